@@ -1,0 +1,61 @@
+"""Input validation that works on concrete values and stays silent under tracing.
+
+Model constructors run both with concrete numbers (a user building a model:
+validate, raise `InputError`) and inside ``jax.grad``/``jax.vmap`` (values are
+tracers: nothing to check at trace time; the untraced call already did).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import jax
+import numpy as np
+
+from .errors import InputError
+
+
+def concrete(value: Any) -> np.ndarray | None:
+    """The value as a NumPy array, or ``None`` when it is a JAX tracer."""
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(value)):
+        return None
+    return np.asarray(value, dtype=float)
+
+
+def check_finite(what: str, value: Any) -> None:
+    v = concrete(value)
+    if v is not None and not np.all(np.isfinite(v)):
+        raise InputError(f"{what} must be finite, got {v.tolist()}")
+
+
+def check_positive(what: str, value: Any, *, allow_zero: bool = False) -> None:
+    v = concrete(value)
+    if v is None:
+        return
+    check_finite(what, v)
+    bad = v < 0 if allow_zero else v <= 0
+    if np.any(bad):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise InputError(f"{what} must be {bound}, got {v.tolist()}")
+
+
+def check_range(
+    what: str,
+    value: Any,
+    low: float = -math.inf,
+    high: float = math.inf,
+    *,
+    low_open: bool = False,
+    high_open: bool = False,
+) -> None:
+    v = concrete(value)
+    if v is None:
+        return
+    check_finite(what, v)
+    too_low = v <= low if low_open else v < low
+    too_high = v >= high if high_open else v > high
+    if np.any(too_low) or np.any(too_high):
+        lo = "(" if low_open else "["
+        hi = ")" if high_open else "]"
+        raise InputError(f"{what} must lie in {lo}{low}, {high}{hi}, got {v.tolist()}")

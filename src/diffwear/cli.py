@@ -1,0 +1,65 @@
+"""The ``diffwear`` command line.
+
+Exit codes: 0 success, 2 bad input (`InputError`, unknown study, bad option),
+3 solver failure (`SolverError`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from .errors import DiffwearError, InputError
+
+
+def _study(args: argparse.Namespace) -> int:
+    from .io import OutputDir
+    from .studies import STUDIES
+
+    if args.list or args.name is None:
+        width = max(len(n) for n in STUDIES)
+        for name, module in STUDIES.items():
+            print(f"{name:<{width}}  {module.DESCRIPTION}")
+        return 0
+    if args.name not in STUDIES:
+        raise InputError(f"unknown study {args.name!r}; available: {', '.join(STUDIES)}")
+    if args.out is None:
+        raise InputError("study: --out DIR is required")
+    out = OutputDir(args.out, overwrite=args.overwrite)
+    log = (lambda *a, **k: None) if args.quiet else print
+    STUDIES[args.name].run(out, log=log)
+    return 0
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # argparse exits with 2 already; keep its message
+        self.print_usage(sys.stderr)
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="diffwear", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("study", help="run a named thesis study (see --list)")
+    p.add_argument("name", nargs="?", help="study name; omit or use --list to list them")
+    p.add_argument("--list", action="store_true", help="list the studies and exit")
+    p.add_argument("--out", help="output folder (created; must not hold earlier results)")
+    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=_study)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except DiffwearError as err:
+        print(f"diffwear: error: {err}", file=sys.stderr)
+        return err.exit_code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

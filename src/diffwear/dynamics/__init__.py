@@ -1,0 +1,19 @@
+"""Dynamics: Baumgarte DAE, diffrax integration, kinematics, reactions."""
+
+from .equations import Baumgarte, accelerations, vector_field
+from .kinematics import (
+    assemble,
+    check_assembly,
+    consistent_state,
+    kinematic_accelerations,
+    kinematic_analysis,
+    velocities,
+)
+from .reactions import along_trajectory, driver_torque, reaction_wrench
+from .simulate import Trajectory, simulate
+
+__all__ = [
+    "Baumgarte", "accelerations", "vector_field", "assemble", "check_assembly",
+    "consistent_state", "kinematic_accelerations", "kinematic_analysis", "velocities",
+    "along_trajectory", "driver_torque", "reaction_wrench", "Trajectory", "simulate",
+]

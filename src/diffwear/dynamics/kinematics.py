@@ -1,0 +1,142 @@
+"""Kinematic analysis: positions, velocities, accelerations from the constraints.
+
+Positions: Newton's method (optimistix) on the first-order conditions of
+
+    min_q  1/2 |q - q_guess|_M^2   subject to  Phi(q, t) = 0,
+
+i.e. the square root-finding problem  [M (q - q_guess) + Phi_q^T mu ; Phi] = 0.
+For a fully driven mechanism (as many independent rows as coordinates) this is
+plain Newton on Phi = 0; for a mechanism with free coordinates (e.g. one with
+a clearance joint) it is the consistent configuration nearest the guess.  The
+root find is differentiated implicitly, so `assemble` is differentiable with
+respect to lengths and other parameters.
+
+Velocities and accelerations are the M-weighted least-norm solutions of
+Phi_q qd = -Phi_t (closest to a guess) and Phi_q qdd = gamma; for a fully
+driven mechanism these are the unique solutions.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+from jaxtyping import Array, Float
+
+from ..errors import InputError
+from ..mechanism import Mechanism
+
+
+def _projection(mech: Mechanism, q, t, v, target):
+    """v + dv with Phi_q (v + dv) = target, |dv|_M minimal."""
+    minv = 1.0 / mech.mass_diagonal()
+    jac = mech.phi_q(q, t)
+    jm = jac * minv
+    mu = jnp.linalg.solve(jm @ jac.T, jac @ v - target)
+    return v - jm.T @ mu
+
+
+def assemble(mech: Mechanism, q_guess, t=0.0, *, tol=1e-12, max_steps=64):
+    """Configuration q with Phi(q, t) = 0 closest (M-norm) to ``q_guess``.
+
+    Returns ``(q, converged)``; `check_assembly` raises a clear error for an
+    unusable result.  Jit- and grad-safe.
+    """
+    q_guess = jnp.asarray(q_guess, dtype=float)
+    t = jnp.asarray(t, dtype=q_guess.dtype)
+    m = mech.n_constraints
+    if m == 0:
+        return q_guess, jnp.array(True)
+    mdiag = mech.mass_diagonal()
+    scale = jnp.mean(mdiag)
+
+    def kkt(z, _):
+        q, mu = z[: mech.n_coords], z[mech.n_coords :]
+        jac = mech.phi_q(q, t)
+        return jnp.concatenate([(mdiag / scale) * (q - q_guess) + jac.T @ mu, mech.phi(q, t)])
+
+    z0 = jnp.concatenate([q_guess, jnp.zeros(m, dtype=q_guess.dtype)])
+    sol = optx.root_find(
+        kkt, optx.Newton(rtol=tol, atol=tol), z0, max_steps=max_steps, throw=False
+    )
+    q = sol.value[: mech.n_coords]
+    ok = (sol.result == optx.RESULTS.successful) & jnp.all(jnp.isfinite(q))
+    return q, ok
+
+
+def velocities(mech: Mechanism, q, t=0.0, qd_guess=None):
+    """qd with Phi_q qd + Phi_t = 0 closest (M-norm) to ``qd_guess`` (default 0)."""
+    t = jnp.asarray(t, dtype=q.dtype)
+    v = jnp.zeros_like(q) if qd_guess is None else qd_guess
+    if mech.n_constraints == 0:
+        return v
+    return _projection(mech, q, t, v, -mech.phi_t(q, t))
+
+
+def kinematic_accelerations(mech: Mechanism, q, qd, t=0.0):
+    """qdd with Phi_q qdd = gamma (least M-norm: unique when fully driven)."""
+    t = jnp.asarray(t, dtype=q.dtype)
+    return _projection(mech, q, t, jnp.zeros_like(q), mech.gamma(q, qd, t))
+
+
+def check_assembly(mech: Mechanism, q, ok, t=0.0, *, rank_tol=1e-9) -> None:
+    """Raise `InputError` if the configuration does not assemble or the
+    constraint Jacobian is rank deficient (redundant or inconsistent rows).
+    Call with concrete values, outside ``jit``."""
+    q = jnp.asarray(q)
+    if mech.n_constraints == 0:
+        return
+    jac = np.asarray(mech.phi_q(q, jnp.asarray(t, dtype=q.dtype)))
+    u, s, _ = np.linalg.svd(jac)
+    m = jac.shape[0]
+    rank = int(np.sum(s > rank_tol * max(s.max(), 1.0)))
+    if rank < m:
+        null = u[:, rank:]  # row combinations w with w^T Phi_q = 0
+        weights = np.abs(null).max(axis=1)
+        rows = [i for i in range(m) if weights[i] > 1e-6]
+        owners = _row_owners(mech)
+        involved = sorted({owners[i] for i in rows})
+        raise InputError(
+            f"constraint Jacobian is singular: {m} rows but rank {rank} "
+            f"(redundant or inconsistent constraints among {involved})"
+        )
+    resid = float(np.max(np.abs(np.asarray(mech.phi(q, jnp.asarray(t, dtype=q.dtype))))))
+    if not bool(ok) or not np.isfinite(resid) or resid > 1e-8:
+        raise InputError(
+            f"the mechanism cannot be assembled at t = {float(t)} s: max |Phi| = {resid:.3g} "
+            "after Newton's method (check lengths, joint points and the initial guess)"
+        )
+
+
+def _row_owners(mech: Mechanism) -> list[str]:
+    return [c.name for c in mech.constraints for _ in range(c.n_rows)]
+
+
+def consistent_state(mech: Mechanism, q_guess, qd_guess=None, t0=0.0, *, check=True):
+    """y0 = [q, qd, aux0] satisfying Phi = 0 and Phidot = 0 at ``t0``.
+
+    ``check=True`` validates the assembly (concrete inputs only); pass
+    ``check=False`` inside a traced function.
+    """
+    q, ok = assemble(mech, q_guess, t0)
+    if check:
+        check_assembly(mech, q, ok, t0)
+    qd = velocities(mech, q, t0, qd_guess)
+    return mech.join(q, qd, mech.initial_aux(q, qd))
+
+
+def kinematic_analysis(mech: Mechanism, ts, q_guess):
+    """(q, qd, qdd) at each time of ``ts`` for a fully driven mechanism.
+
+    A ``lax.scan`` over ``ts``; each position solve starts from the previous one.
+    """
+    ts = jnp.asarray(ts, dtype=float)
+
+    def step(q_prev, t):
+        q, _ = assemble(mech, q_prev, t)
+        qd = velocities(mech, q, t)
+        return q, (q, qd, kinematic_accelerations(mech, q, qd, t))
+
+    _, (q, qd, qdd) = jax.lax.scan(step, jnp.asarray(q_guess, dtype=float), ts)
+    return q, qd, qdd

@@ -1,0 +1,68 @@
+"""`Frames`: named access to body poses, velocities and points during a trace.
+
+Force elements and constraints address bodies by name.  ``Frames`` holds the
+coordinate arrays with an extra all-zero row for the ground, so that a lookup of
+``"ground"`` costs nothing special, and turns point forces into generalised
+forces.  It is built inside the traced right-hand side; it is not a pytree.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .body import GROUND
+from .geometry import cross, perp, rotation
+
+
+class Frames:
+    def __init__(
+        self,
+        index: Mapping[str, int],
+        masses: Float[Array, " nb"],
+        q: Float[Array, " n"],
+        qd: Float[Array, " n"],
+    ):
+        zero = jnp.zeros((1, 3), dtype=q.dtype)
+        self._index = index
+        self.masses = jnp.concatenate([masses, jnp.zeros(1, dtype=masses.dtype)])
+        self.n_bodies = q.shape[0] // 3
+        self.q = jnp.concatenate([q.reshape(-1, 3), zero])
+        self.qd = jnp.concatenate([qd.reshape(-1, 3), zero])
+
+    def row(self, name: str) -> int:
+        return -1 if name == GROUND else self._index[name]
+
+    def pose(self, name: str) -> Float[Array, "3"]:
+        return self.q[self.row(name)]
+
+    def velocity(self, name: str) -> Float[Array, "3"]:
+        return self.qd[self.row(name)]
+
+    def point(self, name: str, s: Float[Array, "2"]) -> Float[Array, "2"]:
+        """Global position of the body-fixed point ``s`` (body frame)."""
+        x = self.pose(name)
+        return x[:2] + rotation(x[2]) @ s
+
+    def point_velocity(self, name: str, s: Float[Array, "2"]) -> Float[Array, "2"]:
+        x, v = self.pose(name), self.velocity(name)
+        return v[:2] + v[2] * perp(rotation(x[2]) @ s)
+
+    def zero_forces(self) -> Float[Array, "nb1 3"]:
+        return jnp.zeros_like(self.q)
+
+    def wrench(
+        self,
+        name: str,
+        force: Float[Array, "2"],
+        at: Float[Array, "2"] | None = None,
+        torque: Float[Array, ""] | float = 0.0,
+    ) -> Float[Array, "nb1 3"]:
+        """Generalised force of ``force`` applied at global point ``at`` (default:
+        the COM) plus a pure ``torque``, as rows (Fx, Fy, moment about the COM)."""
+        x = self.pose(name)
+        arm = jnp.zeros(2) if at is None else at - x[:2]
+        row = jnp.array([force[0], force[1], cross(arm, force) + torque])
+        return self.zero_forces().at[self.row(name)].add(row)

@@ -1,0 +1,36 @@
+"""Planar rotation and cross-product helpers (SI units, radians)."""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+
+def rotation(phi: Float[Array, ""]) -> Float[Array, "2 2"]:
+    """A(phi): body-frame vectors to the global frame."""
+    c, s = jnp.cos(phi), jnp.sin(phi)
+    return jnp.array([[c, -s], [s, c]])
+
+
+def perp(v: Float[Array, "2"]) -> Float[Array, "2"]:
+    """k x v: the vector rotated by +90 degrees."""
+    return jnp.array([-v[1], v[0]])
+
+
+def cross(a: Float[Array, "2"], b: Float[Array, "2"]) -> Float[Array, ""]:
+    """z-component of a x b."""
+    return a[0] * b[1] - a[1] * b[0]
+
+
+def safe_norm(v: Float[Array, "2"], floor: float = 0.0) -> Float[Array, ""]:
+    """|v| with a finite gradient at v = 0 (the "double where").
+
+    ``floor`` > 0 returns sqrt(|v|^2 + floor^2) - a smooth norm whose width is
+    ``floor`` (same units as ``v``).
+    """
+    sq = jnp.sum(v * v)
+    if floor > 0.0:
+        return jnp.sqrt(sq + floor * floor)
+    is_zero = sq == 0.0
+    safe_sq = jnp.where(is_zero, 1.0, sq)
+    return jnp.where(is_zero, 0.0, jnp.sqrt(safe_sq))

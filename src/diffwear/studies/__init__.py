@@ -1,0 +1,9 @@
+"""Registry of the named studies run by ``diffwear study NAME``."""
+
+from __future__ import annotations
+
+from . import ideal_slider_crank
+
+STUDIES = {m.NAME: m for m in (ideal_slider_crank,)}
+
+__all__ = ["STUDIES"]

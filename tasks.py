@@ -1,0 +1,62 @@
+#!/usr/bin/env python3
+"""One-file bootstrap: the two commands of the README.
+
+    python3 tasks.py study   # default study: report + plots in out/ideal-slider-crank
+    python3 tasks.py test    # the test suite (what CI runs)
+
+Each creates ``.venv`` (stdlib ``venv``) on first use, installs the package with
+its test extras, then runs.  Only Python >= 3.11 and pip are needed beforehand.
+Extra arguments after the command are passed through (to ``pytest`` or to
+``diffwear study``).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+VENV = ROOT / ".venv"
+BIN = VENV / ("Scripts" if os.name == "nt" else "bin")
+PY = BIN / ("python.exe" if os.name == "nt" else "python")
+STAMP = VENV / ".diffwear-installed"
+
+
+def _run(*cmd: str | Path) -> int:
+    print("+", " ".join(str(c) for c in cmd), flush=True)
+    return subprocess.call([str(c) for c in cmd], cwd=ROOT)
+
+
+def ensure_env() -> None:
+    """Create the venv and (re)install when pyproject.toml is newer than the stamp."""
+    if not PY.exists():
+        venv.EnvBuilder(with_pip=True, clear=False).create(VENV)
+    pyproject = ROOT / "pyproject.toml"
+    if STAMP.exists() and STAMP.stat().st_mtime >= pyproject.stat().st_mtime:
+        return
+    for cmd in (
+        (PY, "-m", "pip", "install", "--quiet", "--upgrade", "pip"),
+        (PY, "-m", "pip", "install", "--quiet", "-e", f"{ROOT}[test]"),
+    ):
+        if _run(*cmd) != 0:
+            sys.exit("tasks.py: installing dependencies failed (see pip output above)")
+    STAMP.touch()
+
+
+def main(argv: list[str]) -> int:
+    if not argv or argv[0] not in {"study", "test"}:
+        print(__doc__)
+        return 2
+    ensure_env()
+    cmd, rest = argv[0], argv[1:]
+    if cmd == "test":
+        return _run(PY, "-m", "pytest", *rest)
+    out = ROOT / "out" / "ideal-slider-crank"
+    return _run(BIN / "diffwear", "study", "ideal-slider-crank", "--out", out, *rest)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

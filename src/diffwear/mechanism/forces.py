@@ -10,8 +10,6 @@ derivatives are returned next to the forces.
 from __future__ import annotations
 
 import abc
-from typing import ClassVar
-
 import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
@@ -28,7 +26,11 @@ class AbstractForceElement(eqx.Module):
     """Generalised forces Q_A(q, qd, aux, t) (and d aux/dt) from one element."""
 
     name: eqx.AbstractVar[str]
-    n_aux: ClassVar[int] = 0
+
+    @property
+    def n_aux(self) -> int:
+        """Number of auxiliary ODE states (static: derived from array shapes)."""
+        return 0
 
     @property
     @abc.abstractmethod

@@ -1,0 +1,207 @@
+"""`ClearanceJoint`: an imperfect revolute joint as a force element (thesis Ch. 3).
+
+The pin (on body i) moves freely inside the bushing (on body j): the joint
+adds two degrees of freedom and no constraint rows.  A contact law gives the
+force; it acts at the pin centre with the friction moment, on the pin, and with
+opposite sign on the bushing (action and reaction at one point, so linear and
+angular momentum are conserved).
+
+Auxiliary states, in this order: the contact law's memory; with wear enabled,
+the bushing wear depth h(theta_k) [m] on the profile grid and the Archard
+bookkeeping integral of (normal load x sliding distance) [N m].
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .._checks import check_positive, concrete
+from ..errors import InputError
+from ..mechanism import AbstractForceElement, Frames, Mechanism, RevoluteJoint
+from ..mechanism.constraints import _vec2
+from ..mechanism.geometry import perp, rotation
+from ..wear.archard import SLIP_RATE_WIDTH, ArchardWear
+from . import smoothing
+from .friction import CoulombFriction
+from .kinematics import ContactResult, PinKinematics
+from .laws import AbstractContactLaw, ElasticFoundation
+from .profile import BushingProfile
+
+
+class ClearanceJoint(AbstractForceElement):
+    """Pin of radius ``pin_radius`` on ``pin_body`` (at ``pin_point``) inside the
+    bushing profile ``profile`` on ``bushing_body`` (centre at ``bushing_point``).
+
+    ``bushing_radius`` is the unworn bore radius: pin_radius + initial clearance.
+    """
+
+    name: str = eqx.field(static=True)
+    pin_body: str = eqx.field(static=True)
+    bushing_body: str = eqx.field(static=True)
+    pin_point: Float[Array, "2"]
+    bushing_point: Float[Array, "2"]
+    pin_radius: Float[Array, ""]
+    bushing_radius: Float[Array, ""]
+    profile: BushingProfile
+    law: AbstractContactLaw
+    friction: CoulombFriction
+    wear: ArchardWear | None
+
+    def __init__(self, name, pin_body, pin_point, bushing_body, bushing_point, pin_radius,
+                 bushing_radius, law, friction=None, profile=None, wear=None, n_theta=360):
+        self.name, self.pin_body, self.bushing_body = name, pin_body, bushing_body
+        self.pin_point = _vec2(f"clearance joint {name!r}: pin_point", pin_point)
+        self.bushing_point = _vec2(f"clearance joint {name!r}: bushing_point", bushing_point)
+        check_positive(f"clearance joint {name!r}: pin radius [m]", pin_radius)
+        check_positive(f"clearance joint {name!r}: bushing radius [m]", bushing_radius)
+        rp, rb = concrete(pin_radius), concrete(bushing_radius)
+        if rp is not None and rb is not None and rp > rb:
+            raise InputError(
+                f"clearance joint {name!r}: pin radius {float(rp)} m is larger than the bushing "
+                f"radius {float(rb)} m (clearance must be >= 0)"
+            )
+        if not isinstance(law, AbstractContactLaw):
+            raise InputError(f"clearance joint {name!r}: law must be a contact law, got {law!r}")
+        if wear is not None and not isinstance(law, ElasticFoundation):
+            raise InputError(
+                f"clearance joint {name!r}: wear needs a pressure distribution: use the "
+                "ElasticFoundation contact law"
+            )
+        self.pin_radius = jnp.asarray(pin_radius, dtype=float)
+        self.bushing_radius = jnp.asarray(bushing_radius, dtype=float)
+        if profile is None:
+            profile = BushingProfile.circular(self.bushing_radius - self.pin_radius, n_theta)
+        self.profile = profile
+        self.law = law
+        self.friction = CoulombFriction() if friction is None else friction
+        self.wear = wear
+
+    @property
+    def bodies(self):
+        return (self.pin_body, self.bushing_body)
+
+    @property
+    def n_aux(self) -> int:
+        return self.law.n_memory + (self.profile.n + 1 if self.wear is not None else 0)
+
+    def initial_aux(self, frames):
+        parts = [self.law.initial_memory()]
+        if self.wear is not None:
+            parts.append(jnp.zeros(self.profile.n + 1))
+        return jnp.concatenate(parts)
+
+    # ----------------------------------------------------------------- physics
+    def kinematics(self, frames: Frames) -> PinKinematics:
+        """Pin offset and its rate in the bushing frame."""
+        xj, vj = frames.pose(self.bushing_body), frames.velocity(self.bushing_body)
+        e = frames.point(self.pin_body, self.pin_point) - frames.point(self.bushing_body,
+                                                                        self.bushing_point)
+        e_dot = (frames.point_velocity(self.pin_body, self.pin_point)
+                 - frames.point_velocity(self.bushing_body, self.bushing_point))
+        a_t = rotation(xj[2]).T
+        omega = frames.velocity(self.pin_body)[2] - vj[2]
+        return PinKinematics(
+            offset=a_t @ e,
+            offset_rate=a_t @ (e_dot - vj[2] * perp(e)),
+            omega=omega,
+            pin_radius=self.pin_radius,
+            bushing_radius=self.bushing_radius,
+        )
+
+    def contact(self, frames: Frames, aux) -> tuple[PinKinematics, ContactResult]:
+        kin = self.kinematics(frames)
+        memory = aux[: self.law.n_memory]
+        return kin, self.law.evaluate(kin, memory, self.profile, self.friction)
+
+    def sliding_rate(self, kin: PinKinematics) -> Float[Array, ""]:
+        """ds/dt = R_b |omega_rel| [m/s] (thesis Eq. 5-3), |.| smoothed."""
+        return kin.bushing_radius * smoothing.magnitude(kin.omega, SLIP_RATE_WIDTH)
+
+    def forces(self, frames, aux, t):
+        kin, res = self.contact(frames, aux)
+        a_j = rotation(frames.pose(self.bushing_body)[2])
+        force = a_j @ res.force
+        at = frames.point(self.pin_body, self.pin_point)
+        q = frames.wrench(self.pin_body, force, at=at, torque=res.torque)
+        q = q + frames.wrench(self.bushing_body, -force, at=at, torque=-res.torque)
+        rates = [res.memory_rate]
+        if self.wear is not None:
+            slide = self.sliding_rate(kin)
+            rates.append(self.wear.coefficient * res.pressure * slide)
+            rates.append(jnp.atleast_1d(res.normal_load * slide))
+        return q, jnp.concatenate(rates)
+
+    # ------------------------------------------------------------- accessors
+    def wear_depth(self, aux) -> Float[Array, " n"]:
+        """Bushing wear depth on the grid [m] accumulated in the aux states."""
+        start = self.law.n_memory
+        return aux[start : start + self.profile.n]
+
+    def load_sliding_integral(self, aux) -> Float[Array, ""]:
+        """Integral of normal load x sliding distance [N m] (Archard bookkeeping)."""
+        return aux[self.law.n_memory + self.profile.n]
+
+
+def with_clearance(mech: Mechanism, joint: str, **kwargs) -> Mechanism:
+    """Replace the ideal `RevoluteJoint` ``joint`` of ``mech`` by a `ClearanceJoint`.
+
+    The first body of the revolute joint carries the pin, the second the
+    bushing; points are taken over.  ``kwargs`` go to `ClearanceJoint`
+    (pin_radius, bushing_radius, law, friction, profile, wear, n_theta).
+    The state layout of q and qd is unchanged, so a consistent state of the
+    ideal mechanism (pin centred, same velocities) starts the clearance one.
+    """
+    old = mech.element(joint)
+    if not isinstance(old, RevoluteJoint):
+        raise InputError(f"{joint!r} is a {type(old).__name__}, not a RevoluteJoint")
+    new = ClearanceJoint(joint, old.body_i, old.point_i, old.body_j, old.point_j, **kwargs)
+    constraints = tuple(c for c in mech.constraints if c.name != joint)
+    return Mechanism(mech.bodies, constraints, (*mech.forces, new))
+
+
+class ContactHistory(eqx.Module):
+    """A clearance joint's contact along a trajectory (arrays over saved times).
+
+    force: force on the bushing body from the pin, global frame [N]
+    normal_load: total normal load [N]
+    offset: pin offset in the bushing frame [m]
+    penetration: max_k (e . u_k - c_k) [m] (> 0: in contact)
+    contact_angle: bushing angle of the offset direction [rad, 0..2 pi)
+    pressure: p(theta_k) [Pa] (EFM; zeros for point laws)
+    """
+
+    force: Float[Array, "T 2"]
+    normal_load: Float[Array, " T"]
+    offset: Float[Array, "T 2"]
+    penetration: Float[Array, " T"]
+    contact_angle: Float[Array, " T"]
+    pressure: Float[Array, "T n"]
+
+    @property
+    def force_magnitude(self) -> Float[Array, " T"]:
+        return jnp.sqrt(jnp.sum(self.force**2, axis=-1))
+
+
+def contact_history(mech: Mechanism, joint: str, ys: Float[Array, "T s"]) -> ContactHistory:
+    """Evaluate the contact of clearance joint ``joint`` at every saved state."""
+    import jax
+
+    element = mech.element(joint)
+    if not isinstance(element, ClearanceJoint):
+        raise InputError(f"{joint!r} is not a ClearanceJoint")
+    aux_slice = mech.aux_slice(joint)
+
+    def one(y):
+        q, qd, aux = mech.split(y)
+        frames = mech.frames(q, qd)
+        kin, res = element.contact(frames, aux[aux_slice])
+        a_j = rotation(frames.pose(element.bushing_body)[2])
+        theta = element.profile.theta
+        gap = (jnp.cos(theta) * kin.offset[0] + jnp.sin(theta) * kin.offset[1]
+               - element.profile.clearance)
+        angle = jnp.mod(jnp.arctan2(kin.offset[1], kin.offset[0]), 2 * jnp.pi)
+        return -(a_j @ res.force), res.normal_load, kin.offset, jnp.max(gap), angle, res.pressure
+
+    return ContactHistory(*jax.vmap(one)(ys))

@@ -1,0 +1,56 @@
+"""`BushingProfile`: the clearance of a (possibly worn) bushing as a function of angle."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .._checks import check_positive, concrete
+from ..errors import InputError
+
+
+class BushingProfile(eqx.Module):
+    """Radial clearance c(theta) [m] on a periodic grid of the bushing angle.
+
+    theta_k = 2 pi k / n, k = 0..n-1, measured counter-clockwise from the
+    bushing body's x axis (for the thesis slider-crank: the rod axis, pointing
+    from the crank end toward the slider).  ``clearance[k] = c0 + wear depth``.
+    """
+
+    clearance: Float[Array, " n"]
+
+    def __init__(self, clearance):
+        c = jnp.asarray(clearance, dtype=float)
+        if c.ndim != 1 or c.shape[0] < 8:
+            raise InputError(
+                f"bushing profile needs a 1-D angular grid of at least 8 points, got shape {c.shape}"
+            )
+        check_positive("bushing clearance c(theta) [m]", c, allow_zero=True)
+        self.clearance = c
+
+    @classmethod
+    def circular(cls, clearance, n: int = 360) -> "BushingProfile":
+        """A round bushing: c(theta) = clearance [m] on ``n`` grid points."""
+        if not isinstance(n, int) or n < 8:
+            raise InputError(f"angular grid size must be an integer >= 8, got {n!r}")
+        v = concrete(clearance)
+        if v is not None and v.ndim != 0:
+            raise InputError(f"clearance must be a scalar [m], got shape {v.shape}")
+        return cls(jnp.full(n, jnp.asarray(clearance, dtype=float)))
+
+    @property
+    def n(self) -> int:
+        return self.clearance.shape[0]
+
+    @property
+    def theta(self) -> Float[Array, " n"]:
+        return 2.0 * jnp.pi * jnp.arange(self.n) / self.n
+
+    @property
+    def dtheta(self) -> float:
+        return 2.0 * jnp.pi / self.n
+
+    def worn(self, depth: Float[Array, " n"]) -> "BushingProfile":
+        """The profile after removing ``depth`` [m] of bushing material."""
+        return BushingProfile(self.clearance + depth)

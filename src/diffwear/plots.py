@@ -39,3 +39,21 @@ def stacked(
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def polar_loci(path: Path, loci: Mapping[str, tuple[np.ndarray, np.ndarray]], *, title: str) -> Path:
+    """Contact loci in the bushing frame: one polar panel per case, radius = |e|."""
+    n = len(loci)
+    cols = min(4, n)
+    rows = -(-n // cols)
+    fig = plt.figure(figsize=(3.0 * cols, 3.0 * rows))
+    for k, (label, (theta, radius)) in enumerate(loci.items()):
+        ax = fig.add_subplot(rows, cols, k + 1, projection="polar")
+        ax.scatter(theta, radius * 1e3, s=2)
+        ax.set_title(label, fontsize=8)
+        ax.tick_params(labelsize=6)
+    fig.suptitle(title + "  (radius: |e| [mm])", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -133,6 +133,14 @@ class ClearanceJoint(AbstractForceElement):
             rates.append(jnp.atleast_1d(res.normal_load * slide))
         return q, jnp.concatenate(rates)
 
+    def diagnose(self, frames: Frames, aux) -> str:
+        """One line on the joint's state, for failure messages."""
+        kin, res = self.contact(frames, aux)
+        e = float(jnp.sqrt(kin.offset @ kin.offset))
+        c = float(jnp.min(self.profile.clearance))
+        return (f"clearance joint {self.name!r}: eccentricity {e * 1e6:.4g} um vs clearance "
+                f"{c * 1e6:.4g} um, normal load {float(res.normal_load):.4g} N")
+
     # ------------------------------------------------------------- accessors
     def wear_depth(self, aux) -> Float[Array, " n"]:
         """Bushing wear depth on the grid [m] accumulated in the aux states."""

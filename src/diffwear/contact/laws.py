@@ -218,7 +218,7 @@ class KelvinVoigt(AbstractPointLaw):
         return cls(k, ln.restitution, **kwargs)
 
     def normal_force(self, delta, delta_dot, memory):
-        loading = smoothing.step(delta_dot, self.rebound_width)
+        loading = 0.5 * (1.0 + smoothing.sign(delta_dot, self.rebound_width))
         factor = self.restitution + (1.0 - self.restitution) * loading
         return self.stiffness * smoothing.ramp(delta, self.penetration_width) * factor
 

@@ -15,6 +15,7 @@ Sign convention: the generalised constraint force on the bodies is
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
@@ -55,7 +56,7 @@ def accelerations(
         - baumgarte.beta**2 * mech.phi(q, t)
     )
     jm = jac * minv
-    lam = jnp.linalg.solve(jm @ jac.T, jm @ force - rhs)
+    lam = jax.scipy.linalg.cho_solve(jax.scipy.linalg.cho_factor(jm @ jac.T), jm @ force - rhs)
     qdd = minv * (force - jac.T @ lam)
     return qdd, lam, daux
 

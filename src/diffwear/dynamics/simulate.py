@@ -33,10 +33,13 @@ class Trajectory(eqx.Module):
     num_accepted_steps: Int[Array, ""]
     num_rejected_steps: Int[Array, ""]
 
-    def raise_if_failed(self, what: str = "simulation") -> "Trajectory":
+    def raise_if_failed(self, what: str = "simulation", mech: Mechanism | None = None
+                        ) -> "Trajectory":
         """Raise `SolverError` if the integrator failed or produced non-finite values.
 
-        Call outside ``jit``.  Returns ``self`` for chaining.
+        Call outside ``jit``.  With ``mech``, the message also describes each
+        force element that can diagnose itself (e.g. a clearance joint's
+        penetration) at the last finite saved state.  Returns ``self``.
         """
         ts, ys = np.asarray(self.ts), np.asarray(self.ys)
         finite_rows = np.all(np.isfinite(ys), axis=-1)
@@ -50,9 +53,17 @@ class Trajectory(eqx.Module):
             reason = f"integrator stopped ({self.result}{': ' + str(msg) if msg else ''})"
         else:
             reason = "non-finite state (NaN or inf)"
+        details = ""
+        if mech is not None and finite_rows.any():
+            y = self.ys[int(np.flatnonzero(finite_rows)[-1])]
+            q, qd, aux = mech.split(y)
+            frames = mech.frames(q, qd)
+            notes = [f.diagnose(frames, aux[mech.aux_slice(f.name)])
+                     for f in mech.forces if hasattr(f, "diagnose")]
+            details = "".join(f" {n}." for n in notes)
         raise SolverError(
             f"{what}: {reason} after {int(self.num_steps)} steps; last finite saved "
-            f"state at t = {t_last} (saved range {ts[0]:.6g}..{ts[-1]:.6g} s). "
+            f"state at t = {t_last} (saved range {ts[0]:.6g}..{ts[-1]:.6g} s).{details} "
             "Tighten the tolerances, raise max_steps, or check the contact stiffness."
         )
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from . import ideal_slider_crank
+from . import clearance_sweep, ideal_slider_crank
 
-STUDIES = {m.NAME: m for m in (ideal_slider_crank,)}
+STUDIES = {m.NAME: m for m in (ideal_slider_crank, clearance_sweep)}
 
 __all__ = ["STUDIES"]

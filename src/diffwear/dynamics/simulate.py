@@ -43,16 +43,23 @@ class Trajectory(eqx.Module):
         ok = bool(self.result == diffrax.RESULTS.successful)
         if ok and finite_rows.all():
             return self
+        # diffrax fills the saved times it never reached with inf
         reached = ts[finite_rows & np.isfinite(ts)]
-        t_last = f"{reached.max():.6g} s" if reached.size else "the start"
-        if not ok:
-            msg = diffrax.RESULTS[self.result] if hasattr(diffrax.RESULTS, "__getitem__") else ""
-            reason = f"integrator stopped ({self.result}{': ' + str(msg) if msg else ''})"
+        if reached.size:
+            where = (f"last finite state saved at t = {reached.max():.6g} s "
+                     f"({reached.size} of {ts.size} saved times reached)")
         else:
-            reason = "non-finite state (NaN or inf)"
+            where = f"no saved time was reached ({ts.size} requested)"
+        if not ok:
+            try:
+                msg = str(diffrax.RESULTS[self.result])
+            except (KeyError, TypeError):  # older diffrax: no message lookup
+                msg = str(self.result)
+            reason = f"integrator stopped: {msg.rstrip('.')}."
+        else:
+            reason = "non-finite state (NaN or inf)."
         raise SolverError(
-            f"{what}: {reason} after {int(self.num_steps)} steps; last finite saved "
-            f"state at t = {t_last} (saved range {ts[0]:.6g}..{ts[-1]:.6g} s). "
+            f"{what}: {reason} After {int(self.num_steps)} steps; {where}. "
             "Tighten the tolerances, raise max_steps, or check the contact stiffness."
         )
 

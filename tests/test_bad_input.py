@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import pytest
 
 from diffwear import InputError, SolverError
-from diffwear.dynamics import consistent_state, simulate
+from diffwear.dynamics import check_assembly, consistent_state, simulate
 from diffwear.mechanism import Body, Driver, Gravity, Mechanism, RevoluteJoint
 from diffwear.presets import slider_crank
 from linkages import four_bar
@@ -90,6 +90,13 @@ def test_four_bar_that_cannot_close_from_a_collinear_guess():
     q_guess = jnp.array([0.05, 0.0, 0.0, 0.15, 0.0, 0.0, 0.35, 0.0, 0.0])
     with pytest.raises(InputError, match="cannot be assembled"):
         consistent_state(mech, q_guess)
+
+
+def test_check_assembly_of_a_failed_solve_without_guess():
+    mech, _ = slider_crank()
+    q = jnp.full(mech.n_coords, jnp.nan)  # what assemble returns for a singular Newton matrix
+    with pytest.raises(InputError, match="cannot be assembled.*non-finite"):
+        check_assembly(mech, q, False)
 
 
 def test_too_few_steps_raise_solver_error():

@@ -80,14 +80,40 @@ def kinematic_accelerations(mech: Mechanism, q, qd, t=0.0):
     return _projection(mech, q, t, jnp.zeros_like(q), mech.gamma(q, qd, t))
 
 
-def check_assembly(mech: Mechanism, q, ok, t=0.0, *, rank_tol=1e-9) -> None:
+def check_assembly(mech: Mechanism, q, ok, t=0.0, *, q_guess=None, rank_tol=1e-9) -> None:
     """Raise `InputError` if the configuration does not assemble or the
     constraint Jacobian is rank deficient (redundant or inconsistent rows).
-    Call with concrete values, outside ``jit``."""
-    q = jnp.asarray(q)
+    Call with concrete values, outside ``jit``.
+
+    When Newton's method failed, ``q`` may be NaN (redundant rows make its
+    matrix singular) or far off; ``q_guess`` then tells the two causes apart:
+    a Jacobian that is singular at a generic configuration (a random
+    perturbation of the guess) means redundant constraints, anything else means
+    the geometry does not close.
+    """
     if mech.n_constraints == 0:
         return
-    jac = np.asarray(mech.phi_q(q, jnp.asarray(t, dtype=q.dtype)))
+    q = np.asarray(q, dtype=float)
+    t = jnp.asarray(t, dtype=float)
+    finite = bool(np.all(np.isfinite(q)))
+    resid = float(np.max(np.abs(np.asarray(mech.phi(jnp.asarray(q), t))))) if finite else np.nan
+    assembled = bool(ok) and finite and resid <= 1e-8
+    if assembled:
+        _raise_if_singular(mech, q, t, rank_tol)
+        return
+    if q_guess is not None:
+        q_guess = np.asarray(q_guess, dtype=float)
+        generic = q_guess + 0.1 * np.random.default_rng(0).standard_normal(q_guess.shape)
+        _raise_if_singular(mech, generic, t, rank_tol)
+    found = f"with max |Phi| = {resid:.3g}" if finite else "at a non-finite configuration"
+    raise InputError(
+        f"the mechanism cannot be assembled at t = {float(t)} s: Newton's method ended "
+        f"{found} (check lengths, joint points and the initial guess)"
+    )
+
+
+def _raise_if_singular(mech: Mechanism, q, t, rank_tol) -> None:
+    jac = np.asarray(mech.phi_q(jnp.asarray(q, dtype=float), t))
     u, s, _ = np.linalg.svd(jac)
     m = jac.shape[0]
     rank = int(np.sum(s > rank_tol * max(s.max(), 1.0)))
@@ -100,12 +126,6 @@ def check_assembly(mech: Mechanism, q, ok, t=0.0, *, rank_tol=1e-9) -> None:
         raise InputError(
             f"constraint Jacobian is singular: {m} rows but rank {rank} "
             f"(redundant or inconsistent constraints among {involved})"
-        )
-    resid = float(np.max(np.abs(np.asarray(mech.phi(q, jnp.asarray(t, dtype=q.dtype))))))
-    if not bool(ok) or not np.isfinite(resid) or resid > 1e-8:
-        raise InputError(
-            f"the mechanism cannot be assembled at t = {float(t)} s: max |Phi| = {resid:.3g} "
-            "after Newton's method (check lengths, joint points and the initial guess)"
         )
 
 
@@ -121,7 +141,7 @@ def consistent_state(mech: Mechanism, q_guess, qd_guess=None, t0=0.0, *, check=T
     """
     q, ok = assemble(mech, q_guess, t0)
     if check:
-        check_assembly(mech, q, ok, t0)
+        check_assembly(mech, q, ok, t0, q_guess=q_guess)
     qd = velocities(mech, q, t0, qd_guess)
     return mech.join(q, qd, mech.initial_aux(q, qd))
 

@@ -24,14 +24,22 @@ from .equations import Baumgarte, vector_field
 
 
 class Trajectory(eqx.Module):
-    """Saved states y(ts) = [q, qd, aux] and integrator statistics."""
+    """Saved states y(ts) = [q, qd, aux], the state where the integration ended
+    (``t_final``, ``y_final``: t1 on success, the last accepted step on failure)
+    and integrator statistics."""
 
     ts: Float[Array, " T"]
     ys: Float[Array, "T s"]
+    t_final: Float[Array, ""]
+    y_final: Float[Array, " s"]
     result: diffrax.RESULTS
     num_steps: Int[Array, ""]
     num_accepted_steps: Int[Array, ""]
     num_rejected_steps: Int[Array, ""]
+
+    @property
+    def succeeded(self):
+        return self.result == diffrax.RESULTS.successful
 
     def raise_if_failed(self, what: str = "simulation", mech: Mechanism | None = None
                         ) -> "Trajectory":
@@ -39,31 +47,39 @@ class Trajectory(eqx.Module):
 
         Call outside ``jit``.  With ``mech``, the message also describes each
         force element that can diagnose itself (e.g. a clearance joint's
-        penetration) at the last finite saved state.  Returns ``self``.
+        penetration) at the state where the integration ended.  Returns ``self``.
         """
         ts, ys = np.asarray(self.ts), np.asarray(self.ys)
         finite_rows = np.all(np.isfinite(ys), axis=-1)
-        ok = bool(self.result == diffrax.RESULTS.successful)
+        ok = bool(self.succeeded)
         if ok and finite_rows.all():
             return self
+        # diffrax fills the saved times it never reached with inf
         reached = ts[finite_rows & np.isfinite(ts)]
-        t_last = f"{reached.max():.6g} s" if reached.size else "the start"
-        if not ok:
-            msg = diffrax.RESULTS[self.result] if hasattr(diffrax.RESULTS, "__getitem__") else ""
-            reason = f"integrator stopped ({self.result}{': ' + str(msg) if msg else ''})"
+        if reached.size:
+            where = (f"last finite state saved at t = {reached.max():.6g} s "
+                     f"({reached.size} of {ts.size} saved times reached)")
         else:
-            reason = "non-finite state (NaN or inf)"
+            where = f"no saved time was reached ({ts.size} requested)"
+        if np.isfinite(float(self.t_final)):
+            where += f"; integration ended at t = {float(self.t_final):.6g} s"
+        if not ok:
+            try:
+                msg = str(diffrax.RESULTS[self.result])
+            except (KeyError, TypeError):  # older diffrax: no message lookup
+                msg = str(self.result)
+            reason = f"integrator stopped: {msg.rstrip('.')}."
+        else:
+            reason = "non-finite state (NaN or inf)."
         details = ""
-        if mech is not None and finite_rows.any():
-            y = self.ys[int(np.flatnonzero(finite_rows)[-1])]
-            q, qd, aux = mech.split(y)
+        if mech is not None and np.all(np.isfinite(np.asarray(self.y_final))):
+            q, qd, aux = mech.split(self.y_final)
             frames = mech.frames(q, qd)
             notes = [f.diagnose(frames, aux[mech.aux_slice(f.name)])
                      for f in mech.forces if hasattr(f, "diagnose")]
             details = "".join(f" {n}." for n in notes)
         raise SolverError(
-            f"{what}: {reason} after {int(self.num_steps)} steps; last finite saved "
-            f"state at t = {t_last} (saved range {ts[0]:.6g}..{ts[-1]:.6g} s).{details} "
+            f"{what}: {reason} After {int(self.num_steps)} steps; {where}.{details} "
             "Tighten the tolerances, raise max_steps, or check the contact stiffness."
         )
 
@@ -95,7 +111,10 @@ def simulate(
     adjoint = diffrax.RecursiveCheckpointAdjoint() if adjoint is None else adjoint
     t0 = jnp.asarray(t0, dtype=y0.dtype)
     t1 = jnp.asarray(t1, dtype=y0.dtype)
-    saveat = diffrax.SaveAt(ts=jnp.atleast_1d(t1) if ts is None else ts)
+    saveat = diffrax.SaveAt(subs=[
+        diffrax.SubSaveAt(ts=jnp.atleast_1d(t1) if ts is None else ts),
+        diffrax.SubSaveAt(t1=True),
+    ])
     sol = diffrax.diffeqsolve(
         diffrax.ODETerm(vector_field),
         solver,
@@ -111,9 +130,12 @@ def simulate(
         throw=False,
     )
     stats = sol.stats
+    (saved_ts, final_t), (saved_ys, final_y) = sol.ts, sol.ys
     return Trajectory(
-        ts=sol.ts,
-        ys=sol.ys,
+        ts=saved_ts,
+        ys=saved_ys,
+        t_final=final_t[-1],
+        y_final=final_y[-1],
         result=sol.result,
         num_steps=stats["num_steps"],
         num_accepted_steps=stats["num_accepted_steps"],

@@ -1,0 +1,114 @@
+"""Bad input (issue 2): every case raises `InputError` / `SolverError` with a
+message that says what is wrong, never NaN or a bare NumPy/JAX error."""
+
+import math
+import re
+
+import jax.numpy as jnp
+import pytest
+
+from diffwear import InputError, SolverError
+from diffwear.dynamics import check_assembly, consistent_state, simulate
+from diffwear.mechanism import Body, Driver, Gravity, Mechanism, RevoluteJoint
+from diffwear.presets import slider_crank
+from linkages import four_bar
+
+
+def test_no_bodies():
+    with pytest.raises(InputError, match="at least one body"):
+        Mechanism([])
+
+
+@pytest.mark.parametrize("mass, inertia, what, why", [
+    (0.0, 1.0, r"mass \[kg\]", "> 0"),
+    (-2.0, 1.0, r"mass \[kg\]", "> 0"),
+    (1.0, 0.0, r"inertia \[kg m\^2\]", "> 0"),
+    (1.0, -1e-3, r"inertia \[kg m\^2\]", "> 0"),
+    (math.nan, 1.0, r"mass \[kg\]", "finite"),
+    (1.0, jnp.inf, r"inertia \[kg m\^2\]", "finite"),
+])
+def test_bad_mass_or_inertia(mass, inertia, what, why):
+    with pytest.raises(InputError, match=rf"body 'link': {what} must be .*{why[-1]}") as err:
+        Body("link", mass, inertia)
+    assert why in str(err.value)
+
+
+def test_reserved_body_name():
+    with pytest.raises(InputError, match="reserved"):
+        Body("ground", 1.0, 1.0)
+
+
+def test_joint_names_unknown_body():
+    with pytest.raises(InputError, match=r"'pin' names unknown body 'rod'.*known bodies"):
+        Mechanism([Body("crank", 1.0, 1.0)],
+                  [RevoluteJoint("pin", "crank", "rod", (0.5, 0.0), (0.0, 0.0))])
+
+
+def test_duplicate_body_names():
+    with pytest.raises(InputError, match=r"body names must be unique.*'crank'"):
+        Mechanism([Body("crank", 1.0, 1.0), Body("crank", 2.0, 1.0)])
+
+
+def test_duplicate_joint_names():
+    mech, _ = slider_crank()
+    with pytest.raises(InputError, match=r"names must be unique.*'driver'"):
+        Mechanism(mech.bodies, mech.constraints + (Driver("driver", "rod", 1.0),))
+
+
+def _with_extra(constraint):
+    mech, q_guess = slider_crank()
+    return Mechanism(mech.bodies, mech.constraints + (constraint,), mech.forces), q_guess
+
+
+@pytest.mark.parametrize("extra, culprit", [
+    # the crank pivot a second time
+    (RevoluteJoint("ground_crank_again", "crank", "ground", (-1.0, 0.0), (0.0, 0.0)),
+     "ground_crank_again"),
+    # a second driver on the crank: same speed (redundant) and another speed (inconsistent)
+    (Driver("driver_again", "crank", math.pi), "driver_again"),
+    (Driver("driver_fast", "crank", 2 * math.pi), "driver_fast"),
+])
+def test_redundant_constraints_are_singular(extra, culprit):
+    mech, q_guess = _with_extra(extra)
+    with pytest.raises(InputError, match="singular") as err:
+        consistent_state(mech, q_guess)
+    assert "redundant" in str(err.value) and culprit in str(err.value)
+
+
+def test_four_bar_that_cannot_close():
+    # coupler + rocker = 0.2 m cannot span the 0.3 m from the crank pin to O4
+    mech, q_guess = four_bar(a=0.1, b=0.1, c=0.1, d=0.4)
+    with pytest.raises(InputError, match="cannot be assembled") as err:
+        consistent_state(mech, q_guess)
+    assert "t = 0" in str(err.value) and "lengths" in str(err.value)
+
+
+def test_four_bar_that_cannot_close_from_a_collinear_guess():
+    # all links guessed on the x axis, where the Jacobian is singular: still a
+    # geometry error, not a "redundant constraints" one
+    mech, _ = four_bar(a=0.1, b=0.1, c=0.1, d=0.4)
+    q_guess = jnp.array([0.05, 0.0, 0.0, 0.15, 0.0, 0.0, 0.35, 0.0, 0.0])
+    with pytest.raises(InputError, match="cannot be assembled"):
+        consistent_state(mech, q_guess)
+
+
+def test_check_assembly_of_a_failed_solve_without_guess():
+    mech, _ = slider_crank()
+    q = jnp.full(mech.n_coords, jnp.nan)  # what assemble returns for a singular Newton matrix
+    with pytest.raises(InputError, match="cannot be assembled.*non-finite"):
+        check_assembly(mech, q, False)
+
+
+def test_too_few_steps_raise_solver_error():
+    # a pendulum (crank pinned to the ground, no driver): cheap to compile
+    mech = Mechanism([Body("bob", 1.0, 0.1)],
+                     [RevoluteJoint("pivot", "bob", "ground", (-0.5, 0.0), (0.0, 0.0))],
+                     [Gravity()])
+    y0 = consistent_state(mech, jnp.array([0.5, 0.0, 0.0]))
+    traj = simulate(mech, y0, 1.0, ts=jnp.linspace(0.0, 1.0, 5), max_steps=10)
+    with pytest.raises(SolverError, match="max_steps") as err:
+        traj.raise_if_failed("pendulum")
+    msg = str(err.value)
+    assert msg.startswith("pendulum:") and "10 steps" in msg
+    assert "1 of 5 saved times reached" in msg  # only t = 0
+    assert not re.search(r"\b(inf|nan)\b", msg)  # unreached times are inf in diffrax

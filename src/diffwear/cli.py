@@ -32,6 +32,20 @@ def _study(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from . import runner
+    from .config import load
+    from .config.loader import decode
+
+    study = load(args.file)  # every input check happens before --out is touched
+    text = decode(Path(args.file).read_bytes(), args.file)
+    log = (lambda *a, **k: None) if args.quiet else print
+    runner.run(study, args.out, overwrite=args.overwrite, input_text=text, log=log)
+    return 0
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # argparse exits with 2 already; keep its message
         self.print_usage(sys.stderr)
@@ -49,6 +63,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_study)
+
+    p = sub.add_parser("run", help="simulate a mechanism file (TOML; see README 'Mechanism files')")
+    p.add_argument("file", help="mechanism file, e.g. design_studies/ideal_slider_crank.toml")
+    p.add_argument("--out", required=True,
+                   help="output folder (created; must not hold earlier results)")
+    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=_run)
     return parser
 
 

@@ -1,0 +1,17 @@
+"""Mechanisms and simulation studies from TOML files (``diffwear run FILE.toml``).
+
+`load` reads a file into a `Study` (mechanism, coordinate guess, integration
+settings, requested outputs); every problem is an `InputError` naming the file,
+the key path and what is allowed.  New element types register in
+`JOINT_TYPES` / `FORCE_TYPES` (see `elements`); units live in `units.DIMENSIONS`.
+"""
+
+from . import schema, units
+from .elements import FORCE_TYPES, JOINT_TYPES, ElementType
+from .loader import load, load_dict, loads
+from .study import ReactionOutput, Simulation, Study
+
+__all__ = [
+    "schema", "units", "FORCE_TYPES", "JOINT_TYPES", "ElementType", "load", "load_dict", "loads",
+    "ReactionOutput", "Simulation", "Study",
+]

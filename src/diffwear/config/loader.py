@@ -1,0 +1,294 @@
+"""Read a mechanism file (TOML, stdlib `tomllib`) into a `Study`.
+
+Top level (see README "Mechanism files"):
+
+    title, source         optional strings, shown in the report
+    [[bodies]]            name, mass, inertia
+    [[joints]]            type = one of JOINT_TYPES, then that type's fields
+    [[forces]]            type = one of FORCE_TYPES, then that type's fields
+    [initial]             <body> = { x, y, phi }: assembly guess for every body
+    [simulation]          duration, n_save, rtol, atol, baumgarte_alpha/beta, max_steps
+    [outputs]             reactions = ["joint", { joint = "...", on = "body" }, ...]
+
+Every problem raises `InputError("<file>: <key path>: <what>; allowed: ...")`.
+Nothing here integrates or assembles; see `diffwear.runner`.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+
+import jax.numpy as jnp
+
+from ..errors import InputError
+from ..mechanism import GROUND, Body, Mechanism
+from .elements import FORCE_TYPES, JOINT_TYPES, ElementType
+from .schema import (
+    NAME_RULE,
+    Context,
+    Integer,
+    Number,
+    Quantity,
+    Text,
+    check_table,
+    check_unknown,
+    read_array_of_tables,
+    read_table,
+    show,
+    suggest,
+    toml_type,
+)
+from .study import (
+    DEFAULT_ALPHA,
+    DEFAULT_ATOL,
+    DEFAULT_BETA,
+    DEFAULT_MAX_STEPS,
+    DEFAULT_N_SAVE,
+    DEFAULT_RTOL,
+    ReactionOutput,
+    Simulation,
+    Study,
+)
+
+SECTIONS = ("title", "source", "bodies", "joints", "forces", "initial", "simulation", "outputs")
+
+BODY_FIELDS = {
+    "name": Text(name=True),
+    "mass": Quantity(dimension="mass", low=0.0, low_open=True),
+    "inertia": Quantity(dimension="inertia", low=0.0, low_open=True, doc="about the COM"),
+}
+
+POSE_FIELDS = {
+    "x": Quantity(dimension="length"),
+    "y": Quantity(dimension="length"),
+    "phi": Quantity(dimension="angle"),
+}
+
+# Sanity bounds: beyond them a value is a typo, not a study.
+MAX_DURATION = 1e5  # s (~28 h of simulated time)
+MAX_N_SAVE = 10**7  # saved states (memory: n_save x state size x 8 bytes)
+SIMULATION_FIELDS = {
+    "duration": Quantity(dimension="time", low=0.0, low_open=True, high=MAX_DURATION),
+    "n_save": Integer(default=DEFAULT_N_SAVE, low=2, high=MAX_N_SAVE),
+    # float64 epsilon is 2.2e-16: a relative tolerance below ~1e-14 cannot be met.
+    "rtol": Number(default=DEFAULT_RTOL, low=1e-14, high=0.1),
+    "atol": Number(default=DEFAULT_ATOL, low=1e-16, high=1.0),
+    # Gains above 1e5 1/s make the stabilised DAE stiffer than any step size allows.
+    "baumgarte_alpha": Quantity(dimension="rate", default=DEFAULT_ALPHA, low=0.0, high=1e5),
+    "baumgarte_beta": Quantity(dimension="rate", default=DEFAULT_BETA, low=0.0, high=1e5),
+    "max_steps": Integer(default=DEFAULT_MAX_STEPS, low=1, high=10**9),
+}
+
+REACTION_FIELDS = {"joint": Text(), "on": Text(default=None)}
+
+
+# ----------------------------------------------------------------------------- entry points
+def load(path: str | Path) -> Study:
+    """Load a mechanism file; raise `InputError` naming the file for any problem."""
+    path = Path(path)
+    file = str(path)
+    allowed = "allowed: a path to a .toml mechanism file"
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise InputError(f"{file}: no such file; {allowed}") from None
+    except IsADirectoryError:
+        raise InputError(f"{file}: is a directory; {allowed}") from None
+    except OSError as err:
+        raise InputError(f"{file}: cannot be read ({err.strerror})") from None
+    return loads(data, file=file)
+
+
+def decode(data: bytes, file: str) -> str:
+    """UTF-8 text of ``data`` (a leading byte-order mark is dropped)."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = data[: err.start].count(b"\n") + 1
+        raise InputError(
+            f"{file}: line {line}: byte {err.start} ({data[err.start:err.start + 1]!r}) is not "
+            f"UTF-8 ({err.reason}); allowed: UTF-8 text (TOML files are UTF-8)"
+        ) from None
+    return text.removeprefix("\ufeff")
+
+
+def loads(source: str | bytes, file: str = "<string>") -> Study:
+    """Load mechanism-file text (``file`` names it in messages)."""
+    text = decode(source, file) if isinstance(source, bytes) else source
+    if not text.strip():
+        raise InputError(f"{file}: the file is empty; allowed: a TOML mechanism description "
+                         "with [[bodies]], [initial] and [simulation]")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise InputError(f"{file}: invalid TOML: {err}; allowed: TOML 1.0 syntax "
+                         "(https://toml.io)") from None
+    return load_dict(data, file=file)
+
+
+def load_dict(data: Mapping, file: str = "<dict>") -> Study:
+    """Build a `Study` from parsed TOML (a dict of dicts, lists and scalars)."""
+    ctx = Context(file)
+    if not isinstance(data, Mapping):
+        raise ctx.error("(top level)", f"expected a table, got {toml_type(data)}")
+    if not data:
+        raise InputError(f"{file}: the file holds no keys or tables (only comments?); allowed: "
+                         "[[bodies]], [[joints]], [[forces]], [initial], [simulation], [outputs]")
+    check_unknown(ctx, "", data, SECTIONS)
+    title = _optional_text(ctx, data, "title")
+    source = _optional_text(ctx, data, "source")
+
+    bodies = _bodies(ctx, data.get("bodies"))
+    ctx.bodies = tuple(b.name for b in bodies)
+    constraints = _elements(ctx, "joints", data.get("joints"), JOINT_TYPES, FORCE_TYPES)
+    forces = _elements(ctx, "forces", data.get("forces"), FORCE_TYPES, JOINT_TYPES)
+    _unique_element_names(ctx, data, constraints, forces)
+    try:
+        mechanism = Mechanism(bodies, [c for _, c in constraints], [f for _, f in forces])
+    except InputError as err:  # checks above should catch everything; keep the file name
+        raise InputError(f"{file}: {err}") from None
+
+    return Study(
+        file=file,
+        title=title,
+        source=source,
+        mechanism=mechanism,
+        q_guess=_initial(ctx, data.get("initial")),
+        simulation=_simulation(ctx, data.get("simulation")),
+        reactions=_outputs(ctx, data.get("outputs", {}), mechanism),
+    )
+
+
+# ----------------------------------------------------------------------------- sections
+def _optional_text(ctx, data, key) -> str:
+    value = data.get(key, "")
+    if not isinstance(value, str):
+        raise ctx.error(key, f"expected a string, got {toml_type(value)} {show(value)}", "a string")
+    return value
+
+
+def _bodies(ctx: Context, raw) -> list[Body]:
+    out, seen = [], {}
+    for k, table in enumerate(read_array_of_tables(ctx, "bodies", raw, required=True)):
+        v = read_table(ctx, f"bodies[{k}]", table, BODY_FIELDS)
+        name = v["name"]
+        if name == GROUND:
+            raise ctx.error(f"bodies[{k}].name", f"{GROUND!r} is reserved for the fixed frame",
+                            f"any other name: {NAME_RULE}")
+        if name in seen:
+            raise ctx.error(f"bodies[{k}].name",
+                            f"{name!r} is already the name of bodies[{seen[name]}]",
+                            "unique body names")
+        seen[name] = k
+        out.append(Body(name, v["mass"], v["inertia"]))
+    return out
+
+
+def _elements(ctx: Context, section: str, raw, types: Mapping[str, ElementType],
+              other: Mapping[str, ElementType]):
+    """[(index, element)] of ``[[joints]]`` or ``[[forces]]``."""
+    out = []
+    kinds = ", ".join(repr(t) for t in types)
+    for k, table in enumerate(read_array_of_tables(ctx, section, raw, required=False)):
+        path = f"{section}[{k}]"
+        kind = table.get("type")
+        if kind is None:
+            raise ctx.error(f"{path}.type", "missing key", kinds)
+        if not isinstance(kind, str):
+            raise ctx.error(f"{path}.type",
+                            f"expected a string, got {toml_type(kind)} {show(kind)}", kinds)
+        if kind not in types:
+            what = f"unknown {section[:-1]} type {kind!r}{suggest(kind, list(types))}"
+            if kind in other:
+                home = "forces" if section == "joints" else "joints"
+                what += f" ({kind!r} belongs under [[{home}]])"
+            raise ctx.error(f"{path}.type", what, kinds)
+        spec = types[kind]
+        values = read_table(ctx, path, {key: val for key, val in table.items() if key != "type"},
+                            spec.fields)
+        try:
+            element = spec.build(values)
+        except InputError as err:
+            raise ctx.wrap(path, err) from None
+        names = element.bodies
+        if len(set(names)) < len(names):
+            raise ctx.error(path, f"connects body {names[0]!r} to itself",
+                            "two different bodies (one may be \"ground\")")
+        out.append((k, element))
+    return out
+
+
+def _unique_element_names(ctx, data, constraints, forces):
+    seen = {}
+    for section, items in (("joints", constraints), ("forces", forces)):
+        for k, element in items:
+            path = f"{section}[{k}]"
+            if element.name in seen:
+                raise ctx.error(f"{path}.name",
+                                f"{element.name!r} is already the name of {seen[element.name]}",
+                                "names unique among all joints and forces")
+            seen[element.name] = path
+
+
+def _initial(ctx: Context, raw):
+    if raw is None:
+        raise ctx.error("initial", "missing section",
+                        "[initial] with <body> = { x = \"..\", y = \"..\", phi = \"..\" } "
+                        "for every body")
+    table = check_table(ctx, "initial", raw, "<body> = { x, y, phi } for every body")
+    check_unknown(ctx, "initial", table, ctx.bodies)
+    rows = []
+    for name in ctx.bodies:
+        if name not in table:
+            raise ctx.error(f"initial.{name}", "missing guess for this body",
+                            f"{name} = {{ x = \"0 m\", y = \"0 m\", phi = \"0 deg\" }}")
+        v = read_table(ctx, f"initial.{name}", table[name], POSE_FIELDS, "{ x, y, phi }")
+        rows += [v["x"], v["y"], v["phi"]]
+    return jnp.asarray(rows, dtype=float)
+
+
+def _simulation(ctx: Context, raw) -> Simulation:
+    if raw is None:
+        raise ctx.error("simulation", "missing section",
+                        "[simulation] with at least duration = \"2 s\"")
+    v = read_table(ctx, "simulation", raw, SIMULATION_FIELDS)
+    return Simulation(**v)
+
+
+def _outputs(ctx: Context, raw, mechanism: Mechanism) -> tuple[ReactionOutput, ...]:
+    table = check_table(ctx, "outputs", raw, "reactions = [...]")
+    check_unknown(ctx, "outputs", table, ("reactions",))
+    entries = table.get("reactions", [])
+    joints = {c.name: c for c in mechanism.constraints}
+    if not isinstance(entries, list):
+        raise ctx.error("outputs.reactions", f"expected an array, got {toml_type(entries)} "
+                        f"{show(entries)}", "an array of joint names or { joint, on } tables")
+    out, seen = [], set()
+    for k, entry in enumerate(entries):
+        path = f"outputs.reactions[{k}]"
+        if isinstance(entry, str):
+            entry = {"joint": entry}
+        elif not isinstance(entry, dict):
+            raise ctx.error(path, f"expected a joint name or a table, got {toml_type(entry)} "
+                            f"{show(entry)}",
+                            "\"<joint>\" or { joint = \"<joint>\", on = \"<body>\" }")
+        v = read_table(ctx, path, entry, REACTION_FIELDS)
+        name = v["joint"]
+        if name not in joints:
+            forces = [f.name for f in mechanism.forces]
+            what = f"unknown joint {name!r}{suggest(name, list(joints))}"
+            if name in forces:
+                what = f"{name!r} is a force element, not a joint (it has no reaction)"
+            raise ctx.error(path, what, ", ".join(joints) or "(no joints)")
+        movable = [b for b in joints[name].bodies if b != GROUND]
+        on = movable[-1] if v["on"] is None else v["on"]
+        if on not in movable:
+            raise ctx.error(f"{path}.on", f"{on!r} is not a (non-ground) body of joint {name!r}",
+                            ", ".join(movable))
+        if name in seen:  # one reaction_<joint>.csv per joint
+            raise ctx.error(path, f"joint {name!r} is requested twice", "each joint once")
+        seen.add(name)
+        out.append(ReactionOutput(name, on))
+    return tuple(out)

@@ -1,0 +1,238 @@
+"""``diffwear run FILE.toml``: simulate a loaded `Study` and write its outputs.
+
+Stages, each with its own error class so that the CLI's exit code says which
+one failed: `initial_state` (assembly; `InputError`), `integrate`
+(`SolverError`), `write` (files).  Outputs in the results folder:
+
+    summary.json          key numbers (written last: marks a finished run)
+    report.md             what was run and what came out, linking the rest
+    trajectory.csv        t_s, then <body>_x_m, <body>_y_m, <body>_phi_rad for every body,
+                          then <body>_vx_m_s, <body>_vy_m_s, <body>_omega_rad_s
+    reaction_<joint>.csv  t_s, fx_N, fy_N, m_Nm: the wrench the joint exerts ON the
+                          output's body (global axes; moment about that body's COM)
+    trajectory.png, reactions.png
+    input.toml            copy of the mechanism file
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from collections.abc import Callable
+from typing import NamedTuple
+
+import equinox as eqx
+import jax
+import numpy as np
+
+from . import plots
+from .config import Study
+from .config.study import Simulation
+from .dynamics import (
+    along_trajectory,
+    check_assembly,
+    consistent_state,
+    reaction_wrench,
+    simulate,
+)
+from .dynamics.simulate import Trajectory
+from .errors import InputError
+from .io import OutputDir
+from .mechanism import Mechanism
+
+
+_consistent_state = eqx.filter_jit(functools.partial(consistent_state, check=False))
+
+
+def initial_state(study: Study):
+    """Consistent y0 = [q, qd, aux] at t = 0 from the file's ``[initial]`` guess;
+    `InputError` if the mechanism does not assemble near it.
+
+    Same result as ``consistent_state(mech, q_guess)`` but compiled (the eager
+    Newton iteration costs seconds); the check then runs on concrete values.
+    """
+    mech = study.mechanism
+    y0 = _consistent_state(mech, study.q_guess)
+    finite = bool(np.all(np.isfinite(np.asarray(y0))))
+    # Newton may end in NaN (e.g. on a singular Jacobian); the SVD of
+    # `check_assembly` needs finite numbers, so diagnose at the guess then.
+    q = y0[: mech.n_coords] if finite else study.q_guess
+    try:
+        check_assembly(mech, q, finite)
+    except InputError as err:
+        raise InputError(f"{study.file}: initial: {err}") from None
+    return y0
+
+
+@eqx.filter_jit
+def _integrate(mech: Mechanism, y0, sim: Simulation) -> Trajectory:
+    return simulate(mech, y0, sim.duration, ts=sim.ts(), baumgarte=sim.baumgarte(),
+                    stepsize_controller=sim.controller(), max_steps=sim.max_steps)
+
+
+def integrate(study: Study, y0) -> Trajectory:
+    """The study's trajectory; `SolverError` (naming the file) if the solve failed."""
+    traj = _integrate(study.mechanism, y0, study.simulation)
+    return traj.raise_if_failed(study.file)
+
+
+class Results(NamedTuple):
+    ts: np.ndarray          # (T,) s
+    q: np.ndarray           # (T, n) m / rad
+    qd: np.ndarray          # (T, n) m/s / rad/s
+    violation: np.ndarray   # (T, m) constraint residuals (m or rad per row)
+    reactions: dict         # joint -> (T, 3): fx [N], fy [N], moment about COM [N m]
+
+
+@eqx.filter_jit
+def _post(mech: Mechanism, ts, ys, sim: Simulation, outputs):
+    _, lam, _ = along_trajectory(mech, ts, ys, sim.baumgarte())
+    q, qd, _ = jax.vmap(mech.split)(ys)
+    phi = jax.vmap(mech.phi)(q, ts)
+    wrenches = {
+        o.joint: jax.vmap(lambda qq, ll, t, o=o: reaction_wrench(mech, qq, ll, t, o.joint, o.on))(
+            q, lam, ts)
+        for o in outputs
+    }
+    return q, qd, phi, wrenches
+
+
+def postprocess(study: Study, traj: Trajectory) -> Results:
+    q, qd, phi, wrenches = _post(study.mechanism, traj.ts, traj.ys, study.simulation,
+                                 study.reactions)
+    return Results(np.asarray(traj.ts), np.asarray(q), np.asarray(qd), np.asarray(phi),
+                   {k: np.asarray(v) for k, v in wrenches.items()})
+
+
+# ----------------------------------------------------------------------------- files
+def _trajectory_columns(mech: Mechanism, r: Results) -> dict:
+    cols = {"t_s": r.ts}
+    for i, b in enumerate(mech.body_names):
+        cols |= {f"{b}_x_m": r.q[:, 3 * i], f"{b}_y_m": r.q[:, 3 * i + 1],
+                 f"{b}_phi_rad": r.q[:, 3 * i + 2]}
+    for i, b in enumerate(mech.body_names):
+        cols |= {f"{b}_vx_m_s": r.qd[:, 3 * i], f"{b}_vy_m_s": r.qd[:, 3 * i + 1],
+                 f"{b}_omega_rad_s": r.qd[:, 3 * i + 2]}
+    return cols
+
+
+def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time: float,
+          input_text: str | None = None, started: float | None = None) -> dict:
+    """Write every output file; returns the summary (also ``summary.json``)."""
+    mech, sim = study.mechanism, study.simulation
+    if input_text is not None:
+        out.text("input.toml", input_text)
+    out.csv("trajectory.csv", _trajectory_columns(mech, r))
+    by_joint = {c.name: float(np.max(np.abs(r.violation[:, mech.constraint_rows(c.name)])))
+                for c in mech.constraints}
+    reactions = {}
+    for o in study.reactions:
+        w = r.reactions[o.joint]
+        name = f"reaction_{o.joint}.csv"
+        out.csv(name, {"t_s": r.ts, "fx_N": w[:, 0], "fy_N": w[:, 1], "m_Nm": w[:, 2]})
+        reactions[o.joint] = {
+            "on_body": o.on,
+            "max_force_N": float(np.max(np.hypot(w[:, 0], w[:, 1]))),
+            "max_abs_moment_Nm": float(np.max(np.abs(w[:, 2]))),
+            "file": name,
+        }
+
+    panels = [(f"{c} [{u}]", {b: r.q[:, 3 * i + k] for i, b in enumerate(mech.body_names)})
+              for k, (c, u) in enumerate((("x", "m"), ("y", "m"), ("φ", "rad")))]
+    if r.violation.shape[1]:
+        panels.append(("max |Φ| [m, rad]", {"all constraints": np.max(np.abs(r.violation), axis=1)
+                                             + 1e-300}))
+    figures = [plots.stacked(out.file("trajectory.png"), r.ts, panels, xlabel="time [s]",
+                             logy=[False, False, False, True][: len(panels)],
+                             title=f"{study.title or study.file}: body coordinates")]
+    if study.reactions:
+        figures.append(plots.stacked(out.file("reactions.png"), r.ts, [
+            ("|F| [N]", {f"{o.joint} on {o.on}": np.hypot(r.reactions[o.joint][:, 0],
+                                                           r.reactions[o.joint][:, 1])
+                         for o in study.reactions}),
+            ("M about COM [N m]", {f"{o.joint} on {o.on}": r.reactions[o.joint][:, 2]
+                                   for o in study.reactions}),
+        ], xlabel="time [s]", title=f"{study.title or study.file}: joint reactions"))
+
+    wall = time.perf_counter() - started if started is not None else simulate_time
+    summary = {
+        "file": study.file,
+        "title": study.title,
+        "duration_s": sim.duration,
+        "n_save": sim.n_save,
+        "max_constraint_violation": max(by_joint.values(), default=0.0),
+        "max_constraint_violation_by_joint": by_joint,
+        "reactions": reactions,
+        "integrator_steps": steps,
+        "simulate_time_s": simulate_time,
+        "wall_time_s": wall,
+        "files": sorted(set(out.files)) + ["report.md", "summary.json"],
+    }
+    out.text("report.md", _report(study, summary, [f.name for f in figures]))
+    out.json("summary.json", summary)
+    return summary
+
+
+def _report(study: Study, s: dict, figures: list[str]) -> str:
+    mech, sim = study.mechanism, study.simulation
+    lines = [
+        f"# {study.title or study.file}\n",
+        f"Mechanism file: `{study.file}` (copy: [input.toml](input.toml)).  "
+        + (f"Source of the numbers: {study.source}." if study.source else ""),
+        "",
+        f"{len(mech.bodies)} bodies ({', '.join(mech.body_names)}), "
+        f"{len(mech.constraints)} joints ({', '.join(c.name for c in mech.constraints) or '-'}), "
+        f"{len(mech.forces)} force elements ({', '.join(f.name for f in mech.forces) or '-'}); "
+        f"{mech.n_coords} coordinates, {mech.n_constraints} constraint rows.\n",
+        f"Simulated 0 .. {sim.duration:g} s ({sim.n_save} saved states) with Tsit5, PID step "
+        f"control (rtol {sim.rtol:g}, atol {sim.atol:g}), Baumgarte alpha = "
+        f"{sim.baumgarte_alpha:g} 1/s, "
+        f"beta = {sim.baumgarte_beta:g} 1/s.\n",
+        "| quantity | value |", "|---|---|",
+        f"| max constraint violation | {s['max_constraint_violation']:.3e} "
+        "(m; rad for angle rows) |",
+        f"| integrator steps | {s['integrator_steps']} |",
+        f"| simulation time (incl. compilation) | {s['simulate_time_s']:.2f} s |",
+        f"| wall time | {s['wall_time_s']:.2f} s |\n",
+    ]
+    if s["reactions"]:
+        lines += [
+            "## Joint reactions\n",
+            "Wrench the joint exerts **on** the named body: force in global axes, moment about "
+            "that body's centre of mass (for a driver: the driving torque).\n",
+            "| joint | on body | max abs(F) [N] | max abs(M) [N m] | file |",
+            "|---|---|---|---|---|",
+        ]
+        lines += [f"| {j} | {r['on_body']} | {r['max_force_N']:.4g} | {r['max_abs_moment_Nm']:.4g} "
+                  f"| [{r['file']}]({r['file']}) |" for j, r in s["reactions"].items()]
+        lines.append("")
+    lines += [
+        "## Files\n",
+        "- [summary.json](summary.json): the numbers above",
+        "- [trajectory.csv](trajectory.csv): t_s; every body's x_m, y_m, phi_rad (centre of "
+        "mass), then vx_m_s, vy_m_s, omega_rad_s",
+        "",
+    ]
+    lines += [f"![{name}]({name})\n" for name in figures]
+    return "\n".join(lines)
+
+
+def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str | None = None,
+        log: Callable[..., None] = print) -> dict:
+    """Assemble, integrate, write.  Bad input fails before ``out_dir`` is touched."""
+    started = time.perf_counter()
+    y0 = initial_state(study)
+    out = OutputDir(out_dir, overwrite=overwrite)
+    log(f"[{study.file}] integrating {study.simulation.duration:g} s (first run compiles) ...")
+    t0 = time.perf_counter()
+    traj = jax.block_until_ready(integrate(study, y0))
+    simulate_time = time.perf_counter() - t0
+    results = postprocess(study, traj)
+    summary = write(study, results, out, steps=int(traj.num_steps), simulate_time=simulate_time,
+                    input_text=input_text, started=started)
+    log(f"[{study.file}] max constraint violation {summary['max_constraint_violation']:.2e}; "
+        f"report: {out.path / 'report.md'}")
+    return summary
+
+
+__all__ = ["initial_state", "integrate", "postprocess", "write", "run", "Results"]

@@ -153,6 +153,14 @@ def evolve(
     if method not in ("constant", "adaptive", "error"):
         raise InputError(f"method must be 'constant', 'adaptive' or 'error', got {method!r}")
     index, el = clearance_element(mech, joint)
+    if method == "constant":
+        a_check = float(extrapolation)
+        if a_check < 1.0 or not math.isfinite(a_check):
+            raise InputError(f"extrapolation factor A must be >= 1, got {a_check}")
+        if float(cycles) <= 0:
+            raise InputError(f"cycles must be > 0, got {cycles}")
+    else:
+        _slots(max_dynamic, cycles)
     c_base = el.profile.clearance
     radius, bdepth, k = el.bushing_radius, el.law.depth, el.wear.coefficient
     wall = jnp.inf if wall_thickness is None else jnp.asarray(wall_thickness, dtype=float)

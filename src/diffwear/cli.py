@@ -28,7 +28,14 @@ def _study(args: argparse.Namespace) -> int:
         raise InputError("study: --out DIR is required")
     out = OutputDir(args.out, overwrite=args.overwrite)
     log = (lambda *a, **k: None) if args.quiet else print
-    STUDIES[args.name].run(out, log=log)
+    kwargs = {}
+    if args.cycles is not None:
+        if args.cycles <= 0:
+            raise InputError(f"--cycles must be a positive integer, got {args.cycles}")
+        if "cycles" not in STUDIES[args.name].run.__code__.co_varnames:
+            raise InputError(f"study {args.name!r} does not take --cycles")
+        kwargs["cycles"] = args.cycles
+    STUDIES[args.name].run(out, log=log, **kwargs)
     return 0
 
 
@@ -61,6 +68,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--list", action="store_true", help="list the studies and exit")
     p.add_argument("--out", help="output folder (created; must not hold earlier results)")
     p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    p.add_argument("--cycles", type=int, default=None,
+                   help="number of real crank cycles (wear studies)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_study)
 

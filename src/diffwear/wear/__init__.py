@@ -2,4 +2,24 @@
 
 from .archard import MM3_PER_NM, SLIP_RATE_WIDTH, ArchardWear
 
-__all__ = ["MM3_PER_NM", "SLIP_RATE_WIDTH", "ArchardWear"]
+__all__ = [
+    "MM3_PER_NM", "SLIP_RATE_WIDTH", "ArchardWear",
+    "CycleResult", "wear_cycle", "reset_wear",
+    "EvolutionResult", "evolve", "smooth_max", "worn_volume", "WearLimitError",
+]
+
+# cycle/evolution import the contact package, which itself imports
+# `wear.archard`: load them lazily to keep the import graph acyclic.
+_LAZY = {
+    "CycleResult": "cycle", "wear_cycle": "cycle", "reset_wear": "cycle",
+    "EvolutionResult": "evolution", "evolve": "evolution", "smooth_max": "evolution",
+    "worn_volume": "evolution", "WearLimitError": "evolution",
+}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    raise AttributeError(name)

@@ -1,0 +1,167 @@
+"""Shared driver of the wear studies (``wear-5000``, ``rig-21400``)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..contact import contact_history
+from ..dynamics import consistent_state
+from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
+from ..wear import evolve, wear_cycle, worn_volume
+from ..wear.evolution import _with_profile
+
+JOINT = "crank_rod"
+N_SAVE = 401
+
+
+def params_of(d: WearJointDesign):
+    """(k, clearance, depth, diameter) as one array: the differentiable inputs."""
+    return jnp.stack([d.k, d.clearance, d.depth, d.diameter])
+
+
+def design_of(p, base: WearJointDesign) -> WearJointDesign:
+    return WearJointDesign(p[0], p[1], p[2], p[3], base.wall, base.mu, base.restitution)
+
+
+def initial_state(mech0, q_guess, mech):
+    y_ideal = consistent_state(mech0, q_guess)
+    q, qd, _ = mech0.split(y_ideal)
+    return mech.join(q, qd, mech.initial_aux(q, qd))
+
+
+def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, max_dynamic,
+                  wall, n_theta, rtol=1e-2, atol=1e-7):
+    """Compile (timed) and run (timed) the whole evolution as one jitted function."""
+    def fn(p, y0):
+        return evolve(mech_of_p(p), JOINT, y0, cycles, period=period, method=method,
+                      extrapolation=extrapolation, max_dynamic=max_dynamic,
+                      wall_thickness=wall, rtol=rtol, atol=atol)
+
+    t0 = time.perf_counter()
+    compiled = jax.jit(fn).lower(p, y0).compile()
+    compile_time = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    res = jax.block_until_ready(compiled(p, y0))
+    wall_time = time.perf_counter() - t0
+    return res, compile_time, wall_time
+
+
+def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, cycles,
+                  compile_time, wall_time, thesis: dict, method: str, extrapolation,
+                  description: str, log, extra_summary=None, extra_report=()):
+    from .. import plots_wear
+
+    el = mech.element(JOINT)
+    n = el.profile.n
+    theta = np.asarray(el.profile.theta)
+    depth = np.asarray(res.depth)
+    rb, bd = float(design.bushing_radius), float(design.depth)
+    volume = float(worn_volume(res.depth, rb, bd))
+    mass_g = volume * PTFE_DENSITY * 1e3
+    archard_volume = float(design.k * res.load_sliding)
+
+    # first (after the warm-up) and last dynamic cycles, saved densely
+    cyc = jax.jit(lambda m, y, t: wear_cycle(m, JOINT, y, t, period, n_save=N_SAVE))
+    warm = cyc(mech, y0, 0.0)
+    first = cyc(mech, warm.y_end, period)
+    last = cyc(_with_profile(mech, _index(mech), el.profile.clearance + res.depth), res.y, res.t)
+    hist_first = contact_history(mech, JOINT, first.ys)
+    mech_last = _with_profile(mech, _index(mech), el.profile.clearance + res.depth)
+    hist_last = contact_history(mech_last, JOINT, last.ys)
+    tt = np.asarray(first.ts) - float(first.ts[0])
+    crank = 2 * np.pi * tt / period
+
+    out.csv("wear_profile.csv", {"theta_rad": theta, "depth_mm": depth * 1e3})
+    h = {k: np.asarray(v) for k, v in res.history.items()}
+    valid = h["valid"].astype(bool)
+    out.csv("wear_history.csv", {
+        "cycles": np.concatenate([[0.0], h["cycles"][valid]]),
+        "max_depth_mm": np.concatenate([[0.0], h["max_depth"][valid] * 1e3]),
+        "volume_mm3": np.concatenate([[0.0], h["volume"][valid] * 1e9]),
+        "extrapolation": np.concatenate([[0.0], h["extrapolation"][valid]]),
+        "dynamic_cycles": np.concatenate([[h["dynamic_cycles"][0] * 0 + 1],
+                                          h["dynamic_cycles"][valid]]),
+    })
+    for tag, hist in (("first", hist_first), ("last", hist_last)):
+        f = np.asarray(hist.force)
+        out.csv(f"joint_force_{tag}_cycle.csv", {
+            "crank_angle_rad": crank, "fx_N": f[:, 0], "fy_N": f[:, 1],
+            "force_N": np.hypot(f[:, 0], f[:, 1]), "normal_load_N": np.asarray(hist.normal_load),
+        })
+        off = np.asarray(hist.offset)
+        out.csv(f"contact_locus_{tag}_cycle.csv", {
+            "crank_angle_rad": crank, "offset_x_mm": off[:, 0] * 1e3,
+            "offset_y_mm": off[:, 1] * 1e3, "contact_angle_rad": np.asarray(hist.contact_angle),
+            "penetration_um": np.asarray(hist.penetration) * 1e6,
+        })
+
+    figs = plots_wear.wear_figures(out, name=name, theta=theta, depth_mm=depth * 1e3,
+                                   history=(h["cycles"][valid], h["max_depth"][valid] * 1e3,
+                                            h["volume"][valid] * 1e9),
+                                   crank=crank, first=hist_first, last=hist_last,
+                                   clearance_mm=float(design.clearance) * 1e3, thesis=thesis)
+
+    summary = {
+        "study": name,
+        "cycles": float(res.cycles),
+        "cycles_requested": float(cycles),
+        "max_wear_depth_mm": float(depth.max() * 1e3),
+        "max_wear_angle_rad": float(theta[np.argmax(depth)]),
+        "wear_volume_mm3": volume * 1e9,
+        "worn_mass_g": mass_g,
+        "archard_k_times_load_sliding_mm3": archard_volume * 1e9,
+        "dynamic_cycles_simulated": int(res.dynamic_cycles),
+        "method": method,
+        "extrapolation": extrapolation,
+        "status": int(res.status),
+        "wall_time_s": wall_time,
+        "compile_time_s": compile_time,
+        "mean_joint_force_first_cycle_N": float(np.mean(np.asarray(hist_first.force_magnitude))),
+        "mean_normal_load_first_cycle_N": float(np.mean(np.asarray(hist_first.normal_load))),
+        "n_theta": n,
+        "thesis": thesis,
+        **(extra_summary or {}),
+    }
+    summary["files"] = sorted(set(out.files)) + ["report.md", "summary.json"]
+    rows = [
+        f"# {name}\n", description + "\n",
+        "| quantity | diffwear | " + " | ".join(thesis) + " |",
+        "|---" * (2 + len(thesis)) + "|",
+        f"| max wear depth [mm] | {summary['max_wear_depth_mm']:.4f} | "
+        + " | ".join(f"{v.get('max_wear_depth_mm', '')}" for v in thesis.values()) + " |",
+        f"| wear volume [mm^3] | {summary['wear_volume_mm3']:.2f} | "
+        + " | ".join(f"{v.get('wear_volume_mm3', '')}" for v in thesis.values()) + " |",
+        f"| worn mass [g] | {summary['worn_mass_g']:.4f} | "
+        + " | ".join(f"{v.get('worn_mass_g', '')}" for v in thesis.values()) + " |",
+        "",
+        f"- cycles: {summary['cycles']:.0f}; dynamic cycles simulated: "
+        f"{summary['dynamic_cycles_simulated']} (method {method}, A/A0 {extrapolation}; "
+        "incl. 1 warm-up cycle whose wear is discarded)",
+        f"- Archard check: k x sum(N ds) = {summary['archard_k_times_load_sliding_mm3']:.3f} mm^3",
+        f"- peak wear at theta = {summary['max_wear_angle_rad']:.3f} rad (bushing frame, "
+        "from the rod axis crank->slider)",
+        f"- mean |joint force| first cycle {summary['mean_joint_force_first_cycle_N']:.1f} N, "
+        f"mean total normal load {summary['mean_normal_load_first_cycle_N']:.1f} N",
+        f"- wall time {wall_time:.1f} s, compile time {compile_time:.1f} s",
+        *extra_report, "",
+    ]
+    rows += [f"![{f}]({f})\n" for f in figs]
+    out.text("report.md", "\n".join(rows))
+    out.json("summary.json", summary)
+    log(f"[{name}] max depth {summary['max_wear_depth_mm']:.4f} mm, volume "
+        f"{summary['wear_volume_mm3']:.2f} mm^3, {summary['dynamic_cycles_simulated']} dynamic "
+        f"cycles, {wall_time:.1f} s (+{compile_time:.1f} s compile)")
+    return summary
+
+
+def _index(mech):
+    return next(i for i, f in enumerate(mech.forces) if f.name == JOINT)
+
+
+def default_constant_a(cycles, target_dynamic):
+    return max(1.0, float(math.ceil(cycles / target_dynamic)))

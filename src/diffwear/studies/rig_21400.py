@@ -1,0 +1,113 @@
+"""Study ``rig-21400``: thesis Ch. 7 experimental rig (Tables 7-1..7-6).
+
+Rig slider-crank (Table 7-1, half-lengths), slider spring 525.4 N/m pulling the
+slider away from the crank, crank-rod EFM PTFE bushing (Table 7-2), 30 rpm,
+21,400 cycles.  The spring free length is calibrated (`calibrate_free_length`)
+so that the worn volume equals the thesis models' 106.7 mm^3.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from ..io import OutputDir
+from ..presets import (
+    PTFE_DENSITY,
+    RIG_CYCLES,
+    RIG_JOINT,
+    RIG_SPRING_ANCHOR_X,
+    RIG_SPRING_FREE_LENGTH,
+    RIG_SPRING_STIFFNESS,
+    TABLE_7_1,
+    THESIS_CRANK_SPEED,
+    rig_slider_crank,
+    with_wear_joint,
+)
+from ..wear import evolve, worn_volume
+from . import _wear_common as common
+
+NAME = "rig-21400"
+DESCRIPTION = "Ch. 7: experimental rig, EFM crank-rod bushing wear over 21,400 cycles"
+
+N_THETA = 180
+TARGET_DYNAMIC = 50
+PERIOD = 2 * 3.141592653589793 / THESIS_CRANK_SPEED
+TARGET_VOLUME_MM3 = 106.7  # Table 7-4: FEM 106.71, EFM 106.68 mm^3
+
+THESIS = {  # Tables 7-4..7-6
+    "EFM (Table 7-4)": {"max_wear_depth_mm": 0.4263, "wear_volume_mm3": 106.68, "time_h": 7},
+    "FEM (Table 7-4)": {"max_wear_depth_mm": 0.4779, "wear_volume_mm3": 106.71, "time_h": 11},
+    "measured (Tables 7-5/7-6)": {"max_wear_depth_mm": 0.4850, "wear_volume_mm3": 116.27,
+                                  "worn_mass_g": 0.2616},
+}
+
+
+def _setup(p=TABLE_7_1, free_length=None):
+    mech0, q_guess = rig_slider_crank(p, free_length=free_length)
+    mech = with_wear_joint(mech0, RIG_JOINT, n_theta=N_THETA)
+    y0 = common.initial_state(mech0, q_guess, mech)
+    return mech0, mech, y0
+
+
+def calibrate_free_length(l0_guesses=(0.50, 0.56), *, cycles=RIG_CYCLES, dynamic=10,
+                          iterations=4, p=TABLE_7_1, log=print) -> float:
+    """Secant iteration on the spring free length L0 [m] so that the volume after
+    ``cycles`` (constant A = cycles / ``dynamic``) equals 106.7 mm^3.  The volume is
+    nearly linear in the spring force, hence in L0: 2-4 iterations suffice."""
+    _, mech, y0 = _setup(p, l0_guesses[0])
+    idx = common._index(mech)
+    spring = next(i for i, f in enumerate(mech.forces) if f.name == "slider_spring")
+
+    @jax.jit
+    def volume(l0):
+        import equinox as eqx
+
+        m = eqx.tree_at(lambda m: m.forces[spring].free_length, mech, l0)
+        r = evolve(m, common.JOINT, y0, cycles, period=PERIOD,
+                   extrapolation=float(cycles) / dynamic)
+        return worn_volume(r.depth, m.forces[idx].bushing_radius, m.forces[idx].law.depth) * 1e9
+
+    x0, x1 = l0_guesses
+    f0, f1 = float(volume(x0)) - TARGET_VOLUME_MM3, float(volume(x1)) - TARGET_VOLUME_MM3
+    log(f"[{NAME}] calibrate L0: {x0:.5f} m -> {f0 + TARGET_VOLUME_MM3:.2f}; "
+        f"{x1:.5f} m -> {f1 + TARGET_VOLUME_MM3:.2f} mm^3")
+    for _ in range(iterations):
+        if abs(f1) < 0.05:
+            break
+        x0, x1, f0 = x1, x1 - f1 * (x1 - x0) / (f1 - f0), f1
+        f1 = float(volume(x1)) - TARGET_VOLUME_MM3
+        log(f"[{NAME}] calibrate L0: {x1:.5f} m -> {f1 + TARGET_VOLUME_MM3:.2f} mm^3")
+    return x1
+
+
+def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
+        extrapolation: float | None = None, free_length: float | None = None,
+        log=print) -> dict:
+    l0 = RIG_SPRING_FREE_LENGTH if free_length is None else free_length
+    mech0, mech, y0 = _setup(TABLE_7_1, l0)
+    design = RIG_JOINT
+    mech_of_p = lambda p: with_wear_joint(mech0, common.design_of(p, design), n_theta=N_THETA)  # noqa: E731
+    a = extrapolation or common.default_constant_a(cycles, TARGET_DYNAMIC)
+    log(f"[{NAME}] {cycles} cycles, method {method}, A {a}, spring L0 {l0:.5f} m ...")
+    res, ct, wt = common.run_evolution(
+        mech_of_p, common.params_of(design), y0, cycles, PERIOD, method=method,
+        extrapolation=a, max_dynamic=4 * TARGET_DYNAMIC, wall=design.wall, n_theta=N_THETA)
+    x3 = jnp.asarray(y0[6])
+    spring_mid = RIG_SPRING_STIFFNESS * (RIG_SPRING_ANCHOR_X - float(x3) - l0)
+    summary = common.write_outputs(
+        out, name=NAME, mech=mech, design=design, res=res, y0=y0, period=PERIOD, cycles=cycles,
+        compile_time=ct, wall_time=wt, thesis=THESIS, method=method, extrapolation=a,
+        description=(
+            "Rig of thesis Ch. 7: Table 7-1 read as half-lengths (crank 38.1 mm, rod 101.6 mm "
+            "COM distances), gravity -y in the plane, slider spring 525.4 N/m pulling the "
+            f"slider away from the crank (anchor x = {RIG_SPRING_ANCHOR_X} m, free length "
+            f"L0 = {l0:.5f} m, calibrated to 106.7 mm^3), EFM PTFE bushing R 9.533 mm on a "
+            "9.500 mm pin, wall 6.342 mm, depth 13.1 mm, mu 0.13, k 5.05e-4 mm^3/(N m), "
+            f"30 rpm. Worn mass with PTFE density {PTFE_DENSITY / 1e3:g} g/cm^3."),
+        log=log,
+        extra_summary={"spring_free_length_m": l0,
+                       "spring_force_at_t0_N": spring_mid},
+        extra_report=[f"- spring force at t = 0 (crank angle 0): {spring_mid:.1f} N"])
+    res.check(NAME)
+    return summary

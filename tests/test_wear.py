@@ -1,0 +1,151 @@
+"""Wear cycle and wear evolution: bookkeeping, convergence, gradients, failures.
+
+Reduced problem: the Table 2-1 slider-crank with the wear-5000 joint on a
+coarse grid (n_theta = 36) and a wear coefficient amplified 100x
+(K_FAST), so that a few cycles change the profile by many clearances and the
+extrapolation error is visible.
+"""
+
+import math
+
+import diffrax
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from diffwear.errors import InputError
+from diffwear.presets import WEAR_5000, WearJointDesign, slider_crank, with_wear_joint
+from diffwear.studies import _wear_common as common
+from diffwear.wear import ArchardWear, WearLimitError, evolve, smooth_max, worn_volume
+
+N_THETA = 36
+PERIOD = 2.0
+K_FAST = WEAR_5000.k * 100.0
+
+
+def _design(p):
+    return WearJointDesign(p[0], p[1], p[2], p[3], WEAR_5000.wall)
+
+
+@pytest.fixture(scope="module")
+def problem():
+    mech0, qg = slider_crank()
+    p = jnp.stack([K_FAST, WEAR_5000.clearance, WEAR_5000.depth, WEAR_5000.diameter])
+
+    def mech_of(p):
+        return with_wear_joint(mech0, _design(p), n_theta=N_THETA)
+
+    y0 = common.initial_state(mech0, qg, mech_of(p))
+    return mech_of, p, y0
+
+
+def _metrics(mech_of, p, res):
+    el = mech_of(p).element("crank_rod")
+    vol = worn_volume(res.depth, el.bushing_radius, el.law.depth)
+    return jnp.max(res.depth), vol
+
+
+@pytest.fixture(scope="module")
+def short_run(problem):
+    """One jitted evolution (6 real cycles, A = 2) with the wall thickness traced,
+    shared by the bookkeeping and wear-through tests (one compilation)."""
+    mech_of, p, y0 = problem
+    return jax.jit(lambda p, y, wall: evolve(mech_of(p), "crank_rod", y, 6, period=PERIOD,
+                                             extrapolation=2.0, wall_thickness=wall))
+
+
+def test_archard_bookkeeping(problem, short_run):
+    """Worn volume from the profile == k x sum over cycles of A x int N ds (rel 1e-3)."""
+    mech_of, p, y0 = problem
+    res = short_run(p, y0, jnp.inf).check()
+    _, vol = _metrics(mech_of, p, res)
+    assert int(res.dynamic_cycles) == 1 + 3
+    assert float(res.cycles) == 6.0
+    np.testing.assert_allclose(float(vol), float(p[0] * res.load_sliding), rtol=1e-3)
+    assert float(vol) > 0
+
+
+@pytest.mark.slow
+def test_extrapolation_converges(problem):
+    """A = 4 and the error-controlled scheme agree with every-cycle within 1 %."""
+    mech_of, p, y0 = problem
+    n = 16
+
+    def run(method, a, max_dyn=None):
+        f = jax.jit(lambda p, y: evolve(mech_of(p), "crank_rod", y, n, period=PERIOD,
+                                        method=method, extrapolation=a, max_dynamic=max_dyn,
+                                        rtol=2e-3, atol=1e-8))
+        r = f(p, y0).check()
+        return r, [float(v) for v in _metrics(mech_of, p, r)]
+
+    ref, (d_ref, v_ref) = run("constant", 1.0)
+    assert d_ref > 10 * float(p[1])  # the profile changed a lot: a real test
+    for method, a in (("constant", 4.0), ("error", 2.0), ("adaptive", 2.0)):
+        r, (d, v) = run(method, a, 16)
+        assert float(r.cycles) == pytest.approx(n)
+        if method != "error":  # at this tight tolerance on 16 cycles the error-
+            # controlled scheme may need more dynamic cycles than it saves
+            assert int(r.dynamic_cycles) < int(ref.dynamic_cycles), method
+        assert d == pytest.approx(d_ref, rel=1e-2), method
+        assert v == pytest.approx(v_ref, rel=1e-2), method
+
+
+@pytest.mark.slow
+def test_gradients_match_finite_differences(problem):
+    """d/dp of a smooth max depth (logsumexp, temperature 1 % of the max depth of
+    the reference run) and of the volume, p = (k, clearance, depth, diameter),
+    through warm-up + 2 dynamic cycles, against central differences."""
+    mech_of, p, y0 = problem
+
+    def outputs(p, temperature):
+        r = evolve(mech_of(p), "crank_rod", y0, 4, period=PERIOD, extrapolation=2.0,
+                   cycle_rtol=1e-9, cycle_atol=1e-9, adjoint=diffrax.ForwardMode())
+        el = mech_of(p).element("crank_rod")
+        return jnp.stack([smooth_max(r.depth, temperature) * 1e6,
+                          worn_volume(r.depth, el.bushing_radius, el.law.depth) * 1e9])
+
+    f = jax.jit(outputs)
+    base = f(p, 1.0)
+    temperature = 0.01 * float(jnp.max(base[0])) * 1e-6
+    jac = np.asarray(jax.jit(jax.jacfwd(outputs))(p, temperature))
+    for i in range(4):
+        h = 1e-4 * float(p[i])
+        e = jnp.zeros(4).at[i].set(h)
+        fd = (np.asarray(f(p + e, temperature)) - np.asarray(f(p - e, temperature))) / (2 * h)
+        scale = np.abs(np.asarray(base)) / float(p[i])  # output per unit relative change
+        np.testing.assert_allclose(jac[:, i], fd, rtol=2e-3, atol=1e-3 * scale.max(),
+                                   err_msg=f"parameter {i}")
+
+
+def test_negative_wear_coefficient_rejected():
+    with pytest.raises(InputError, match="wear coefficient"):
+        ArchardWear(-1e-13)
+    with pytest.raises(InputError, match="wear coefficient"):
+        ArchardWear.from_mm3_per_Nm(-5.05e-4)
+
+
+def test_bad_evolution_options(problem):
+    mech_of, p, y0 = problem
+    with pytest.raises(InputError, match="extrapolation"):
+        evolve(mech_of(p), "crank_rod", y0, 4, period=PERIOD, extrapolation=0.5)
+    with pytest.raises(InputError, match="method"):
+        evolve(mech_of(p), "crank_rod", y0, 4, period=PERIOD, method="bogus")
+    with pytest.raises(InputError, match="crank_rod|ClearanceJoint"):
+        evolve(slider_crank()[0], "crank_rod", y0, 4, period=PERIOD)
+
+
+def test_wear_through_wall_stops_with_message(problem, short_run):
+    """A wall thinner than the wear of a few cycles: the run stops, names the cycle
+    and the depth, and keeps the profile reached before the piercing step."""
+    mech_of, p, y0 = problem
+    full = short_run(p, y0, jnp.inf)
+    wall = 0.5 * float(jnp.max(full.depth))  # pierced half-way through the run
+    res = short_run(p, y0, wall)
+    with pytest.raises(WearLimitError, match=r"bushing wall after \d+ cycles \(max depth") as err:
+        res.check("test")
+    kept = err.value.result
+    assert 0 < float(kept.cycles) < 6
+    assert 0 < float(jnp.max(kept.depth)) < wall
+    assert float(kept.fail_depth) >= wall
+    assert math.isclose(float(kept.fail_cycles), float(kept.cycles) + 2)

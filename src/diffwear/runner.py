@@ -54,11 +54,8 @@ def initial_state(study: Study):
     mech = study.mechanism
     y0 = _consistent_state(mech, study.q_guess)
     finite = bool(np.all(np.isfinite(np.asarray(y0))))
-    # Newton may end in NaN (e.g. on a singular Jacobian); the SVD of
-    # `check_assembly` needs finite numbers, so diagnose at the guess then.
-    q = y0[: mech.n_coords] if finite else study.q_guess
     try:
-        check_assembly(mech, q, finite)
+        check_assembly(mech, y0[: mech.n_coords], finite, q_guess=study.q_guess)
     except InputError as err:
         raise InputError(f"{study.file}: initial: {err}") from None
     return y0

@@ -94,6 +94,8 @@ def test_gradients_match_finite_differences():
     x = (jnp.asarray(20e-6), jnp.asarray(0.5e9), jnp.asarray(0.13))
     fwd = jax.jit(jax.jacfwd(lambda *a: _rotor_normal_load(*a, diffrax.ForwardMode()),
                              argnums=(0, 1, 2)))(*x)
+    rev = jax.jit(jax.grad(lambda *a: _rotor_normal_load(*a, diffrax.RecursiveCheckpointAdjoint()),
+                           argnums=(0, 1, 2)))(*x)
     f = jax.jit(lambda *a: _rotor_normal_load(*a, diffrax.RecursiveCheckpointAdjoint()))
     for i, rel_step in enumerate((1e-3, 1e-4, 1e-4)):
         h = float(x[i]) * rel_step
@@ -102,6 +104,7 @@ def test_gradients_match_finite_differences():
         fd = (float(f(*up)) - float(f(*dn))) / (2 * h)
         assert np.isfinite(float(fwd[i])) and abs(fd) > 0
         np.testing.assert_allclose(float(fwd[i]), fd, rtol=2e-3)
+        np.testing.assert_allclose(float(rev[i]), float(fwd[i]), rtol=1e-6)
 
 
 def test_step_limit_is_reported_with_the_joint():

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import diffrax
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
@@ -111,6 +112,12 @@ def simulate(
     adjoint = diffrax.RecursiveCheckpointAdjoint() if adjoint is None else adjoint
     t0 = jnp.asarray(t0, dtype=y0.dtype)
     t1 = jnp.asarray(t1, dtype=y0.dtype)
+    # Keep XLA from constant-folding the step times: under an outer jit with
+    # constant t0/t1 its algebraic simplifier rewrites t0 + (t1 - t0) * k / n as
+    # k * dt, which moves some step times by one ulp.  The checkpointed reverse
+    # pass then places a save time in a different step than the forward pass
+    # did and returns a wrong gradient (tests/test_gradients.py reproduces it).
+    t0, t1 = jax.lax.optimization_barrier((t0, t1))
     saveat = diffrax.SaveAt(subs=[
         diffrax.SubSaveAt(ts=jnp.atleast_1d(t1) if ts is None else ts),
         diffrax.SubSaveAt(t1=True),

@@ -1,0 +1,37 @@
+"""Reverse-mode gradients through `simulate` under jit equal forward mode.
+
+Regression test: with constant t0/t1 under an outer jit, XLA folded diffrax's
+step-time formula differently in the forward loop and in the checkpointed
+recomputation, moving a save time into another step and giving a gradient
+off by 2x here (found with jax 0.10.2 / diffrax 0.7.2; fixed in `simulate`
+with an optimization barrier on t0, t1).
+"""
+
+import diffrax
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from diffwear.dynamics import simulate
+from diffwear.mechanism import Body, LinearSpring, Mechanism
+
+
+def _displacement(stiffness, adjoint):
+    spring = LinearSpring("s", "mass", (0.0, 0.0), "ground", (0.0, 0.0), stiffness, 0.0,
+                          damping=0.5)
+    mech = Mechanism((Body("mass", 1.0, 1.0),), (), (spring,))
+    y0 = mech.join(jnp.array([0.1, 0.0, 0.0]), jnp.zeros(3))
+    ts = jnp.linspace(0.2, 0.4, 21)  # ts[2] lies on a step boundary to 1 ulp
+    traj = simulate(mech, y0, 0.4, ts=ts, dt0=1e-4, adjoint=adjoint, max_steps=5000,
+                    stepsize_controller=diffrax.ConstantStepSize())
+    return traj.ys[2, 0]
+
+
+def test_jitted_reverse_mode_equals_forward_mode():
+    k = jnp.asarray(400.0)
+    rev = jax.jit(jax.grad(lambda s: _displacement(s, diffrax.RecursiveCheckpointAdjoint())))(k)
+    fwd = jax.jit(jax.jacfwd(lambda s: _displacement(s, diffrax.ForwardMode())))(k)
+    f = jax.jit(lambda s: _displacement(s, diffrax.RecursiveCheckpointAdjoint()))
+    fd = (float(f(k + 1e-3)) - float(f(k - 1e-3))) / 2e-3
+    np.testing.assert_allclose(float(fwd), fd, rtol=1e-6)
+    np.testing.assert_allclose(float(rev), float(fwd), rtol=1e-9)

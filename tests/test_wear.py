@@ -149,3 +149,14 @@ def test_wear_through_wall_stops_with_message(problem, short_run):
     assert 0 < float(jnp.max(kept.depth)) < wall
     assert float(kept.fail_depth) >= wall
     assert math.isclose(float(kept.fail_cycles), float(kept.cycles) + 2)
+
+
+def test_running_out_of_slots_is_an_error_not_a_short_answer(problem):
+    """An adaptive run whose scan slots end before the requested cycles reports
+    status 3 and raises, instead of returning the wear of fewer cycles."""
+    mech_of, p, y0 = problem
+    res = evolve(mech_of(p), "crank_rod", y0, 6, period=PERIOD, method="adaptive",
+                 extrapolation=1.0, max_dynamic=2)
+    assert int(res.status) == 3 and float(res.cycles) < 6
+    with pytest.raises(WearLimitError, match="slots"):
+        res.check()

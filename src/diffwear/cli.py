@@ -7,10 +7,14 @@ Exit codes: 0 success, 2 bad input (`InputError`, unknown study, bad option),
 from __future__ import annotations
 
 import argparse
+import inspect
 import sys
 from collections.abc import Sequence
 
 from .errors import DiffwearError, InputError
+
+# Upper bound of --cycles: 1e8 crank cycles is ~6 years at 30 rpm.
+MAX_CYCLES = 100_000_000
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -26,15 +30,19 @@ def _study(args: argparse.Namespace) -> int:
         raise InputError(f"unknown study {args.name!r}; available: {', '.join(STUDIES)}")
     if args.out is None:
         raise InputError("study: --out DIR is required")
-    out = OutputDir(args.out, overwrite=args.overwrite)
-    log = (lambda *a, **k: None) if args.quiet else print
     kwargs = {}
-    if args.cycles is not None:
-        if args.cycles <= 0:
-            raise InputError(f"--cycles must be a positive integer, got {args.cycles}")
-        if "cycles" not in STUDIES[args.name].run.__code__.co_varnames:
-            raise InputError(f"study {args.name!r} does not take --cycles")
-        kwargs["cycles"] = args.cycles
+    if args.cycles is not None and not 0 < args.cycles <= MAX_CYCLES:
+        raise InputError(f"--cycles must be an integer in [1, {MAX_CYCLES:.0e}], got {args.cycles}")
+    accepted = inspect.signature(STUDIES[args.name].run).parameters
+    for option in ("cycles", "method"):
+        value = getattr(args, option)
+        if value is None:
+            continue
+        if option not in accepted:
+            raise InputError(f"study {args.name!r} does not take --{option}")
+        kwargs[option] = value
+    out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
+    log = (lambda *a, **k: None) if args.quiet else print
     STUDIES[args.name].run(out, log=log, **kwargs)
     return 0
 
@@ -68,6 +76,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--list", action="store_true", help="list the studies and exit")
     p.add_argument("--out", help="output folder (created; must not hold earlier results)")
     p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    p.add_argument("--method", choices=("constant", "adaptive", "error"),
+                   help="wear extrapolation over cycles (wear studies; default constant)")
     p.add_argument("--cycles", type=int, default=None,
                    help="number of real crank cycles (wear studies)")
     p.add_argument("--quiet", action="store_true", help="no progress output")

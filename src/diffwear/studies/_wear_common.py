@@ -35,7 +35,7 @@ def initial_state(mech0, q_guess, mech):
 
 
 def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, max_dynamic,
-                  wall, n_theta, rtol=1e-2, atol=1e-7):
+                  wall, n_theta, rtol=1e-2, atol=1e-6):
     """Compile (timed) and run (timed) the whole evolution as one jitted function."""
     def fn(p, y0):
         return evolve(mech_of_p(p), JOINT, y0, cycles, period=period, method=method,

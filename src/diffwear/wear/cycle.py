@@ -87,7 +87,7 @@ def wear_cycle(
     ts = None if n_save is None else t0 + period * jnp.linspace(0.0, 1.0, n_save)
     traj = simulate(
         mech, y0, t1, t0=t0, ts=ts, adjoint=adjoint, max_steps=max_steps,
-        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
+        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol, pcoeff=0.3, icoeff=0.4),
     )
     y1 = traj.ys[-1]
     aux = mech.split(y1)[2][mech.aux_slice(joint)]

@@ -82,8 +82,81 @@ def ideal_slider_crank(repeats: int) -> dict:
     }
 
 
+_CLEARANCE_FNS: dict = {}
+
+
+def clearance_cycle(law: str, clearance_mm: float) -> Callable[[int], dict]:
+    """One crank cycle (the second: the first holds the start-up transient) of
+    the Table 2-1 slider-crank with a clearance crank-rod joint, as in the
+    ``clearance-sweep`` study (Tsit5, PID, rtol = atol = 1e-6)."""
+
+    def case(repeats: int) -> dict:
+        import diffrax
+        import jax
+
+        from diffwear.dynamics import simulate
+        from diffwear.presets import clearance_slider_crank
+        from diffwear.studies.clearance_sweep import ATOL, PERIOD, RTOL
+
+        mech, y0 = clearance_slider_crank(law, clearance_mm * 1e-3)
+        ctrl = diffrax.PIDController(rtol=RTOL, atol=ATOL, pcoeff=0.3, icoeff=0.4)
+        fresh = law not in _CLEARANCE_FNS
+        if fresh:  # one compilation per law: the clearance is an array leaf
+            _CLEARANCE_FNS[law] = jax.jit(lambda m, y, t0: simulate(
+                m, y, t0 + PERIOD, t0=t0, stepsize_controller=ctrl))
+        fn = _CLEARANCE_FNS[law]
+        warm, first = timed(fn, mech, y0, 0.0)  # the start-up cycle (and the compilation)
+        warm.raise_if_failed("benchmark warm-up", mech)
+        traj, metrics = time_jitted(fn, (mech, warm.y_final, PERIOD), repeats)
+        # compile time of the law's first case; later cases reuse the executable
+        metrics["compile_s"] = max(first - metrics["run_s"], 0.0) if fresh else 0.0
+        traj.raise_if_failed(f"benchmark {law} {clearance_mm} mm", mech)
+        steps = int(traj.num_steps)
+        return {"simulated_s": PERIOD, **metrics, "run_s_per_cycle": metrics["run_s"],
+                "run_s_per_simulated_s": metrics["run_s"] / PERIOD,
+                "integrator_steps": steps, "steps_per_cycle": steps,
+                "us_per_step": metrics["run_s"] / steps * 1e6, "repeats": repeats}
+
+    return case
+
+
+def rig_21400(repeats: int) -> dict:
+    """The whole ``rig-21400`` wear evolution (constant A = 428, 50 wear cycles
+    after one warm-up cycle), compiled once; one or two steady repeats."""
+    from diffwear.presets import RIG_CYCLES
+    from diffwear.studies import _wear_common as common
+    from diffwear.studies.rig_21400 import (
+        N_THETA, PERIOD, RIG_JOINT, TARGET_DYNAMIC, _setup, with_wear_joint)
+    from diffwear.wear import worn_volume
+
+    mech0, mech, y0 = _setup()
+    a = common.default_constant_a(RIG_CYCLES, TARGET_DYNAMIC)
+    mech_of_p = lambda p: with_wear_joint(mech0, common.design_of(p, RIG_JOINT),  # noqa: E731
+                                          n_theta=N_THETA)
+    import jax
+
+    from diffwear.wear import evolve
+
+    fn = jax.jit(lambda p, y: evolve(mech_of_p(p), common.JOINT, y, RIG_CYCLES, period=PERIOD,
+                                     extrapolation=a, wall_thickness=RIG_JOINT.wall))
+    res, metrics = time_jitted(fn, (common.params_of(RIG_JOINT), y0), min(repeats, 2))
+    res.check("benchmark rig-21400")
+    dyn = int(res.dynamic_cycles)
+    el = mech.element(common.JOINT)
+    return {"simulated_s": dyn * PERIOD, **metrics, "dynamic_cycles": dyn,
+            "run_s_per_cycle": metrics["run_s"] / dyn,
+            "run_s_per_simulated_s": metrics["run_s"] / (dyn * PERIOD),
+            "max_wear_depth_mm": float(res.depth.max()) * 1e3,
+            "wear_volume_mm3": float(worn_volume(res.depth, el.bushing_radius,
+                                                 el.law.depth)) * 1e9,
+            "repeats": min(repeats, 2)}
+
+
 CASES: dict[str, Callable[[int], dict]] = {
     "ideal slider-crank, 2 s": ideal_slider_crank,
+    **{f"clearance cycle, {law.upper()} c={c:g} mm": clearance_cycle(law, c)
+       for law in ("ln", "kv", "efm") for c in (0.0005, 0.05, 0.5, 5.0)},
+    "rig-21400 (constant A)": rig_21400,
 }
 
 
@@ -135,6 +208,9 @@ COLUMNS = (  # metric key, header, format
     ("run_s", "run, median [s]", "{:.3f}"),
     ("run_s_per_simulated_s", "run per simulated s", "{:.3f}"),
     ("integrator_steps", "integrator steps", "{:d}"),
+    ("us_per_step", "µs per step", "{:.0f}"),
+    ("dynamic_cycles", "dynamic cycles", "{:d}"),
+    ("run_s_per_cycle", "run per dynamic cycle [s]", "{:.3f}"),
 )
 
 

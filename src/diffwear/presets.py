@@ -271,12 +271,14 @@ RIG_SPRING_ANCHOR_X = 1.0  # m (our choice, far beyond the stroke 0.127..0.279 m
 # (Table 7-4: FEM 106.71, EFM 106.68).  Obtained by `diffwear.studies.rig_21400
 # .calibrate_free_length` (secant iteration on the coarse evolution, volume
 # being nearly linear in the spring force), then checked with the full study.
-RIG_SPRING_FREE_LENGTH = 0.5490  # m, calibrated (see above)
+RIG_SPRING_FREE_LENGTH = 0.5479  # m, calibrated (see above)
 # Calibration record: secant on L0 with A = 2140 (10 dynamic cycles): 0.50 m ->
 # 129.17 mm^3, 0.56 m -> 102.96 mm^3 (dV/dL0 ~ -437 mm^3/m), converged at
 # 0.55175 m -> 106.69 mm^3.  The study itself (A = 428, 51 dynamic cycles) gave
 # 105.48 mm^3 at 0.55175 m (extrapolation difference 1.1 %), so L0 was moved by
-# -1.22 / 437 m to 0.5490 m.  Spring force k_s (1.0 - x3 - L0): 90-170 N over
+# -1.22 / 437 m to 0.5490 m.  After the wear cycle took the PID gains of
+# `simulate` (0.3, 0.4) the study gave 106.22 mm^3 at 0.5490 m; the same slope
+# moved L0 by -0.48 / 437 m to 0.5479 m.  Spring force k_s (1.0 - x3 - L0): 90-170 N over
 # the stroke x3 = 0.127..0.279 m; mean joint force ~140 N (digest: ~130 N).
 
 # Gravity: the rig's orientation is not stated.  We keep the project default,

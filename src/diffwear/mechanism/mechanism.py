@@ -88,20 +88,11 @@ class Mechanism(eqx.Module):
 
     def constraint_rows(self, name: str) -> slice:
         """Rows of Phi (and entries of lambda) that belong to constraint ``name``."""
-        start = 0
-        for c in self.constraints:
-            if c.name == name:
-                return slice(start, start + c.n_rows)
-            start += c.n_rows
-        raise InputError(f"no constraint named {name!r}; have {[c.name for c in self.constraints]}")
+        return _block(self.constraints, name, lambda c: c.n_rows, "constraint")
 
     def aux_slice(self, name: str) -> slice:
-        start = 0
-        for f in self.forces:
-            if f.name == name:
-                return slice(start, start + f.n_aux)
-            start += f.n_aux
-        raise InputError(f"no force element named {name!r}; have {[f.name for f in self.forces]}")
+        """Entries of the aux state that belong to force element ``name``."""
+        return _block(self.forces, name, lambda f: f.n_aux, "force element")
 
     def element(self, name: str):
         for e in (*self.constraints, *self.forces):
@@ -190,3 +181,13 @@ class Mechanism(eqx.Module):
         frames = self.frames(q, qd)
         parts = [f.initial_aux(frames) for f in self.forces]
         return jnp.concatenate(parts) if parts else jnp.zeros(0, dtype=q.dtype)
+
+
+def _block(elements, name: str, size, kind: str) -> slice:
+    """The slice of element ``name`` in the concatenation of the elements' blocks."""
+    start = 0
+    for e in elements:
+        if e.name == name:
+            return slice(start, start + size(e))
+        start += size(e)
+    raise InputError(f"no {kind} named {name!r}; have {[e.name for e in elements]}")

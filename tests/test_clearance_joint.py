@@ -112,3 +112,36 @@ def test_step_limit_is_reported_with_the_joint():
     traj = simulate(mech, y0, 1.0, max_steps=50)
     with pytest.raises(SolverError, match=r"crank_rod.*eccentricity"):
         traj.raise_if_failed("tiny budget", mech)
+
+
+def test_two_clearance_joints_track_the_ideal_reactions():
+    """A mechanism can have several clearance joints: crank-rod and rod-slider,
+    both EFM at 0.0005 mm, follow the ideal joints' reactions."""
+    from diffwear.contact import ClearanceJoint, contact_history
+    from diffwear.dynamics import along_trajectory, consistent_state, reaction_wrench
+    from diffwear.presets import efm_law, slider_crank
+    from diffwear.contact import CoulombFriction, with_clearance
+
+    ideal, q_guess = slider_crank()
+    y_ideal = consistent_state(ideal, q_guess)
+    mech = ideal
+    for joint, mass in (("crank_rod", 15.0), ("rod_slider", 30.0)):
+        law = efm_law(PTFE, 0.0200005, 13.31e-3, 12.8e-3, 0.8, mass)
+        mech = with_clearance(mech, joint, pin_radius=0.02, bushing_radius=0.0200005, law=law,
+                              friction=CoulombFriction(0.13), n_theta=90)
+    assert sum(isinstance(f, ClearanceJoint) for f in mech.forces) == 2
+    q, qd, _ = ideal.split(y_ideal)
+    y0 = mech.join(q, qd, mech.initial_aux(q, qd))
+    ts = jnp.linspace(0.5, 1.0, 51)
+    ctrl = diffrax.PIDController(rtol=1e-6, atol=1e-6, pcoeff=0.3, icoeff=0.4)
+    traj = jax.jit(lambda m, y: simulate(m, y, 1.0, ts=ts, stepsize_controller=ctrl))(mech, y0)
+    traj.raise_if_failed("two clearance joints", mech)
+    ref = simulate(ideal, y_ideal, 1.0, ts=ts).raise_if_failed()
+    _, lam, _ = along_trajectory(ideal, ref.ts, ref.ys)
+    for joint, bushing in (("crank_rod", "rod"), ("rod_slider", "slider")):
+        f = jax.vmap(lambda qq, ll, t: reaction_wrench(ideal, qq, ll, t, joint, bushing))(
+            ref.ys[:, :9], lam, ts)
+        f_ideal = np.hypot(np.asarray(f[:, 0]), np.asarray(f[:, 1]))
+        f_clear = np.asarray(contact_history(mech, joint, traj.ys).force_magnitude)
+        rel = np.sqrt(np.mean((f_clear - f_ideal) ** 2) / np.mean(f_ideal**2))
+        assert rel < 0.05, (joint, rel)

@@ -75,3 +75,89 @@ def test_bad_option_exits_2(capsys):
         main(["study", "--no-such-option"])
     assert exc.value.code == 2
     assert "unrecognized arguments" in capsys.readouterr().err
+
+
+WEAR = "wear-5000"
+
+
+@pytest.fixture(scope="module")
+def interrupted_dir(tmp_path_factory):
+    """A 3-cycle wear-5000 run (A = 1, 1 slot per chunk) interrupted (Ctrl-C)
+    right after its first checkpoint was saved."""
+    import numpy as np
+
+    from diffwear.studies import _wear_common as common
+
+    out = tmp_path_factory.mktemp("wear") / "run"
+    real = common.save_checkpoint
+
+    def save_then_interrupt(*args, **kwargs):
+        real(*args, **kwargs)
+        raise KeyboardInterrupt
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(common, "save_checkpoint", save_then_interrupt)
+        with pytest.raises(KeyboardInterrupt):
+            main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"])
+    assert not (out / "summary.json").exists()
+    with np.load(out / "checkpoint.npz") as z:
+        assert float(z["state.n"]) == 1.0
+    return out
+
+
+def _copy(src, dst):
+    import shutil
+
+    shutil.copytree(src, dst)
+    return dst
+
+
+def test_resume_finishes_an_interrupted_wear_study(interrupted_dir, tmp_path):
+    out = _copy(interrupted_dir, tmp_path / "run")
+    assert main(["study", WEAR, "--cycles", "3", "--resume", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["finished"] is True and summary["resumed_from_cycles"] == 1.0
+    assert summary["cycles"] == 3.0 and summary["dynamic_cycles_simulated"] == 1 + 3
+    assert summary["status"] == 0 and (out / "checkpoint.npz").is_file()
+    assert "checkpoint.npz" in summary["files"]
+    assert not list(out.glob("*.tmp"))
+    rows = (out / "wear_history.csv").read_text().splitlines()
+    assert len(rows) == 1 + 1 + 3  # header, cycle 0, three cycles (one before the cut)
+    # a finished run is not resumed again
+    assert main(["study", WEAR, "--cycles", "3", "--resume", str(out), "--quiet"]) == 2
+
+
+def test_resume_with_other_options_exits_2_naming_the_key(interrupted_dir, tmp_path, capsys):
+    out = _copy(interrupted_dir, tmp_path / "run")
+    before = (out / "checkpoint.npz").read_bytes()
+    assert main(["study", WEAR, "--cycles", "4", "--resume", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "cycles = 3.0" in err and "cycles = 4.0" in err
+    assert (out / "checkpoint.npz").read_bytes() == before
+    assert not (out / "summary.json").exists()
+
+
+def test_resume_needs_a_checkpoint_and_a_wear_study(tmp_path, capsys):
+    assert main(["study", WEAR, "--resume", str(tmp_path), "--quiet"]) == 2
+    assert "no checkpoint.npz" in capsys.readouterr().err
+    assert main(["study", STUDY, "--resume", str(tmp_path), "--quiet"]) == 2
+    assert "does not take --resume" in capsys.readouterr().err
+    assert main(["study", WEAR, "--resume", str(tmp_path), "--out", str(tmp_path / "x")]) == 2
+    assert "same folder" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_resumed_wear_study_equals_uninterrupted(interrupted_dir, tmp_path):
+    import numpy as np
+
+    out = _copy(interrupted_dir, tmp_path / "resumed")
+    assert main(["study", WEAR, "--cycles", "3", "--resume", str(out), "--quiet"]) == 0
+    ref = tmp_path / "ref"
+    assert main(["study", WEAR, "--cycles", "3", "--out", str(ref), "--quiet"]) == 0
+    for name in ("wear_profile.csv", "wear_history.csv", "joint_force_last_cycle.csv"):
+        np.testing.assert_allclose(np.loadtxt(out / name, delimiter=",", skiprows=1),
+                                   np.loadtxt(ref / name, delimiter=",", skiprows=1),
+                                   rtol=1e-12, atol=1e-15, err_msg=name)
+    a, b = (json.loads((d / "summary.json").read_text()) for d in (out, ref))
+    for key in ("max_wear_depth_mm", "wear_volume_mm3", "archard_k_times_load_sliding_mm3"):
+        assert a[key] == pytest.approx(b[key], rel=1e-12), key

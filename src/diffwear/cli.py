@@ -18,6 +18,8 @@ MAX_CYCLES = 100_000_000
 
 
 def _study(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
     from .io import OutputDir
     from .studies import STUDIES
 
@@ -28,6 +30,11 @@ def _study(args: argparse.Namespace) -> int:
         return 0
     if args.name not in STUDIES:
         raise InputError(f"unknown study {args.name!r}; available: {', '.join(STUDIES)}")
+    if args.resume is not None:
+        if args.out is not None and Path(args.out).resolve() != Path(args.resume).resolve():
+            raise InputError(f"--resume {args.resume} writes its results there; --out "
+                             f"{args.out} must be the same folder or left out")
+        args.out = args.resume
     if args.out is None:
         raise InputError("study: --out DIR is required")
     kwargs = {}
@@ -41,6 +48,14 @@ def _study(args: argparse.Namespace) -> int:
         if option not in accepted:
             raise InputError(f"study {args.name!r} does not take --{option}")
         kwargs[option] = value
+    if args.resume is not None:
+        if "resume" not in accepted:
+            raise InputError(f"study {args.name!r} does not take --resume (wear studies do)")
+        if not (Path(args.resume) / "checkpoint.npz").is_file():
+            raise InputError(f"--resume {args.resume}: no checkpoint.npz there to resume from")
+        kwargs["resume"] = True
+    if "progress" in accepted:
+        kwargs["progress"] = not args.quiet
     out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
     log = (lambda *a, **k: None) if args.quiet else print
     STUDIES[args.name].run(out, log=log, **kwargs)
@@ -80,6 +95,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wear extrapolation over cycles (wear studies; default constant)")
     p.add_argument("--cycles", type=int, default=None,
                    help="number of real crank cycles (wear studies)")
+    p.add_argument("--resume", metavar="DIR",
+                   help="continue the interrupted wear study whose checkpoint.npz is in DIR "
+                        "(same study and options); results are written into DIR")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_study)
 

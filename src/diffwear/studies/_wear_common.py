@@ -12,7 +12,10 @@ import numpy as np
 from ..contact import contact_history
 from ..dynamics import consistent_state
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
+from ..errors import InputError
 from ..wear import evolve, wear_cycle, worn_volume
+from ..wear.evolution import (ChunkedEvolution, Evolver, load_checkpoint,
+                              save_checkpoint)
 from ..wear.evolution import _with_profile
 
 JOINT = "crank_rod"
@@ -34,21 +37,77 @@ def initial_state(mech0, q_guess, mech):
     return mech.join(q, qd, mech.initial_aux(q, qd))
 
 
+CHECKPOINT = "checkpoint.npz"
+CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
+
+
 def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, max_dynamic,
-                  wall, n_theta, rtol=1e-2, atol=1e-6):
-    """Compile (timed) and run (timed) the whole evolution as one jitted function."""
-    def fn(p, y0):
-        return evolve(mech_of_p(p), JOINT, y0, cycles, period=period, method=method,
-                      extrapolation=extrapolation, max_dynamic=max_dynamic,
-                      wall_thickness=wall, rtol=rtol, atol=atol)
+                  wall, n_theta, rtol=1e-2, atol=1e-6, out=None, meta=None, resume=False,
+                  progress=False, chunks=CHUNKS):
+    """Compile (timed) and run (timed) the whole evolution.
+
+    Without ``out``: one jitted function.  With ``out`` (an `OutputDir`): in
+    ``chunks`` chunks of scan slots (`ChunkedEvolution`, same result), saving
+    ``out/checkpoint.npz`` (state, history so far, ``meta``) after each chunk;
+    ``resume=True`` continues from that checkpoint, which must carry the same
+    ``meta``.  ``progress``: a tqdm bar of real cycles done (with time left).
+    Returns (result, compile time, run time, info for the summary).
+    """
+    kw = dict(period=period, method=method, extrapolation=extrapolation,
+              max_dynamic=max_dynamic, wall_thickness=wall, rtol=rtol, atol=atol)
+    if out is None:
+        def fn(p, y0):
+            return evolve(mech_of_p(p), JOINT, y0, cycles, **kw)
+
+        t0 = time.perf_counter()
+        compiled = jax.jit(fn).lower(p, y0).compile()
+        compile_time = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        res = jax.block_until_ready(compiled(p, y0))
+        return res, compile_time, time.perf_counter() - t0, {}
+
+    from tqdm.auto import tqdm
+
+    meta = {**(meta or {}), "cycles": float(cycles), "method": method,
+            "extrapolation": float(extrapolation), "n_theta": int(n_theta)}
+    path = out.path / CHECKPOINT
+    start = None
+    if resume:
+        if not path.is_file():
+            raise InputError(f"--resume {out.path}: no {CHECKPOINT} there to resume from")
+        start, saved = load_checkpoint(path)
+        for key, value in meta.items():
+            if saved.get(key) != value:
+                raise InputError(
+                    f"--resume {out.path}: the checkpoint belongs to a run with {key} = "
+                    f"{saved.get(key)!r}, this run has {key} = {value!r}; resume with the "
+                    "options of the interrupted run")
+
+    def make(p):
+        return Evolver(mech_of_p(p), JOINT, cycles, **kw)
+
+    n_slots = make(p).n_slots
+    run = ChunkedEvolution(make, p, y0, max(1, math.ceil(n_slots / chunks)))
+    compile_time = run.compile()
+    done0 = 0.0 if start is None else float(start.state["n"])
+    bar = tqdm(total=float(cycles), initial=done0, unit="cycle", disable=not progress,
+               desc=meta.get("study", "wear"), dynamic_ncols=True,
+               bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} cycles [{elapsed}<{remaining}]")
+
+    def on_chunk(ck):
+        save_checkpoint(path, ck, meta)
+        bar.update(float(ck.state["n"]) - bar.n)
 
     t0 = time.perf_counter()
-    compiled = jax.jit(fn).lower(p, y0).compile()
-    compile_time = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    res = jax.block_until_ready(compiled(p, y0))
-    wall_time = time.perf_counter() - t0
-    return res, compile_time, wall_time
+    try:
+        res = jax.block_until_ready(run.run(start=start, on_chunk=on_chunk))
+    finally:
+        bar.close()
+    if path.exists():
+        out.file(CHECKPOINT)  # listed in the summary; kept after the run
+    info = {"finished": True, "checkpoint": CHECKPOINT if path.exists() else None,
+            "resumed_from_cycles": done0 if start is not None else None}
+    return res, compile_time, time.perf_counter() - t0, info
 
 
 def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, cycles,

@@ -83,16 +83,17 @@ def calibrate_free_length(l0_guesses=(0.50, 0.56), *, cycles=RIG_CYCLES, dynamic
 
 def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
         extrapolation: float | None = None, free_length: float | None = None,
-        log=print) -> dict:
+        log=print, resume: bool = False, progress: bool = False) -> dict:
     l0 = RIG_SPRING_FREE_LENGTH if free_length is None else free_length
     mech0, mech, y0 = _setup(TABLE_7_1, l0)
     design = RIG_JOINT
     mech_of_p = lambda p: with_wear_joint(mech0, common.design_of(p, design), n_theta=N_THETA)  # noqa: E731
     a = extrapolation or common.default_constant_a(cycles, TARGET_DYNAMIC)
     log(f"[{NAME}] {cycles} cycles, method {method}, A {a}, spring L0 {l0:.5f} m ...")
-    res, ct, wt = common.run_evolution(
+    res, ct, wt, info = common.run_evolution(
         mech_of_p, common.params_of(design), y0, cycles, PERIOD, method=method,
-        extrapolation=a, max_dynamic=4 * TARGET_DYNAMIC, wall=design.wall, n_theta=N_THETA)
+        extrapolation=a, max_dynamic=4 * TARGET_DYNAMIC, wall=design.wall, n_theta=N_THETA,
+        out=out, meta={"study": NAME}, resume=resume, progress=progress)
     x3 = jnp.asarray(y0[6])
     spring_mid = RIG_SPRING_STIFFNESS * (RIG_SPRING_ANCHOR_X - float(x3) - l0)
     summary = common.write_outputs(
@@ -107,7 +108,7 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
             f"30 rpm. Worn mass with PTFE density {PTFE_DENSITY / 1e3:g} g/cm^3."),
         log=log,
         extra_summary={"spring_free_length_m": l0,
-                       "spring_force_at_t0_N": spring_mid},
+                       "spring_force_at_t0_N": spring_mid, **info},
         extra_report=[f"- spring force at t = 0 (crank angle 0): {spring_mid:.1f} N"])
     res.check(NAME)
     return summary

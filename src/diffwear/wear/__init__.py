@@ -6,6 +6,7 @@ __all__ = [
     "MM3_PER_NM", "SLIP_RATE_WIDTH", "ArchardWear",
     "CycleResult", "wear_cycle", "reset_wear",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "WearLimitError",
+    "Evolver", "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint",
 ]
 
 # cycle/evolution import the contact package, which itself imports
@@ -14,6 +15,8 @@ _LAZY = {
     "CycleResult": "cycle", "wear_cycle": "cycle", "reset_wear": "cycle",
     "EvolutionResult": "evolution", "evolve": "evolution", "smooth_max": "evolution",
     "worn_volume": "evolution", "WearLimitError": "evolution",
+    "Evolver": "evolution", "ChunkedEvolution": "evolution", "Checkpoint": "evolution",
+    "save_checkpoint": "evolution", "load_checkpoint": "evolution",
 }
 
 

@@ -43,11 +43,17 @@ the evolution stops updating, keeps the results so far and reports ``status``;
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import time
+from pathlib import Path
+from typing import NamedTuple
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import lax
 from jaxtyping import Array, Float
 
@@ -109,6 +115,7 @@ class EvolutionResult(eqx.Module):
     fail_cycles: Float[Array, ""]       # real cycles done when it stopped
     fail_depth: Float[Array, ""]        # max depth when it stopped [m]
     history: dict
+    state: dict | None = None           # evolution state at the end (`Evolver`): resumable
 
     def check(self, what: str = "wear evolution") -> "EvolutionResult":
         """Raise `WearLimitError` (carrying this result) if the run stopped early."""
@@ -153,6 +160,8 @@ def evolve(
     cycle_atol: float = CYCLE_ATOL,
     adjoint=None,
     max_steps: int = 200_000,
+    start: dict | None = None,
+    slots: int | None = None,
 ) -> EvolutionResult:
     """Evolve the wear of clearance joint ``joint`` over ``cycles`` real cycles.
 
@@ -164,42 +173,77 @@ def evolve(
     ``warmup_cycles`` dynamic cycles are run first and their wear discarded
     (start-up transient of the pin from the centred position; the thesis drops
     its first ~1.3 revolutions too).
+
+    Resuming: ``start`` is an evolution state (``EvolutionResult.state`` of an
+    earlier call, or `Evolver.init`); the warm-up is then skipped and ``y0``
+    ignored.  ``slots`` scan slots are run (default: all of the method's).  See
+    `evolve_in_chunks` for a checkpointing driver.
     """
-    if method not in ("constant", "adaptive", "error"):
-        raise InputError(f"method must be 'constant', 'adaptive' or 'error', got {method!r}")
-    index, el = clearance_element(mech, joint)
-    if method == "constant":
-        a_check = float(extrapolation)
-        if a_check < 1.0 or not math.isfinite(a_check):
-            raise InputError(f"extrapolation factor A must be >= 1, got {a_check}")
-        if float(cycles) <= 0:
-            raise InputError(f"cycles must be > 0, got {cycles}")
-    else:
-        _slots(max_dynamic, cycles)
-    c_base = el.profile.clearance
-    radius, bdepth, k = el.bushing_radius, el.law.depth, el.wear.coefficient
-    wall = jnp.inf if wall_thickness is None else jnp.asarray(wall_thickness, dtype=float)
-    cycles_arr = jnp.asarray(cycles, dtype=float)
+    ev = Evolver(mech, joint, cycles, period=period, method=method,
+                 extrapolation=extrapolation, max_dynamic=max_dynamic, rtol=rtol, atol=atol,
+                 wall_thickness=wall_thickness, warmup_cycles=warmup_cycles, adaptive=adaptive,
+                 cycle_rtol=cycle_rtol, cycle_atol=cycle_atol, adjoint=adjoint,
+                 max_steps=max_steps)
+    state = ev.init(y0) if start is None else start
+    state, hist = ev.run(state, ev.n_slots if slots is None else int(slots))
+    return ev.result(state, hist)
 
-    def run_cycle(h, y, t, n_save=None):
-        return wear_cycle(_with_profile(mech, index, c_base + h), joint, y, t, period,
-                          rtol=cycle_rtol, atol=cycle_atol, adjoint=adjoint,
-                          max_steps=max_steps, n_save=n_save)
 
-    h0 = jnp.zeros_like(c_base)
-    y, t = y0, jnp.zeros(())
-    warm_ok = jnp.array(True)
-    for _ in range(warmup_cycles):
-        r = run_cycle(h0, y, t)
-        y, t, warm_ok = r.y_end, t + period, warm_ok & r.ok
+class Evolver:
+    """The wear evolution as an explicit state machine: `init` (warm-up, initial
+    state pytree), `run` (``lax.scan`` over scan slots from a state), `result`.
 
-    base = dict(h=h0, y=y, t=t, n=jnp.zeros(()), dyn=jnp.asarray(warmup_cycles),
-                ls=jnp.zeros(()), status=jnp.where(warm_ok, STATUS_OK, STATUS_SOLVER),
-                fail_n=jnp.zeros(()), fail_h=jnp.zeros(()))
+    The state is a dict of arrays: profile ``h``, mechanism state ``y``, time
+    ``t``, real cycles ``n``, dynamic cycles ``dyn``, load-sliding sum ``ls``,
+    ``status``/``fail_n``/``fail_h``, and the method's memory (``a``, ``dh_prev``
+    for "adaptive"; ``dn``, ``have_k1``, ``k1``, ``ls1`` for "error").  Running
+    the slots in several scans, each from the state the previous one returned,
+    computes exactly what one scan does.  Pure Python bookkeeping around pure
+    functions: build it inside a jitted function from traced mechanism leaves.
+    """
 
-    def finish(c, h_new, y_new, t_new, dn, dls, ok):
+    def __init__(self, mech: Mechanism, joint: str, cycles, *, period, method="constant",
+                 extrapolation=1.0, max_dynamic=None, rtol=1e-2, atol=1e-7,
+                 wall_thickness=None, warmup_cycles=1, adaptive=None,
+                 cycle_rtol=CYCLE_RTOL, cycle_atol=CYCLE_ATOL, adjoint=None,
+                 max_steps=200_000):
+        if method not in ("constant", "adaptive", "error"):
+            raise InputError(f"method must be 'constant', 'adaptive' or 'error', got {method!r}")
+        self.index, el = clearance_element(mech, joint)
+        self.mech, self.joint, self.method, self.period = mech, joint, method, period
+        self.extrapolation, self.warmup_cycles = extrapolation, warmup_cycles
+        self.rtol, self.atol = rtol, atol
+        self.cycle_kw = dict(rtol=cycle_rtol, atol=cycle_atol, adjoint=adjoint,
+                             max_steps=max_steps)
+        if method == "constant":
+            a = float(extrapolation)
+            if a < 1.0 or not math.isfinite(a):
+                raise InputError(f"extrapolation factor A must be >= 1, got {a}")
+            if float(cycles) <= 0:
+                raise InputError(f"cycles must be > 0, got {cycles}")
+            self.a = a
+            self.n_slots = int(math.ceil(float(cycles) / a - 1e-9))
+        else:
+            self.n_slots = _slots(max_dynamic, cycles)
+        if method == "adaptive":
+            self.opts = {**ADAPTIVE_DEFAULTS, **(adaptive or {})}
+            if self.opts["criterion"] not in ("increment_change", "pressure_jump"):
+                raise InputError(f"adaptive criterion must be 'increment_change' or "
+                                 f"'pressure_jump', got {self.opts['criterion']!r}")
+        self.c_base = el.profile.clearance
+        self.radius, self.bdepth, self.k = el.bushing_radius, el.law.depth, el.wear.coefficient
+        self.wall = (jnp.inf if wall_thickness is None
+                     else jnp.asarray(wall_thickness, dtype=float))
+        self.cycles_arr = jnp.asarray(cycles, dtype=float)
+
+    # ---------------------------------------------------------------- helpers
+    def run_cycle(self, h, y, t, n_save=None):
+        return wear_cycle(_with_profile(self.mech, self.index, self.c_base + h), self.joint,
+                          y, t, self.period, n_save=n_save, **self.cycle_kw)
+
+    def finish(self, c, h_new, y_new, t_new, dn, dls, ok):
         """Accept a step unless it failed or pierced the wall (then stop, keep old h)."""
-        pierced = jnp.max(h_new) >= wall
+        pierced = jnp.max(h_new) >= self.wall
         bad = (~ok) | pierced
         status = jnp.where(~ok, STATUS_SOLVER, jnp.where(pierced, STATUS_PIERCED, STATUS_OK))
         out = dict(c)
@@ -213,130 +257,141 @@ def evolve(
         out["fail_h"] = jnp.where(bad, jnp.max(h_new), 0.0)
         return out
 
-    def record(c, a, valid):
+    def record(self, c, a, valid):
+        """One history entry (one per scan slot)."""
         return dict(cycles=c["n"], max_depth=jnp.max(c["h"]),
-                    volume=worn_volume(c["h"], radius, bdepth), extrapolation=a,
+                    volume=worn_volume(c["h"], self.radius, self.bdepth), extrapolation=a,
                     valid=valid, dynamic_cycles=c["dyn"])
 
-    def active(c):
-        return (c["status"] == STATUS_OK) & (c["n"] < cycles_arr - 1e-9)
+    def idle_record(self, c):
+        """The history entry of a slot after the end (what `run` records there)."""
+        return self.record(c, jnp.zeros(()), jnp.array(False))
 
-    # ------------------------------------------------------------ constant A
-    if method == "constant":
-        a = float(extrapolation)
-        if a < 1.0 or not math.isfinite(a):
-            raise InputError(f"extrapolation factor A must be >= 1, got {a}")
-        n_cycles = float(cycles)
-        if n_cycles <= 0:
-            raise InputError(f"cycles must be > 0, got {cycles}")
-        n_steps = int(math.ceil(n_cycles / a - 1e-9))
+    def active(self, c):
+        return (c["status"] == STATUS_OK) & (c["n"] < self.cycles_arr - 1e-9)
 
-        def step(c, _):
-            def do(c):
-                a_i = jnp.minimum(a, cycles_arr - c["n"])
-                r = run_cycle(c["h"], c["y"], c["t"])
-                out = finish(c, c["h"] + a_i * r.depth_increment, r.y_end, c["t"] + period,
-                             a_i, a_i * r.load_sliding, r.ok)
-                out["dyn"] = c["dyn"] + 1
-                return out, a_i
+    # ------------------------------------------------------------------ state
+    def init(self, y0) -> dict:
+        """Warm-up cycles (wear discarded), then the initial evolution state."""
+        h0 = jnp.zeros_like(self.c_base)
+        y, t = y0, jnp.zeros(())
+        warm_ok = jnp.array(True)
+        for _ in range(self.warmup_cycles):
+            r = self.run_cycle(h0, y, t)
+            y, t, warm_ok = r.y_end, t + self.period, warm_ok & r.ok
+        c = dict(h=h0, y=y, t=t, n=jnp.zeros(()), dyn=jnp.asarray(self.warmup_cycles),
+                 ls=jnp.zeros(()), status=jnp.where(warm_ok, STATUS_OK, STATUS_SOLVER),
+                 fail_n=jnp.zeros(()), fail_h=jnp.zeros(()))
+        if self.method == "adaptive":
+            ca, ex = self.cycles_arr, self.extrapolation
+            a0 = (jnp.maximum(jnp.round(self.opts["a0_fraction"] * ca), 1.0)
+                  if ex in (None, 1.0) else jnp.asarray(ex, dtype=float))
+            c.update(a=a0, dh_prev=h0)
+        elif self.method == "error":
+            ca, ex = self.cycles_arr, self.extrapolation
+            dn0 = (jnp.maximum(0.01 * ca, 1.0) if ex in (None, 1.0)
+                   else jnp.asarray(ex, dtype=float))
+            c.update(dn=dn0, have_k1=jnp.array(False), k1=h0, ls1=jnp.zeros(()))
+        return c
 
-            go = active(c)
-            c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
-            return c2, record(c2, a_i, go)
+    def run(self, state: dict, length: int):
+        """``length`` scan slots from ``state``: (new state, history of these slots)."""
+        step = {"constant": self._step_constant, "adaptive": self._step_adaptive,
+                "error": self._step_error}[self.method]
+        return lax.scan(step, state, None, length=int(length))
 
-        final, hist = lax.scan(step, base, None, length=n_steps)
+    def result(self, final: dict, hist: dict) -> EvolutionResult:
+        # all scan slots used before reaching ``cycles``: say so, never return a short run
+        short = (final["status"] == STATUS_OK) & (final["n"] < self.cycles_arr - 1e-6)
+        return EvolutionResult(
+            depth=final["h"], y=final["y"], t=final["t"], cycles=final["n"],
+            dynamic_cycles=final["dyn"], load_sliding=final["ls"],
+            status=jnp.where(short, STATUS_INCOMPLETE, final["status"]),
+            fail_cycles=jnp.where(short, final["n"], final["fail_n"]),
+            fail_depth=jnp.where(short, jnp.max(final["h"]), final["fail_h"]), history=hist,
+            state=final,
+        )
 
-    # --------------------------------------------------- adaptive (Eq. 4-20)
-    elif method == "adaptive":
-        opts = {**ADAPTIVE_DEFAULTS, **(adaptive or {})}
-        a0 = (jnp.maximum(jnp.round(opts["a0_fraction"] * cycles_arr), 1.0)
-              if extrapolation in (None, 1.0) else jnp.asarray(extrapolation, dtype=float))
-        a_inc = jnp.maximum(jnp.round(opts["inc_fraction"] * cycles_arr), 1.0)
-        a_dec = jnp.maximum(jnp.round(opts["dec_fraction"] * cycles_arr), 1.0)
-        slots = _slots(max_dynamic, cycles)
+    # ------------------------------------------------------------ scan steps
+    def _step_constant(self, c, _):
+        """Constant A."""
+        def do(c):
+            a_i = jnp.minimum(self.a, self.cycles_arr - c["n"])
+            r = self.run_cycle(c["h"], c["y"], c["t"])
+            out = self.finish(c, c["h"] + a_i * r.depth_increment, r.y_end,
+                              c["t"] + self.period, a_i, a_i * r.load_sliding, r.ok)
+            out["dyn"] = c["dyn"] + 1
+            return out, a_i
 
-        def step(c, _):
-            def do(c):
-                a_i = jnp.minimum(c["a"], cycles_arr - c["n"])
-                r = run_cycle(c["h"], c["y"], c["t"])
-                dh = r.depth_increment
-                if opts["criterion"] == "pressure_jump":
-                    # sliding-weighted mean pressure of the cycle at each node [Pa]
-                    s_cycle = 2 * jnp.pi * radius  # relative rotation 2 pi per crank cycle
-                    p = dh / (k * s_cycle)
-                    jump = jnp.max(jnp.abs(jnp.roll(p, -1) - p))
-                    smooth = jump < opts["p_crit_fraction"] * jnp.max(p)
-                else:
-                    change = jnp.max(jnp.abs(dh - c["dh_prev"]))
-                    smooth = change < opts["change_fraction"] * jnp.max(jnp.abs(dh))
-                out = finish(c, c["h"] + a_i * dh, r.y_end, c["t"] + period, a_i,
-                             a_i * r.load_sliding, r.ok)
-                out["dyn"] = c["dyn"] + 1
-                out["a"] = jnp.where(smooth, c["a"] + a_inc, jnp.maximum(c["a"] - a_dec, 1.0))
-                out["dh_prev"] = dh
-                return out, a_i
+        go = self.active(c)
+        c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
+        return c2, self.record(c2, a_i, go)
 
-            go = active(c)
-            c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
-            return c2, record(c2, a_i, go)
+    def _step_adaptive(self, c, _):
+        """Adaptive A (Eq. 4-20)."""
+        opts, ca = self.opts, self.cycles_arr
+        a_inc = jnp.maximum(jnp.round(opts["inc_fraction"] * ca), 1.0)
+        a_dec = jnp.maximum(jnp.round(opts["dec_fraction"] * ca), 1.0)
 
-        if opts["criterion"] not in ("increment_change", "pressure_jump"):
-            raise InputError(f"adaptive criterion must be 'increment_change' or "
-                             f"'pressure_jump', got {opts['criterion']!r}")
-        final, hist = lax.scan(step, {**base, "a": a0, "dh_prev": h0}, None, length=slots)
+        def do(c):
+            a_i = jnp.minimum(c["a"], ca - c["n"])
+            r = self.run_cycle(c["h"], c["y"], c["t"])
+            dh = r.depth_increment
+            if opts["criterion"] == "pressure_jump":
+                # sliding-weighted mean pressure of the cycle at each node [Pa]
+                s_cycle = 2 * jnp.pi * self.radius  # relative rotation 2 pi per crank cycle
+                p = dh / (self.k * s_cycle)
+                jump = jnp.max(jnp.abs(jnp.roll(p, -1) - p))
+                smooth = jump < opts["p_crit_fraction"] * jnp.max(p)
+            else:
+                change = jnp.max(jnp.abs(dh - c["dh_prev"]))
+                smooth = change < opts["change_fraction"] * jnp.max(jnp.abs(dh))
+            out = self.finish(c, c["h"] + a_i * dh, r.y_end, c["t"] + self.period, a_i,
+                              a_i * r.load_sliding, r.ok)
+            out["dyn"] = c["dyn"] + 1
+            out["a"] = jnp.where(smooth, c["a"] + a_inc, jnp.maximum(c["a"] - a_dec, 1.0))
+            out["dh_prev"] = dh
+            return out, a_i
 
-    # ------------------------------------------ error-controlled (Heun-Euler)
-    else:
-        slots = _slots(max_dynamic, cycles)
-        dn0 = (jnp.maximum(0.01 * cycles_arr, 1.0) if extrapolation in (None, 1.0)
-               else jnp.asarray(extrapolation, dtype=float))
+        go = self.active(c)
+        c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
+        return c2, self.record(c2, a_i, go)
 
-        def step(c, _):
-            def do(c):
-                def stage1(c):
-                    r = run_cycle(c["h"], c["y"], c["t"])
-                    return r.depth_increment, r.load_sliding, r.y_end, c["t"] + period, r.ok, 1
+    def _step_error(self, c, _):
+        """Error-controlled (Heun-Euler)."""
+        period, rtol, atol = self.period, self.rtol, self.atol
 
-                def cached(c):
-                    return c["k1"], c["ls1"], c["y"], c["t"], jnp.array(True), 0
+        def do(c):
+            def stage1(c):
+                r = self.run_cycle(c["h"], c["y"], c["t"])
+                return r.depth_increment, r.load_sliding, r.y_end, c["t"] + period, r.ok, 1
 
-                k1, ls1, y1, t1, ok1, n1 = lax.cond(c["have_k1"], cached, stage1, c)
-                dn = jnp.minimum(c["dn"], cycles_arr - c["n"])
-                r2 = run_cycle(c["h"] + dn * k1, y1, t1)
-                k2 = r2.depth_increment
-                h_new = c["h"] + 0.5 * dn * (k1 + k2)
-                err = 0.5 * dn * jnp.max(jnp.abs(k2 - k1))
-                tol = atol + rtol * jnp.max(jnp.abs(h_new))
-                ratio = err / tol
-                accept = ratio <= 1.0
-                ok = ok1 & r2.ok
-                factor = jnp.clip(0.9 * jnp.where(ratio > 0, ratio, 1e-10) ** -0.5, 0.3, 4.0)
-                dls = 0.5 * dn * (ls1 + r2.load_sliding)
-                out = finish(c, jnp.where(accept, h_new, c["h"]), r2.y_end, t1 + period,
-                             jnp.where(accept, dn, 0.0), jnp.where(accept, dls, 0.0), ok)
-                out["dyn"] = c["dyn"] + n1 + 1
-                out["dn"] = dn * factor
-                out["have_k1"] = ~accept
-                out["k1"], out["ls1"] = k1, ls1
-                return out, jnp.where(accept, dn, 0.0)
+            def cached(c):
+                return c["k1"], c["ls1"], c["y"], c["t"], jnp.array(True), 0
 
-            go = active(c)
-            c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
-            return c2, record(c2, a_i, go & (a_i > 0))
+            k1, ls1, y1, t1, ok1, n1 = lax.cond(c["have_k1"], cached, stage1, c)
+            dn = jnp.minimum(c["dn"], self.cycles_arr - c["n"])
+            r2 = self.run_cycle(c["h"] + dn * k1, y1, t1)
+            k2 = r2.depth_increment
+            h_new = c["h"] + 0.5 * dn * (k1 + k2)
+            err = 0.5 * dn * jnp.max(jnp.abs(k2 - k1))
+            tol = atol + rtol * jnp.max(jnp.abs(h_new))
+            ratio = err / tol
+            accept = ratio <= 1.0
+            ok = ok1 & r2.ok
+            factor = jnp.clip(0.9 * jnp.where(ratio > 0, ratio, 1e-10) ** -0.5, 0.3, 4.0)
+            dls = 0.5 * dn * (ls1 + r2.load_sliding)
+            out = self.finish(c, jnp.where(accept, h_new, c["h"]), r2.y_end, t1 + period,
+                              jnp.where(accept, dn, 0.0), jnp.where(accept, dls, 0.0), ok)
+            out["dyn"] = c["dyn"] + n1 + 1
+            out["dn"] = dn * factor
+            out["have_k1"] = ~accept
+            out["k1"], out["ls1"] = k1, ls1
+            return out, jnp.where(accept, dn, 0.0)
 
-        init = {**base, "dn": dn0, "have_k1": jnp.array(False), "k1": h0,
-                "ls1": jnp.zeros(())}
-        final, hist = lax.scan(step, init, None, length=slots)
-
-    # all scan slots used before reaching ``cycles``: say so, never return a short run
-    short = (final["status"] == STATUS_OK) & (final["n"] < cycles_arr - 1e-6)
-    return EvolutionResult(
-        depth=final["h"], y=final["y"], t=final["t"], cycles=final["n"],
-        dynamic_cycles=final["dyn"], load_sliding=final["ls"],
-        status=jnp.where(short, STATUS_INCOMPLETE, final["status"]),
-        fail_cycles=jnp.where(short, final["n"], final["fail_n"]),
-        fail_depth=jnp.where(short, jnp.max(final["h"]), final["fail_h"]), history=hist,
-    )
+        go = self.active(c)
+        c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
+        return c2, self.record(c2, a_i, go & (a_i > 0))
 
 
 def _slots(max_dynamic, cycles) -> int:
@@ -345,3 +400,110 @@ def _slots(max_dynamic, cycles) -> int:
     if int(max_dynamic) < 1:
         raise InputError(f"max_dynamic must be >= 1, got {max_dynamic}")
     return int(max_dynamic)
+
+
+# ------------------------------------------------------- chunks and checkpoints
+class Checkpoint(NamedTuple):
+    """Where a chunked evolution stands: ``state`` (`Evolver` state, numpy),
+    ``history`` (per-slot history of the slots run so far, numpy) and
+    ``slots_done`` (scan slots run, possibly past the end on the last chunk)."""
+
+    state: dict
+    history: dict
+    slots_done: int
+
+
+class ChunkedEvolution:
+    """Run an evolution as a Python loop over chunks of ``chunk_slots`` scan slots.
+
+    ``make(p)`` builds the `Evolver` from the (traced) parameters ``p``.  One
+    compiled chunk function is reused; after every chunk ``on_chunk(Checkpoint)``
+    is called (to save it, to show progress; an exception there interrupts the
+    run with the checkpoint already saved).  The loop stops once the evolution
+    is done (all cycles, or a failure status).  Slots skipped after the end
+    are recorded as the single scan records them, so the result (state and
+    history) equals that of `evolve` run in one scan.
+    """
+
+    def __init__(self, make, p, y0, chunk_slots: int):
+        if int(chunk_slots) < 1:
+            raise InputError(f"chunk_slots must be >= 1, got {chunk_slots}")
+        ev = make(p)  # input checks, static slot count
+        self.n_slots, self.chunk_slots = ev.n_slots, int(chunk_slots)
+        self.cycles = float(ev.cycles_arr)
+        self._init = jax.jit(lambda p, y0: make(p).init(y0))
+        self._chunk = jax.jit(lambda p, c: make(p).run(c, self.chunk_slots))
+        self._idle = jax.jit(lambda p, c: make(p).idle_record(c))
+        self._result = jax.jit(lambda p, c, h: make(p).result(c, h))
+        self._p, self._y0 = p, y0
+
+    def compile(self) -> float:
+        """Compile the warm-up and the chunk function ahead of time; seconds taken."""
+        t0 = time.perf_counter()
+        shape = jax.tree.map(lambda x: jax.ShapeDtypeStruct(x.shape, x.dtype),
+                             jax.eval_shape(self._init, self._p, self._y0))
+        self._init = self._init.lower(self._p, self._y0).compile()
+        self._chunk = self._chunk.lower(self._p, shape).compile()
+        return time.perf_counter() - t0
+
+    def done(self, state) -> bool:
+        return not (int(state["status"]) == STATUS_OK
+                    and float(state["n"]) < self.cycles - 1e-9)
+
+    def run(self, start: Checkpoint | None = None, on_chunk=None) -> EvolutionResult:
+        p = self._p
+        if start is None:
+            state = _as_numpy(self._init(p, self._y0))
+            parts, slots = [], 0
+        else:
+            state, slots = start.state, int(start.slots_done)
+            parts = [start.history] if slots > 0 else []
+        while slots < self.n_slots and not self.done(state):
+            new, h = self._chunk(p, jax.tree.map(jnp.asarray, state))
+            state = _as_numpy(new)
+            parts.append(_as_numpy(h))
+            slots += self.chunk_slots
+            if len(parts) > 1:
+                parts = [{k: np.concatenate([q[k] for q in parts]) for k in parts[0]}]
+            if on_chunk is not None:
+                on_chunk(Checkpoint(state, parts[0], slots))
+        done = slots if parts else 0
+        if done < self.n_slots:  # the rest of the slots: idle, as in one scan
+            idle = _as_numpy(self._idle(p, jax.tree.map(jnp.asarray, state)))
+            pad = {k: np.repeat(np.asarray(v)[None], self.n_slots - done, axis=0)
+                   for k, v in idle.items()}
+            parts.append(pad)
+        hist = {k: np.concatenate([q[k] for q in parts])[: self.n_slots] for k in parts[0]}
+        return self._result(p, jax.tree.map(jnp.asarray, state),
+                            jax.tree.map(jnp.asarray, hist))
+
+
+def _as_numpy(tree):
+    return jax.tree.map(np.asarray, tree)
+
+
+def save_checkpoint(path, ckpt: Checkpoint, meta: dict) -> None:
+    """Write ``ckpt`` and ``meta`` (JSON-able) to ``path`` (.npz) atomically."""
+    path = Path(path)
+    arrays = {f"state.{k}": np.asarray(v) for k, v in ckpt.state.items()}
+    arrays.update({f"history.{k}": np.asarray(v) for k, v in ckpt.history.items()})
+    arrays["slots_done"] = np.asarray(ckpt.slots_done)
+    arrays["meta"] = np.asarray(json.dumps(meta))
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "wb") as f:
+        np.savez(f, **arrays)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def load_checkpoint(path) -> tuple[Checkpoint, dict]:
+    """Read a checkpoint written by `save_checkpoint`: (checkpoint, meta)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            state = {k[6:]: z[k] for k in z.files if k.startswith("state.")}
+            hist = {k[8:]: z[k] for k in z.files if k.startswith("history.")}
+            slots, meta = int(z["slots_done"]), json.loads(str(z["meta"]))
+    except (OSError, KeyError, ValueError) as err:
+        raise InputError(f"cannot read checkpoint {path}: {err}") from err
+    return Checkpoint(state, hist, slots), meta

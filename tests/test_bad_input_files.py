@@ -13,6 +13,9 @@ from diffwear.errors import InputError
 
 DESIGN = Path(__file__).resolve().parents[1] / "design_studies" / "ideal_slider_crank.toml"
 TEXT = DESIGN.read_text()
+CLEARANCE = (DESIGN.parent / "clearance_slider_crank.toml").read_text()
+EFM = ('law = { type = "elastic-foundation", layer_thickness = "13.308686667365992 mm", '
+       'depth = "12.8 mm", restitution = 0.8, damping_mass = "15 kg" }')
 SPRING = """
 [[forces]]
 type = "spring"
@@ -33,6 +36,11 @@ def sub(old: str, new: str, text: str = TEXT) -> str:
 
 def line_of(snippet: str) -> int:
     return TEXT[: TEXT.index(snippet)].count("\n") + 1
+
+
+def csub(old: str, new: str) -> str:
+    """The clearance design file with one edit."""
+    return sub(old, new, CLEARANCE)
 
 
 def _before_initial(block: str) -> str:
@@ -142,6 +150,45 @@ CASES = [
      ["forces[1].stiffness", "'N' is a force unit, not stiffness", "N/m"]),
     ("gravity-bad-field", sub('g = ["0 m/s^2"', 'g_ms2 = ["0 m/s^2"'),
      ["forces[0].g_ms2", "unknown key", "did you mean 'g_m_per_s2'", "g_m_per_s2)"]),
+    # clearance joints (design_studies/clearance_slider_crank.toml)
+    ("clearance-negative", csub('clearance = "0.5 mm"', 'clearance = "-0.5 mm"'),
+     ["joints[1].clearance", "out of range", ">= 0 m"]),
+    ("clearance-pin-larger", csub('clearance = "0.5 mm"', 'bushing_radius = "19.5 mm"'),
+     ["joints[1].bushing_radius", "smaller than the pin radius", ">= pin_radius"]),
+    ("clearance-and-radius", csub('clearance = "0.5 mm"',
+                                  'clearance = "0.5 mm"\nbushing_radius = "20.5 mm"'),
+     ["joints[1].clearance", "together with bushing_radius", "exactly one of"]),
+    ("clearance-neither", csub('clearance = "0.5 mm"', 'clearence = "0.5 mm"'),
+     ["joints[1].clearence", "unknown key", "did you mean 'clearance'"]),
+    ("clearance-no-radius", csub('clearance = "0.5 mm"', ""),
+     ["joints[1].bushing_radius", "missing key", "exactly one of bushing_radius and clearance"]),
+    ("clearance-zero-modulus", csub('youngs_modulus = "0.5 GPa"', 'youngs_modulus = "-1 GPa"'),
+     ["joints[1].bushing_material.youngs_modulus", "out of range", "> 0 Pa"]),
+    ("clearance-poisson", csub("poisson_ratio = 0.38", "poisson_ratio = -1"),
+     ["joints[1].bushing_material.poisson_ratio", "out of range", "(-1, 0.5)"]),
+    ("clearance-material-name", csub('pin_material = "steel"', 'pin_material = "titanium"'),
+     ["joints[1].pin_material", "unknown material 'titanium'", "'steel' | 'ptfe'"]),
+    ("clearance-negative-friction", csub("coefficient = 0.13", "coefficient = -0.13"),
+     ["joints[1].friction.coefficient", "out of range", ">= 0"]),
+    ("clearance-restitution", csub("restitution = 0.8", "restitution = 1.5"),
+     ["joints[1].law.restitution", "out of range", "(0, 1]"]),
+    ("clearance-n-theta", csub("n_theta = 180", "n_theta = 7"),
+     ["joints[1].n_theta", "out of range", "[8, 100000]"]),
+    ("clearance-unknown-law", csub('type = "elastic-foundation"', 'type = "lankarani"'),
+     ["joints[1].law.type", "unknown law type 'lankarani'", "did you mean 'lankarani-nikravesh'",
+      "'kelvin-voigt'"]),
+    ("clearance-wear-point-law",
+     csub(EFM, 'law = { type = "lankarani-nikravesh" }\n'
+               'wear = { coefficient = "5.05e-4 mm^3/(N m)" }'),
+     ["joints[1].wear", "pressure distribution", "'lankarani-nikravesh' point law",
+      "law.type = 'elastic-foundation'"]),
+    ("clearance-wear-unit", csub(EFM, EFM + '\nwear = { coefficient = "5.05e-4 mm^3/N" }'),
+     ["joints[1].wear.coefficient", "unknown unit", "mm^3/(N m)"]),
+    ("clearance-as-reaction", csub('reactions = ["ground_crank", "driver"]',
+                                   'reactions = ["crank_rod"]'),
+     ["outputs.reactions[0]", "clearance joint", "contact = ['crank_rod']"]),
+    ("contact-of-ideal-joint", csub('contact = ["crank_rod"]', 'contact = ["rod_slider"]'),
+     ["outputs.contact[0]", "not a clearance joint", "'crank_rod'"]),
 ]
 
 

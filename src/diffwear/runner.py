@@ -10,6 +10,9 @@ one failed: `initial_state` (assembly; `InputError`), `integrate`
                           then <body>_vx_m_s, <body>_vy_m_s, <body>_omega_rad_s
     reaction_<joint>.csv  t_s, fx_N, fy_N, m_Nm: the wrench the joint exerts ON the
                           output's body (global axes; moment about that body's COM)
+    contact_<joint>.csv   clearance joints: t_s, force_N (|force| on the bushing body),
+                          normal_load_N, theta_rad (contact angle, bushing frame),
+                          penetration_m (> 0: in contact)
     trajectory.png, reactions.png
     input.toml            copy of the mechanism file
 """
@@ -35,6 +38,7 @@ from .dynamics import (
     reaction_wrench,
     simulate,
 )
+from .contact import contact_history
 from .dynamics.simulate import Trajectory
 from .errors import InputError
 from .io import OutputDir
@@ -50,15 +54,21 @@ def initial_state(study: Study):
 
     Same result as ``consistent_state(mech, q_guess)`` but compiled (the eager
     Newton iteration costs seconds); the check then runs on concrete values.
+    With clearance joints the assembly is that of ``study.assembly`` (each one
+    an ideal revolute at the same points): the pins start centred with the
+    ideal joints' velocities, and the contact states at their initial values.
     """
-    mech = study.mechanism
+    mech = study.mechanism if study.assembly is None else study.assembly
     y0 = _consistent_state(mech, study.q_guess)
     finite = bool(np.all(np.isfinite(np.asarray(y0))))
     try:
         check_assembly(mech, y0[: mech.n_coords], finite, q_guess=study.q_guess)
     except InputError as err:
         raise InputError(f"{study.file}: initial: {err}") from None
-    return y0
+    if study.assembly is None:
+        return y0
+    q, qd, _ = mech.split(y0)
+    return study.mechanism.join(q, qd, study.mechanism.initial_aux(q, qd))
 
 
 @eqx.filter_jit
@@ -70,7 +80,7 @@ def _integrate(mech: Mechanism, y0, sim: Simulation) -> Trajectory:
 def integrate(study: Study, y0) -> Trajectory:
     """The study's trajectory; `SolverError` (naming the file) if the solve failed."""
     traj = _integrate(study.mechanism, y0, study.simulation)
-    return traj.raise_if_failed(study.file)
+    return traj.raise_if_failed(study.file, study.mechanism)
 
 
 class Results(NamedTuple):
@@ -79,6 +89,18 @@ class Results(NamedTuple):
     qd: np.ndarray          # (T, n) m/s / rad/s
     violation: np.ndarray   # (T, m) constraint residuals (m or rad per row)
     reactions: dict         # joint -> (T, 3): fx [N], fy [N], moment about COM [N m]
+    contacts: dict = {}     # clearance joint -> (T, 4): |F| [N], normal load [N],
+                            #   contact angle [rad], penetration [m]
+
+
+@eqx.filter_jit
+def _contacts(mech: Mechanism, ys, joints):
+    out = {}
+    for joint in joints:
+        h = contact_history(mech, joint, ys)
+        out[joint] = jax.numpy.stack([h.force_magnitude, h.normal_load, h.contact_angle,
+                                      h.penetration], axis=-1)
+    return out
 
 
 @eqx.filter_jit
@@ -97,8 +119,10 @@ def _post(mech: Mechanism, ts, ys, sim: Simulation, outputs):
 def postprocess(study: Study, traj: Trajectory) -> Results:
     q, qd, phi, wrenches = _post(study.mechanism, traj.ts, traj.ys, study.simulation,
                                  study.reactions)
+    contacts = _contacts(study.mechanism, traj.ys, tuple(o.joint for o in study.contacts))
     return Results(np.asarray(traj.ts), np.asarray(q), np.asarray(qd), np.asarray(phi),
-                   {k: np.asarray(v) for k, v in wrenches.items()})
+                   {k: np.asarray(v) for k, v in wrenches.items()},
+                   {k: np.asarray(v) for k, v in contacts.items()})
 
 
 # ----------------------------------------------------------------------------- files
@@ -133,6 +157,18 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
             "max_abs_moment_Nm": float(np.max(np.abs(w[:, 2]))),
             "file": name,
         }
+    contacts = {}
+    for o in study.contacts:
+        h = r.contacts[o.joint]
+        name = f"contact_{o.joint}.csv"
+        out.csv(name, {"t_s": r.ts, "force_N": h[:, 0], "normal_load_N": h[:, 1],
+                       "theta_rad": h[:, 2], "penetration_m": h[:, 3]})
+        contacts[o.joint] = {
+            "max_force_N": float(np.max(h[:, 0])),
+            "max_penetration_m": float(np.max(h[:, 3])),
+            "fraction_in_contact": float(np.mean(h[:, 3] > 0)),
+            "file": name,
+        }
 
     panels = [(f"{c} [{u}]", {b: r.q[:, 3 * i + k] for i, b in enumerate(mech.body_names)})
               for k, (c, u) in enumerate((("x", "m"), ("y", "m"), ("φ", "rad")))]
@@ -160,6 +196,7 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
         "max_constraint_violation": max(by_joint.values(), default=0.0),
         "max_constraint_violation_by_joint": by_joint,
         "reactions": reactions,
+        "contacts": contacts,
         "integrator_steps": steps,
         "simulate_time_s": simulate_time,
         "wall_time_s": wall,
@@ -202,6 +239,17 @@ def _report(study: Study, s: dict, figures: list[str]) -> str:
         ]
         lines += [f"| {j} | {r['on_body']} | {r['max_force_N']:.4g} | {r['max_abs_moment_Nm']:.4g} "
                   f"| [{r['file']}]({r['file']}) |" for j, r in s["reactions"].items()]
+        lines.append("")
+    if s["contacts"]:
+        lines += [
+            "## Clearance joints\n",
+            "Contact force on the bushing body; penetration > 0 means contact.\n",
+            "| joint | max abs(F) [N] | max penetration [m] | in contact | file |",
+            "|---|---|---|---|---|",
+        ]
+        lines += [f"| {j} | {c['max_force_N']:.4g} | {c['max_penetration_m']:.3e} | "
+                  f"{100 * c['fraction_in_contact']:.1f} % | [{c['file']}]({c['file']}) |"
+                  for j, c in s["contacts"].items()]
         lines.append("")
     lines += [
         "## Files\n",

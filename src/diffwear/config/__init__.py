@@ -7,11 +7,14 @@ the key path and what is allowed.  New element types register in
 """
 
 from . import schema, units
-from .elements import FORCE_TYPES, JOINT_TYPES, ElementType
+from .elements import FORCE_TYPES, JOINT_TYPES, ElementType, FieldError
+from .clearance import CLEARANCE
+
+JOINT_TYPES["clearance"] = CLEARANCE
 from .loader import load, load_dict, loads
-from .study import ReactionOutput, Simulation, Study
+from .study import ContactOutput, ReactionOutput, Simulation, Study
 
 __all__ = [
-    "schema", "units", "FORCE_TYPES", "JOINT_TYPES", "ElementType", "load", "load_dict", "loads",
-    "ReactionOutput", "Simulation", "Study",
+    "schema", "units", "FORCE_TYPES", "JOINT_TYPES", "ElementType", "FieldError", "load", "load_dict", "loads",
+    "ContactOutput", "ReactionOutput", "Simulation", "Study",
 ]

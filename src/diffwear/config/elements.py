@@ -13,7 +13,14 @@ registers it here before a file is loaded::
 The ``type`` key itself is handled by the loader; ``fields`` lists the others.
 ``build`` receives the converted values (SI floats, tuples for vectors) and
 returns the `AbstractConstraint` / `AbstractForceElement`; an `InputError`
-it raises is reported with the entry's key path.
+it raises is reported with the entry's key path, a `FieldError` with the path
+of the key it names.  With ``bodies=True`` it also receives ``{name: Body}``
+(e.g. for a default damping mass).
+
+A ``[[joints]]`` type may build a *force element* (a clearance joint: the pin
+floats in the bushing).  It then needs ``assembly``: element -> the ideal
+constraint that stands in for it when the mechanism is assembled at t = 0
+(a clearance joint starts centred, with the ideal joint's velocities).
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any, NamedTuple
 
+from ..errors import InputError
 from ..mechanism import (
     STANDARD_GRAVITY,
     Driver,
@@ -34,8 +42,18 @@ from .schema import BodyRef, Direction, Field, Quantity, Text, Vector
 
 class ElementType(NamedTuple):
     fields: Mapping[str, Field]
-    build: Callable[[dict[str, Any]], Any]
+    build: Callable[..., Any]
     doc: str
+    bodies: bool = False
+    assembly: Callable[[Any], Any] | None = None
+
+
+class FieldError(InputError):
+    """A build-time problem with one key of the entry (reported as ``<entry>.<key>``)."""
+
+    def __init__(self, key: str, what: str, allowed: str | None = None):
+        self.key, self.what, self.allowed = key, what, allowed
+        super().__init__(f"{key}: {what}" + (f"; allowed: {allowed}" if allowed else ""))
 
 
 NAME = Text(name=True, doc="unique among joints and forces")

@@ -8,7 +8,12 @@ Top level (see README "Mechanism files"):
     [[forces]]            type = one of FORCE_TYPES, then that type's fields
     [initial]             <body> = { x, y, phi }: assembly guess for every body
     [simulation]          duration, n_save, rtol, atol, baumgarte_alpha/beta, max_steps
-    [outputs]             reactions = ["joint", { joint = "...", on = "body" }, ...]
+    [outputs]             reactions = ["joint", { joint = "...", on = "body" }, ...],
+                          contact = ["<clearance joint>", ...]
+
+A ``[[joints]]`` entry may build a force element (``type = "clearance"``): it
+joins the mechanism's forces (after those of ``[[forces]]``), and the study's
+``assembly`` mechanism holds the ideal joint that stands in for it at t = 0.
 
 Every problem raises `InputError("<file>: <key path>: <what>; allowed: ...")`.
 Nothing here integrates or assembles; see `diffwear.runner`.
@@ -23,8 +28,8 @@ from pathlib import Path
 import jax.numpy as jnp
 
 from ..errors import InputError
-from ..mechanism import GROUND, Body, Mechanism
-from .elements import FORCE_TYPES, JOINT_TYPES, ElementType
+from ..mechanism import GROUND, AbstractForceElement, Body, Mechanism
+from .elements import FORCE_TYPES, JOINT_TYPES, ElementType, FieldError
 from .schema import (
     NAME_RULE,
     Context,
@@ -47,6 +52,7 @@ from .study import (
     DEFAULT_MAX_STEPS,
     DEFAULT_N_SAVE,
     DEFAULT_RTOL,
+    ContactOutput,
     ReactionOutput,
     Simulation,
     Study,
@@ -82,6 +88,7 @@ SIMULATION_FIELDS = {
 }
 
 REACTION_FIELDS = {"joint": Text(), "on": Text(default=None)}
+OUTPUT_KEYS = ("reactions", "contact")
 
 
 # ----------------------------------------------------------------------------- entry points
@@ -142,13 +149,25 @@ def load_dict(data: Mapping, file: str = "<dict>") -> Study:
 
     bodies = _bodies(ctx, data.get("bodies"))
     ctx.bodies = tuple(b.name for b in bodies)
-    constraints = _elements(ctx, "joints", data.get("joints"), JOINT_TYPES, FORCE_TYPES)
-    forces = _elements(ctx, "forces", data.get("forces"), FORCE_TYPES, JOINT_TYPES)
-    _unique_element_names(ctx, data, constraints, forces)
+    by_name = {b.name: b for b in bodies}
+    joints = _elements(ctx, "joints", data.get("joints"), JOINT_TYPES, FORCE_TYPES, by_name)
+    forces = _elements(ctx, "forces", data.get("forces"), FORCE_TYPES, JOINT_TYPES, by_name)
+    _unique_element_names(ctx, data, [(k, e) for k, e, _ in joints],
+                          [(k, e) for k, e, _ in forces])
+    # joints that are force elements (clearance joints) go after the [[forces]]
+    floating = [e for _, e, _ in joints if isinstance(e, AbstractForceElement)]
+    constraints = [e for _, e, _ in joints if not isinstance(e, AbstractForceElement)]
+    plain_forces = [e for _, e, _ in forces]
     try:
-        mechanism = Mechanism(bodies, [c for _, c in constraints], [f for _, f in forces])
+        mechanism = Mechanism(bodies, constraints, [*plain_forces, *floating])
+        assembly = None
+        if floating:
+            stand_in = [spec.assembly(e) if isinstance(e, AbstractForceElement) else e
+                        for _, e, spec in joints]
+            assembly = Mechanism(bodies, stand_in, plain_forces)
     except InputError as err:  # checks above should catch everything; keep the file name
         raise InputError(f"{file}: {err}") from None
+    reactions, contacts = _outputs(ctx, data.get("outputs", {}), mechanism)
 
     return Study(
         file=file,
@@ -157,7 +176,9 @@ def load_dict(data: Mapping, file: str = "<dict>") -> Study:
         mechanism=mechanism,
         q_guess=_initial(ctx, data.get("initial")),
         simulation=_simulation(ctx, data.get("simulation")),
-        reactions=_outputs(ctx, data.get("outputs", {}), mechanism),
+        reactions=reactions,
+        contacts=contacts,
+        assembly=assembly,
     )
 
 
@@ -187,8 +208,8 @@ def _bodies(ctx: Context, raw) -> list[Body]:
 
 
 def _elements(ctx: Context, section: str, raw, types: Mapping[str, ElementType],
-              other: Mapping[str, ElementType]):
-    """[(index, element)] of ``[[joints]]`` or ``[[forces]]``."""
+              other: Mapping[str, ElementType], bodies: Mapping[str, Body]):
+    """[(index, element, its ElementType)] of ``[[joints]]`` or ``[[forces]]``."""
     out = []
     kinds = ", ".join(repr(t) for t in types)
     for k, table in enumerate(read_array_of_tables(ctx, section, raw, required=False)):
@@ -209,14 +230,19 @@ def _elements(ctx: Context, section: str, raw, types: Mapping[str, ElementType],
         values = read_table(ctx, path, {key: val for key, val in table.items() if key != "type"},
                             spec.fields)
         try:
-            element = spec.build(values)
+            element = spec.build(values, bodies) if spec.bodies else spec.build(values)
+        except FieldError as err:
+            raise ctx.error(f"{path}.{err.key}", err.what, err.allowed) from None
         except InputError as err:
             raise ctx.wrap(path, err) from None
+        if isinstance(element, AbstractForceElement) and section == "joints" \
+                and spec.assembly is None:
+            raise TypeError(f"joint type {kind!r} builds a force element but has no assembly")
         names = element.bodies
         if len(set(names)) < len(names):
             raise ctx.error(path, f"connects body {names[0]!r} to itself",
                             "two different bodies (one may be \"ground\")")
-        out.append((k, element))
+        out.append((k, element, spec))
     return out
 
 
@@ -257,9 +283,43 @@ def _simulation(ctx: Context, raw) -> Simulation:
     return Simulation(**v)
 
 
-def _outputs(ctx: Context, raw, mechanism: Mechanism) -> tuple[ReactionOutput, ...]:
-    table = check_table(ctx, "outputs", raw, "reactions = [...]")
-    check_unknown(ctx, "outputs", table, ("reactions",))
+def _outputs(ctx: Context, raw, mechanism: Mechanism):
+    table = check_table(ctx, "outputs", raw, "reactions = [...], contact = [...]")
+    check_unknown(ctx, "outputs", table, OUTPUT_KEYS)
+    return _reactions(ctx, table, mechanism), _contacts(ctx, table, mechanism)
+
+
+def _clearance_names(mechanism: Mechanism) -> list[str]:
+    from ..contact import ClearanceJoint
+
+    return [f.name for f in mechanism.forces if isinstance(f, ClearanceJoint)]
+
+
+def _contacts(ctx: Context, table, mechanism: Mechanism) -> tuple[ContactOutput, ...]:
+    entries = table.get("contact", [])
+    names = _clearance_names(mechanism)
+    allowed = ", ".join(repr(n) for n in names) or "(no clearance joints)"
+    if not isinstance(entries, list):
+        raise ctx.error("outputs.contact", f"expected an array, got {toml_type(entries)} "
+                        f"{show(entries)}", f"an array of clearance joint names: {allowed}")
+    out = []
+    for k, name in enumerate(entries):
+        path = f"outputs.contact[{k}]"
+        if not isinstance(name, str):
+            raise ctx.error(path, f"expected a clearance joint name, got {toml_type(name)} "
+                            f"{show(name)}", allowed)
+        if name not in names:
+            others = [c.name for c in mechanism.constraints] + [f.name for f in mechanism.forces]
+            what = (f"{name!r} is not a clearance joint (it has no contact)" if name in others
+                    else f"unknown clearance joint {name!r}{suggest(name, names)}")
+            raise ctx.error(path, what, allowed)
+        if name in (o.joint for o in out):  # one contact_<joint>.csv per joint
+            raise ctx.error(path, f"joint {name!r} is requested twice", "each joint once")
+        out.append(ContactOutput(name))
+    return tuple(out)
+
+
+def _reactions(ctx: Context, table, mechanism: Mechanism) -> tuple[ReactionOutput, ...]:
     entries = table.get("reactions", [])
     joints = {c.name: c for c in mechanism.constraints}
     if not isinstance(entries, list):
@@ -281,6 +341,9 @@ def _outputs(ctx: Context, raw, mechanism: Mechanism) -> tuple[ReactionOutput, .
             what = f"unknown joint {name!r}{suggest(name, list(joints))}"
             if name in forces:
                 what = f"{name!r} is a force element, not a joint (it has no reaction)"
+            if name in _clearance_names(mechanism):
+                what = (f"{name!r} is a clearance joint: it has no reaction, request its "
+                        f"contact force with contact = [{name!r}]")
             raise ctx.error(path, what, ", ".join(joints) or "(no joints)")
         movable = [b for b in joints[name].bodies if b != GROUND]
         on = movable[-1] if v["on"] is None else v["on"]

@@ -325,6 +325,48 @@ class Integer(Field):
         return raw
 
 
+@dataclass(frozen=True)
+class Table(Field):
+    """An inline sub-table with its own fields: ``friction = { coefficient = 0.13 }``."""
+
+    fields: Mapping[str, Field] = None  # type: ignore[assignment]
+
+    def expects(self, key):
+        return "{ " + ", ".join(self.fields) + " }"
+
+    def read(self, ctx, path, key, spelling, raw):
+        return read_table(ctx, path, raw, self.fields, self.expects(key))
+
+
+@dataclass(frozen=True)
+class Tagged(Field):
+    """A sub-table whose ``type`` key picks its fields:
+    ``law = { type = "kelvin-voigt", stiffness = "1e8 N/m" }``.  Returns the
+    converted fields plus ``"type"``."""
+
+    types: Mapping[str, Mapping[str, Field]] = None  # type: ignore[assignment]
+    what: str = "type"
+
+    def expects(self, key):
+        return f"{{ type = {' | '.join(repr(t) for t in self.types)}, ... }}"
+
+    def read(self, ctx, path, key, spelling, raw):
+        table = check_table(ctx, path, raw, self.expects(key))
+        kinds = ", ".join(repr(t) for t in self.types)
+        kind = table.get("type")
+        if kind is None:
+            raise ctx.error(f"{path}.type", "missing key", kinds)
+        if not isinstance(kind, str):
+            raise ctx.error(f"{path}.type",
+                            f"expected a string, got {toml_type(kind)} {show(kind)}", kinds)
+        if kind not in self.types:
+            raise ctx.error(f"{path}.type",
+                            f"unknown {self.what} {kind!r}{suggest(kind, list(self.types))}",
+                            kinds)
+        rest = {k: v for k, v in table.items() if k != "type"}
+        return {"type": kind, **read_table(ctx, path, rest, self.types[kind])}
+
+
 # ----------------------------------------------------------------------------- tables
 def check_table(ctx: Context, path: str, raw, what: str) -> dict:
     if not isinstance(raw, dict):
@@ -389,6 +431,6 @@ def read_array_of_tables(ctx: Context, key: str, raw, *, required: bool) -> list
 
 __all__ = [
     "REQUIRED", "NAME_PATTERN", "Context", "Field", "Text", "BodyRef", "Quantity", "Vector",
-    "Direction", "Number", "Integer", "read_table", "read_array_of_tables", "check_table",
+    "Direction", "Number", "Integer", "Table", "Tagged", "read_table", "read_array_of_tables", "check_table",
     "check_unknown", "toml_type", "show", "suggest",
 ]

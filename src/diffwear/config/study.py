@@ -57,8 +57,19 @@ class ReactionOutput(eqx.Module):
     on: str = eqx.field(static=True)
 
 
+class ContactOutput(eqx.Module):
+    """``[outputs] contact`` entry: the contact history of clearance joint ``joint``."""
+
+    joint: str = eqx.field(static=True)
+
+
 class Study(eqx.Module):
-    """A loaded mechanism file (see `diffwear.config.load`)."""
+    """A loaded mechanism file (see `diffwear.config.load`).
+
+    ``assembly``: the mechanism with every clearance joint replaced by the ideal
+    revolute at the same points; the initial state is assembled on it (pin
+    centred, ideal velocities).  ``None`` when there is no clearance joint.
+    """
 
     file: str = eqx.field(static=True)
     title: str = eqx.field(static=True)
@@ -67,3 +78,5 @@ class Study(eqx.Module):
     q_guess: Float[Array, " n"]
     simulation: Simulation
     reactions: tuple[ReactionOutput, ...] = eqx.field(static=True)
+    contacts: tuple[ContactOutput, ...] = eqx.field(static=True, default=())
+    assembly: Mechanism | None = None

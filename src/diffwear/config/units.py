@@ -80,6 +80,12 @@ DIMENSIONS: dict[str, Dimension] = {
         "Pa": Unit(_F(1)), "kPa": Unit(_F(1000)), "MPa": Unit(_F(10**6)),
         "GPa": Unit(_F(10**9)),
     }, "207 GPa"),
+    # Hertz contact stiffness K of F = K delta^1.5 (Lankarani-Nikravesh law)
+    "contact stiffness": Dimension("N/m^1.5", {"N/m^1.5": Unit(_F(1))}, "7e10 N/m^1.5"),
+    # Archard k: worn volume per (normal load x sliding distance); 1/Pa = m^3/(N m)
+    "wear coefficient": Dimension("1/Pa", {
+        "1/Pa": Unit(_F(1)), "m^3/(N m)": Unit(_F(1)), "mm^3/(N m)": Unit(_F(1, 10**9)),
+    }, "5.05e-4 mm^3/(N m)"),
 }
 """Allowed units per dimension.  Other modules may add dimensions or units
 (e.g. a wear coefficient in m^2/N) before loading a file."""
@@ -96,8 +102,10 @@ def allowed_units(dimension: str) -> str:
 
 def key_suffix(unit: str) -> str:
     """Key suffix naming ``unit`` for a plain number: ``mass_kg``, ``inertia_kg_m2``,
-    ``omega_rad_per_s``, ``stiffness_N_per_m``, ``baumgarte_alpha_per_s``."""
-    s = unit.replace("^", "").replace(" ", "_")
+    ``omega_rad_per_s``, ``stiffness_N_per_m``, ``baumgarte_alpha_per_s``,
+    ``coefficient_mm3_per_N_m``, ``stiffness_N_per_m1_5``."""
+    s = unit.replace("^", "").replace("(", "").replace(")", "").replace(".", "_")
+    s = s.replace(" ", "_")
     if s.startswith("1/"):
         s = "per_" + s[2:]
     return s.replace("/", "_per_")

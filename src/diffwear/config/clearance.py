@@ -1,0 +1,208 @@
+"""``[[joints]] type = "clearance"``: a revolute joint with radial clearance.
+
+In the file it is a joint (same place, same points as an ideal revolute); in
+the `Mechanism` it is a force element, a `ClearanceJoint` (the pin floats in
+the bushing).  For the assembly at t = 0 it is replaced by the ideal
+`RevoluteJoint` at the same points (pin centred, ideal velocities).
+
+Only conversion and validation live here; the physics comes from the existing
+builders: `LankaraniNikravesh.from_materials`, `KelvinVoigt.matched_to`,
+`presets.efm_law`, `ClearanceJoint`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..contact import (
+    PTFE,
+    STEEL,
+    ClearanceJoint,
+    CoulombFriction,
+    KelvinVoigt,
+    LankaraniNikravesh,
+    Material,
+)
+from ..contact.friction import DEFAULT_SLIP_WIDTH
+from ..mechanism import RevoluteJoint
+from ..wear import ArchardWear
+from .elements import NAME, ElementType, FieldError
+from .schema import (
+    BodyRef,
+    Field,
+    Integer,
+    Number,
+    Quantity,
+    Table,
+    Tagged,
+    Vector,
+    check_table,
+    read_table,
+    show,
+    suggest,
+    toml_type,
+)
+
+MATERIALS = {"steel": STEEL, "ptfe": PTFE}
+"""Named materials (thesis Table 3-2): steel E = 206.8 GPa, nu = 0.29; PTFE 0.5 GPa, 0.38."""
+
+MATERIAL_FIELDS = {
+    "youngs_modulus": Quantity(dimension="pressure", low=0.0, low_open=True),
+    "poisson_ratio": Number(low=-1.0, high=0.5, low_open=True, high_open=True),
+}
+MATERIAL_CHOICES = (" | ".join(repr(m) for m in MATERIALS)
+                    + " | { youngs_modulus = \"206.8 GPa\", poisson_ratio = 0.29 }")
+
+
+@dataclass(frozen=True)
+class MaterialField(Field):
+    """A named material (`MATERIALS`) or ``{ youngs_modulus, poisson_ratio }``."""
+
+    def expects(self, key):
+        return MATERIAL_CHOICES
+
+    def read(self, ctx, path, key, spelling, raw):
+        if isinstance(raw, str):
+            if raw not in MATERIALS:
+                raise ctx.error(path, f"unknown material {raw!r}{suggest(raw, list(MATERIALS))}",
+                                MATERIAL_CHOICES)
+            return MATERIALS[raw]
+        if not isinstance(raw, dict):
+            raise ctx.error(path, f"expected a material name or a table, got {toml_type(raw)} "
+                            f"{show(raw)}", MATERIAL_CHOICES)
+        v = read_table(ctx, path, check_table(ctx, path, raw, MATERIAL_CHOICES), MATERIAL_FIELDS)
+        return Material(v["youngs_modulus"], v["poisson_ratio"], name=path)
+
+
+RESTITUTION = Number(default=0.8, low=0.0, high=1.0, low_open=True,
+                     doc="coefficient of restitution e_r (default 0.8, thesis Table 3-3)")
+LN, KV, EFM = "lankarani-nikravesh", "kelvin-voigt", "elastic-foundation"
+LAWS = {
+    LN: {
+        "restitution": RESTITUTION,
+        "stiffness": Quantity(dimension="contact stiffness", default=None, low=0.0,
+                              low_open=True, doc="default: Hertz, from the materials"),
+    },
+    KV: {
+        "restitution": RESTITUTION,
+        "stiffness": Quantity(dimension="stiffness", default=None, low=0.0, low_open=True),
+        "matched_to_load": Quantity(dimension="force", default=None, low=0.0, low_open=True,
+                                    doc="secant stiffness of the Hertz law at this load"),
+    },
+    EFM: {
+        "layer_thickness": Quantity(dimension="length", low=0.0, low_open=True,
+                                    doc="bushing wall: outer minus inner radius"),
+        "depth": Quantity(dimension="length", low=0.0, low_open=True, doc="axial length"),
+        "restitution": RESTITUTION,
+        "damping_mass": Quantity(dimension="mass", default=None, low=0.0, low_open=True,
+                                 doc="default: the bushing body's mass"),
+    },
+}
+
+FIELDS = {
+    "name": NAME,
+    "pin_body": BodyRef(), "pin_point": Vector(dimension="length"),
+    "bushing_body": BodyRef(), "bushing_point": Vector(dimension="length"),
+    "pin_radius": Quantity(dimension="length", low=0.0, low_open=True),
+    "bushing_radius": Quantity(dimension="length", default=None, low=0.0, low_open=True),
+    "clearance": Quantity(dimension="length", default=None, low=0.0,
+                          doc="radial: bushing radius minus pin radius"),
+    "law": Tagged(types=LAWS, what="law type"),
+    "pin_material": MaterialField(default=None),
+    "bushing_material": MaterialField(default=None),
+    "friction": Table(fields={
+        "coefficient": Number(low=0.0),
+        "slip_width": Quantity(dimension="velocity", default=DEFAULT_SLIP_WIDTH, low=0.0,
+                               low_open=True),
+    }, default={"coefficient": 0.13, "slip_width": DEFAULT_SLIP_WIDTH}),
+    "n_theta": Integer(default=360, low=8, high=100_000),
+    "wear": Table(fields={"coefficient": Quantity(dimension="wear coefficient", low=0.0)},
+                  default=None),
+}
+
+
+def _materials(v, *keys, why):
+    for key in keys:
+        if v[key] is None:
+            raise FieldError(key, f"missing key: {why}", MATERIAL_CHOICES)
+    return [v[key] for key in keys]
+
+
+def _radii(v):
+    rp = v["pin_radius"]
+    rb, c = v["bushing_radius"], v["clearance"]
+    both = "exactly one of bushing_radius and clearance"
+    if rb is not None and c is not None:
+        raise FieldError("clearance", "given together with bushing_radius", both)
+    if rb is None and c is None:
+        raise FieldError("bushing_radius", "missing key (or give clearance instead)", both)
+    if rb is None:
+        return rp, rp + c
+    if rp > rb:
+        raise FieldError("bushing_radius",
+                         f"{rb:g} m is smaller than the pin radius {rp:g} m (negative clearance "
+                         f"{rb - rp:g} m)", f">= pin_radius = {rp:g} m")
+    return rp, rb
+
+
+def _law(v, rp, rb, bodies):
+    from ..presets import efm_law  # presets imports the mechanism package only lazily
+
+    law = v["law"]
+    kind = law["type"]
+    why = f"the {kind} law computes its stiffness from the pin and bushing materials"
+    if kind == LN:
+        if law["stiffness"] is not None:
+            return LankaraniNikravesh(law["stiffness"], law["restitution"])
+        pin, bushing = _materials(v, "pin_material", "bushing_material",
+                                  why=why + " (or give law.stiffness in N/m^1.5)")
+        return LankaraniNikravesh.from_materials(pin, bushing, rp, rb, law["restitution"])
+    if kind == KV:
+        k, load = law["stiffness"], law["matched_to_load"]
+        one = "exactly one of law.stiffness and law.matched_to_load"
+        if k is None and load is None:
+            raise FieldError("law.stiffness", "missing key (or give law.matched_to_load)", one)
+        if k is not None and load is not None:
+            raise FieldError("law.matched_to_load", "given together with law.stiffness", one)
+        if k is not None:
+            return KelvinVoigt(k, law["restitution"])
+        pin, bushing = _materials(v, "pin_material", "bushing_material", why=why)
+        ln = LankaraniNikravesh.from_materials(pin, bushing, rp, rb, law["restitution"])
+        return KelvinVoigt.matched_to(ln, load)
+    (bushing,) = _materials(v, "bushing_material", why=f"the {kind} law needs the bushing "
+                            "material (its constrained modulus)")
+    mass = law["damping_mass"]
+    if mass is None:
+        body = v["bushing_body"]
+        if body not in bodies:
+            raise FieldError("law.damping_mass", f"missing key: the bushing body {body!r} has "
+                             "no mass to default to", "a mass, e.g. \"15 kg\"")
+        mass = bodies[body].mass
+    return efm_law(bushing, rb, law["layer_thickness"], law["depth"], law["restitution"], mass)
+
+
+def build(v, bodies) -> ClearanceJoint:
+    rp, rb = _radii(v)
+    if v["wear"] is not None and v["law"]["type"] != EFM:
+        raise FieldError("wear", f"wear needs the pressure distribution of the {EFM!r} law, "
+                         f"not the {v['law']['type']!r} point law",
+                         f"law.type = {EFM!r}, or no wear key")
+    law = _law(v, rp, rb, bodies)
+    friction = CoulombFriction(v["friction"]["coefficient"], v["friction"]["slip_width"])
+    wear = None if v["wear"] is None else ArchardWear(v["wear"]["coefficient"])
+    return ClearanceJoint(v["name"], v["pin_body"], v["pin_point"], v["bushing_body"],
+                          v["bushing_point"], rp, rb, law, friction=friction, wear=wear,
+                          n_theta=v["n_theta"])
+
+
+def ideal(joint: ClearanceJoint) -> RevoluteJoint:
+    """The ideal revolute at the same points (assembly at t = 0: pin centred)."""
+    return RevoluteJoint(joint.name, joint.pin_body, joint.bushing_body, joint.pin_point,
+                         joint.bushing_point)
+
+
+CLEARANCE = ElementType(
+    fields=FIELDS, build=build, bodies=True, assembly=ideal,
+    doc="revolute joint with radial clearance: the pin (pin_point of pin_body) floats in the "
+        "bushing (bushing_point of bushing_body) under a contact law",
+)

@@ -152,7 +152,13 @@ def test_bad_input_against_model_names():
 @pytest.mark.slow
 def test_rig_wear_sweep_matches_single_runs():
     """Reduced rig wear (n_theta 36, k x 100, 4 cycles = warm-up + 2 dynamic
-    cycles at A = 2): a 2x2 (clearance, k) sweep equals single runs (rel 1e-10)."""
+    cycles at A = 2): a 2x2 (clearance, k) sweep equals single runs.
+
+    Not to 1e-10: batched (vmapped) linear algebra rounds differently from the
+    unbatched kernels (ulp level in the vector field), and the adaptive cycle
+    integration (rtol 1e-6) turns that into a different step sequence; seen:
+    7e-7 relative in the max depth, 1.3e-4 in the mean joint force (contact
+    forces sampled at 37 times).  Hence rel 1e-5 and 1e-3."""
     from diffwear.sweep.models import RigWear
 
     m = RigWear(cycles=4.0, dynamic_cycles=2, n_theta=36, force_samples=37)
@@ -162,8 +168,9 @@ def test_rig_wear_sweep_matches_single_runs():
     one = jax.jit(m)
     for row in r.table():
         ref = one({k: row[k] for k in m.param_names})
-        for key in ("max_depth_mm", "volume_mm3", "mean_joint_force_N", "status"):
-            np.testing.assert_allclose(row[key], float(ref[key]), rtol=1e-10, err_msg=key)
+        for key, rtol in (("max_depth_mm", 1e-5), ("volume_mm3", 1e-5),
+                          ("mean_joint_force_N", 1e-3), ("status", 0)):
+            np.testing.assert_allclose(row[key], float(ref[key]), rtol=rtol, err_msg=key)
     assert np.all(r["status"] == 0) and np.all(r["volume_mm3"] > 0)
     v = r.grid("volume_mm3")
     np.testing.assert_allclose(v[:, 1] / v[:, 0], 2.0, rtol=0.05)  # Archard: V ~ k
@@ -172,6 +179,10 @@ def test_rig_wear_sweep_matches_single_runs():
 
 @pytest.mark.slow
 def test_clearance_force_sweep_matches_single_runs():
+    """As for the rig (batched rounding -> another adaptive step sequence at
+    rtol 1e-6), and the impact peaks, sampled at 50 saved times, amplify it:
+    seen 3e-4 relative in the RMS force, 1.3 % in the peak force and 2 % in the
+    step count at c = 0.1 mm."""
     from diffwear.sweep.models import ClearanceForce
 
     m = ClearanceForce(law="kv", cycles=1, transient_cycles=0, samples_per_cycle=50)
@@ -179,6 +190,7 @@ def test_clearance_force_sweep_matches_single_runs():
     one = jax.jit(m)
     for row in r.table():
         ref = one({k: row[k] for k in m.param_names})
-        for key in ("peak_force_N", "rms_force_N", "integrator_steps"):
-            np.testing.assert_allclose(row[key], float(ref[key]), rtol=1e-10, err_msg=key)
+        for key, rtol in (("peak_force_N", 0.05), ("rms_force_N", 2e-3),
+                          ("integrator_steps", 0.05)):
+            np.testing.assert_allclose(row[key], float(ref[key]), rtol=rtol, err_msg=key)
     assert np.all(r["peak_force_N"] >= r["rms_force_N"])

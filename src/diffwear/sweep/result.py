@@ -17,7 +17,8 @@ class SweepResult:
     in grid order (C order over ``grid_names``: the last varies fastest).
 
     ``grid_shape``: lengths of the grid arrays, in ``grid_names`` order;
-    ``info``: how it was run (points, chunks, chunk size, devices, seconds).
+    ``info``: how it was run (points, chunks, chunk size, padding, devices,
+    ``order``: the evaluation order of the points, compile and run seconds).
     """
 
     inputs: dict[str, np.ndarray]

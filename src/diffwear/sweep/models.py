@@ -32,7 +32,6 @@ from ..presets import (
     WearJointDesign,
     clearance_slider_crank,
     rig_slider_crank,
-    slider_crank,
     with_wear_joint,
 )
 from ..wear import evolve, smooth_max, wear_cycle, worn_volume
@@ -160,4 +159,4 @@ def _index(mech) -> int:
 rig_wear = RigWear()
 clearance_force = ClearanceForce()
 
-__all__ = ["RigWear", "ClearanceForce", "rig_wear", "clearance_force", "slider_crank"]
+__all__ = ["RigWear", "ClearanceForce", "rig_wear", "clearance_force"]

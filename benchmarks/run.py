@@ -152,11 +152,86 @@ def rig_21400(repeats: int) -> dict:
             "repeats": min(repeats, 2)}
 
 
+SWEEP_CHUNK = 16
+
+
+def vmap_sweep(repeats: int) -> dict:
+    """64-point sweep (8 clearances 0.01..2 mm x 8 friction coefficients) of one
+    KV clearance slider-crank cycle (`sweep.models.ClearanceForce`, 100 saves),
+    vmapped in chunks of 16, against 64 single jitted runs; the sweep without
+    and with ``order_by`` (estimates: smaller clearance = more steps, the
+    brief's guess; larger friction = more steps) and with the measured step
+    counts as an oracle order.  ``lockstep_efficiency``: useful
+    integrator steps / steps run in lockstep (chunk size x slowest member),
+    from the step counts, so independent of the machine load.  One pass each
+    (``repeats`` unused: a pass is 64 runs)."""
+    import math
+
+    import jax
+    import numpy as np
+
+    from diffwear.sweep import sweep
+    from diffwear.sweep.models import ClearanceForce
+
+    model = ClearanceForce(law="kv", cycles=1, transient_cycles=0, samples_per_cycle=100)
+    # mu first: grid-order chunks of 16 mix all clearances (2 mu values each)
+    grid = {"mu": np.linspace(0.02, 0.3, 8), "clearance": np.geomspace(0.01e-3, 2e-3, 8)}
+    out: dict = {"points": 64, "chunk_size": SWEEP_CHUNK}
+
+    def efficiency(res):
+        steps = res["integrator_steps"][res.info["order"]].reshape(-1, SWEEP_CHUNK)
+        return float(steps.sum() / (SWEEP_CHUNK * steps.max(axis=1)).sum())
+
+    runs = {}
+    for tag, order_by in (("unordered", None),
+                          ("order_by", lambda p: -math.log(p["clearance"])),
+                          ("order_by_mu", lambda p: p["mu"]),
+                          ("oracle", "steps")):
+        if order_by == "steps":
+            steps = dict(zip(zip(runs["unordered"]["clearance"], runs["unordered"]["mu"]),
+                             runs["unordered"]["integrator_steps"]))
+            order_by = lambda p, steps=steps: steps[(p["clearance"], p["mu"])]  # noqa: E731
+        res = sweep(model, model.defaults, grid, chunk_size=SWEEP_CHUNK, order_by=order_by)
+        runs[tag] = res
+        out[f"sweep_{tag}_s"] = res.info["run_s"]
+        out[f"sweep_{tag}_compile_s"] = res.info["compile_s"]
+        out[f"points_per_s_{tag}"] = 64 / res.info["run_s"]
+        out[f"lockstep_efficiency_{tag}"] = efficiency(res)
+
+    one = jax.jit(model)
+    rows = runs["unordered"].table()
+    first, t_first = timed(one, {k: rows[0][k] for k in model.param_names})
+    single, rel = [], []
+    for row in rows:
+        ref, wall = timed(one, {k: row[k] for k in model.param_names})
+        single.append(wall)
+        # equal up to the integration tolerance only (batched rounding, see `sweep`)
+        rel.append(abs(float(ref["rms_force_N"]) / row["rms_force_N"] - 1.0))
+    total = sum(single)
+    out.update({
+        "single_runs_s": total, "single_compile_s": max(t_first - single[0], 0.0),
+        "points_per_s_single": 64 / total,
+        **{f"ratio_sweep_{t}_to_single": out[f"sweep_{t}_s"] / total
+           for t in ("unordered", "order_by", "order_by_mu", "oracle")},
+        "max_rel_diff_rms_force_sweep_vs_single": max(rel),
+        "median_rel_diff_rms_force_sweep_vs_single": float(np.median(rel)),
+        "max_rel_diff_at_clearance_mm_mu": [rows[int(np.argmax(rel))]["clearance"] * 1e3,
+                                            rows[int(np.argmax(rel))]["mu"]],
+        "integrator_steps": int(runs["unordered"]["integrator_steps"].sum()),
+        "steps_min_max": [int(runs["unordered"]["integrator_steps"].min()),
+                          int(runs["unordered"]["integrator_steps"].max())],
+        "compile_s": out["sweep_unordered_compile_s"], "run_s": out["sweep_unordered_s"],
+        "repeats": 1,
+    })
+    return out
+
+
 CASES: dict[str, Callable[[int], dict]] = {
     "ideal slider-crank, 2 s": ideal_slider_crank,
     **{f"clearance cycle, {law.upper()} c={c:g} mm": clearance_cycle(law, c)
        for law in ("ln", "kv", "efm") for c in (0.0005, 0.05, 0.5, 5.0)},
     "rig-21400 (constant A)": rig_21400,
+    "vmap sweep 64 points vs 64 single runs": vmap_sweep,
 }
 
 
@@ -211,6 +286,8 @@ COLUMNS = (  # metric key, header, format
     ("us_per_step", "µs per step", "{:.0f}"),
     ("dynamic_cycles", "dynamic cycles", "{:d}"),
     ("run_s_per_cycle", "run per dynamic cycle [s]", "{:.3f}"),
+    ("points_per_s_unordered", "sweep points/s", "{:.1f}"),
+    ("ratio_sweep_unordered_to_single", "sweep / single runs", "{:.2f}"),
 )
 
 

@@ -1,0 +1,162 @@
+"""Ready-made model functions for `sweep`: pure JAX functions of a dict of
+scalar parameters returning a dict of scalar outputs.
+
+Static settings (contact law, grid size, cycles, number of dynamic cycles) are
+constructor arguments of small equinox Modules; the numbers are traced, so one
+compilation serves a whole sweep.  ``rig_wear`` and ``clearance_force`` are
+instances with the defaults.
+"""
+
+from __future__ import annotations
+
+import math
+
+import diffrax
+import equinox as eqx
+import jax.numpy as jnp
+
+from ..contact import contact_history
+from ..dynamics import consistent_state, simulate
+from ..presets import (
+    BUSHING_DEPTH_CH5,
+    BUSHING_WALL_CH3,
+    FRICTION_CH3,
+    PIN_RADIUS_CH3,
+    RESTITUTION_CH3,
+    RIG_CYCLES,
+    RIG_JOINT,
+    RIG_SPRING_FREE_LENGTH,
+    TABLE_7_1,
+    THESIS_CRANK_SPEED,
+    SliderCrankParameters,
+    WearJointDesign,
+    clearance_slider_crank,
+    rig_slider_crank,
+    with_wear_joint,
+)
+from ..wear import evolve, smooth_max, wear_cycle, worn_volume
+
+JOINT = "crank_rod"
+
+
+class RigWear(eqx.Module):
+    """Wear of the Ch. 7 rig's crank-rod PTFE bushing (`presets.rig_slider_crank`
+    + `with_wear_joint` + `evolve`, method "constant").
+
+    Parameters (SI): ``k`` wear coefficient [1/Pa], ``clearance`` [m], ``depth``
+    bushing depth [m], ``diameter`` pin diameter [m], ``mu`` friction,
+    ``free_length`` slider-spring free length [m].  Static: ``cycles`` real
+    cycles, ``dynamic_cycles`` simulated wear cycles (constant A = cycles /
+    dynamic_cycles; plus 1 warm-up cycle), ``n_theta`` profile grid, ``wall``
+    and ``restitution`` of the bushing, ``temperature`` [m] of the smooth max,
+    ``force_samples`` saved states of the force cycle.
+
+    Outputs: ``max_depth_mm`` = `smooth_max` (logsumexp, temperature
+    ``temperature``; within temperature x ln(n_theta) below the true maximum) of
+    the final profile; ``volume_mm3`` (`worn_volume`); ``mean_joint_force_N``:
+    time mean of |joint force| over one extra dynamic cycle run after the
+    evolution on the final profile (``force_samples`` equally spaced states);
+    ``status`` (`EvolutionResult.status`: 0 ok, 1 worn through, 2 solver failure).
+    """
+
+    cycles: float = eqx.field(static=True, default=float(RIG_CYCLES))
+    dynamic_cycles: int = eqx.field(static=True, default=50)
+    n_theta: int = eqx.field(static=True, default=180)
+    force_samples: int = eqx.field(static=True, default=181)
+    wall: float = eqx.field(static=True, default=float(RIG_JOINT.wall))
+    restitution: float = eqx.field(static=True, default=float(RIG_JOINT.restitution))
+    temperature: float = eqx.field(static=True, default=1e-7)
+    p: SliderCrankParameters = TABLE_7_1
+
+    param_names = ("k", "clearance", "depth", "diameter", "mu", "free_length")
+
+    @property
+    def defaults(self) -> dict[str, float]:
+        """The thesis rig (Table 7-2 joint, calibrated spring free length)."""
+        d = RIG_JOINT
+        return {"k": float(d.k), "clearance": float(d.clearance), "depth": float(d.depth),
+                "diameter": float(d.diameter), "mu": float(d.mu),
+                "free_length": float(RIG_SPRING_FREE_LENGTH)}
+
+    @property
+    def period(self) -> float:
+        return 2 * math.pi / float(self.p.omega)
+
+    def design(self, params) -> WearJointDesign:
+        return WearJointDesign(params["k"], params["clearance"], params["depth"],
+                               params["diameter"], self.wall, params["mu"], self.restitution)
+
+    def __call__(self, params: dict) -> dict:
+        mech0, q_guess = rig_slider_crank(self.p, free_length=params["free_length"])
+        design = self.design(params)
+        mech = with_wear_joint(mech0, design, n_theta=self.n_theta)
+        # the ideal kinematics at t = 0 depend on no swept parameter
+        q, qd, _ = mech0.split(consistent_state(mech0, q_guess, check=False))
+        y0 = mech.join(q, qd, mech.initial_aux(q, qd))
+        res = evolve(mech, JOINT, y0, self.cycles, period=self.period,
+                     extrapolation=self.cycles / self.dynamic_cycles, wall_thickness=design.wall)
+        el = mech.element(JOINT)
+        worn = eqx.tree_at(lambda m: m.forces[_index(m)].profile.clearance, mech,
+                           el.profile.clearance + res.depth)
+        cyc = wear_cycle(worn, JOINT, res.y, res.t, self.period, n_save=self.force_samples)
+        force = contact_history(worn, JOINT, cyc.ys).force_magnitude
+        return {
+            "max_depth_mm": smooth_max(res.depth, self.temperature) * 1e3,
+            "volume_mm3": worn_volume(res.depth, el.bushing_radius, el.law.depth) * 1e9,
+            "mean_joint_force_N": jnp.mean(force[:-1]),  # one period: drop the repeated end
+            "status": res.status.astype(float),
+        }
+
+
+class ClearanceForce(eqx.Module):
+    """Joint force of the Table 2-1 slider-crank with a clearance crank-rod joint
+    (`presets.clearance_slider_crank`), as in the ``clearance-sweep`` study
+    (Tsit5, PID rtol = atol = 1e-6).
+
+    Parameters: ``clearance`` [m], ``mu`` friction, ``restitution``, ``pin_radius``
+    [m].  Static: ``law`` ("ln", "kv", "efm"), ``cycles`` simulated (the first
+    ``transient_cycles`` are left out of the statistics), ``samples_per_cycle``,
+    ``n_theta``.  Outputs over the kept cycles: ``peak_force_N`` (max |force|
+    over the saved states), ``rms_force_N``, and ``integrator_steps`` (of the
+    whole run: the cost).
+    """
+
+    law: str = eqx.field(static=True, default="ln")
+    cycles: int = eqx.field(static=True, default=2)
+    transient_cycles: int = eqx.field(static=True, default=1)
+    samples_per_cycle: int = eqx.field(static=True, default=400)
+    n_theta: int = eqx.field(static=True, default=180)
+    rtol: float = eqx.field(static=True, default=1e-6)
+    atol: float = eqx.field(static=True, default=1e-6)
+
+    param_names = ("clearance", "mu", "restitution", "pin_radius")
+
+    @property
+    def defaults(self) -> dict[str, float]:
+        """Table 3-2/3-3: clearance 0.5 mm, mu 0.13, e 0.8, pin radius 20 mm."""
+        return {"clearance": 0.5e-3, "mu": FRICTION_CH3, "restitution": RESTITUTION_CH3,
+                "pin_radius": PIN_RADIUS_CH3}
+
+    def __call__(self, params: dict) -> dict:
+        mech, y0 = clearance_slider_crank(
+            self.law, params["clearance"], friction=params["mu"],
+            restitution=params["restitution"], pin_radius=params["pin_radius"],
+            depth=BUSHING_DEPTH_CH5, wall=BUSHING_WALL_CH3, n_theta=self.n_theta, check=False)
+        period = 2 * math.pi / THESIS_CRANK_SPEED
+        n = self.samples_per_cycle
+        ts = jnp.linspace(0.0, self.cycles * period, self.cycles * n + 1)
+        ctrl = diffrax.PIDController(rtol=self.rtol, atol=self.atol, pcoeff=0.3, icoeff=0.4)
+        traj = simulate(mech, y0, ts[-1], ts=ts, stepsize_controller=ctrl)
+        f = contact_history(mech, JOINT, traj.ys).force_magnitude[self.transient_cycles * n:]
+        return {"peak_force_N": jnp.max(f), "rms_force_N": jnp.sqrt(jnp.mean(f ** 2)),
+                "integrator_steps": jnp.asarray(traj.num_steps, dtype=float)}
+
+
+def _index(mech) -> int:
+    return next(i for i, f in enumerate(mech.forces) if f.name == JOINT)
+
+
+rig_wear = RigWear()
+clearance_force = ClearanceForce()
+
+__all__ = ["RigWear", "ClearanceForce", "rig_wear", "clearance_force"]

@@ -41,6 +41,7 @@ from .schema import (
     check_unknown,
     read_array_of_tables,
     read_table,
+    read_type_tag,
     show,
     suggest,
     toml_type,
@@ -211,21 +212,13 @@ def _elements(ctx: Context, section: str, raw, types: Mapping[str, ElementType],
               other: Mapping[str, ElementType], bodies: Mapping[str, Body]):
     """[(index, element, its ElementType)] of ``[[joints]]`` or ``[[forces]]``."""
     out = []
-    kinds = ", ".join(repr(t) for t in types)
+    home = "forces" if section == "joints" else "joints"
     for k, table in enumerate(read_array_of_tables(ctx, section, raw, required=False)):
         path = f"{section}[{k}]"
         kind = table.get("type")
-        if kind is None:
-            raise ctx.error(f"{path}.type", "missing key", kinds)
-        if not isinstance(kind, str):
-            raise ctx.error(f"{path}.type",
-                            f"expected a string, got {toml_type(kind)} {show(kind)}", kinds)
-        if kind not in types:
-            what = f"unknown {section[:-1]} type {kind!r}{suggest(kind, list(types))}"
-            if kind in other:
-                home = "forces" if section == "joints" else "joints"
-                what += f" ({kind!r} belongs under [[{home}]])"
-            raise ctx.error(f"{path}.type", what, kinds)
+        in_other = isinstance(kind, str) and kind in other
+        hint = f" ({kind!r} belongs under [[{home}]])" if in_other else ""
+        kind = read_type_tag(ctx, path, table, types, f"{section[:-1]} type", hint)
         spec = types[kind]
         values = read_table(ctx, path, {key: val for key, val in table.items() if key != "type"},
                             spec.fields)

@@ -352,19 +352,26 @@ class Tagged(Field):
 
     def read(self, ctx, path, key, spelling, raw):
         table = check_table(ctx, path, raw, self.expects(key))
-        kinds = ", ".join(repr(t) for t in self.types)
-        kind = table.get("type")
-        if kind is None:
-            raise ctx.error(f"{path}.type", "missing key", kinds)
-        if not isinstance(kind, str):
-            raise ctx.error(f"{path}.type",
-                            f"expected a string, got {toml_type(kind)} {show(kind)}", kinds)
-        if kind not in self.types:
-            raise ctx.error(f"{path}.type",
-                            f"unknown {self.what} {kind!r}{suggest(kind, list(self.types))}",
-                            kinds)
+        kind = read_type_tag(ctx, path, table, self.types, self.what)
         rest = {k: v for k, v in table.items() if k != "type"}
         return {"type": kind, **read_table(ctx, path, rest, self.types[kind])}
+
+
+def read_type_tag(ctx: Context, path: str, table: dict, types: Mapping, what: str,
+                  hint: str = "") -> str:
+    """The table's ``type`` key, checked against ``types`` (with a did-you-mean
+    suggestion; ``hint`` is appended to the unknown-type message)."""
+    kinds = ", ".join(repr(t) for t in types)
+    kind = table.get("type")
+    if kind is None:
+        raise ctx.error(f"{path}.type", "missing key", kinds)
+    if not isinstance(kind, str):
+        raise ctx.error(f"{path}.type",
+                        f"expected a string, got {toml_type(kind)} {show(kind)}", kinds)
+    if kind not in types:
+        raise ctx.error(f"{path}.type",
+                        f"unknown {what} {kind!r}{suggest(kind, list(types))}{hint}", kinds)
+    return kind
 
 
 # ----------------------------------------------------------------------------- tables

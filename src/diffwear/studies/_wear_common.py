@@ -11,7 +11,7 @@ import numpy as np
 
 from ..contact import contact_history
 from ..dynamics import consistent_state
-from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
+from ..presets import PTFE_DENSITY, WearJointDesign
 from ..errors import InputError
 from ..wear import evolve, wear_cycle, worn_volume
 from ..wear.evolution import (ChunkedEvolution, Evolver, load_checkpoint,

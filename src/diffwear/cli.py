@@ -83,7 +83,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="diffwear", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="diffwear", description="Planar mechanisms with clearance and wear in "
+                     "their revolute joints: thesis studies and mechanism files.",
+                     epilog="Exit codes: 0 success, 2 bad input, 3 solver failure.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("study", help="run a named thesis study (see --list)")

@@ -11,11 +11,12 @@ import numpy as np
 
 from ..contact import contact_history
 from ..dynamics import consistent_state
-from ..presets import PTFE_DENSITY, WearJointDesign
+from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..errors import InputError
 from ..wear import evolve, wear_cycle, worn_volume
 from ..wear.evolution import (ChunkedEvolution, Evolver, load_checkpoint,
                               save_checkpoint)
+from ..wear.cycle import clearance_element
 from ..wear.evolution import _with_profile
 
 JOINT = "crank_rod"
@@ -110,6 +111,33 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
     return res, compile_time, time.perf_counter() - t0, info
 
 
+def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, period, method,
+                   extrapolation, target_dynamic, n_theta, thesis: dict, description: str, log,
+                   resume=False, progress=False, extra_summary=None, extra_report=()) -> dict:
+    """The body of a wear study: ``design``'s wear joint swapped into ``mech0``
+    (differentiable in k, clearance, depth, diameter), the evolution over
+    ``cycles`` (constant A = cycles / ``target_dynamic`` unless ``extrapolation``
+    is given; checkpointed into ``out``), all outputs, then `EvolutionResult.check`
+    (a run that stopped early raises after its results are written)."""
+    def mech_of_p(p):
+        return with_wear_joint(mech0, design_of(p, design), n_theta=n_theta)
+
+    params = params_of(design)
+    a = extrapolation or default_constant_a(cycles, target_dynamic)
+    log(f"[{name}] {cycles} cycles, method {method}, A {a} ...")
+    res, ct, wt, info = run_evolution(
+        mech_of_p, params, y0, cycles, period, method=method, extrapolation=a,
+        max_dynamic=4 * target_dynamic, wall=design.wall, n_theta=n_theta, out=out,
+        meta={"study": name}, resume=resume, progress=progress)
+    summary = write_outputs(
+        out, name=name, mech=mech_of_p(params), design=design, res=res, y0=y0, period=period,
+        cycles=cycles, compile_time=ct, wall_time=wt, thesis=thesis, method=method,
+        extrapolation=a, description=description, log=log,
+        extra_summary={**(extra_summary or {}), **info}, extra_report=extra_report)
+    res.check(name)
+    return summary
+
+
 def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, cycles,
                   compile_time, wall_time, thesis: dict, method: str, extrapolation,
                   description: str, log, extra_summary=None, extra_report=()):
@@ -128,9 +156,10 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
     cyc = jax.jit(lambda m, y, t: wear_cycle(m, JOINT, y, t, period, n_save=N_SAVE))
     warm = cyc(mech, y0, 0.0)
     first = cyc(mech, warm.y_end, period)
-    last = cyc(_with_profile(mech, _index(mech), el.profile.clearance + res.depth), res.y, res.t)
+    mech_last = _with_profile(mech, clearance_element(mech, JOINT)[0],
+                              el.profile.clearance + res.depth)
+    last = cyc(mech_last, res.y, res.t)
     hist_first = contact_history(mech, JOINT, first.ys)
-    mech_last = _with_profile(mech, _index(mech), el.profile.clearance + res.depth)
     hist_last = contact_history(mech_last, JOINT, last.ys)
     tt = np.asarray(first.ts) - float(first.ts[0])
     crank = 2 * np.pi * tt / period
@@ -216,10 +245,6 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
         f"{summary['wear_volume_mm3']:.2f} mm^3, {summary['dynamic_cycles_simulated']} dynamic "
         f"cycles, {wall_time:.1f} s (+{compile_time:.1f} s compile)")
     return summary
-
-
-def _index(mech):
-    return next(i for i, f in enumerate(mech.forces) if f.name == JOINT)
 
 
 def default_constant_a(cycles, target_dynamic):

@@ -8,8 +8,9 @@ so that the worn volume equals the thesis models' 106.7 mm^3.
 
 from __future__ import annotations
 
+import math
+
 import jax
-import jax.numpy as jnp
 
 from ..io import OutputDir
 from ..presets import (
@@ -25,6 +26,7 @@ from ..presets import (
     with_wear_joint,
 )
 from ..wear import evolve, worn_volume
+from ..wear.cycle import clearance_element
 from . import _wear_common as common
 
 NAME = "rig-21400"
@@ -32,7 +34,7 @@ DESCRIPTION = "Ch. 7: experimental rig, EFM crank-rod bushing wear over 21,400 c
 
 N_THETA = 180
 TARGET_DYNAMIC = 50
-PERIOD = 2 * 3.141592653589793 / THESIS_CRANK_SPEED
+PERIOD = 2 * math.pi / THESIS_CRANK_SPEED
 TARGET_VOLUME_MM3 = 106.7  # Table 7-4: FEM 106.71, EFM 106.68 mm^3
 
 THESIS = {  # Tables 7-4..7-6
@@ -56,7 +58,7 @@ def calibrate_free_length(l0_guesses=(0.50, 0.56), *, cycles=RIG_CYCLES, dynamic
     ``cycles`` (constant A = cycles / ``dynamic``) equals 106.7 mm^3.  The volume is
     nearly linear in the spring force, hence in L0: 2-4 iterations suffice."""
     _, mech, y0 = _setup(p, l0_guesses[0])
-    idx = common._index(mech)
+    idx = clearance_element(mech, common.JOINT)[0]
     spring = next(i for i, f in enumerate(mech.forces) if f.name == "slider_spring")
 
     @jax.jit
@@ -85,20 +87,14 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
         extrapolation: float | None = None, free_length: float | None = None,
         log=print, resume: bool = False, progress: bool = False) -> dict:
     l0 = RIG_SPRING_FREE_LENGTH if free_length is None else free_length
-    mech0, mech, y0 = _setup(TABLE_7_1, l0)
-    design = RIG_JOINT
-    mech_of_p = lambda p: with_wear_joint(mech0, common.design_of(p, design), n_theta=N_THETA)  # noqa: E731
-    a = extrapolation or common.default_constant_a(cycles, TARGET_DYNAMIC)
-    log(f"[{NAME}] {cycles} cycles, method {method}, A {a}, spring L0 {l0:.5f} m ...")
-    res, ct, wt, info = common.run_evolution(
-        mech_of_p, common.params_of(design), y0, cycles, PERIOD, method=method,
-        extrapolation=a, max_dynamic=4 * TARGET_DYNAMIC, wall=design.wall, n_theta=N_THETA,
-        out=out, meta={"study": NAME}, resume=resume, progress=progress)
-    x3 = jnp.asarray(y0[6])
-    spring_mid = RIG_SPRING_STIFFNESS * (RIG_SPRING_ANCHOR_X - float(x3) - l0)
-    summary = common.write_outputs(
-        out, name=NAME, mech=mech, design=design, res=res, y0=y0, period=PERIOD, cycles=cycles,
-        compile_time=ct, wall_time=wt, thesis=THESIS, method=method, extrapolation=a,
+    mech0, _, y0 = _setup(TABLE_7_1, l0)
+    log(f"[{NAME}] spring free length L0 {l0:.5f} m")
+    x3 = float(y0[6])  # slider position at t = 0 [m]
+    spring_mid = RIG_SPRING_STIFFNESS * (RIG_SPRING_ANCHOR_X - x3 - l0)
+    return common.run_wear_study(
+        out, name=NAME, mech0=mech0, design=RIG_JOINT, y0=y0, cycles=cycles, period=PERIOD,
+        method=method, extrapolation=extrapolation, target_dynamic=TARGET_DYNAMIC,
+        n_theta=N_THETA, thesis=THESIS, log=log, resume=resume, progress=progress,
         description=(
             "Rig of thesis Ch. 7: Table 7-1 read as half-lengths (crank 38.1 mm, rod 101.6 mm "
             "COM distances), gravity -y in the plane, slider spring 525.4 N/m pulling the "
@@ -106,9 +102,5 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
             f"L0 = {l0:.5f} m, calibrated to 106.7 mm^3), EFM PTFE bushing R 9.533 mm on a "
             "9.500 mm pin, wall 6.342 mm, depth 13.1 mm, mu 0.13, k 5.05e-4 mm^3/(N m), "
             f"30 rpm. Worn mass with PTFE density {PTFE_DENSITY / 1e3:g} g/cm^3."),
-        log=log,
-        extra_summary={"spring_free_length_m": l0,
-                       "spring_force_at_t0_N": spring_mid, **info},
+        extra_summary={"spring_free_length_m": l0, "spring_force_at_t0_N": spring_mid},
         extra_report=[f"- spring force at t = 0 (crank angle 0): {spring_mid:.1f} N"])
-    res.check(NAME)
-    return summary

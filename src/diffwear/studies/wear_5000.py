@@ -8,6 +8,8 @@ pin R 20 mm, clearance 0.005 mm, depth 12.8 mm, k 5.05e-4 mm^3/(N m), mu 0.13,
 
 from __future__ import annotations
 
+import math
+
 from ..io import OutputDir
 from ..presets import (
     TABLE_2_1,
@@ -35,25 +37,14 @@ def run(out: OutputDir, *, cycles: int = WEAR_5000_CYCLES, method: str = "consta
         extrapolation: float | None = None, log=print, resume: bool = False,
         progress: bool = False) -> dict:
     mech0, q_guess = slider_crank(TABLE_2_1)
-    design = WEAR_5000
-    mech_of_p = lambda p: with_wear_joint(mech0, common.design_of(p, design), n_theta=N_THETA)  # noqa: E731
-    mech = mech_of_p(common.params_of(design))
-    y0 = common.initial_state(mech0, q_guess, mech)
-    period = 2 * 3.141592653589793 / THESIS_CRANK_SPEED
-    a = extrapolation or common.default_constant_a(cycles, TARGET_DYNAMIC)
-    log(f"[{NAME}] {cycles} cycles, method {method}, A {a} ...")
-    res, ct, wt, info = common.run_evolution(
-        mech_of_p, common.params_of(design), y0, cycles, period, method=method,
-        extrapolation=a, max_dynamic=4 * TARGET_DYNAMIC, wall=design.wall, n_theta=N_THETA,
-        out=out, meta={"study": NAME}, resume=resume, progress=progress)
-    summary = common.write_outputs(
-        out, name=NAME, mech=mech, design=design, res=res, y0=y0, period=period, cycles=cycles,
-        compile_time=ct, wall_time=wt, thesis=THESIS, method=method, extrapolation=a,
+    y0 = common.initial_state(mech0, q_guess, with_wear_joint(mech0, WEAR_5000, n_theta=N_THETA))
+    return common.run_wear_study(
+        out, name=NAME, mech0=mech0, design=WEAR_5000, y0=y0, cycles=cycles,
+        period=2 * math.pi / THESIS_CRANK_SPEED, method=method, extrapolation=extrapolation,
+        target_dynamic=TARGET_DYNAMIC, n_theta=N_THETA, thesis=THESIS, log=log, resume=resume,
+        progress=progress,
         description=(
             "Table 2-1 slider-crank (half-lengths 1 m / 1.75 m), gravity -y, crank-rod EFM "
             "clearance joint: pin R 20 mm, c 0.005 mm, depth 12.8 mm, bushing outer R 33.31 mm "
             "(our choice: rig proportions), PTFE E 0.5 GPa nu 0.38, e_r 0.8, mu 0.13, "
-            "k 5.05e-4 mm^3/(N m), 30 rpm. Volume = depth x integral of h R_b dtheta."),
-        log=log, extra_summary=info)
-    res.check(NAME)
-    return summary
+            "k 5.05e-4 mm^3/(N m), 30 rpm. Volume = depth x integral of h R_b dtheta."))

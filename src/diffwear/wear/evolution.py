@@ -270,6 +270,13 @@ class Evolver:
     def active(self, c):
         return (c["status"] == STATUS_OK) & (c["n"] < self.cycles_arr - 1e-9)
 
+    def when_active(self, do, c):
+        """``do(c) -> (state, A)`` if the evolution is still running, else a
+        no-op: (new state, A used, whether this slot ran)."""
+        go = self.active(c)
+        c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
+        return c2, a_i, go
+
     # ------------------------------------------------------------------ state
     def init(self, y0) -> dict:
         """Warm-up cycles (wear discarded), then the initial evolution state."""
@@ -323,8 +330,7 @@ class Evolver:
             out["dyn"] = c["dyn"] + 1
             return out, a_i
 
-        go = self.active(c)
-        c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
+        c2, a_i, go = self.when_active(do, c)
         return c2, self.record(c2, a_i, go)
 
     def _step_adaptive(self, c, _):
@@ -353,8 +359,7 @@ class Evolver:
             out["dh_prev"] = dh
             return out, a_i
 
-        go = self.active(c)
-        c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
+        c2, a_i, go = self.when_active(do, c)
         return c2, self.record(c2, a_i, go)
 
     def _step_error(self, c, _):
@@ -389,8 +394,7 @@ class Evolver:
             out["k1"], out["ls1"] = k1, ls1
             return out, jnp.where(accept, dn, 0.0)
 
-        go = self.active(c)
-        c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
+        c2, a_i, go = self.when_active(do, c)
         return c2, self.record(c2, a_i, go & (a_i > 0))
 
 

@@ -134,7 +134,8 @@ def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *, p: SliderCrankP
     Returns (mechanism, y0): y0 is the ideal mechanism's consistent state at
     t = 0 with the pin centred in the bushing (the thesis's start-up).
     """
-    from .contact import PTFE, STEEL, CoulombFriction, KelvinVoigt, LankaraniNikravesh, with_clearance
+    from .contact import (PTFE, STEEL, CoulombFriction, KelvinVoigt, LankaraniNikravesh,
+                          centred_state, with_clearance)
     from .dynamics import consistent_state
     from .errors import InputError
 
@@ -156,8 +157,7 @@ def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *, p: SliderCrankP
     mech = with_clearance(ideal, "crank_rod", pin_radius=pin_radius, bushing_radius=bore,
                           law=contact, friction=CoulombFriction(friction), wear=wear,
                           n_theta=n_theta)
-    q, qd, _ = ideal.split(y_ideal)
-    return mech, mech.join(q, qd, mech.initial_aux(q, qd))
+    return mech, centred_state(ideal, y_ideal, mech)
 
 
 # ============================================================ wear joints

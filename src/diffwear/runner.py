@@ -38,7 +38,7 @@ from .dynamics import (
     reaction_wrench,
     simulate,
 )
-from .contact import contact_history
+from .contact import centred_state, contact_history
 from .dynamics.simulate import Trajectory
 from .errors import InputError
 from .io import OutputDir
@@ -67,8 +67,7 @@ def initial_state(study: Study):
         raise InputError(f"{study.file}: initial: {err}") from None
     if study.assembly is None:
         return y0
-    q, qd, _ = mech.split(y0)
-    return study.mechanism.join(q, qd, study.mechanism.initial_aux(q, qd))
+    return centred_state(mech, y0, study.mechanism)
 
 
 @eqx.filter_jit

@@ -1,6 +1,12 @@
 """Imperfect revolute joints: clearance, contact laws, friction, bushing profiles."""
 
-from .clearance_joint import ClearanceJoint, ContactHistory, contact_history, with_clearance
+from .clearance_joint import (
+    ClearanceJoint,
+    ContactHistory,
+    centred_state,
+    contact_history,
+    with_clearance,
+)
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
 from .laws import (
@@ -14,7 +20,7 @@ from .materials import PTFE, STEEL, Material
 from .profile import BushingProfile
 
 __all__ = [
-    "ClearanceJoint", "ContactHistory", "contact_history", "with_clearance", "CoulombFriction", "ContactResult", "PinKinematics",
+    "ClearanceJoint", "ContactHistory", "centred_state", "contact_history", "with_clearance", "CoulombFriction", "ContactResult", "PinKinematics",
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
     "LankaraniNikravesh", "PTFE", "STEEL", "Material", "BushingProfile",
 ]

@@ -152,6 +152,15 @@ class ClearanceJoint(AbstractForceElement):
         return aux[self.law.n_memory + self.profile.n]
 
 
+def centred_state(ideal: Mechanism, y_ideal, mech: Mechanism):
+    """The state of ``mech`` (``ideal`` with revolute joints swapped for clearance
+    joints, `with_clearance`) that starts where ``ideal`` is: same positions and
+    velocities, so every pin sits centred in its bushing, and the contact-law and
+    wear states at their initial values (the thesis's start-up)."""
+    q, qd, _ = ideal.split(y_ideal)
+    return mech.join(q, qd, mech.initial_aux(q, qd))
+
+
 def with_clearance(mech: Mechanism, joint: str, **kwargs) -> Mechanism:
     """Replace the ideal `RevoluteJoint` ``joint`` of ``mech`` by a `ClearanceJoint`.
 

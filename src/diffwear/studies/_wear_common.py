@@ -9,15 +9,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..contact import contact_history
+from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..errors import InputError
-from ..wear import evolve, wear_cycle, worn_volume
+from ..wear import worn_mechanism, evolve, wear_cycle, worn_volume
 from ..wear.evolution import (ChunkedEvolution, Evolver, load_checkpoint,
                               save_checkpoint)
-from ..wear.cycle import clearance_element
-from ..wear.evolution import _with_profile
 
 JOINT = "crank_rod"
 N_SAVE = 401
@@ -33,9 +31,9 @@ def design_of(p, base: WearJointDesign) -> WearJointDesign:
 
 
 def initial_state(mech0, q_guess, mech):
-    y_ideal = consistent_state(mech0, q_guess)
-    q, qd, _ = mech0.split(y_ideal)
-    return mech.join(q, qd, mech.initial_aux(q, qd))
+    """y0 of ``mech`` (the wear version of the ideal ``mech0``): the ideal
+    mechanism's consistent state with the pin centred."""
+    return centred_state(mech0, consistent_state(mech0, q_guess), mech)
 
 
 CHECKPOINT = "checkpoint.npz"
@@ -156,8 +154,7 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
     cyc = jax.jit(lambda m, y, t: wear_cycle(m, JOINT, y, t, period, n_save=N_SAVE))
     warm = cyc(mech, y0, 0.0)
     first = cyc(mech, warm.y_end, period)
-    mech_last = _with_profile(mech, clearance_element(mech, JOINT)[0],
-                              el.profile.clearance + res.depth)
+    mech_last = worn_mechanism(mech, JOINT, res.depth)
     last = cyc(mech_last, res.y, res.t)
     hist_first = contact_history(mech, JOINT, first.ys)
     hist_last = contact_history(mech_last, JOINT, last.ys)

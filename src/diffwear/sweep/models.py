@@ -15,7 +15,7 @@ import diffrax
 import equinox as eqx
 import jax.numpy as jnp
 
-from ..contact import contact_history
+from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state, simulate
 from ..presets import (
     BUSHING_DEPTH_CH5,
@@ -34,7 +34,7 @@ from ..presets import (
     rig_slider_crank,
     with_wear_joint,
 )
-from ..wear import evolve, smooth_max, wear_cycle, worn_volume
+from ..wear import evolve, smooth_max, wear_cycle, worn_mechanism, worn_volume
 
 JOINT = "crank_rod"
 
@@ -91,13 +91,11 @@ class RigWear(eqx.Module):
         design = self.design(params)
         mech = with_wear_joint(mech0, design, n_theta=self.n_theta)
         # the ideal kinematics at t = 0 depend on no swept parameter
-        q, qd, _ = mech0.split(consistent_state(mech0, q_guess, check=False))
-        y0 = mech.join(q, qd, mech.initial_aux(q, qd))
+        y0 = centred_state(mech0, consistent_state(mech0, q_guess, check=False), mech)
         res = evolve(mech, JOINT, y0, self.cycles, period=self.period,
                      extrapolation=self.cycles / self.dynamic_cycles, wall_thickness=design.wall)
         el = mech.element(JOINT)
-        worn = eqx.tree_at(lambda m: m.forces[_index(m)].profile.clearance, mech,
-                           el.profile.clearance + res.depth)
+        worn = worn_mechanism(mech, JOINT, res.depth)
         cyc = wear_cycle(worn, JOINT, res.y, res.t, self.period, n_save=self.force_samples)
         force = contact_history(worn, JOINT, cyc.ys).force_magnitude
         return {
@@ -150,10 +148,6 @@ class ClearanceForce(eqx.Module):
         f = contact_history(mech, JOINT, traj.ys).force_magnitude[self.transient_cycles * n:]
         return {"peak_force_N": jnp.max(f), "rms_force_N": jnp.sqrt(jnp.mean(f ** 2)),
                 "integrator_steps": jnp.asarray(traj.num_steps, dtype=float)}
-
-
-def _index(mech) -> int:
-    return next(i for i, f in enumerate(mech.forces) if f.name == JOINT)
 
 
 rig_wear = RigWear()

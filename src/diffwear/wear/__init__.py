@@ -5,7 +5,7 @@ from .archard import MM3_PER_NM, SLIP_RATE_WIDTH, ArchardWear
 __all__ = [
     "MM3_PER_NM", "SLIP_RATE_WIDTH", "ArchardWear",
     "CycleResult", "wear_cycle", "reset_wear",
-    "EvolutionResult", "evolve", "smooth_max", "worn_volume", "WearLimitError",
+    "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "Evolver", "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint",
 ]
 
@@ -14,7 +14,7 @@ __all__ = [
 _LAZY = {
     "CycleResult": "cycle", "wear_cycle": "cycle", "reset_wear": "cycle",
     "EvolutionResult": "evolution", "evolve": "evolution", "smooth_max": "evolution",
-    "worn_volume": "evolution", "WearLimitError": "evolution",
+    "worn_volume": "evolution", "worn_mechanism": "evolution", "WearLimitError": "evolution",
     "Evolver": "evolution", "ChunkedEvolution": "evolution", "Checkpoint": "evolution",
     "save_checkpoint": "evolution", "load_checkpoint": "evolution",
 }

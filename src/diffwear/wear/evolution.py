@@ -141,6 +141,14 @@ def _with_profile(mech: Mechanism, index: int, clearance):
     return eqx.tree_at(lambda m: m.forces[index].profile.clearance, mech, clearance)
 
 
+def worn_mechanism(mech: Mechanism, joint: str, depth) -> Mechanism:
+    """``mech`` with the bushing of clearance joint ``joint`` worn by ``depth`` [m]
+    on its profile grid (e.g. ``EvolutionResult.depth``): the mechanism of the
+    next dynamic cycle."""
+    index, el = clearance_element(mech, joint)
+    return _with_profile(mech, index, el.profile.clearance + depth)
+
+
 def evolve(
     mech: Mechanism,
     joint: str,

@@ -195,23 +195,26 @@ class WearJointDesign(eqx.Module):
 
 
 def with_wear_joint(mech: Mechanism, design: WearJointDesign, *, joint: str = "crank_rod",
-                    damping_mass=None, n_theta: int = 180) -> Mechanism:
+                    bushing_body: str | None = None, damping_mass=None,
+                    n_theta: int = 180) -> Mechanism:
     """Swap the ideal revolute ``joint`` for an EFM clearance joint with Archard wear.
 
     EFM (thesis Ch. 6): PTFE bushing (Table 3-2 / 7-2), foundation stiffness
     E_W / wall.  Damping time from the restitution coefficient with the
     half-circle contact stiffness and ``damping_mass`` (default: the mass of the
-    bushing body).  Friction Coulomb mu.
+    bushing body).  Friction Coulomb mu.  ``bushing_body``: the body carrying
+    the bushing (default: the joint's second body; see `with_clearance`).
     """
     from .contact import PTFE, CoulombFriction, with_clearance
     from .wear import ArchardWear
 
     old = mech.element(joint)
+    bushing_body = old.body_j if bushing_body is None else bushing_body
     if damping_mass is None:
-        damping_mass = next(b.mass for b in mech.bodies if b.name == old.body_j)
+        damping_mass = next(b.mass for b in mech.bodies if b.name == bushing_body)
     law = efm_law(PTFE, design.bushing_radius, design.wall, design.depth, design.restitution,
                   damping_mass)
-    return with_clearance(mech, joint, pin_radius=design.pin_radius,
+    return with_clearance(mech, joint, bushing_body=bushing_body, pin_radius=design.pin_radius,
                           bushing_radius=design.bushing_radius, law=law,
                           friction=CoulombFriction(design.mu), wear=ArchardWear(design.k),
                           n_theta=n_theta)

@@ -161,19 +161,29 @@ def centred_state(ideal: Mechanism, y_ideal, mech: Mechanism):
     return mech.join(q, qd, mech.initial_aux(q, qd))
 
 
-def with_clearance(mech: Mechanism, joint: str, **kwargs) -> Mechanism:
+def with_clearance(mech: Mechanism, joint: str, *, bushing_body: str | None = None,
+                   **kwargs) -> Mechanism:
     """Replace the ideal `RevoluteJoint` ``joint`` of ``mech`` by a `ClearanceJoint`.
 
-    The first body of the revolute joint carries the pin, the second the
-    bushing; points are taken over.  ``kwargs`` go to `ClearanceJoint`
-    (pin_radius, bushing_radius, law, friction, profile, wear, n_theta).
-    The state layout of q and qd is unchanged, so a consistent state of the
-    ideal mechanism (pin centred, same velocities) starts the clearance one.
+    By default the first body of the revolute joint carries the pin and the
+    second the bushing; ``bushing_body`` (either of the two) chooses the body
+    that carries the bushing.  Points are taken over.  ``kwargs`` go to
+    `ClearanceJoint` (pin_radius, bushing_radius, law, friction, profile, wear,
+    n_theta).  The state layout of q and qd is unchanged, so a consistent state
+    of the ideal mechanism (pin centred, same velocities) starts the clearance one.
     """
     old = mech.element(joint)
     if not isinstance(old, RevoluteJoint):
         raise InputError(f"{joint!r} is a {type(old).__name__}, not a RevoluteJoint")
-    new = ClearanceJoint(joint, old.body_i, old.point_i, old.body_j, old.point_j, **kwargs)
+    ends = [(old.body_i, old.point_i), (old.body_j, old.point_j)]
+    if bushing_body is not None:
+        if bushing_body not in (old.body_i, old.body_j):
+            raise InputError(f"joint {joint!r} connects {old.body_i!r} and {old.body_j!r}; "
+                             f"bushing_body {bushing_body!r} is neither")
+        if bushing_body == old.body_i:
+            ends.reverse()
+    (pin_b, pin_p), (bush_b, bush_p) = ends
+    new = ClearanceJoint(joint, pin_b, pin_p, bush_b, bush_p, **kwargs)
     constraints = tuple(c for c in mech.constraints if c.name != joint)
     return Mechanism(mech.bodies, constraints, (*mech.forces, new))
 

@@ -4,7 +4,8 @@ from .archard import MM3_PER_NM, SLIP_RATE_WIDTH, ArchardWear
 
 __all__ = [
     "MM3_PER_NM", "SLIP_RATE_WIDTH", "ArchardWear",
-    "CycleResult", "wear_cycle", "reset_wear",
+    "CycleResult", "wear_cycle", "reset_wear", "JointsCycleResult", "wear_cycle_joints",
+    "LifeResult", "cycles_to_limit",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "Evolver", "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint",
 ]
@@ -13,6 +14,8 @@ __all__ = [
 # `wear.archard`: load them lazily to keep the import graph acyclic.
 _LAZY = {
     "CycleResult": "cycle", "wear_cycle": "cycle", "reset_wear": "cycle",
+    "JointsCycleResult": "cycle", "wear_cycle_joints": "cycle",
+    "LifeResult": "life", "cycles_to_limit": "life",
     "EvolutionResult": "evolution", "evolve": "evolution", "smooth_max": "evolution",
     "worn_volume": "evolution", "worn_mechanism": "evolution", "WearLimitError": "evolution",
     "Evolver": "evolution", "ChunkedEvolution": "evolution", "Checkpoint": "evolution",

@@ -61,6 +61,60 @@ def reset_wear(mech: Mechanism, joint: str, y: Float[Array, " s"]) -> Float[Arra
     return y.at[start:stop].set(0.0)
 
 
+class JointsCycleResult(eqx.Module):
+    """`wear_cycle_joints`: like `CycleResult`, with one depth increment and one
+    load x sliding increment per joint (tuples in the order of ``joints``)."""
+
+    y_end: Float[Array, " s"]
+    depth_increment: tuple
+    load_sliding: tuple
+    num_steps: Int[Array, ""]
+    ok: Array
+    ts: Float[Array, " T"] | None = None
+    ys: Float[Array, "T s"] | None = None
+
+
+def wear_cycle_joints(
+    mech: Mechanism,
+    joints: tuple[str, ...],
+    y: Float[Array, " s"],
+    t0,
+    period,
+    *,
+    rtol: float = CYCLE_RTOL,
+    atol: float = CYCLE_ATOL,
+    n_save: int | None = None,
+    adjoint: diffrax.AbstractAdjoint | None = None,
+    max_steps: int = 200_000,
+) -> JointsCycleResult:
+    """One cycle [t0, t0 + period] from ``y`` with the wear states of every
+    joint in ``joints`` reset: the wear of several joints in one integration."""
+    elements = [clearance_element(mech, j)[1] for j in joints]
+    y0 = y
+    for j in joints:
+        y0 = reset_wear(mech, j, y0)
+    t0 = jnp.asarray(t0, dtype=float)
+    t1 = t0 + period
+    ts = None if n_save is None else t0 + period * jnp.linspace(0.0, 1.0, n_save)
+    traj = simulate(
+        mech, y0, t1, t0=t0, ts=ts, adjoint=adjoint, max_steps=max_steps,
+        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol, pcoeff=0.3, icoeff=0.4),
+    )
+    y1 = traj.ys[-1]
+    aux = mech.split(y1)[2]
+    auxes = [aux[mech.aux_slice(j)] for j in joints]
+    ok = (traj.result == diffrax.RESULTS.successful) & jnp.all(jnp.isfinite(y1))
+    return JointsCycleResult(
+        y_end=y1,
+        depth_increment=tuple(el.wear_depth(a) for el, a in zip(elements, auxes)),
+        load_sliding=tuple(el.load_sliding_integral(a) for el, a in zip(elements, auxes)),
+        num_steps=traj.num_steps,
+        ok=ok,
+        ts=None if n_save is None else traj.ts,
+        ys=None if n_save is None else traj.ys,
+    )
+
+
 def wear_cycle(
     mech: Mechanism,
     joint: str,
@@ -80,24 +134,8 @@ def wear_cycle(
     (for contact loci and joint-force plots).  Pure and jit-able; failure is
     reported in ``ok`` (False on an integrator failure or a non-finite state).
     """
-    _, el = clearance_element(mech, joint)
-    y0 = reset_wear(mech, joint, y)
-    t0 = jnp.asarray(t0, dtype=float)
-    t1 = t0 + period
-    ts = None if n_save is None else t0 + period * jnp.linspace(0.0, 1.0, n_save)
-    traj = simulate(
-        mech, y0, t1, t0=t0, ts=ts, adjoint=adjoint, max_steps=max_steps,
-        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol, pcoeff=0.3, icoeff=0.4),
-    )
-    y1 = traj.ys[-1]
-    aux = mech.split(y1)[2][mech.aux_slice(joint)]
-    ok = (traj.result == diffrax.RESULTS.successful) & jnp.all(jnp.isfinite(y1))
-    return CycleResult(
-        y_end=y1,
-        depth_increment=el.wear_depth(aux),
-        load_sliding=el.load_sliding_integral(aux),
-        num_steps=traj.num_steps,
-        ok=ok,
-        ts=None if n_save is None else traj.ts,
-        ys=None if n_save is None else traj.ys,
-    )
+    r = wear_cycle_joints(mech, (joint,), y, t0, period, rtol=rtol, atol=atol, n_save=n_save,
+                          adjoint=adjoint, max_steps=max_steps)
+    return CycleResult(y_end=r.y_end, depth_increment=r.depth_increment[0],
+                       load_sliding=r.load_sliding[0], num_steps=r.num_steps, ok=r.ok,
+                       ts=r.ts, ys=r.ys)

@@ -1,0 +1,158 @@
+"""The Chapter 8 design problem: a slider-crank with two wearing joints.
+
+Thesis Ch. 8 (digest section 4, Tables 8-1 to 8-5): the Table 2-1 slider-crank
+(Table 8-1 = Table 2-1) with PTFE bushings in the connecting rod at both of its
+joints, hardened steel pins (Table 8-2 = Table 3-2 materials, k = 5.05e-4
+mm^3/(N m), mu = 0.13), 30 rpm.  Joint 1 is crank-rod (pin on the crank),
+joint 2 rod-slider (pin on the slider).  The design is the bushing bore
+diameter d_j and the bushing depth (axial length) h_j of each joint, inside the
+Table 8-3 box; the life of joint j is the number of crank cycles until its
+maximum wear depth reaches 2 mm (Table 8-3), `cycles_to_limit`.
+
+Assumptions beyond the thesis (also in the README):
+
+* Clearance 0.0005 mm (Table 3-2's smallest; the thesis's Ch. 8 text gives no
+  other value), the same at both joints; the bore diameter d is the pin
+  diameter plus twice that (d and the pin diameter differ by 1 um).
+* Bushing wall (the EFM layer thickness L) is not in the thesis: we keep the
+  rig's proportions (Table 7-2: outer / inner radius = 15.875 / 9.533), as for
+  the Ch. 5/6 example, so L = 0.6653 x bore radius (6.65 mm at d = 20 mm,
+  23.3 mm at d = 70 mm: always thicker than the 2 mm limit).  The EFM stiffness
+  E / L therefore falls with d; a fixed wall would change the pressures.
+* Damping of each EFM joint from e_r = 0.8 (Table 3-3) with the rod's mass.
+* After a joint reaches 2 mm its profile is held (end of life); the other joint
+  wears on.
+"""
+
+from __future__ import annotations
+
+import math
+
+import diffrax
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from .._checks import concrete
+from ..contact import centred_state
+from ..dynamics import consistent_state
+from ..errors import InputError, SolverError
+from ..presets import (
+    FRICTION_CH3,
+    K_PTFE_MM3_PER_NM,
+    RESTITUTION_CH3,
+    TABLE_2_1,
+    SliderCrankParameters,
+    WearJointDesign,
+    slider_crank,
+    with_wear_joint,
+)
+from ..wear import LifeResult, cycles_to_limit
+
+JOINTS = ("crank_rod", "rod_slider")
+BUSHING_BODY = "rod"
+VARIABLES = ("d1", "d2", "h1", "h2")  # bore diameters, bushing depths [m]
+
+WEAR_LIMIT = 2.0e-3                     # m, Table 8-3 (max allowable wear depth)
+DIAMETER_BOUNDS = (20.0e-3, 70.0e-3)    # m, Table 8-3
+DEPTH_BOUNDS = (10.0e-3, 50.0e-3)       # m, Table 8-3
+LOWER = np.array([DIAMETER_BOUNDS[0]] * 2 + [DEPTH_BOUNDS[0]] * 2)
+UPPER = np.array([DIAMETER_BOUNDS[1]] * 2 + [DEPTH_BOUNDS[1]] * 2)
+
+CLEARANCE_CH8 = 0.0005e-3               # m (Table 3-2's smallest; see module notes)
+WALL_PER_RADIUS = 15.875 / 9.533 - 1.0  # Table 7-2 rig proportions (our choice)
+
+# Table 8-4: the surrogate optimum (d1, d2, h1, h2) [m]; Table 8-5: its check.
+TABLE_8_4 = np.array([46.58e-3, 48.60e-3, 37.25e-3, 14.00e-3])
+TABLE_8_5 = {"surrogate_cycles": 119_435, "full_model_cyc1": 121_600,
+             "full_model_cyc2": 117_600, "rel_gap": 4000 / 119_600}
+
+
+def check_design(x, *, what: str = "design") -> None:
+    """Raise `InputError` unless ``x`` = (d1, d2, h1, h2) [m] lies in the Table 8-3 box."""
+    v = concrete(x)
+    if v is None:
+        return
+    if v.shape != (4,):
+        raise InputError(f"{what}: expected 4 values (d1, d2, h1, h2) in m, got shape {v.shape}")
+    for name, value, lo, hi in zip(VARIABLES, v, LOWER, UPPER):
+        if not (math.isfinite(value) and lo - 1e-12 <= value <= hi + 1e-12):
+            raise InputError(f"{what}: {name} = {value * 1e3:.6g} mm is outside the Table 8-3 "
+                             f"range [{lo * 1e3:g}, {hi * 1e3:g}] mm")
+
+
+def bushing(diameter, depth, *, clearance=CLEARANCE_CH8, k=K_PTFE_MM3_PER_NM * 1e-9,
+            mu=FRICTION_CH3) -> WearJointDesign:
+    """One Ch. 8 PTFE bushing of bore ``diameter`` and ``depth`` [m]."""
+    diameter = jnp.asarray(diameter, dtype=float)
+    pin = diameter - 2 * clearance
+    wall = WALL_PER_RADIUS * 0.5 * diameter
+    return WearJointDesign(k, clearance, depth, pin, wall, mu, RESTITUTION_CH3)
+
+
+class TwoJointLife(eqx.Module):
+    """cycles-to-limit of both joints as a function of x = (d1, d2, h1, h2) [m].
+
+    ``model(x)`` -> [cyc1, cyc2] (jit-able, differentiable in forward and
+    reverse mode, vmap-able); ``model.evaluate(x)`` -> the `LifeResult`;
+    ``model.life(x)`` checks the status (`SolverError` on failure) and returns
+    NumPy cycles.  Static settings: ``steps`` (slots to the limit of the
+    fastest joint), ``scheme`` ("heun"), ``n_theta`` (profile grid),
+    ``cycle_rtol`` (dynamic cycle tolerance, rtol = atol), ``forward_mode``
+    (diffrax `ForwardMode` adjoint: `jax.jacfwd`/`jvp` work, `jax.grad` does
+    not; with False the default checkpointed reverse mode, and the reverse).
+    With 4 inputs and 2 outputs forward mode is the cheaper Jacobian.
+    """
+
+    steps: int = eqx.field(static=True, default=5)
+    scheme: str = eqx.field(static=True, default="implicit")
+    n_theta: int = eqx.field(static=True, default=90)
+    cycle_rtol: float = eqx.field(static=True, default=1e-6)
+    limit: float = eqx.field(static=True, default=WEAR_LIMIT)
+    forward_mode: bool = eqx.field(static=True, default=True)
+    p: SliderCrankParameters = TABLE_2_1
+
+    @property
+    def period(self) -> float:
+        return 2 * math.pi / float(self.p.omega)
+
+    def mechanism(self, x):
+        """The wearing mechanism for design x and its ideal parent."""
+        ideal, q_guess = slider_crank(self.p)
+        mech = ideal
+        for joint, d, h in zip(JOINTS, (x[0], x[1]), (x[2], x[3])):
+            mech = with_wear_joint(mech, bushing(d, h), joint=joint, bushing_body=BUSHING_BODY,
+                                   n_theta=self.n_theta)
+        return ideal, q_guess, mech
+
+    def evaluate(self, x: Float[Array, "4"]) -> LifeResult:
+        check_design(x)
+        x = jnp.asarray(x, dtype=float)
+        ideal, q_guess, mech = self.mechanism(x)
+        # the ideal kinematics at t = 0 do not depend on the design
+        y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
+        return cycles_to_limit(mech, JOINTS, y0, period=self.period, limit=self.limit,
+                               steps=self.steps, scheme=self.scheme, slots=3 * self.steps + 4,
+                               cycle_rtol=self.cycle_rtol, cycle_atol=self.cycle_rtol,
+                               adjoint=diffrax.ForwardMode() if self.forward_mode else None)
+
+    def __call__(self, x: Float[Array, "4"]) -> Float[Array, "2"]:
+        return self.evaluate(x).cycles
+
+    def life(self, x) -> np.ndarray:
+        """[cyc1, cyc2] at a concrete design, as NumPy; `SolverError` on failure."""
+        check_design(x)
+        res = _evaluate(self, jnp.asarray(x, dtype=float))
+        status = int(res.status)
+        if status != 0:
+            why = ("the dynamic integration failed" if status == 2 else
+                   "a joint did not reach the wear limit within the scan slots")
+            raise SolverError(f"cycles_to_limit at design {np.asarray(x) * 1e3} mm: {why} "
+                              f"(status {status})")
+        return np.asarray(res.cycles)
+
+
+@eqx.filter_jit
+def _evaluate(model: TwoJointLife, x) -> LifeResult:
+    return model.evaluate(x)

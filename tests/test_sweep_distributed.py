@@ -45,6 +45,7 @@ def client():
         yield c
 
 
+@pytest.mark.slow
 def test_distributed_equals_local(client):
     """15 points in tasks of 4 (the last 3) over 2 worker processes: every
     output equals the local sweep to 1e-10, in grid order, computed in float64
@@ -66,6 +67,7 @@ def test_distributed_equals_local(client):
     np.testing.assert_allclose(dist.grid("x1")[:, 0], 2.0 * np.cos(GRID["omega"]), rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_distributed_default_split_and_bad_input(client):
     """Default: one task per worker; bad input is refused before anything is sent."""
     from diffwear.sweep.distributed import sweep_distributed

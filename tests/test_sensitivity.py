@@ -125,6 +125,9 @@ def test_scatter_propagation_linear_model(tmp_path):
     assert s["std_linear"] == pytest.approx(y0 * sd / POINT["k"], rel=1e-9)
     assert abs(s["mean"] - s["mean_linear"]) < 4 * s["std_linear"] / math.sqrt(256)
     assert s["std"] == pytest.approx(s["std_linear"], rel=0.2)
+    # on the same samples the linear estimate is exact for a linear model
+    assert s["mean"] == pytest.approx(s["mean_linear_samples"], rel=1e-9)
+    assert s["std"] == pytest.approx(s["std_linear_samples"], rel=1e-9)
     np.testing.assert_allclose(prop.result["max_depth_mm"] / prop.result["k"], y0 / POINT["k"],
                                rtol=1e-9)  # exactly proportional per sample
     np.testing.assert_allclose(prop.life["samples"], 21_400 * 0.5 / prop.result["max_depth_mm"])
@@ -141,3 +144,6 @@ def test_scatter_propagation_nonlinear_model():
     assert s["mean"] == pytest.approx(s["mean_linear"], rel=0.02)
     assert s["std"] == pytest.approx(s["std_linear"], rel=0.2)
     assert s["p5"] < prop.y0["max_depth_mm"] < s["p95"]
+    # concave (e_k < 1): the mean falls below the linear estimate on the same samples
+    assert s["mean"] < s["mean_linear_samples"]
+    assert s["mean"] == pytest.approx(s["mean_linear_samples"], rel=0.02)

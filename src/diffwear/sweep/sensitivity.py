@@ -229,12 +229,18 @@ class Propagation:
                 "outputs": self.stats}
 
 
-def _stats(x, mean_lin, std_lin):
+def _stats(x, mean_lin, std_lin, lin_samples):
+    """Sample statistics of ``x``; the linearised estimate with the exact
+    moments of the distribution (``*_linear``) and applied to the same samples
+    (``*_linear_samples``: free of sampling noise, so the difference to
+    mean/std is the model's non-linearity alone)."""
     x = np.asarray(x, dtype=float)
     return {"mean": float(np.mean(x)), "std": float(np.std(x, ddof=1)),
             "p5": float(np.percentile(x, 5)), "p50": float(np.median(x)),
             "p95": float(np.percentile(x, 95)), "mean_linear": float(mean_lin),
-            "std_linear": float(std_lin)}
+            "std_linear": float(std_lin),
+            "mean_linear_samples": float(np.mean(lin_samples)),
+            "std_linear_samples": float(np.std(lin_samples, ddof=1))}
 
 
 def propagate_scatter(model_fn: Callable[[dict], dict], params: Mapping, name: str = "k", *,
@@ -262,8 +268,8 @@ def propagate_scatter(model_fn: Callable[[dict], dict], params: Mapping, name: s
     outs = outputs or list(sens.outputs)
     mean_p, std_p = moments(p0, scatter, distribution)
     g = {o: sens.gradient[o][name] for o in outs}
-    stats = {o: _stats(res[o], sens.outputs[o] + g[o] * (mean_p - p0), abs(g[o]) * std_p)
-             for o in outs}
+    stats = {o: _stats(res[o], sens.outputs[o] + g[o] * (mean_p - p0), abs(g[o]) * std_p,
+                       sens.outputs[o] + g[o] * (ks - p0)) for o in outs}
     life_info = None
     if life is not None:
         out, limit, cycles = life
@@ -273,7 +279,7 @@ def propagate_scatter(model_fn: Callable[[dict], dict], params: Mapping, name: s
         lives = cycles * limit / res[out]
         dl = -cycles * limit / y0 ** 2 * g[out]  # d life / dp at p0
         stats["life_cycles"] = _stats(lives, cycles * limit / y0 + dl * (mean_p - p0),
-                                      abs(dl) * std_p)
+                                      abs(dl) * std_p, cycles * limit / y0 + dl * (ks - p0))
         life_info = {"output": out, "limit": limit, "cycles": cycles, "samples": lives}
     return Propagation(name, p0, scatter, distribution, res, sens.outputs, g, life_info, stats)
 

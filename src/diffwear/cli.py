@@ -76,6 +76,49 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sweep(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .config.loader import decode
+    from .config.sweep import MAX_POINTS, load_sweep
+    from .io import OutputDir
+    from .sweep import study
+
+    spec = load_sweep(args.file)  # every input check happens before --out is touched
+    if args.chunk_size is not None and not 1 <= args.chunk_size <= MAX_POINTS:
+        raise InputError(f"--chunk-size must be an integer in [1, {MAX_POINTS}], "
+                         f"got {args.chunk_size}")
+    if args.workers is not None and not 1 <= args.workers <= 1024:
+        raise InputError(f"--workers must be an integer in [1, 1024], got {args.workers}")
+    if args.workers is not None and args.cluster is not None:
+        raise InputError("--cluster ADDRESS and --workers N exclude each other (--workers "
+                         "starts a local cluster)")
+    text = decode(Path(args.file).read_bytes(), args.file)
+    log = (lambda *a, **k: None) if args.quiet else print
+    out = OutputDir(args.out, overwrite=args.overwrite)
+    if args.cluster is None and args.workers is None:
+        study.run(spec, out, chunk_size=args.chunk_size, input_text=text, log=log)
+        return 0
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise InputError("--cluster / --workers need Dask: pip install 'diffwear[cluster]'") \
+            from None
+    if args.cluster is not None:
+        try:
+            client = Client(args.cluster, timeout="20s")
+        except (OSError, TimeoutError) as err:
+            raise InputError(f"--cluster {args.cluster}: cannot connect ({err})") from None
+        with client:
+            study.run(spec, out, chunk_size=args.chunk_size, client=client, input_text=text,
+                      log=log)
+        return 0
+    with LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        study.run(spec, out, chunk_size=args.chunk_size, client=client, input_text=text, log=log)
+    return 0
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # argparse exits with 2 already; keep its message
         self.print_usage(sys.stderr)
@@ -84,7 +127,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="diffwear", description="Planar mechanisms with clearance and wear in "
-                     "their revolute joints: thesis studies and mechanism files.",
+                     "their revolute joints: thesis studies, mechanism files and sweeps.",
                      epilog="Exit codes: 0 success, 2 bad input, 3 solver failure.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
@@ -110,6 +153,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_run)
+
+    p = sub.add_parser("sweep", help="evaluate a model over a parameter grid (TOML; see README "
+                       "'Sweeps, sensitivity and clusters')",
+                       description="Evaluate a ready-made model (rig-wear, clearance-force) at "
+                       "every point of a grid given in a sweep file, vmapped in chunks; write "
+                       "results.csv/.npz (.nc with SciPy), heatmaps or line plots, summary.json "
+                       "and report.md.",
+                       epilog="Exit codes: 0 success, 2 bad input, 3 a point failed (results "
+                       "are written all the same).")
+    p.add_argument("file", help="sweep file, e.g. design_studies/sweep_rig_clearance_k.toml")
+    p.add_argument("--out", required=True,
+                   help="output folder (created; must not hold earlier results)")
+    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    p.add_argument("--chunk-size", type=int, default=None,
+                   help="points per vmap call (default: the file's [run] chunk_size, else all)")
+    p.add_argument("--cluster", metavar="ADDRESS", default=None,
+                   help="run on the Dask scheduler at ADDRESS (tcp://host:8786); needs the "
+                        "'cluster' extra")
+    p.add_argument("--workers", type=int, default=None,
+                   help="run on a local Dask cluster of N worker processes (cluster extra)")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=_sweep)
     return parser
 
 

@@ -35,6 +35,7 @@ from ..presets import (
     with_wear_joint,
 )
 from ..wear import evolve, smooth_max, wear_cycle, worn_mechanism, worn_volume
+from ..wear.cycle import CYCLE_ATOL, CYCLE_RTOL
 
 JOINT = "crank_rod"
 
@@ -49,7 +50,10 @@ class RigWear(eqx.Module):
     cycles, ``dynamic_cycles`` simulated wear cycles (constant A = cycles /
     dynamic_cycles; plus 1 warm-up cycle), ``n_theta`` profile grid, ``wall``
     and ``restitution`` of the bushing, ``temperature`` [m] of the smooth max,
-    ``force_samples`` saved states of the force cycle.
+    ``force_samples`` saved states of the force cycle, ``cycle_rtol`` /
+    ``cycle_atol`` of each dynamic cycle's integration (default those of
+    `wear.wear_cycle`; tighten them when gradients are checked against finite
+    differences: AD holds the adaptive steps fixed).
 
     Outputs: ``max_depth_mm`` = `smooth_max` (logsumexp, temperature
     ``temperature``; within temperature x ln(n_theta) below the true maximum) of
@@ -66,6 +70,8 @@ class RigWear(eqx.Module):
     wall: float = eqx.field(static=True, default=float(RIG_JOINT.wall))
     restitution: float = eqx.field(static=True, default=float(RIG_JOINT.restitution))
     temperature: float = eqx.field(static=True, default=1e-7)
+    cycle_rtol: float = eqx.field(static=True, default=CYCLE_RTOL)
+    cycle_atol: float = eqx.field(static=True, default=CYCLE_ATOL)
     p: SliderCrankParameters = TABLE_7_1
 
     param_names = ("k", "clearance", "depth", "diameter", "mu", "free_length")
@@ -93,10 +99,12 @@ class RigWear(eqx.Module):
         # the ideal kinematics at t = 0 depend on no swept parameter
         y0 = centred_state(mech0, consistent_state(mech0, q_guess, check=False), mech)
         res = evolve(mech, JOINT, y0, self.cycles, period=self.period,
-                     extrapolation=self.cycles / self.dynamic_cycles, wall_thickness=design.wall)
+                     extrapolation=self.cycles / self.dynamic_cycles, wall_thickness=design.wall,
+                     cycle_rtol=self.cycle_rtol, cycle_atol=self.cycle_atol)
         el = mech.element(JOINT)
         worn = worn_mechanism(mech, JOINT, res.depth)
-        cyc = wear_cycle(worn, JOINT, res.y, res.t, self.period, n_save=self.force_samples)
+        cyc = wear_cycle(worn, JOINT, res.y, res.t, self.period, n_save=self.force_samples,
+                         rtol=self.cycle_rtol, atol=self.cycle_atol)
         force = contact_history(worn, JOINT, cyc.ys).force_magnitude
         return {
             "max_depth_mm": smooth_max(res.depth, self.temperature) * 1e3,

@@ -97,8 +97,24 @@ def sweep(model_fn: Callable[[dict], dict], base_params: Mapping, grid: Mapping,
     known = getattr(model_fn, "param_names", None)
     base, axes = validate(base_params, grid, None if known is None else tuple(known))
     cols, shape = full_grid(base, axes)
+    results, info = evaluate(model_fn, cols, chunk_size=chunk_size, devices=devices,
+                             order_by=order_by, describe=tuple(axes))
+    return build_result(cols, results, tuple(axes), shape, info)
+
+
+def evaluate(model_fn: Callable[[dict], dict], cols: Mapping[str, np.ndarray], *,
+             chunk_size: int | None = None, devices=None,
+             order_by: Callable[[dict], float] | None = None,
+             describe: Sequence[str] = ()) -> tuple[dict[str, np.ndarray], dict]:
+    """The engine of `sweep`: ``model_fn`` at every point of ``cols`` (name ->
+    equal-length 1-D float64 columns, already validated), vmapped in padded
+    chunks, shard_map over ``devices``, optionally cost-ordered.  Returns
+    (outputs name -> column in the order of ``cols``, info).  `sweep` and
+    `distributed.sweep_distributed` (on each worker) both call it, so a point
+    goes through the same compiled function either way.  ``describe``: the
+    names shown for a point in messages."""
     names = list(cols)
-    n = int(np.prod(shape))
+    n = int(np.asarray(cols[names[0]]).size)
     out_names = _output_names(model_fn, names)
 
     devs = _devices(devices)
@@ -115,14 +131,13 @@ def sweep(model_fn: Callable[[dict], dict], base_params: Mapping, grid: Mapping,
     t0 = time.perf_counter()
     if order_by is None:
         order = np.arange(n)
-        costs = None
     else:
         costs = np.array([float(order_by({k: float(cols[k][i]) for k in names}))
                           for i in range(n)])
         if not np.all(np.isfinite(costs)):
             i = int(np.argmax(~np.isfinite(costs)))
             raise InputError(f"sweep: order_by gave {costs[i]} at point {i} "
-                             f"({ {k: float(cols[k][i]) for k in axes} })")
+                             f"({ {k: float(cols[k][i]) for k in describe} })")
         order = np.argsort(costs, kind="stable")
     padded = np.concatenate([order, np.full(n_chunks * size - n, order[-1])])
     order_s = time.perf_counter() - t0
@@ -147,4 +162,5 @@ def sweep(model_fn: Callable[[dict], dict], base_params: Mapping, grid: Mapping,
     info = {"points": n, "chunks": n_chunks, "chunk_size": size, "padding": n_chunks * size - n,
             "devices": nd, "ordered": order_by is not None, "order": order, "compile_s": compile_s,
             "run_s": float(sum(chunk_s)), "chunk_s": chunk_s, "order_s": order_s}
-    return build_result(cols, results, tuple(axes), shape, info)
+    return results, info
+

@@ -1,0 +1,257 @@
+"""``diffwear sweep FILE.toml``: run a checked `SweepSpec` and write its outputs.
+
+Outputs in the results folder (`io.OutputDir`: never over earlier results):
+
+    results.csv     one row per grid point (grid order, last axis fastest): every
+                    parameter in SI with its unit in the name (clearance_m,
+                    k_per_Pa, mu), then every output (named with its unit)
+    results.npz     the same columns, plus axis_<name> (SI) and grid_shape
+    results.nc      NetCDF-3 (dimensions = grid axes), only if SciPy is
+                    installed (extra ``diffwear[netcdf]``); skipped otherwise
+    <output>.png    heatmap over a 2-D grid, line plot over a 1-D grid (none for
+                    3-D and more: use the tables)
+    summary.json    settings, axes, per-output min/max and where, failed points,
+                    timing (written last: marks a finished run)
+    report.md       what was run and what came out, linking the rest
+    input.toml      copy of the sweep file
+
+A point failed if an output is not finite or its ``status`` (rig wear) is 2
+(solver failure).  Failed points stay in the tables (NaN / status); the run
+then ends with `SolverError` (CLI exit 3) after writing everything.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ..config.sweep import SweepSpec
+from ..config.units import DIMENSIONS, key_suffix
+from ..errors import SolverError
+from ..io import OutputDir
+from .result import SweepResult
+from .runner import sweep
+
+SKIP_PLOTS = ("status",)
+
+
+def column_name(spec: SweepSpec, name: str) -> str:
+    """``clearance`` -> ``clearance_m``: an input column named with its SI unit."""
+    field = spec.params[name].field
+    dim = getattr(field, "dimension", None)
+    return name if dim is None else f"{name}_{key_suffix(DIMENSIONS[dim].si)}"
+
+
+def label(spec: SweepSpec, name: str) -> str:
+    p = spec.params[name]
+    return f"{name} [{p.display_unit}]" if p.display_unit else name
+
+
+def shown(spec: SweepSpec, name: str, values):
+    return np.asarray(values, dtype=float) * spec.params[name].display_scale
+
+
+def failed_points(res: SweepResult) -> np.ndarray:
+    bad = np.zeros(len(res), dtype=bool)
+    for col in res.outputs.values():
+        bad |= ~np.isfinite(col)
+    if "status" in res.outputs:
+        bad |= res.outputs["status"] == 2
+    return np.flatnonzero(bad)
+
+
+def run(spec: SweepSpec, out: OutputDir, *, chunk_size: int | None = None, client=None,
+        input_text: str | None = None, log=print) -> dict:
+    """Run the sweep (locally, or on the Dask ``client``) and write every output."""
+    started = time.perf_counter()
+    chunk = chunk_size if chunk_size is not None else spec.chunk_size
+    axes = ", ".join(f"{k} x {v.size}" for k, v in spec.grid.items())
+    where = "on the Dask cluster" if client is not None else "locally"
+    log(f"[sweep] {spec.model_name}: {spec.points} points ({axes}) {where}, "
+        f"chunk size {chunk or 'all'}")
+    if client is None:
+        res = sweep(spec.model, spec.base, spec.grid, chunk_size=chunk)
+    else:
+        from .distributed import sweep_distributed
+
+        res = sweep_distributed(spec.model, spec.base, spec.grid, client=client, chunk_size=chunk)
+    wall = time.perf_counter() - started
+    log(f"[sweep] done: compile {res.info['compile_s']:.1f} s, run {res.info['run_s']:.1f} s")
+    return write(spec, res, out, input_text=input_text, wall_s=wall)
+
+
+def write(spec: SweepSpec, res: SweepResult, out: OutputDir, *, input_text=None,
+          wall_s: float = math.nan) -> dict:
+    if input_text is not None:
+        out.text("input.toml", input_text)
+    cols = {column_name(spec, k): v for k, v in res.inputs.items()}
+    cols |= res.outputs
+    out.csv("results.csv", cols, fmt="%.17g")
+    np.savez(out.file("results.npz"), grid_shape=np.asarray(res.grid_shape),
+             **{f"axis_{k}": res.axis(k) for k in res.grid_names}, **cols)
+    netcdf = _netcdf(spec, res, out)
+
+    figures = _figures(spec, res, out)
+    bad = failed_points(res)
+    outputs = {}
+    for k, col in res.outputs.items():
+        ok = np.isfinite(col)
+        if not ok.any():
+            outputs[k] = {"min": None, "max": None}
+            continue
+        i_min = int(np.flatnonzero(ok)[np.argmin(col[ok])])
+        i_max = int(np.flatnonzero(ok)[np.argmax(col[ok])])
+        outputs[k] = {"min": float(col[i_min]), "max": float(col[i_max]),
+                      "argmin": {g: float(res[g][i_min]) for g in res.grid_names},
+                      "argmax": {g: float(res[g][i_max]) for g in res.grid_names}}
+    info = res.info
+    summary = {
+        "file": spec.file, "title": spec.title, "model": spec.model_name,
+        "settings": spec.settings,
+        "base_si": {column_name(spec, k): v for k, v in spec.base.items()
+                    if k not in spec.grid},
+        "grid_si": {column_name(spec, k): v.tolist() for k, v in spec.grid.items()},
+        "grid_shape": list(res.grid_shape), "points": len(res),
+        "outputs": outputs,
+        "failed_points": [int(i) for i in bad],
+        "compile_s": info.get("compile_s"), "run_s": info.get("run_s"),
+        "points_per_s": len(res) / info["run_s"] if info.get("run_s") else None,
+        "chunk_size": info.get("chunk_size"), "devices": info.get("devices"),
+        "workers": info.get("workers"), "wall_time_s": wall_s,
+        "netcdf": netcdf,
+    }
+    out.text("report.md", _report(spec, res, summary, figures))
+    summary["files"] = [*out.files, "summary.json"]
+    out.json("summary.json", summary)
+    if bad.size:
+        first = [{g: float(res[g][i]) for g in res.grid_names} for i in bad[:3]]
+        raise SolverError(f"{spec.file}: {bad.size} of {len(res)} sweep points failed (outputs "
+                          f"not finite or status 2), e.g. {first}; every result is in "
+                          f"{out.path}/results.csv")
+    return summary
+
+
+def _netcdf(spec: SweepSpec, res: SweepResult, out: OutputDir) -> str:
+    try:
+        from scipy.io import netcdf_file
+    except ImportError:
+        return "not written: SciPy is not installed (pip install 'diffwear[netcdf]')"
+    with netcdf_file(out.file("results.nc"), "w") as nc:
+        nc.title = spec.title or spec.file
+        nc.model = spec.model_name
+        for name in res.grid_names:
+            nc.createDimension(name, res.axis(name).size)
+            var = nc.createVariable(name, "d", (name,))
+            var[:] = res.axis(name)
+            var.units = column_name(spec, name)[len(name) + 1:] or "1"
+        for k, col in res.outputs.items():
+            var = nc.createVariable(k, "d", tuple(res.grid_names))
+            var[:] = res.grid(k)
+        for k, v in spec.base.items():
+            if k not in spec.grid:
+                setattr(nc, f"base_{column_name(spec, k)}", float(v))
+    return "results.nc"
+
+
+def _figures(spec: SweepSpec, res: SweepResult, out: OutputDir) -> list[str]:
+    from .. import plots  # noqa: F401  (Agg backend)
+    import matplotlib.pyplot as plt
+
+    names = [k for k in res.outputs if k not in SKIP_PLOTS]
+    files = []
+    if len(res.grid_names) == 1:
+        (g,) = res.grid_names
+        x = shown(spec, g, res.axis(g))
+        for k in names:
+            fig, ax = plt.subplots(figsize=(6, 3.6))
+            ax.plot(x, res.grid(k), "o-")
+            ax.set_xlabel(label(spec, g))
+            ax.set_ylabel(k)
+            ax.grid(alpha=0.3)
+            if _geometric(x):
+                ax.set_xscale("log")
+            ax.set_title(f"{spec.title or spec.model_name}: {k}", fontsize=9)
+            fig.tight_layout()
+            fig.savefig(out.file(f"{k}.png"), dpi=110)
+            plt.close(fig)
+            files.append(f"{k}.png")
+    elif len(res.grid_names) == 2:
+        gy, gx = res.grid_names
+        x, y = shown(spec, gx, res.axis(gx)), shown(spec, gy, res.axis(gy))
+        for k in names:
+            files.append(heatmap(out.file(f"{k}.png"), x, y, res.grid(k), xlabel=label(spec, gx),
+                                 ylabel=label(spec, gy), title=f"{spec.title or spec.model_name}:"
+                                 f" {k}").name)
+    return files
+
+
+def _geometric(v) -> bool:
+    v = np.asarray(v, dtype=float)
+    if v.size < 3 or np.any(v <= 0):
+        return False
+    r = v[1:] / v[:-1]
+    return bool(np.allclose(r, r[0], rtol=1e-6) and not np.isclose(r[0], 1.0))
+
+
+def heatmap(path, x, y, z, *, xlabel: str, ylabel: str, title: str, annotate: bool = True):
+    """Heatmap of z[i, j] at (x[j], y[i]) (cells centred on the values; log axes
+    for geometric grids); values written in the cells up to 10 x 10."""
+    from .. import plots  # noqa: F401  (Agg backend)
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    mesh = ax.pcolormesh(x, y, z, shading="nearest", cmap="viridis")
+    fig.colorbar(mesh, ax=ax)
+    if _geometric(x):
+        ax.set_xscale("log")
+    if _geometric(y):
+        ax.set_yscale("log")
+    if annotate and z.shape[0] <= 10 and z.shape[1] <= 10:
+        for i, yi in enumerate(y):
+            for j, xj in enumerate(x):
+                ax.text(xj, yi, f"{z[i, j]:.3g}", ha="center", va="center", fontsize=7,
+                        color="w")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _report(spec: SweepSpec, res: SweepResult, summary: dict, figures: list[str]) -> str:
+    lines = [f"# sweep: {spec.title or spec.model_name}", "",
+             f"Model `{spec.model_name}` from `{spec.file}`; settings "
+             f"{spec.settings or '(defaults)'}; {len(res)} points "
+             f"({' x '.join(f'{g} {n}' for g, n in zip(res.grid_names, res.grid_shape))}).",
+             "", "| axis | values |", "|---|---|"]
+    for g in res.grid_names:
+        vals = ", ".join(f"{v:.4g}" for v in shown(spec, g, res.axis(g)))
+        lines.append(f"| {label(spec, g)} | {vals} |")
+    lines += ["", "| output | min | max | max at |", "|---|---:|---:|---|"]
+    for k, s in summary["outputs"].items():
+        if s["min"] is None:
+            lines.append(f"| {k} | - | - | - |")
+            continue
+        at = ", ".join(f"{g} = {float(shown(spec, g, v)):.4g}" for g, v in s["argmax"].items())
+        lines.append(f"| {k} | {s['min']:.6g} | {s['max']:.6g} | {at} |")
+    if summary["failed_points"]:
+        lines += ["", f"**{len(summary['failed_points'])} point(s) failed** (indices in "
+                  "summary.json `failed_points`)."]
+    pps = summary["points_per_s"]
+    lines += ["", f"Compile {summary['compile_s']:.1f} s, run {summary['run_s']:.1f} s"
+              + (f" ({pps:.2f} points/s)" if pps else "") + ".", "",
+              "Tables: [results.csv](results.csv), [results.npz](results.npz)"
+              + (", [results.nc](results.nc)" if summary["netcdf"] == "results.nc" else "")
+              + ", [summary.json](summary.json), [input.toml](input.toml)."]
+    if figures:
+        lines += [""] + [f"![{f}]({f})" for f in figures]
+    elif len(res.grid_names) > 2:
+        lines += ["", "No figures for a grid of more than 2 axes: see the tables."]
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["run", "write", "heatmap", "column_name", "failed_points"]

@@ -226,6 +226,138 @@ def vmap_sweep(repeats: int) -> dict:
     return out
 
 
+def _load_peer(name: str):
+    """A peer module from benchmarks/peers/ (not a package: loaded by path)."""
+    import importlib.util
+
+    path = ROOT / "benchmarks" / "peers" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"diffwear_peer_{name}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def rhs_us(mech, y, t=0.3, n: int = 2000, reps: int = 5) -> float:
+    """Microseconds per `vector_field` evaluation of ``mech`` at ``y``: ``n``
+    calls chained inside one jitted fori_loop (no dispatch cost), median of
+    ``reps`` timed calls."""
+    import jax
+    import jax.numpy as jnp
+
+    from diffwear.dynamics.equations import Baumgarte, vector_field
+
+    args = (mech, Baumgarte())
+
+    @jax.jit
+    def loop(y):  # each call depends on the last, so none is hoisted or skipped
+        return jax.lax.fori_loop(0, n, lambda i, acc: acc + 1e-300 * vector_field(t, acc, args), y)
+
+    _, m = time_jitted(loop, (jnp.asarray(y),), reps)
+    return m["run_s"] / n * 1e6
+
+
+SCIPY_DYNAMIC = 10  # wear cycles of the full evolution cross-check (A = 21,400 / 10)
+
+
+def scipy_peer(repeats: int) -> dict:
+    """diffwear against `peers/scipy_rig.py` (the same rig, NumPy + solve_ivp RK45
+    at the same rtol = atol = 1e-6).  Both run the warm-up cycle from the same
+    state, then one wear cycle saving 181 states: joint force and wear increment
+    compared.  Full mode adds the evolution over 21,400 cycles with A = 2,140
+    (10 wear cycles + warm-up) on both, and both solvers' error against a
+    reference cycle at rtol = atol = 1e-10 (equal accuracy)."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.contact import contact_history
+    from diffwear.presets import RIG_CYCLES
+    from diffwear.studies import _wear_common as common
+    from diffwear.studies.rig_21400 import PERIOD, RIG_JOINT, _setup
+    from diffwear.wear import evolve, wear_cycle, worn_volume
+
+    peer = _load_peer("scipy_rig")
+    quick = repeats <= QUICK_REPEATS
+    mech0, mech, y0 = _setup()
+    n_save = 181
+    y0_peer = peer.initial_state()
+    out: dict = {"state_start_max_abs_diff": float(np.abs(np.asarray(y0) - y0_peer).max())}
+
+    cycle = jax.jit(lambda m, y, t0: wear_cycle(m, common.JOINT, y, t0, PERIOD))
+    warm, dw = time_jitted(cycle, (mech, y0, 0.0), repeats)
+    saved = jax.jit(lambda m, y, t0: wear_cycle(m, common.JOINT, y, t0, PERIOD, n_save=n_save))
+    cyc = saved(mech, warm.y_end, PERIOD)
+    f_dw = np.asarray(contact_history(mech, common.JOINT, cyc.ys).force_magnitude)
+
+    rig = peer.Rig()
+    t_start = time.perf_counter()
+    warm_p = peer.wear_cycle(rig, y0_peer, 0.0)
+    peer_cycle_s = time.perf_counter() - t_start
+    t_eval = PERIOD + PERIOD * np.linspace(0.0, 1.0, n_save)
+    t_eval[-1] = 2 * PERIOD  # solve_ivp wants t_eval inside the span, bit for bit
+    sol = peer.wear_cycle(rig, warm_p.y[:, -1], PERIOD, t_eval=t_eval)
+    f_peer = rig.joint_force(sol.y.T)
+    dh_dw, dh_peer = np.asarray(cyc.depth_increment), sol.y[18:18 + peer.N_THETA, -1]
+    peer_attempts = (warm_p.nfev - 2) / 6  # RK45: 6 evaluations per try, 2 to start
+    out.update({
+        "diffwear_cycle_s": dw["run_s"], "diffwear_compile_s": dw["compile_s"],
+        "scipy_cycle_s": peer_cycle_s,
+        "speedup_per_cycle": peer_cycle_s / dw["run_s"],
+        "diffwear_steps_per_cycle": int(warm.num_steps),
+        "scipy_steps_per_cycle": int(round(peer_attempts)),
+        "scipy_accepted_steps_per_cycle": int(warm_p.t.size - 1),
+        "diffwear_us_per_step": dw["run_s"] / int(warm.num_steps) * 1e6,
+        "scipy_us_per_step": peer_cycle_s / peer_attempts * 1e6,
+        "diffwear_us_per_rhs": rhs_us(mech, warm.y_end),
+        "scipy_us_per_rhs": peer.time_rhs(500 if quick else 2000) * 1e6,
+        # agreement of the second cycle (first wear cycle)
+        "force_max_rel_diff": float(np.abs(f_dw - f_peer).max() / np.abs(f_dw).max()),
+        "force_mean_rel_diff": float(abs(f_dw.mean() / f_peer.mean() - 1)),
+        "wear_increment_max_rel_diff": float(np.abs(dh_dw - dh_peer).max() / dh_dw.max()),
+        "load_sliding_rel_diff": float(abs(float(cyc.load_sliding) / sol.y[-1, -1] - 1)),
+        "mean_joint_force_N": float(f_dw[:-1].mean()),
+    })
+    out["ratio_rhs_scipy_to_diffwear"] = out["scipy_us_per_rhs"] / out["diffwear_us_per_rhs"]
+    out.update({"compile_s": dw["compile_s"], "run_s": dw["run_s"],
+                "run_s_per_cycle": dw["run_s"], "integrator_steps": int(warm.num_steps),
+                "us_per_step": out["diffwear_us_per_step"], "repeats": repeats})
+    if quick:
+        return out
+
+    # reference cycle (rtol = atol = 1e-10) for the accuracy of both at 1e-6
+    ref = jax.jit(lambda m, y, t0: wear_cycle(m, common.JOINT, y, t0, PERIOD, rtol=1e-10,
+                                              atol=1e-10))(mech, y0, 0.0)
+    dh_ref = np.asarray(ref.depth_increment)
+    out["diffwear_wear_increment_err_vs_ref"] = float(
+        np.abs(np.asarray(warm.depth_increment) - dh_ref).max() / dh_ref.max())
+    out["scipy_wear_increment_err_vs_ref"] = float(
+        np.abs(warm_p.y[18:18 + peer.N_THETA, -1] - dh_ref).max() / dh_ref.max())
+
+    el = mech.element(common.JOINT)
+    a = RIG_CYCLES / SCIPY_DYNAMIC
+    evo = jax.jit(lambda m, y: evolve(m, common.JOINT, y, RIG_CYCLES, period=PERIOD,
+                                      extrapolation=a, wall_thickness=RIG_JOINT.wall))
+    res, de = time_jitted(evo, (mech, y0), 1)
+    res.check("benchmark scipy-peer evolution")
+    depth_dw = float(res.depth.max()) * 1e3
+    vol_dw = float(worn_volume(res.depth, el.bushing_radius, el.law.depth)) * 1e9
+    t_start = time.perf_counter()
+    ev_p = peer.evolve(RIG_CYCLES, SCIPY_DYNAMIC)
+    peer_evo_s = time.perf_counter() - t_start
+    out.update({
+        "evolution_dynamic_cycles": SCIPY_DYNAMIC + 1,
+        "diffwear_evolution_s": de["run_s"], "scipy_evolution_s": peer_evo_s,
+        "speedup_evolution": peer_evo_s / de["run_s"],
+        "scipy_cycle_s_median": float(np.median(ev_p["cycle_s"])),
+        "diffwear_max_depth_mm": depth_dw, "scipy_max_depth_mm": ev_p["max_depth_mm"],
+        "diffwear_volume_mm3": vol_dw, "scipy_volume_mm3": ev_p["volume_mm3"],
+        "max_depth_rel_diff": abs(depth_dw / ev_p["max_depth_mm"] - 1),
+        "volume_rel_diff": abs(vol_dw / ev_p["volume_mm3"] - 1),
+    })
+    out["speedup_per_cycle"] = out["scipy_cycle_s_median"] / dw["run_s"]
+    return out
+
+
 def ch8_optimisation(repeats: int) -> dict:
     """Thesis Ch. 8 design optimisation, owned by `diffwear.design`: the case
     calls ``diffwear.design.benchmark_case(quick)`` (quick when ``repeats`` is
@@ -248,6 +380,7 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig-21400 (constant A)": rig_21400,
     "vmap sweep 64 points vs 64 single runs": vmap_sweep,
     "ch8-optimisation": ch8_optimisation,
+    "scipy-peer": scipy_peer,
 }
 
 
@@ -304,6 +437,7 @@ COLUMNS = (  # metric key, header, format
     ("run_s_per_cycle", "run per dynamic cycle [s]", "{:.3f}"),
     ("points_per_s_unordered", "sweep points/s", "{:.1f}"),
     ("ratio_sweep_unordered_to_single", "sweep / single runs", "{:.2f}"),
+    ("speedup_per_cycle", "peer / diffwear per cycle", "{:.1f}"),
     ("note", "note", "{}"),
 )
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import math
 import os
 import platform
 import statistics
@@ -226,6 +227,151 @@ def vmap_sweep(repeats: int) -> dict:
     return out
 
 
+GRAD_DYNAMIC, GRAD_DYNAMIC_QUICK = 5, 1  # wear cycles (+1 warm-up) of the gradient case
+GRAD_FD_STEPS = (1e-3, 1e-2)  # relative central-difference steps of the check
+
+
+def rig_gradient(repeats: int) -> dict:
+    """Jacobian of the rig-21400 result (smooth max depth [mm], volume [mm^3];
+    `sweep.models.RigWear` outputs) w.r.t. (k, clearance, depth, diameter),
+    as relative changes p = p0 (1 + x), through warm-up + 5 wear cycles (quick:
+    1) with constant A = 21,400 / 5.  Timed: the forward run; forward mode
+    (`jax.jacfwd`, diffrax ``ForwardMode``: 4 tangents vmapped); one tangent
+    (`jax.jvp`); and (full mode only: its compilation takes ~2 min) reverse mode
+    (`jax.jacrev`, ``RecursiveCheckpointAdjoint``).  Checked against central
+    differences with relative steps 1e-3 and 1e-2.  One timed call each."""
+    import diffrax
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.presets import RIG_CYCLES
+    from diffwear.studies import _wear_common as common
+    from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, _setup, with_wear_joint
+    from diffwear.wear import evolve, smooth_max, worn_volume
+
+    quick = repeats <= QUICK_REPEATS
+    dyn = GRAD_DYNAMIC_QUICK if quick else GRAD_DYNAMIC
+    mech0, _, y0 = _setup()
+    p0 = common.params_of(RIG_JOINT)
+
+    def outputs(adjoint):
+        def f(x):
+            p = p0 * (1.0 + x)
+            m = with_wear_joint(mech0, common.design_of(p, RIG_JOINT), n_theta=N_THETA)
+            r = evolve(m, common.JOINT, y0, RIG_CYCLES, period=PERIOD,
+                       extrapolation=RIG_CYCLES / dyn, wall_thickness=RIG_JOINT.wall,
+                       adjoint=adjoint)
+            el = m.element(common.JOINT)
+            # RigWear's outputs: smooth max (temperature 0.1 um) and volume
+            return jnp.stack([smooth_max(r.depth, 1e-7) * 1e3,
+                              worn_volume(r.depth, el.bushing_radius, el.law.depth) * 1e9])
+        return f
+
+    x0 = jnp.zeros(4)
+    fwd = jax.jit(outputs(None))
+    base, m_fwd = time_jitted(fwd, (x0,), max(repeats, 2))
+    fm = outputs(diffrax.ForwardMode())
+    jac_fwd, m_jf = time_jitted(jax.jit(jax.jacfwd(fm)), (x0,), 1)
+    jvp1 = jax.jit(lambda x: jax.jvp(fm, (x,), (jnp.eye(4)[1],))[1])
+    _, m_j1 = time_jitted(jvp1, (x0,), 1)
+    jac_fwd = np.asarray(jac_fwd)
+    out = {"dynamic_cycles": dyn + 1, "parameters": ["k", "clearance", "depth", "diameter"],
+           "outputs": ["max_depth_mm", "volume_mm3"], "value": np.asarray(base).tolist(),
+           "forward_s": m_fwd["run_s"], "forward_compile_s": m_fwd["compile_s"],
+           "jacfwd_s": m_jf["run_s"], "jacfwd_compile_s": m_jf["compile_s"],
+           "jvp1_s": m_j1["run_s"], "jvp1_compile_s": m_j1["compile_s"],
+           "ratio_jacfwd_to_forward": m_jf["run_s"] / m_fwd["run_s"],
+           "ratio_jvp1_to_forward": m_j1["run_s"] / m_fwd["run_s"],
+           "jacobian_fwd": jac_fwd.tolist()}
+    if not quick:
+        jac_rev, m_jr = time_jitted(jax.jit(jax.jacrev(outputs(None))), (x0,), 1)
+        jac_rev = np.asarray(jac_rev)
+        out.update({"jacrev_s": m_jr["run_s"], "jacrev_compile_s": m_jr["compile_s"],
+                    "ratio_jacrev_to_forward": m_jr["run_s"] / m_fwd["run_s"],
+                    "jacobian_rev": jac_rev.tolist(),
+                    "max_rel_diff_fwd_vs_rev": float(
+                        np.max(np.abs(jac_fwd - jac_rev)) / np.max(np.abs(jac_fwd)))})
+    # central differences; per output, relative to that output's largest entry
+    scale = np.abs(jac_fwd).max(axis=1, keepdims=True)
+    for h in GRAD_FD_STEPS:
+        fd = np.stack([(np.asarray(fwd(x0.at[i].set(h))) - np.asarray(fwd(x0.at[i].set(-h))))
+                       / (2 * h) for i in range(4)], axis=1)
+        out[f"jacobian_fd_{h:g}"] = fd.tolist()
+        out[f"max_rel_diff_fwd_vs_fd_{h:g}"] = float(np.max(np.abs(jac_fwd - fd) / scale))
+        # entry by entry (relative to each entry): the clearance entries are the worst
+        out[f"max_entry_rel_diff_fwd_vs_fd_{h:g}"] = float(np.max(np.abs(jac_fwd / fd - 1)))
+        if "jacobian_rev" in out:
+            out[f"max_entry_rel_diff_rev_vs_fd_{h:g}"] = float(
+                np.max(np.abs(np.asarray(out["jacobian_rev"]) / fd - 1)))
+    out.update({"compile_s": m_jf["compile_s"], "run_s": m_jf["run_s"],
+                "ratio_gradient_to_forward": m_jf["run_s"] / m_fwd["run_s"],
+                "repeats": 1})
+    return out
+
+
+# Stability boundary of Tsit5 / Dormand-Prince 5(4) along the negative real axis
+# (Hairer & Wanner, Solving ODEs II, Fig. IV.2.1: ~3.3; the imaginary-axis
+# extent is similar): an explicit step needs dt <= 3.3 / |lambda|.
+EXPLICIT_STABILITY_RADIUS = 3.3
+
+
+def rig_profile(repeats: int) -> dict:
+    """Where a rig wear cycle's time goes (one cycle after the warm-up, the
+    wear-cycle settings: Tsit5, PID 0.3/0.4, rtol = atol = 1e-6): accepted and
+    rejected steps, time per step and per `vector_field` call, the share of the
+    time spent in the RHS (6 calls per Tsit5 step), the EFM contact frequency
+    sqrt(k_contact / m) / 2 pi (k_contact: half-circle EFM stiffness; m: the
+    rod mass, diffwear's damping mass), and the explicit-stability floor on the
+    steps: the largest |eigenvalue| of d(vector_field)/dy at 73 states over the
+    cycle, integrated as sum |lambda_max| dt / 3.3."""
+    import diffrax
+    import jax
+    import numpy as np
+
+    from diffwear.dynamics import simulate
+    from diffwear.dynamics.equations import Baumgarte, vector_field
+    from diffwear.studies import _wear_common as common
+    from diffwear.studies.rig_21400 import PERIOD, _setup
+    from diffwear.wear.cycle import CYCLE_ATOL, CYCLE_RTOL
+
+    mech0, mech, y0 = _setup()
+    ctrl = diffrax.PIDController(rtol=CYCLE_RTOL, atol=CYCLE_ATOL, pcoeff=0.3, icoeff=0.4)
+    n_save = 73
+    fn = jax.jit(lambda m, y, t0: simulate(
+        m, y, t0 + PERIOD, t0=t0, ts=t0 + PERIOD * jax.numpy.linspace(0.0, 1.0, n_save),
+        stepsize_controller=ctrl))
+    warm = fn(mech, y0, 0.0)
+    traj, m = time_jitted(fn, (mech, warm.y_final, PERIOD), repeats)
+    traj.raise_if_failed("benchmark rig profile", mech)
+    steps, acc, rej = int(traj.num_steps), int(traj.num_accepted_steps), int(traj.num_rejected_steps)
+    us_rhs = rhs_us(mech, traj.y_final)
+
+    jac = jax.jit(jax.vmap(jax.jacfwd(lambda t, y: vector_field(t, y, (mech, Baumgarte())),
+                                      argnums=1)))(traj.ts, traj.ys)
+    lam_max = np.array([np.abs(np.linalg.eigvals(j)).max() for j in np.asarray(jac)])
+    dt = PERIOD / (n_save - 1)
+    floor_steps = float(np.sum(0.5 * (lam_max[1:] + lam_max[:-1])) * dt
+                        / EXPLICIT_STABILITY_RADIUS)
+    el = mech.element(common.JOINT)
+    k_c = float(el.law.contact_stiffness(el.bushing_radius))
+    m_rod = float(next(b.mass for b in mech.bodies if b.name == "rod"))
+    return {
+        "simulated_s": PERIOD, **m, "integrator_steps": steps, "accepted_steps": acc,
+        "rejected_steps": rej, "us_per_step": m["run_s"] / steps * 1e6,
+        "us_per_rhs": us_rhs, "rhs_share": 6 * steps * us_rhs * 1e-6 / m["run_s"],
+        "contact_stiffness_N_per_m": k_c,
+        "contact_frequency_Hz": math.sqrt(k_c / m_rod) / (2 * math.pi),
+        "dt_stable_contact_s": EXPLICIT_STABILITY_RADIUS / math.sqrt(k_c / m_rod),
+        "steps_floor_contact_formula": PERIOD * math.sqrt(k_c / m_rod) / EXPLICIT_STABILITY_RADIUS,
+        "lambda_max_over_cycle": [float(lam_max.min()), float(np.median(lam_max)),
+                                  float(lam_max.max())],
+        "steps_floor_eigenvalues": floor_steps,
+        "accepted_over_floor": acc / floor_steps,
+        "repeats": repeats,
+    }
+
+
 def _load_peer(name: str):
     """A peer module from benchmarks/peers/ (not a package: loaded by path)."""
     import importlib.util
@@ -379,6 +525,8 @@ CASES: dict[str, Callable[[int], dict]] = {
        for law in ("ln", "kv", "efm") for c in (0.0005, 0.05, 0.5, 5.0)},
     "rig-21400 (constant A)": rig_21400,
     "vmap sweep 64 points vs 64 single runs": vmap_sweep,
+    "rig-21400 gradient (4 parameters)": rig_gradient,
+    "rig cycle profile": rig_profile,
     "ch8-optimisation": ch8_optimisation,
     "scipy-peer": scipy_peer,
 }
@@ -437,6 +585,7 @@ COLUMNS = (  # metric key, header, format
     ("run_s_per_cycle", "run per dynamic cycle [s]", "{:.3f}"),
     ("points_per_s_unordered", "sweep points/s", "{:.1f}"),
     ("ratio_sweep_unordered_to_single", "sweep / single runs", "{:.2f}"),
+    ("ratio_gradient_to_forward", "gradient / forward", "{:.1f}"),
     ("speedup_per_cycle", "peer / diffwear per cycle", "{:.1f}"),
     ("note", "note", "{}"),
 )

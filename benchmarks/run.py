@@ -227,15 +227,19 @@ def vmap_sweep(repeats: int) -> dict:
     return out
 
 
-GRAD_DYNAMIC, GRAD_DYNAMIC_QUICK = 5, 1  # wear cycles (+1 warm-up) of the gradient case
+# Wear cycles (+1 warm-up) of the gradient case.  Not 5 (A = 4,280): that
+# evolution is unconverged (max depth 0.74 mm against 0.58 at A = 2,140) and not
+# smooth in the parameters - central differences at steps 1e-3 and 1e-2 differ
+# by up to 20x there, so no gradient can be checked (measured at commit c371919).
+GRAD_DYNAMIC, GRAD_DYNAMIC_QUICK = 10, 1
 GRAD_FD_STEPS = (1e-3, 1e-2)  # relative central-difference steps of the check
 
 
 def rig_gradient(repeats: int) -> dict:
     """Jacobian of the rig-21400 result (smooth max depth [mm], volume [mm^3];
     `sweep.models.RigWear` outputs) w.r.t. (k, clearance, depth, diameter),
-    as relative changes p = p0 (1 + x), through warm-up + 5 wear cycles (quick:
-    1) with constant A = 21,400 / 5.  Timed: the forward run; forward mode
+    as relative changes p = p0 (1 + x), through warm-up + 10 wear cycles (quick:
+    1) with constant A = 21,400 / 10.  Timed: the forward run; forward mode
     (`jax.jacfwd`, diffrax ``ForwardMode``: 4 tangents vmapped); one tangent
     (`jax.jvp`); and (full mode only: its compilation takes ~2 min) reverse mode
     (`jax.jacrev`, ``RecursiveCheckpointAdjoint``).  Checked against central

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import math
 import os
 import platform
 import statistics
@@ -226,12 +227,312 @@ def vmap_sweep(repeats: int) -> dict:
     return out
 
 
+# Wear cycles (+1 warm-up) of the gradient case.  Not 5 (A = 4,280): that
+# evolution is unconverged (max depth 0.74 mm against 0.58 at A = 2,140) and not
+# smooth in the parameters - central differences at steps 1e-3 and 1e-2 differ
+# by up to 20x there, so no gradient can be checked (measured at commit c371919).
+GRAD_DYNAMIC, GRAD_DYNAMIC_QUICK = 10, 1
+GRAD_FD_STEPS = (1e-3, 1e-2)  # relative central-difference steps of the check
+
+
+def rig_gradient(repeats: int) -> dict:
+    """Jacobian of the rig-21400 result (smooth max depth [mm], volume [mm^3];
+    `sweep.models.RigWear` outputs) w.r.t. (k, clearance, depth, diameter),
+    as relative changes p = p0 (1 + x), through warm-up + 10 wear cycles (quick:
+    1) with constant A = 21,400 / 10.  Timed: the forward run; forward mode
+    (`jax.jacfwd`, diffrax ``ForwardMode``: 4 tangents vmapped); one tangent
+    (`jax.jvp`); and (full mode only: its compilation takes ~2 min) reverse mode
+    (`jax.jacrev`, ``RecursiveCheckpointAdjoint``).  Checked against central
+    differences with relative steps 1e-3 and 1e-2.  One timed call each."""
+    import diffrax
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.presets import RIG_CYCLES
+    from diffwear.studies import _wear_common as common
+    from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, _setup, with_wear_joint
+    from diffwear.wear import evolve, smooth_max, worn_volume
+
+    quick = repeats <= QUICK_REPEATS
+    dyn = GRAD_DYNAMIC_QUICK if quick else GRAD_DYNAMIC
+    mech0, _, y0 = _setup()
+    p0 = common.params_of(RIG_JOINT)
+
+    def outputs(adjoint):
+        def f(x):
+            p = p0 * (1.0 + x)
+            m = with_wear_joint(mech0, common.design_of(p, RIG_JOINT), n_theta=N_THETA)
+            r = evolve(m, common.JOINT, y0, RIG_CYCLES, period=PERIOD,
+                       extrapolation=RIG_CYCLES / dyn, wall_thickness=RIG_JOINT.wall,
+                       adjoint=adjoint)
+            el = m.element(common.JOINT)
+            # RigWear's outputs: smooth max (temperature 0.1 um) and volume
+            return jnp.stack([smooth_max(r.depth, 1e-7) * 1e3,
+                              worn_volume(r.depth, el.bushing_radius, el.law.depth) * 1e9])
+        return f
+
+    x0 = jnp.zeros(4)
+    fwd = jax.jit(outputs(None))
+    base, m_fwd = time_jitted(fwd, (x0,), max(repeats, 2))
+    fm = outputs(diffrax.ForwardMode())
+    jac_fwd, m_jf = time_jitted(jax.jit(jax.jacfwd(fm)), (x0,), 1)
+    jvp1 = jax.jit(lambda x: jax.jvp(fm, (x,), (jnp.eye(4)[1],))[1])
+    _, m_j1 = time_jitted(jvp1, (x0,), 1)
+    jac_fwd = np.asarray(jac_fwd)
+    out = {"dynamic_cycles": dyn + 1, "parameters": ["k", "clearance", "depth", "diameter"],
+           "outputs": ["max_depth_mm", "volume_mm3"], "value": np.asarray(base).tolist(),
+           "forward_s": m_fwd["run_s"], "forward_compile_s": m_fwd["compile_s"],
+           "jacfwd_s": m_jf["run_s"], "jacfwd_compile_s": m_jf["compile_s"],
+           "jvp1_s": m_j1["run_s"], "jvp1_compile_s": m_j1["compile_s"],
+           "ratio_jacfwd_to_forward": m_jf["run_s"] / m_fwd["run_s"],
+           "ratio_jvp1_to_forward": m_j1["run_s"] / m_fwd["run_s"],
+           "jacobian_fwd": jac_fwd.tolist()}
+    if not quick:
+        jac_rev, m_jr = time_jitted(jax.jit(jax.jacrev(outputs(None))), (x0,), 1)
+        jac_rev = np.asarray(jac_rev)
+        out.update({"jacrev_s": m_jr["run_s"], "jacrev_compile_s": m_jr["compile_s"],
+                    "ratio_jacrev_to_forward": m_jr["run_s"] / m_fwd["run_s"],
+                    "jacobian_rev": jac_rev.tolist(),
+                    "max_rel_diff_fwd_vs_rev": float(
+                        np.max(np.abs(jac_fwd - jac_rev)) / np.max(np.abs(jac_fwd)))})
+    # central differences; per output, relative to that output's largest entry
+    scale = np.abs(jac_fwd).max(axis=1, keepdims=True)
+    for h in GRAD_FD_STEPS:
+        fd = np.stack([(np.asarray(fwd(x0.at[i].set(h))) - np.asarray(fwd(x0.at[i].set(-h))))
+                       / (2 * h) for i in range(4)], axis=1)
+        out[f"jacobian_fd_{h:g}"] = fd.tolist()
+        out[f"max_rel_diff_fwd_vs_fd_{h:g}"] = float(np.max(np.abs(jac_fwd - fd) / scale))
+        # entry by entry (relative to each entry): the clearance entries are the worst
+        out[f"max_entry_rel_diff_fwd_vs_fd_{h:g}"] = float(np.max(np.abs(jac_fwd / fd - 1)))
+        if "jacobian_rev" in out:
+            out[f"max_entry_rel_diff_rev_vs_fd_{h:g}"] = float(
+                np.max(np.abs(np.asarray(out["jacobian_rev"]) / fd - 1)))
+    out.update({"compile_s": m_jf["compile_s"], "run_s": m_jf["run_s"],
+                "ratio_gradient_to_forward": m_jf["run_s"] / m_fwd["run_s"],
+                "repeats": 1})
+    return out
+
+
+# Stability boundary of Tsit5 / Dormand-Prince 5(4) along the negative real axis
+# (Hairer & Wanner, Solving ODEs II, Fig. IV.2.1: ~3.3; the imaginary-axis
+# extent is similar): an explicit step needs dt <= 3.3 / |lambda|.
+EXPLICIT_STABILITY_RADIUS = 3.3
+
+
+def rig_profile(repeats: int) -> dict:
+    """Where a rig wear cycle's time goes (one cycle after the warm-up, the
+    wear-cycle settings: Tsit5, PID 0.3/0.4, rtol = atol = 1e-6): accepted and
+    rejected steps, time per step and per `vector_field` call, the share of the
+    time spent in the RHS (6 calls per Tsit5 step), the EFM contact frequency
+    sqrt(k_contact / m) / 2 pi (k_contact: half-circle EFM stiffness; m: the
+    rod mass, diffwear's damping mass), and the explicit-stability floor on the
+    steps: the largest |eigenvalue| of d(vector_field)/dy at 73 states over the
+    cycle, integrated as sum |lambda_max| dt / 3.3."""
+    import diffrax
+    import jax
+    import numpy as np
+
+    from diffwear.dynamics import simulate
+    from diffwear.dynamics.equations import Baumgarte, vector_field
+    from diffwear.studies import _wear_common as common
+    from diffwear.studies.rig_21400 import PERIOD, _setup
+    from diffwear.wear.cycle import CYCLE_ATOL, CYCLE_RTOL
+
+    mech0, mech, y0 = _setup()
+    ctrl = diffrax.PIDController(rtol=CYCLE_RTOL, atol=CYCLE_ATOL, pcoeff=0.3, icoeff=0.4)
+    n_save = 73
+    fn = jax.jit(lambda m, y, t0: simulate(
+        m, y, t0 + PERIOD, t0=t0, ts=t0 + PERIOD * jax.numpy.linspace(0.0, 1.0, n_save),
+        stepsize_controller=ctrl))
+    warm = fn(mech, y0, 0.0)
+    traj, m = time_jitted(fn, (mech, warm.y_final, PERIOD), repeats)
+    traj.raise_if_failed("benchmark rig profile", mech)
+    steps, acc, rej = int(traj.num_steps), int(traj.num_accepted_steps), int(traj.num_rejected_steps)
+    us_rhs = rhs_us(mech, traj.y_final)
+
+    jac = jax.jit(jax.vmap(jax.jacfwd(lambda t, y: vector_field(t, y, (mech, Baumgarte())),
+                                      argnums=1)))(traj.ts, traj.ys)
+    lam_max = np.array([np.abs(np.linalg.eigvals(j)).max() for j in np.asarray(jac)])
+    dt = PERIOD / (n_save - 1)
+    floor_steps = float(np.sum(0.5 * (lam_max[1:] + lam_max[:-1])) * dt
+                        / EXPLICIT_STABILITY_RADIUS)
+    el = mech.element(common.JOINT)
+    k_c = float(el.law.contact_stiffness(el.bushing_radius))
+    m_rod = float(next(b.mass for b in mech.bodies if b.name == "rod"))
+    return {
+        "simulated_s": PERIOD, **m, "integrator_steps": steps, "accepted_steps": acc,
+        "rejected_steps": rej, "us_per_step": m["run_s"] / steps * 1e6,
+        "us_per_rhs": us_rhs, "rhs_share": 6 * steps * us_rhs * 1e-6 / m["run_s"],
+        "contact_stiffness_N_per_m": k_c,
+        "contact_frequency_Hz": math.sqrt(k_c / m_rod) / (2 * math.pi),
+        "dt_stable_contact_s": EXPLICIT_STABILITY_RADIUS / math.sqrt(k_c / m_rod),
+        "steps_floor_contact_formula": PERIOD * math.sqrt(k_c / m_rod) / EXPLICIT_STABILITY_RADIUS,
+        "lambda_max_over_cycle": [float(lam_max.min()), float(np.median(lam_max)),
+                                  float(lam_max.max())],
+        "steps_floor_eigenvalues": floor_steps,
+        "accepted_over_floor": acc / floor_steps,
+        "repeats": repeats,
+    }
+
+
+def _load_peer(name: str):
+    """A peer module from benchmarks/peers/ (not a package: loaded by path)."""
+    import importlib.util
+
+    path = ROOT / "benchmarks" / "peers" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"diffwear_peer_{name}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def rhs_us(mech, y, t=0.3, n: int = 2000, reps: int = 5) -> float:
+    """Microseconds per `vector_field` evaluation of ``mech`` at ``y``: ``n``
+    calls chained inside one jitted fori_loop (no dispatch cost), median of
+    ``reps`` timed calls."""
+    import jax
+    import jax.numpy as jnp
+
+    from diffwear.dynamics.equations import Baumgarte, vector_field
+
+    args = (mech, Baumgarte())
+
+    @jax.jit
+    def loop(y):  # each call depends on the last, so none is hoisted or skipped
+        return jax.lax.fori_loop(0, n, lambda i, acc: acc + 1e-300 * vector_field(t, acc, args), y)
+
+    _, m = time_jitted(loop, (jnp.asarray(y),), reps)
+    return m["run_s"] / n * 1e6
+
+
+SCIPY_DYNAMIC = 10  # wear cycles of the full evolution cross-check (A = 21,400 / 10)
+
+
+def scipy_peer(repeats: int) -> dict:
+    """diffwear against `peers/scipy_rig.py` (the same rig, NumPy + solve_ivp RK45
+    at the same rtol = atol = 1e-6).  Both run the warm-up cycle from the same
+    state, then one wear cycle saving 181 states: joint force and wear increment
+    compared.  Full mode adds the evolution over 21,400 cycles with A = 2,140
+    (10 wear cycles + warm-up) on both, and both solvers' error against a
+    reference cycle at rtol = atol = 1e-10 (equal accuracy)."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.contact import contact_history
+    from diffwear.presets import RIG_CYCLES
+    from diffwear.studies import _wear_common as common
+    from diffwear.studies.rig_21400 import PERIOD, RIG_JOINT, _setup
+    from diffwear.wear import evolve, wear_cycle, worn_volume
+
+    peer = _load_peer("scipy_rig")
+    quick = repeats <= QUICK_REPEATS
+    mech0, mech, y0 = _setup()
+    n_save = 181
+    y0_peer = peer.initial_state()
+    out: dict = {"state_start_max_abs_diff": float(np.abs(np.asarray(y0) - y0_peer).max())}
+
+    cycle = jax.jit(lambda m, y, t0: wear_cycle(m, common.JOINT, y, t0, PERIOD))
+    warm, dw = time_jitted(cycle, (mech, y0, 0.0), repeats)
+    saved = jax.jit(lambda m, y, t0: wear_cycle(m, common.JOINT, y, t0, PERIOD, n_save=n_save))
+    cyc = saved(mech, warm.y_end, PERIOD)
+    f_dw = np.asarray(contact_history(mech, common.JOINT, cyc.ys).force_magnitude)
+
+    rig = peer.Rig()
+    t_start = time.perf_counter()
+    warm_p = peer.wear_cycle(rig, y0_peer, 0.0)
+    peer_cycle_s = time.perf_counter() - t_start
+    t_eval = PERIOD + PERIOD * np.linspace(0.0, 1.0, n_save)
+    t_eval[-1] = 2 * PERIOD  # solve_ivp wants t_eval inside the span, bit for bit
+    sol = peer.wear_cycle(rig, warm_p.y[:, -1], PERIOD, t_eval=t_eval)
+    f_peer = rig.joint_force(sol.y.T)
+    dh_dw, dh_peer = np.asarray(cyc.depth_increment), sol.y[18:18 + peer.N_THETA, -1]
+    peer_attempts = (warm_p.nfev - 2) / 6  # RK45: 6 evaluations per try, 2 to start
+    out.update({
+        "diffwear_cycle_s": dw["run_s"], "diffwear_compile_s": dw["compile_s"],
+        "scipy_cycle_s": peer_cycle_s,
+        "speedup_per_cycle": peer_cycle_s / dw["run_s"],
+        "diffwear_steps_per_cycle": int(warm.num_steps),
+        "scipy_steps_per_cycle": int(round(peer_attempts)),
+        "scipy_accepted_steps_per_cycle": int(warm_p.t.size - 1),
+        "diffwear_us_per_step": dw["run_s"] / int(warm.num_steps) * 1e6,
+        "scipy_us_per_step": peer_cycle_s / peer_attempts * 1e6,
+        "diffwear_us_per_rhs": rhs_us(mech, warm.y_end),
+        "scipy_us_per_rhs": peer.time_rhs(500 if quick else 2000) * 1e6,
+        # agreement of the second cycle (first wear cycle)
+        "force_max_rel_diff": float(np.abs(f_dw - f_peer).max() / np.abs(f_dw).max()),
+        "force_mean_rel_diff": float(abs(f_dw.mean() / f_peer.mean() - 1)),
+        "wear_increment_max_rel_diff": float(np.abs(dh_dw - dh_peer).max() / dh_dw.max()),
+        "load_sliding_rel_diff": float(abs(float(cyc.load_sliding) / sol.y[-1, -1] - 1)),
+        "mean_joint_force_N": float(f_dw[:-1].mean()),
+    })
+    out["ratio_rhs_scipy_to_diffwear"] = out["scipy_us_per_rhs"] / out["diffwear_us_per_rhs"]
+    out.update({"compile_s": dw["compile_s"], "run_s": dw["run_s"],
+                "run_s_per_cycle": dw["run_s"], "integrator_steps": int(warm.num_steps),
+                "us_per_step": out["diffwear_us_per_step"], "repeats": repeats})
+    if quick:
+        return out
+
+    # reference cycle (rtol = atol = 1e-10) for the accuracy of both at 1e-6
+    ref = jax.jit(lambda m, y, t0: wear_cycle(m, common.JOINT, y, t0, PERIOD, rtol=1e-10,
+                                              atol=1e-10))(mech, y0, 0.0)
+    dh_ref = np.asarray(ref.depth_increment)
+    out["diffwear_wear_increment_err_vs_ref"] = float(
+        np.abs(np.asarray(warm.depth_increment) - dh_ref).max() / dh_ref.max())
+    out["scipy_wear_increment_err_vs_ref"] = float(
+        np.abs(warm_p.y[18:18 + peer.N_THETA, -1] - dh_ref).max() / dh_ref.max())
+
+    el = mech.element(common.JOINT)
+    a = RIG_CYCLES / SCIPY_DYNAMIC
+    evo = jax.jit(lambda m, y: evolve(m, common.JOINT, y, RIG_CYCLES, period=PERIOD,
+                                      extrapolation=a, wall_thickness=RIG_JOINT.wall))
+    res, de = time_jitted(evo, (mech, y0), 1)
+    res.check("benchmark scipy-peer evolution")
+    depth_dw = float(res.depth.max()) * 1e3
+    vol_dw = float(worn_volume(res.depth, el.bushing_radius, el.law.depth)) * 1e9
+    t_start = time.perf_counter()
+    ev_p = peer.evolve(RIG_CYCLES, SCIPY_DYNAMIC)
+    peer_evo_s = time.perf_counter() - t_start
+    out.update({
+        "evolution_dynamic_cycles": SCIPY_DYNAMIC + 1,
+        "diffwear_evolution_s": de["run_s"], "scipy_evolution_s": peer_evo_s,
+        "speedup_evolution": peer_evo_s / de["run_s"],
+        "scipy_cycle_s_median": float(np.median(ev_p["cycle_s"])),
+        "diffwear_max_depth_mm": depth_dw, "scipy_max_depth_mm": ev_p["max_depth_mm"],
+        "diffwear_volume_mm3": vol_dw, "scipy_volume_mm3": ev_p["volume_mm3"],
+        "max_depth_rel_diff": abs(depth_dw / ev_p["max_depth_mm"] - 1),
+        "volume_rel_diff": abs(vol_dw / ev_p["volume_mm3"] - 1),
+    })
+    out["speedup_per_cycle"] = out["scipy_cycle_s_median"] / dw["run_s"]
+    return out
+
+
+def ch8_optimisation(repeats: int) -> dict:
+    """Thesis Ch. 8 design optimisation, owned by `diffwear.design`: the case
+    calls ``diffwear.design.benchmark_case(quick)`` (quick when ``repeats`` is
+    the quick count) and reports ``available: False`` until that module exists."""
+    import importlib
+
+    try:
+        design = importlib.import_module("diffwear.design")
+    except ModuleNotFoundError as err:
+        if err.name not in ("diffwear.design",):
+            raise  # the module exists but one of its imports is broken: say so
+        return {"available": False, "note": "not available (no diffwear.design yet)"}
+    return {"available": True, **design.benchmark_case(quick=repeats <= QUICK_REPEATS)}
+
+
 CASES: dict[str, Callable[[int], dict]] = {
     "ideal slider-crank, 2 s": ideal_slider_crank,
     **{f"clearance cycle, {law.upper()} c={c:g} mm": clearance_cycle(law, c)
        for law in ("ln", "kv", "efm") for c in (0.0005, 0.05, 0.5, 5.0)},
     "rig-21400 (constant A)": rig_21400,
     "vmap sweep 64 points vs 64 single runs": vmap_sweep,
+    "rig-21400 gradient (4 parameters)": rig_gradient,
+    "rig cycle profile": rig_profile,
+    "ch8-optimisation": ch8_optimisation,
+    "scipy-peer": scipy_peer,
 }
 
 
@@ -288,6 +589,9 @@ COLUMNS = (  # metric key, header, format
     ("run_s_per_cycle", "run per dynamic cycle [s]", "{:.3f}"),
     ("points_per_s_unordered", "sweep points/s", "{:.1f}"),
     ("ratio_sweep_unordered_to_single", "sweep / single runs", "{:.2f}"),
+    ("ratio_gradient_to_forward", "gradient / forward", "{:.1f}"),
+    ("speedup_per_cycle", "peer / diffwear per cycle", "{:.1f}"),
+    ("note", "note", "{}"),
 )
 
 

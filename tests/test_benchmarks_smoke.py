@@ -44,3 +44,53 @@ def test_cases_registry_and_unknown_case(bench):
     assert CASE in bench.CASES and all(callable(f) for f in bench.CASES.values())
     with pytest.raises(KeyError, match="unknown benchmark case"):
         bench.run_cases(["no such case"], quick=True, log=lambda *a, **k: None)
+
+
+CI_CASES = ("ideal slider-crank, 2 s", "clearance cycle, EFM c=0.5 mm", "scipy-peer",
+            "ch8-optimisation")
+
+
+def test_quick_benchmark_subprocess_ci_cases(tmp_path):
+    """`benchmarks/run.py --quick` as CI would run it by hand (a subprocess, the
+    cheap cases, ~1 min): the JSON has its keys, the numbers are sane, and the
+    SciPy peer (an independent NumPy implementation of the rig) agrees with
+    diffwear on the joint force and the wear of a cycle."""
+    import subprocess
+    import sys
+
+    target = tmp_path / "ci.json"
+    cmd = [sys.executable, str(RUN_PY), "--quick", "--json", str(target)]
+    for case in CI_CASES:
+        cmd += ["--case", case]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert all(f"| {c} |" in proc.stdout for c in CI_CASES)
+    cases = json.loads(target.read_text())["cases"]
+    assert set(cases) == set(CI_CASES)
+    for name in CI_CASES[:3]:
+        m = cases[name]
+        assert m["integrator_steps"] > 0 and m["compile_s"] >= 0.0, name
+        assert math.isfinite(m["run_s"]) and m["run_s"] > 0.0, name
+
+    peer = cases["scipy-peer"]
+    for key in ("speedup_per_cycle", "ratio_rhs_scipy_to_diffwear", "diffwear_us_per_rhs",
+                "scipy_us_per_rhs", "diffwear_us_per_step", "scipy_us_per_step"):
+        assert math.isfinite(peer[key]) and peer[key] > 0.0, key
+    # same start state (the peer derives it by hand from the geometry at phi1 = 0)
+    assert peer["state_start_max_abs_diff"] < 1e-12
+    # same model and tolerances: the step counts of two 5(4) pairs are close
+    ratio = peer["scipy_steps_per_cycle"] / peer["diffwear_steps_per_cycle"]
+    assert 0.7 < ratio < 1.4, ratio
+    # agreement of the first wear cycle (measured: 2e-3, 1e-5, 1e-7)
+    assert peer["force_max_rel_diff"] < 1e-2
+    assert peer["force_mean_rel_diff"] < 1e-3
+    assert peer["wear_increment_max_rel_diff"] < 1e-3
+    assert peer["load_sliding_rel_diff"] < 1e-4
+    # the rig's mean joint force: 90-170 N of spring force over the stroke
+    # (presets: k_s (1.0 - x3 - L0) with x3 = 0.127..0.279 m)
+    assert 90.0 < peer["mean_joint_force_N"] < 170.0
+
+    ch8 = cases["ch8-optimisation"]
+    assert isinstance(ch8["available"], bool)
+    if not ch8["available"]:
+        assert "not available" in ch8["note"]

@@ -508,6 +508,107 @@ def scipy_peer(repeats: int) -> dict:
     return out
 
 
+EXUDYN_PYTHON_DEFAULT = Path("/work/venv-exudyn/bin/python")
+EXUDYN_STEP = 1e-3  # s, generalized-alpha fixed step of the headline comparison
+EXUDYN_STEPS_FULL = (2e-3, 1e-3, 5e-4)  # full mode: the agreement against the step
+EXUDYN_SAMPLE = 0.01  # s, compared every 4th of diffwear's 801 times: a multiple of each step
+
+
+def exudyn_python() -> str | None:
+    """The interpreter with ``exudyn`` (env ``DIFFWEAR_EXUDYN_PYTHON``, else the
+    project's default venv), or None when it is missing or cannot import exudyn."""
+    exe = os.environ.get("DIFFWEAR_EXUDYN_PYTHON") or (
+        str(EXUDYN_PYTHON_DEFAULT) if EXUDYN_PYTHON_DEFAULT.exists() else None)
+    if not exe:
+        return None
+    try:
+        probe = subprocess.run([exe, "-c", "import exudyn"], capture_output=True, timeout=60)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return exe if probe.returncode == 0 else None
+
+
+def exudyn_peer(repeats: int) -> dict:
+    """diffwear's ideal slider-crank (Table 2-1, 2 s, the `ideal slider-crank`
+    case's settings) against `peers/exudyn_slider_crank.py`, the same mechanism
+    in Exudyn (implicit generalized-alpha, index 3, fixed step ``EXUDYN_STEP``),
+    run as a subprocess with the ``DIFFWEAR_EXUDYN_PYTHON`` interpreter.  Compared
+    at 201 common times (every ``EXUDYN_SAMPLE``, on Exudyn's step grid, so
+    nothing is interpolated): slider x (max |dx| / stroke), crank-rod
+    reaction |F| and driver torque (max difference / peak).  Times: diffwear's
+    median steady run (no compilation) against Exudyn's median solve (model
+    building, ``exudyn_build_s``, apart).  Full mode adds Exudyn at the steps
+    ``EXUDYN_STEPS_FULL``.  Reports ``available: False`` without exudyn."""
+    exe = exudyn_python()
+    if exe is None:
+        return {"available": False,
+                "note": "not available (no exudyn interpreter: set DIFFWEAR_EXUDYN_PYTHON)"}
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.dynamics import along_trajectory, consistent_state, reaction_wrench, simulate
+    from diffwear.presets import TABLE_2_1, slider_crank
+
+    duration, n_save = 2.0, 801
+    mech, q_guess = slider_crank(TABLE_2_1)
+    y0 = consistent_state(mech, q_guess)
+    ts = jnp.linspace(0.0, duration, n_save)
+    sim = jax.jit(lambda m, y: simulate(m, y, duration, ts=ts))
+    traj, dw = time_jitted(sim, (mech, y0), repeats)
+    traj.raise_if_failed("benchmark exudyn-peer")
+    q, _, _ = jax.vmap(mech.split)(traj.ys)
+    _, lam, _ = jax.jit(along_trajectory)(mech, traj.ts, traj.ys)
+    force = jax.vmap(lambda qq, ll, t: reaction_wrench(mech, qq, ll, t, "crank_rod", "rod"))(
+        q, lam, ts)
+    t = np.asarray(ts)
+    x_dw = np.asarray(q[:, 6])
+    f_dw = np.hypot(np.asarray(force[:, 0]), np.asarray(force[:, 1]))
+    torque_dw = np.asarray(lam[:, mech.constraint_rows("driver").start])
+    every = int(round(EXUDYN_SAMPLE / (duration / (n_save - 1))))
+
+    def peer(step: float) -> dict:
+        cmd = [exe, str(ROOT / "benchmarks" / "peers" / "exudyn_slider_crank.py"),
+               "--step", repr(step), "--sample", repr(EXUDYN_SAMPLE),
+               "--repeats", str(repeats)]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+        if proc.returncode != 0:
+            raise RuntimeError(f"exudyn peer failed: {proc.stdout[-2000:]}{proc.stderr[-2000:]}")
+        d = json.loads(proc.stdout)
+        te = np.asarray(d["t"])
+        if te.shape != t[::every].shape or np.abs(te - t[::every]).max() > 1e-9:
+            raise RuntimeError(f"exudyn peer sampled at other times ({te.size} samples)")
+        x_ex, f_ex, tq_ex = (np.asarray(d[k]) for k in ("slider_x", "joint_force", "driver_torque"))
+        x_d, f_d, tq_d = x_dw[::every], f_dw[::every], torque_dw[::every]
+        return {
+            "exudyn_step_s": step, "exudyn_steps": d["steps"],
+            "exudyn_solve_s": d["solve_s"], "exudyn_build_s": d["build_s"],
+            "exudyn_newton_iterations": d["newton_iterations"],
+            "exudyn_spectral_radius": d["spectral_radius"], "exudyn_version": d["exudyn"],
+            "exudyn_driver": d["driver"],
+            "slider_x_max_diff_rel_stroke": float(np.abs(x_d - x_ex).max() / np.ptp(x_dw)),
+            "joint_force_max_rel_diff": float(np.abs(f_d - f_ex).max() / f_dw.max()),
+            "driver_torque_max_rel_diff": float(
+                np.abs(tq_d - tq_ex).max() / np.abs(torque_dw).max()),
+            "exudyn_peak_joint_force_N": float(f_ex.max()),
+        }
+
+    out = {"available": True, **peer(EXUDYN_STEP)}
+    steps = int(traj.num_steps)
+    out.update({
+        "diffwear_run_s": dw["run_s"], "diffwear_compile_s": dw["compile_s"],
+        "diffwear_steps": steps, "peak_joint_force_N": float(f_dw.max()),
+        "ratio_exudyn_to_diffwear": out["exudyn_solve_s"] / dw["run_s"],
+        "simulated_s": duration, "compile_s": dw["compile_s"], "run_s": dw["run_s"],
+        "run_s_per_simulated_s": dw["run_s"] / duration, "integrator_steps": steps,
+        "us_per_step": dw["run_s"] / steps * 1e6, "repeats": repeats,
+    })
+    out["speedup_per_cycle"] = out["ratio_exudyn_to_diffwear"]  # one cycle = the 2 s
+    if repeats > QUICK_REPEATS:
+        out["step_sweep"] = [peer(h) for h in EXUDYN_STEPS_FULL]
+    return out
+
+
 def ch8_optimisation(repeats: int) -> dict:
     """Thesis Ch. 8 design optimisation, owned by `diffwear.design`: the case
     calls ``diffwear.design.benchmark_case(quick)`` (quick when ``repeats`` is
@@ -533,6 +634,7 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig cycle profile": rig_profile,
     "ch8-optimisation": ch8_optimisation,
     "scipy-peer": scipy_peer,
+    "exudyn-peer": exudyn_peer,
 }
 
 

@@ -94,3 +94,31 @@ def test_quick_benchmark_subprocess_ci_cases(tmp_path):
     assert isinstance(ch8["available"], bool)
     if not ch8["available"]:
         assert "not available" in ch8["note"]
+
+
+def test_exudyn_peer_agrees(bench):
+    """The Exudyn peer (benchmarks/peers/exudyn_slider_crank.py, run with the
+    ``DIFFWEAR_EXUDYN_PYTHON`` interpreter) against diffwear's ideal
+    slider-crank; skipped where no interpreter with exudyn is found (CI)."""
+    if bench.exudyn_python() is None:
+        pytest.skip("no exudyn interpreter (set DIFFWEAR_EXUDYN_PYTHON)")
+    m = bench.exudyn_peer(bench.QUICK_REPEATS)
+    assert m["available"] is True
+    assert m["exudyn_step_s"] == bench.EXUDYN_STEP and m["exudyn_steps"] == 2000
+    # measured at h = 1e-3: 1.4e-11 (both hold the position constraints),
+    # 5e-5 of the 1,314 N peak, 1.6e-3 of the torque peak (generalized-alpha's
+    # multipliers converge at first order in h)
+    assert m["slider_x_max_diff_rel_stroke"] < 1e-8
+    assert m["joint_force_max_rel_diff"] < 5e-4
+    assert m["driver_torque_max_rel_diff"] < 5e-3
+    assert abs(m["peak_joint_force_N"] - 1313.5) < 1.0
+    for key in ("exudyn_solve_s", "exudyn_build_s", "diffwear_run_s", "ratio_exudyn_to_diffwear"):
+        assert math.isfinite(m[key]) and m[key] > 0.0, key
+
+
+def test_exudyn_peer_not_available(bench, monkeypatch, tmp_path):
+    """Without an exudyn interpreter the case reports itself unavailable."""
+    monkeypatch.setenv("DIFFWEAR_EXUDYN_PYTHON", str(tmp_path / "no-such-python"))
+    assert bench.exudyn_python() is None
+    m = bench.exudyn_peer(bench.QUICK_REPEATS)
+    assert m == {"available": False, "note": m["note"]} and "not available" in m["note"]

@@ -624,7 +624,63 @@ def exudyn_peer(repeats: int) -> dict:
                 "run_s": m_l["run_s"], "steps": int(tr.num_steps),
                 "joint_force_max_rel_diff_vs_rtol1e-8": float(np.abs(fl - f_dw).max() / f_dw.max()),
                 "ratio_exudyn_to_diffwear": out["exudyn_solve_s"] / m_l["run_s"]}
+        out["clearance_kv_0.5mm"] = exudyn_clearance_kv(exe)
     return out
+
+
+EXUDYN_CLEARANCE_STEP = 2e-4  # s; contact at K = 1.7e7 N/m on the rod: ~170 Hz
+
+
+def exudyn_clearance_kv(exe: str, clearance: float = 0.5e-3) -> dict:
+    """The crank-rod clearance joint (Kelvin-Voigt law, as
+    ``presets.clearance_slider_crank("kv", 0.5e-3)``) in the Exudyn peer (loads
+    with Python user functions; K taken from diffwear's law) against diffwear
+    (Tsit5, PID 0.3/0.4, rtol = atol = 1e-6 as the clearance-sweep study), two
+    cycles from the centred start: peak |F| of the start-up cycle and of the
+    second cycle, the second cycle's mean |F|.  One timed solve each."""
+    import diffrax
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.contact import contact_history
+    from diffwear.dynamics import simulate
+    from diffwear.presets import clearance_slider_crank
+
+    duration, dt = 4.0, EXUDYN_CLEARANCE_STEP
+    mech, y0 = clearance_slider_crank("kv", clearance)
+    stiffness = float(mech.element("crank_rod").law.stiffness)
+    ts = jnp.linspace(0.0, duration, int(round(duration / dt)) + 1)
+    ctrl = diffrax.PIDController(rtol=1e-6, atol=1e-6, pcoeff=0.3, icoeff=0.4)
+    fn = jax.jit(lambda m, y: simulate(m, y, duration, ts=ts, stepsize_controller=ctrl))
+    traj, dw = time_jitted(fn, (mech, y0), 1)
+    traj.raise_if_failed("benchmark exudyn-peer clearance", mech)
+    f_dw = np.asarray(contact_history(mech, "crank_rod", traj.ys).force_magnitude)
+    cmd = [exe, str(ROOT / "benchmarks" / "peers" / "exudyn_slider_crank.py"), "--step", repr(dt),
+           "--sample", repr(dt), "--repeats", "1", "--duration", repr(duration),
+           "--kv-stiffness", repr(stiffness), "--clearance", repr(clearance)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    if proc.returncode != 0:
+        raise RuntimeError(f"exudyn peer (clearance) failed: {proc.stdout[-2000:]}{proc.stderr[-2000:]}")
+    d = json.loads(proc.stdout)
+    t = np.asarray(ts)
+    f_ex = np.interp(t, np.asarray(d["t"]), np.asarray(d["joint_force"]))
+    first, second = t < 2.0, t >= 2.0
+    return {
+        "law": "kv", "clearance_m": clearance, "stiffness_N_per_m": stiffness,
+        "exudyn_step_s": dt, "exudyn_solve_s": d["solve_s"], "diffwear_run_s": dw["run_s"],
+        "diffwear_steps": int(traj.num_steps),
+        "ratio_exudyn_to_diffwear": d["solve_s"] / dw["run_s"],
+        "diffwear_peak_first_cycle_N": float(f_dw[first].max()),
+        "exudyn_peak_first_cycle_N": float(f_ex[first].max()),
+        "diffwear_peak_second_cycle_N": float(f_dw[second].max()),
+        "exudyn_peak_second_cycle_N": float(f_ex[second].max()),
+        "peak_first_cycle_rel_diff": float(abs(f_ex[first].max() / f_dw[first].max() - 1)),
+        "peak_second_cycle_rel_diff": float(abs(f_ex[second].max() / f_dw[second].max() - 1)),
+        "mean_second_cycle_rel_diff": float(abs(f_ex[second].mean() / f_dw[second].mean() - 1)),
+        "max_diff_second_cycle_rel_peak": float(
+            np.abs(f_ex - f_dw)[second].max() / f_dw[second].max()),
+    }
 
 
 def ch8_optimisation(repeats: int) -> dict:

@@ -108,16 +108,17 @@ BUSHING_WALL_CH3 = WEAR_5000_OUTER_RADIUS - 20.005e-3  # m (= 13.31 mm)
 CONTACT_LAWS = ("ln", "kv", "efm")
 
 
-def efm_law(bushing, bore_radius, wall, depth, restitution, mass):
+def efm_law(bushing, bore_radius, wall, depth, restitution, mass, **kwargs):
     """ElasticFoundation for a bushing of ``bushing`` material (bore radius,
     wall thickness, depth in m), damped to the restitution ``restitution`` for
-    a body of ``mass`` kg (see ElasticFoundation.damping_time_for_restitution)."""
+    a body of ``mass`` kg (see ElasticFoundation.damping_time_for_restitution).
+    ``kwargs`` (e.g. ``penetration_width``) go to `ElasticFoundation`."""
     from .contact import ElasticFoundation
 
     undamped = ElasticFoundation.from_material(bushing, wall, depth)
     tau = ElasticFoundation.damping_time_for_restitution(
         restitution, undamped.contact_stiffness(bore_radius), mass)
-    return ElasticFoundation.from_material(bushing, wall, depth, damping_time=tau)
+    return ElasticFoundation.from_material(bushing, wall, depth, damping_time=tau, **kwargs)
 
 
 def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *, p: SliderCrankParameters = TABLE_2_1,
@@ -196,7 +197,7 @@ class WearJointDesign(eqx.Module):
 
 def with_wear_joint(mech: Mechanism, design: WearJointDesign, *, joint: str = "crank_rod",
                     bushing_body: str | None = None, damping_mass=None,
-                    n_theta: int = 180) -> Mechanism:
+                    n_theta: int = 180, penetration_width=None) -> Mechanism:
     """Swap the ideal revolute ``joint`` for an EFM clearance joint with Archard wear.
 
     EFM (thesis Ch. 6): PTFE bushing (Table 3-2 / 7-2), foundation stiffness
@@ -204,6 +205,8 @@ def with_wear_joint(mech: Mechanism, design: WearJointDesign, *, joint: str = "c
     half-circle contact stiffness and ``damping_mass`` (default: the mass of the
     bushing body).  Friction Coulomb mu.  ``bushing_body``: the body carrying
     the bushing (default: the joint's second body; see `with_clearance`).
+    ``penetration_width`` [m]: the contact-onset smoothing band of the EFM
+    springs (default `ElasticFoundation`'s).
     """
     from .contact import PTFE, CoulombFriction, with_clearance
     from .wear import ArchardWear
@@ -212,8 +215,9 @@ def with_wear_joint(mech: Mechanism, design: WearJointDesign, *, joint: str = "c
     bushing_body = old.body_j if bushing_body is None else bushing_body
     if damping_mass is None:
         damping_mass = next(b.mass for b in mech.bodies if b.name == bushing_body)
+    extra = {} if penetration_width is None else {"penetration_width": penetration_width}
     law = efm_law(PTFE, design.bushing_radius, design.wall, design.depth, design.restitution,
-                  damping_mass)
+                  damping_mass, **extra)
     return with_clearance(mech, joint, bushing_body=bushing_body, pin_radius=design.pin_radius,
                           bushing_radius=design.bushing_radius, law=law,
                           friction=CoulombFriction(design.mu), wear=ArchardWear(design.k),

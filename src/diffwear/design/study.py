@@ -1,0 +1,169 @@
+"""``diffwear design two-joint``: the thesis Ch. 8 design study, on the model itself.
+
+Writes into the output folder: ``summary.json`` (the equal-life answer with
+d1_mm, d2_mm, h1_mm, h2_mm, cyc1, cyc2, rel_gap, iterations,
+model_evaluations, wall_time_s; plus the two further problems, the Table 8-4
+check and the trend check), ``history.csv`` (every model evaluation inside the
+optimiser), ``life_map_joint1.png`` / ``life_map_joint2.png`` and
+``life_maps.csv`` (cyc1 over (d1, h1) and cyc2 over (d2, h2), the other joint
+at the answer: a vmap sweep of the model, like thesis Figs. 8-7 and 8-8) and
+``report.md``.
+"""
+
+from __future__ import annotations
+
+import csv
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..io import OutputDir
+from .optimise import equal_life, kkt_check, least_material, longest_common_life
+from .two_joint import LOWER, TABLE_8_4, TABLE_8_5, UPPER, TwoJointLife
+
+NAME = "two-joint"
+DESCRIPTION = ("Ch. 8: bushing diameters and depths of two wearing joints for equal life "
+               "(optimistix on the full model)")
+
+START = np.array([45.0e-3, 45.0e-3, 30.0e-3, 30.0e-3])  # m: the centre of the Table 8-3 box
+FULL = dict(steps=10, map_points=5)
+QUICK = dict(steps=3, map_points=2)
+
+
+def life_maps(model: TwoJointLife, x, points: int) -> dict:
+    """cyc_j over (d_j, h_j) on a points x points grid, the other joint at ``x``."""
+    d = np.linspace(LOWER[0], UPPER[0], points)
+    h = np.linspace(LOWER[2], UPPER[2], points)
+    dd, hh = np.meshgrid(d, h, indexing="ij")
+    batch = jax.jit(jax.vmap(model))
+    maps = {"d_m": d, "h_m": h}
+    for j in (0, 1):
+        xs = np.repeat(np.asarray(x)[None], dd.size, axis=0)
+        xs[:, j], xs[:, j + 2] = dd.ravel(), hh.ravel()
+        maps[f"cyc{j + 1}"] = np.asarray(batch(jnp.asarray(xs)))[:, j].reshape(dd.shape)
+    return maps
+
+
+def _plot_map(path, maps, j, answer):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    d, h = maps["d_m"] * 1e3, maps["h_m"] * 1e3
+    c = ax.contourf(d, h, maps[f"cyc{j}"].T / 1e3, levels=12, cmap="viridis")
+    fig.colorbar(c, ax=ax, label=f"cyc{j} [thousand cycles]")
+    ax.plot(answer[j - 1] * 1e3, answer[j + 1] * 1e3, "r*", ms=12, label="equal-life answer")
+    ax.plot(TABLE_8_4[j - 1] * 1e3, TABLE_8_4[j + 1] * 1e3, "wo", label="thesis Table 8-4")
+    ax.set_xlabel(f"bushing diameter d{j} [mm]")
+    ax.set_ylabel(f"bushing depth h{j} [mm]")
+    ax.set_title(f"Joint {j}: cycles to 2 mm wear")
+    ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def run(out: OutputDir, *, quick: bool = False, log=print) -> dict:
+    settings = QUICK if quick else FULL
+    model = TwoJointLife(steps=settings["steps"])
+    t0 = time.perf_counter()
+    log(f"[{NAME}] model: steps {model.steps}, n_theta {model.n_theta}; Table 8-4 check ...")
+    thesis_cycles = model.life(TABLE_8_4)
+    thesis_gap = float(abs(thesis_cycles[0] - thesis_cycles[1]) / thesis_cycles.mean())
+
+    log(f"[{NAME}] equal life from {np.round(START * 1e3, 2).tolist()} mm ...")
+    eq = equal_life(model, START)
+    trend = kkt_check(model, eq.x, "trend")["jacobian_cycles_per_mm"]
+    jac = np.asarray(trend)
+    trend_ok = bool(jac[0, 2] > 0 and jac[1, 3] > 0 and jac[0, 0] < 0 and jac[1, 1] < 0)
+
+    log(f"[{NAME}] longest common life ...")
+    longest = longest_common_life(model)
+    log(f"[{NAME}] least material at the thesis's {TABLE_8_5['surrogate_cycles']} cycles ...")
+    least = least_material(model, TABLE_8_5["surrogate_cycles"])
+
+    log(f"[{NAME}] life maps ({settings['map_points']}^2 points per joint, vmap) ...")
+    maps = life_maps(model, eq.x, settings["map_points"])
+    total = time.perf_counter() - t0
+
+    for j in (1, 2):
+        _plot_map(out.file(f"life_map_joint{j}.png"), maps, j, eq.x)
+    with open(out.file("life_maps.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["joint", "d_mm", "h_mm", "cycles"])
+        for j in (1, 2):
+            for a, dv in enumerate(maps["d_m"]):
+                for b, hv in enumerate(maps["h_m"]):
+                    w.writerow([j, dv * 1e3, hv * 1e3, maps[f"cyc{j}"][a, b]])
+    with open(out.file("history.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["problem", "evaluation", "d1_mm", "d2_mm", "h1_mm", "h2_mm", "cyc1", "cyc2"])
+        for res in (eq, longest, least):
+            for i, h in enumerate(res.history):
+                w.writerow([res.problem, i, *h["x_mm"], *h["cycles"]])
+
+    summary = {
+        **eq.summary(),
+        "start_mm": (START * 1e3).tolist(),
+        "model": {"steps": model.steps, "scheme": model.scheme, "n_theta": model.n_theta,
+                  "cycle_rtol": model.cycle_rtol, "wear_limit_mm": model.limit * 1e3,
+                  "jacobian": "central differences, 1e-3 relative (8 runs in one vmap)"},
+        "trend": {"jacobian_cycles_per_mm": trend, "life_rises_with_depth_falls_with_diameter":
+                  trend_ok},
+        "thesis_optimum_table_8_4": {
+            "x_mm": (TABLE_8_4 * 1e3).tolist(), "cyc1": float(thesis_cycles[0]),
+            "cyc2": float(thesis_cycles[1]), "rel_gap": thesis_gap,
+            "thesis_full_model": TABLE_8_5},
+        "longest_common_life": longest.summary(),
+        "least_material": least.summary(),
+        "total_wall_time_s": total,
+        "quick": quick,
+    }
+    out.json("summary.json", summary)
+    out.text("report.md", _report(summary))
+    log(f"[{NAME}] equal life: d = {eq.x[:2] * 1e3} mm, h = {eq.x[2:] * 1e3} mm, "
+        f"cyc = {eq.cycles}, gap {eq.rel_gap:.2e}; {total:.0f} s")
+    return summary
+
+
+def _row(name, s):
+    return (f"| {name} | {s['d1_mm']:.2f} | {s['d2_mm']:.2f} | {s['h1_mm']:.2f} | "
+            f"{s['h2_mm']:.2f} | {s['cyc1']:,.0f} | {s['cyc2']:,.0f} | {100 * s['rel_gap']:.2f} % | "
+            f"{s['bushing_volume_mm3'] / 1e3:.1f} | {s['model_evaluations']} |")
+
+
+def _report(s: dict) -> str:
+    t = s["thesis_optimum_table_8_4"]
+    lines = [
+        "# Two-joint bushing design (thesis Ch. 8)", "",
+        "Table 2-1 slider-crank, PTFE bushings in the rod at crank-rod (1) and rod-slider (2), "
+        "k 5.05e-4 mm^3/(N m), mu 0.13, limit 2 mm, Table 8-3 box. Optimiser: optimistix "
+        "Levenberg-Marquardt, bounds by sigmoid reparametrisation.", "",
+        "| problem | d1 mm | d2 mm | h1 mm | h2 mm | cyc1 | cyc2 | gap | PTFE cm^3 | model runs |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+        _row("equal life (from box centre)", s),
+        _row("equal life, longest common life", s["longest_common_life"]),
+        _row("equal life, least material at 119,435 cycles", s["least_material"]), "",
+        f"Thesis optimum (Table 8-4) in our model: cyc1 = {t['cyc1']:,.0f}, cyc2 = "
+        f"{t['cyc2']:,.0f}, gap {100 * t['rel_gap']:.1f} % (thesis full model: 121,600 / "
+        "117,600, 3.3 %).", "",
+        f"Trend (Jacobian at the answer, cycles per mm): life rises with depth and falls with "
+        f"diameter: {s['trend']['life_rises_with_depth_falls_with_diameter']}.", "",
+        "![joint 1](life_map_joint1.png) ![joint 2](life_map_joint2.png)", "",
+        "Data: `summary.json`, `history.csv`, `life_maps.csv`.",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def benchmark_case(quick: bool) -> dict:
+    """The equal-life optimisation timed (benchmarks/run.py case ``ch8-optimisation``)."""
+    model = TwoJointLife(steps=QUICK["steps"] if quick else FULL["steps"])
+    t0 = time.perf_counter()
+    res = equal_life(model, START)
+    return {"wall_time_s": time.perf_counter() - t0, "iterations": res.iterations,
+            "model_evaluations": res.model_evaluations, "rel_gap": res.rel_gap,
+            "steps": model.steps}

@@ -105,6 +105,23 @@ def _zero_offset_force(law, clearance):
     return f(jnp.zeros(2)), jax.grad(f)(jnp.zeros(2))
 
 
+def test_smoothing_derivative_rules_equal_autodiff_of_the_formulas():
+    """`ramp`/`step` carry hand-written JVP rules (both arguments); they must equal
+    autodiff of the plain piecewise formulas, forward and reverse, in and out of the band."""
+    w = 2e-8
+    x = jnp.linspace(-0.5, 1.5, 401) * w
+    for rule, plain in ((smoothing.ramp, smoothing._ramp), (smoothing.step, smoothing._step)):
+        for arg in (0, 1):
+            want = jax.vmap(jax.grad(plain, argnums=arg), (0, None))(x, w)
+            scale = float(jnp.max(jnp.abs(want)))
+            for diff in (jax.grad, jax.jacfwd):
+                got = jax.vmap(diff(rule, argnums=arg), (0, None))(x, w)
+                np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * scale)
+        # a zero width tangent (the usual case) and a batched tangent
+        t = jax.vmap(lambda v: jax.jvp(lambda z: rule(z, w), (x,), (v,))[1])(jnp.stack([x, 2 * x]))
+        np.testing.assert_allclose(t[1], 2 * t[0], rtol=1e-14)
+
+
 @pytest.mark.parametrize("clearance", [0.0, 5e-4])
 def test_no_nan_at_zero_eccentricity(clearance):
     ln = LankaraniNikravesh.from_materials(STEEL, PTFE, 0.02, 0.02 + clearance)

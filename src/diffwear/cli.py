@@ -119,6 +119,23 @@ def _sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def _design(args: argparse.Namespace) -> int:
+    from .design import study
+    from .io import OutputDir
+
+    if args.list or args.name is None:
+        print(f"{study.NAME}  {study.DESCRIPTION}")
+        return 0
+    if args.name != study.NAME:
+        raise InputError(f"unknown design problem {args.name!r}; available: {study.NAME}")
+    if args.out is None:
+        raise InputError("design: --out DIR is required")
+    out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
+    log = (lambda *a, **k: None) if args.quiet else print
+    study.run(out, quick=args.quick, log=log)
+    return 0
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # argparse exits with 2 already; keep its message
         self.print_usage(sys.stderr)
@@ -145,6 +162,17 @@ def build_parser() -> argparse.ArgumentParser:
                         "(same study and options); results are written into DIR")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_study)
+
+    p = sub.add_parser("design", help="solve a bushing design problem (thesis Ch. 8; see --list)")
+    p.add_argument("name", nargs="?", help="design problem: two-joint")
+    p.add_argument("--list", action="store_true", help="list the design problems and exit")
+    p.add_argument("--out", help="output folder (created; must not hold earlier results)")
+    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    p.add_argument("--quick", action="store_true",
+                   help="coarse model (3 wear steps to the limit) and 2 x 2 maps: minutes, "
+                        "for a smoke run; the default model takes 10 steps")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=_design)
 
     p = sub.add_parser("run", help="simulate a mechanism file (TOML; see README 'Mechanism files')")
     p.add_argument("file", help="mechanism file, e.g. design_studies/ideal_slider_crank.toml")

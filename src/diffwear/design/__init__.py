@@ -1,5 +1,15 @@
 """Gradient-based bushing design (thesis Ch. 8)."""
 
+from .optimise import (
+    DesignResult,
+    bushing_volume,
+    equal_life,
+    finite_difference_jacobian,
+    kkt_check,
+    least_material,
+    longest_common_life,
+)
+from .study import benchmark_case
 from .two_joint import (
     DEPTH_BOUNDS,
     DIAMETER_BOUNDS,
@@ -15,7 +25,11 @@ from .two_joint import (
     check_design,
 )
 
+DESIGNS = {"two-joint": "diffwear.design.study"}
+
 __all__ = [
+    "DESIGNS", "DesignResult", "bushing_volume", "equal_life", "finite_difference_jacobian",
+    "kkt_check", "least_material", "longest_common_life", "benchmark_case",
     "DEPTH_BOUNDS", "DIAMETER_BOUNDS", "JOINTS", "LOWER", "TABLE_8_4", "TABLE_8_5", "UPPER",
     "VARIABLES", "WEAR_LIMIT", "TwoJointLife", "bushing", "check_design",
 ]

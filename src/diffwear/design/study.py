@@ -142,7 +142,7 @@ def _report(s: dict) -> str:
         "# Two-joint bushing design (thesis Ch. 8)", "",
         "Table 2-1 slider-crank, PTFE bushings in the rod at crank-rod (1) and rod-slider (2), "
         "k 5.05e-4 mm^3/(N m), mu 0.13, limit 2 mm, Table 8-3 box. Optimiser: optimistix "
-        "Levenberg-Marquardt, bounds by sigmoid reparametrisation.", "",
+        "Levenberg-Marquardt, bounds by sigmoid reparametrisation, Jacobian by central differences.", "",
         "| problem | d1 mm | d2 mm | h1 mm | h2 mm | cyc1 | cyc2 | gap | PTFE cm^3 | model runs |",
         "|---|---|---|---|---|---|---|---|---|---|",
         _row("equal life (from box centre)", s),

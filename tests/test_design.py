@@ -1,0 +1,100 @@
+"""Ch. 8 design: the solvers on closed-form life models, and the study end to end."""
+
+from __future__ import annotations
+
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from diffwear.cli import main
+from diffwear.design import (LOWER, UPPER, bushing_volume, check_design, equal_life,
+                             finite_difference_jacobian, least_material, longest_common_life)
+from diffwear.errors import InputError
+
+
+class PowerLawLife:
+    """cyc_j = a_j (h_j / 10 mm) (d_j / 20 mm)^-0.3: life rises with depth and
+    falls with diameter, like the thesis's Figs. 8-7/8-8; closed-form answers."""
+
+    a = jnp.array([80_000.0, 120_000.0])
+
+    def __call__(self, x):
+        d, h = x[:2], x[2:]
+        return self.a * (h / 10e-3) * (d / 20e-3) ** -0.3
+
+    def life(self, x):
+        return np.asarray(self(jnp.asarray(x)))
+
+
+def test_finite_difference_jacobian_matches_closed_form():
+    f = lambda x: jnp.stack([x[0] ** 2 * x[2], jnp.sin(x[1]) * x[3]])  # noqa: E731
+    x = jnp.array([0.03, 0.04, 0.02, 0.015])
+    exact = jax.jacfwd(f)(x)
+    fd = jax.jacfwd(finite_difference_jacobian(f))(x)
+    np.testing.assert_allclose(fd, exact, rtol=1e-6, atol=1e-12)
+
+
+def test_equal_life_on_closed_form_model():
+    model = PowerLawLife()
+    res = equal_life(model, np.array([45e-3, 45e-3, 30e-3, 30e-3]))
+    assert res.rel_gap < 1e-6
+    assert np.all(res.x > LOWER) and np.all(res.x < UPPER)
+    c = model.life(res.x)
+    np.testing.assert_allclose(res.cycles, c)
+    assert res.model_evaluations > res.iterations
+
+
+def test_longest_common_life_takes_the_weaker_joints_corner():
+    model = PowerLawLife()
+    res = longest_common_life(model)
+    # joint 1 is weaker (a1 < a2): d1 = 20 mm, h1 = 50 mm, life 80,000 x 5
+    np.testing.assert_allclose(res.cycles, [400_000.0, 400_000.0], rtol=1e-6)
+    # joint 2 at d = 20 mm: h2 = 50 mm x 80 / 120
+    np.testing.assert_allclose(res.x[3], 50e-3 * 80 / 120, rtol=1e-6)
+    assert res.notes["kkt"]["optimal"]
+
+
+def test_least_material_solves_both_depths_at_the_lower_diameter():
+    model = PowerLawLife()
+    res = least_material(model, 150_000)
+    np.testing.assert_allclose(res.x[:2], LOWER[:2])
+    np.testing.assert_allclose(res.x[2:], 10e-3 * 150_000 / np.asarray(model.a), rtol=1e-5)
+    assert res.notes["kkt"]["optimal"]
+
+
+def test_bushing_volume_closed_form():
+    # d = 20 mm: R = 10 mm, wall 0.6653 R; h = 10 mm
+    w = (15.875 / 9.533 - 1) * 10e-3
+    one = np.pi * ((10e-3 + w) ** 2 - 10e-3 ** 2) * 10e-3
+    assert float(bushing_volume(jnp.array([20e-3, 20e-3, 10e-3, 10e-3]))) == pytest.approx(2 * one)
+
+
+@pytest.mark.parametrize("x, word", [
+    ([19e-3, 40e-3, 20e-3, 20e-3], "d1"),
+    ([40e-3, 40e-3, 20e-3, 51e-3], "h2"),
+    ([40e-3, np.nan, 20e-3, 20e-3], "d2"),
+])
+def test_design_outside_table_8_3_box(x, word):
+    with pytest.raises(InputError, match=word):
+        check_design(np.array(x))
+
+
+@pytest.mark.slow
+def test_design_two_joint_quick(tmp_path):
+    """The CLI on the coarse model: equal life within 0.5 % on a fresh rerun,
+    the thesis's trend, and every summary field."""
+    out = tmp_path / "design"
+    assert main(["design", "two-joint", "--quick", "--quiet", "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    for key in ("d1_mm", "d2_mm", "h1_mm", "h2_mm", "cyc1", "cyc2", "rel_gap", "iterations",
+                "model_evaluations", "wall_time_s"):
+        assert key in s
+    assert s["rel_gap"] < 5e-3
+    assert s["trend"]["life_rises_with_depth_falls_with_diameter"]
+    assert s["longest_common_life"]["rel_gap"] < 5e-3
+    for name in ("report.md", "history.csv", "life_maps.csv", "life_map_joint1.png"):
+        assert (out / name).stat().st_size > 0
+    assert main(["design", "two-joint", "--quick", "--quiet", "--out", str(out)]) == 2

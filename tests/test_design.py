@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 
 import jax
 import jax.numpy as jnp
@@ -82,7 +83,15 @@ def test_design_outside_table_8_3_box(x, word):
         check_design(np.array(x))
 
 
+def test_design_cli_lists_and_rejects():
+    assert main(["design", "--list"]) == 0
+    assert main(["design", "no-such-problem", "--out", "x"]) == 2
+    assert main(["design", "two-joint"]) == 2  # --out is required
+
+
 @pytest.mark.slow
+@pytest.mark.skipif(not os.environ.get("DIFFWEAR_LONG_TESTS"),
+                    reason="~10 min on 2 cores: set DIFFWEAR_LONG_TESTS=1 to run")
 def test_design_two_joint_quick(tmp_path):
     """The CLI on the coarse model: equal life within 0.5 % on a fresh rerun,
     the thesis's trend, and every summary field."""

@@ -417,7 +417,6 @@ def scipy_peer(repeats: int) -> dict:
     (10 wear cycles + warm-up) on both, and both solvers' error against a
     reference cycle at rtol = atol = 1e-10 (equal accuracy)."""
     import jax
-    import jax.numpy as jnp
     import numpy as np
 
     from diffwear.contact import contact_history

@@ -5,6 +5,7 @@ from .optimise import (
     bushing_volume,
     equal_life,
     finite_difference_jacobian,
+    jacobian,
     kkt_check,
     least_material,
     longest_common_life,
@@ -25,11 +26,9 @@ from .two_joint import (
     check_design,
 )
 
-DESIGNS = {"two-joint": "diffwear.design.study"}
-
 __all__ = [
-    "DESIGNS", "DesignResult", "bushing_volume", "equal_life", "finite_difference_jacobian",
-    "kkt_check", "least_material", "longest_common_life", "benchmark_case",
+    "DesignResult", "bushing_volume", "equal_life", "finite_difference_jacobian",
+    "jacobian", "kkt_check", "least_material", "longest_common_life", "benchmark_case",
     "DEPTH_BOUNDS", "DIAMETER_BOUNDS", "JOINTS", "LOWER", "TABLE_8_4", "TABLE_8_5", "UPPER",
     "VARIABLES", "WEAR_LIMIT", "TwoJointLife", "bushing", "check_design",
 ]

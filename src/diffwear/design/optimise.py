@@ -41,7 +41,7 @@ import optimistix as optx
 from jax import lax
 
 from ..errors import InputError, SolverError
-from .two_joint import LOWER, UPPER, VARIABLES, WALL_PER_RADIUS, TwoJointLife, check_design
+from .two_joint import LOWER, UPPER, WALL_PER_RADIUS, TwoJointLife, check_design
 
 
 def to_free(x, lo, hi):
@@ -180,14 +180,16 @@ def _solve(model: TwoJointLife, problem: str, residual, x_fixed, free, *, rtol, 
     return DesignResult(problem, x, cycles, int(sol.stats["num_steps"]), runs, wall, history)
 
 
+def _life_gap(x, c):
+    """The scale-free equal-life residual (cyc1 - cyc2) / mean(cyc1, cyc2)."""
+    return jnp.atleast_1d((c[0] - c[1]) / (0.5 * (c[0] + c[1])))
+
+
 def equal_life(model: TwoJointLife, x0, *, rtol=1e-4, atol=1e-4,
                max_steps=30) -> DesignResult:
     """min (cyc1 - cyc2)^2 over (d1, d2, h1, h2) in the Table 8-3 box from ``x0``
-    (the thesis's problem); the scale-free residual (cyc1 - cyc2) / mean."""
-    def residual(x, c):
-        return jnp.atleast_1d((c[0] - c[1]) / (0.5 * (c[0] + c[1])))
-
-    return _solve(model, "equal life", residual, x0, [True] * 4, rtol=rtol, atol=atol,
+    (the thesis's problem), as the residual `_life_gap`."""
+    return _solve(model, "equal life", _life_gap, x0, [True] * 4, rtol=rtol, atol=atol,
                   max_steps=max_steps)
 
 
@@ -201,14 +203,10 @@ def longest_common_life(model: TwoJointLife, *, rtol=1e-4, atol=1e-4,
     x = corner.copy()
     free = [False] * 4
     free[strong + 2] = True  # the stronger joint's depth
-
-    def residual(x, c):
-        return jnp.atleast_1d((c[0] - c[1]) / (0.5 * (c[0] + c[1])))
-
-    res = _solve(model, "longest common life", residual, x, free, rtol=rtol, atol=atol,
+    res = _solve(model, "longest common life", _life_gap, x, free, rtol=rtol, atol=atol,
                  max_steps=max_steps)
     res.notes.update({"weaker_joint": weak + 1, "corner_cycles": c.tolist(),
-                      "kkt": kkt_check(model, res.x, "longest common life")})
+                      "kkt": kkt_check(model, res.x, "longest common life", res.cycles)})
     return res
 
 
@@ -226,24 +224,26 @@ def least_material(model: TwoJointLife, target_cycles: float, *, rtol=1e-4, atol
     res = _solve(model, "least material", residual, x, [False, False, True, True], rtol=rtol,
                  atol=atol, max_steps=max_steps)
     res.notes.update({"target_cycles": t,
-                      "kkt": kkt_check(model, res.x, "least material", target=t)})
+                      "kkt": kkt_check(model, res.x, "least material", res.cycles)})
     return res
 
 
-def kkt_check(model: TwoJointLife, x, problem: str, target: float | None = None) -> dict:
+def kkt_check(model: TwoJointLife, x, problem: str, cycles) -> dict:
     """The first-order optimality conditions at ``x``, from the model's Jacobian.
 
     ``longest common life``: the weaker joint's life must not rise along any
     feasible direction of its own variables (d at its lower bound: dcyc/dd <= 0;
     h at its upper bound: dcyc/dh >= 0).  ``least material``: with the
     multipliers of cyc_j = T from the free depths, dL/dd_j >= 0 at d_j's lower
-    bound (no descent by moving d up).  Returns the numbers and a verdict.
+    bound (no descent by moving d up).  ``cycles``: the life at ``x``.
+    Returns the numbers and a verdict.
     """
-    jac = np.asarray(_jacobian(model, jnp.asarray(x)))
+    if problem not in ("longest common life", "least material"):
+        raise InputError(f"kkt_check: unknown problem {problem!r}")
+    jac = np.asarray(jacobian(model, x))
     out = {"jacobian_cycles_per_mm": (jac * 1e-3).tolist()}
     if problem == "longest common life":
-        c = model.life(x)
-        weak = int(np.argmin(c))
+        weak = int(np.argmin(cycles))
         g = jac[weak]
         ok = bool(g[weak] <= 0 and g[weak + 2] >= 0)
         out.update({"weaker_joint": weak + 1, "dlife_dd_per_mm": g[weak] * 1e-3,
@@ -258,7 +258,11 @@ def kkt_check(model: TwoJointLife, x, problem: str, target: float | None = None)
     return out
 
 
+def jacobian(model: TwoJointLife, x) -> np.ndarray:
+    """d(cyc1, cyc2)/d(d1, d2, h1, h2) [cycles/m] at ``x`` (central differences)."""
+    return np.asarray(_jacobian(model, jnp.asarray(x, dtype=float)))
+
+
 @eqx.filter_jit
 def _jacobian(model: TwoJointLife, x):
-    """d(cyc1, cyc2)/d(d1, d2, h1, h2) [cycles/m] (central differences)."""
     return jax.jacfwd(finite_difference_jacobian(model))(x)

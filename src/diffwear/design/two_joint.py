@@ -101,10 +101,10 @@ class TwoJointLife(eqx.Module):
     fastest joint), ``scheme`` ("implicit"), ``n_theta`` (profile grid),
     ``cycle_rtol`` (dynamic cycle tolerance, rtol = atol), ``forward_mode``
     (diffrax `ForwardMode` adjoint, for `jax.jacfwd`/`jvp`; default False:
-    the checkpointed reverse mode, for `jax.grad`/`jacrev`).  Reverse mode is
-    the default because forward-mode tangents through the adaptive contact
-    integration blew up (|dcyc/dx| ~ 1e44 at cycle rtol 1e-6, measured)
-    while reverse mode matches central differences.
+    the checkpointed reverse mode, for `jax.grad`/`jacrev`).  Neither mode's
+    derivative of the life matches central differences yet (tangents of
+    1e20-1e44, measured; see `diffwear.wear.life`): the optimisers use
+    `diffwear.design.finite_difference_jacobian`.
     """
 
     steps: int = eqx.field(static=True, default=5)
@@ -143,7 +143,7 @@ class TwoJointLife(eqx.Module):
         # the ideal kinematics at t = 0 do not depend on the design
         y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
         return cycles_to_limit(mech, JOINTS, y0, period=self.period, limit=self.limit,
-                               steps=self.steps, scheme=self.scheme, slots=3 * self.steps + 4,
+                               steps=self.steps, scheme=self.scheme,
                                cycle_rtol=self.cycle_rtol, cycle_atol=self.cycle_rtol,
                                adjoint=diffrax.ForwardMode() if self.forward_mode else None)
 

@@ -16,10 +16,21 @@ advances the real cycle count by
     dN = min over joints j not yet at the limit of the dN at which
          max_theta (h_j + dN dh_j) = max_theta h_j + limit / steps,
 
-so the fastest-wearing joint gains exactly ``limit / steps`` of maximum depth
-per slot (an explicit Euler step of the profile ODE dh/dN = f(h), with the
-maximum depth as the step variable; the peak may move along the bushing).  A joint that reaches the limit has its profile held
-(it is at its end of life); the others carry on.
+so the fastest-wearing joint would gain exactly ``limit / steps`` of maximum
+depth per slot under an explicit Euler step of the profile ODE dh/dN = f(h)
+(the maximum depth is the step variable; the peak may move along the bushing).
+A joint that reaches the limit has its profile held (it is at its end of
+life); the others carry on.
+
+The profile update: explicit or linearly implicit
+-------------------------------------------------
+Explicit Euler (``scheme="euler"``) is unstable for dN beyond about
+1 / lambda, lambda = k k_f s_contact (~1e-3 per cycle on the Ch. 8 mechanism):
+a worn node loses pressure at that rate.  ``scheme="implicit"`` (default)
+solves (I + dN A) dh_step = dN f(h) with `wear_operator` A, the
+cycle-integrated response of the wear increment to the profile (a
+W-method: first order for any A, stable when A holds the stiff part).  The
+gain per slot is then a little below ``limit / steps``.
 
 The crossing, differentiably
 ----------------------------
@@ -30,13 +41,21 @@ linearly between the slot's ends:
 
 This is the implicit-function root of the piecewise-linear depth history
 m_j(N) = limit: its derivative w.r.t. any parameter is
-dN_j/dp = -(dm_j/dp) / (dm_j/dN) on that segment, which is exactly what
-automatic differentiation of the formula gives (m_old, m_new, N and dN are
-all differentiable functions of the parameters).  N_j is continuous when the
-crossing moves from one slot to the next (at the switch m_new = limit and both
-formulas give the slot's end), so the result is piecewise smooth with kinks
-only there and where the fastest joint changes.  ``max`` over the profile grid
-is the exact maximum (a subgradient at ties; no smoothing bias).
+dN_j/dp = -(dm_j/dp) / (dm_j/dN) on that segment, which is what automatic
+differentiation of the formula gives.  N_j is continuous when the crossing
+moves from one slot to the next (at the switch m_new = limit and both formulas
+give the slot's end), so the result is piecewise smooth with kinks only there
+and where the fastest joint changes.  ``max`` over the profile grid is the
+exact maximum (a subgradient at ties; no smoothing bias).
+
+Known limitation: autodiff through the whole scan does not yet match central
+differences (forward and reverse tangents grow to 1e20-1e44 over the slots;
+the derivative of the sampled operator A is ill-conditioned in free flight).
+Callers that need a Jacobian use central differences
+(`diffwear.design.finite_difference_jacobian`).  The mechanism state a slot
+starts from is passed on without its derivative (`lax.stop_gradient`): the
+cycle's wear depends on the design through the cycle itself, not through the
+inherited pin state, whose tangent grows from cycle to cycle.
 """
 
 from __future__ import annotations
@@ -52,7 +71,7 @@ from ..mechanism import Mechanism
 from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle_joints
 
 STATUS_OK, STATUS_SOLVER, STATUS_INCOMPLETE = 0, 2, 3
-SCHEMES = ("implicit", "euler", "heun")
+SCHEMES = ("implicit", "euler")
 
 # A per-cycle depth increment below this [m] counts as "not wearing" (1e-18 m
 # per cycle is 1 nm per billion cycles): such a joint sets no step size.
@@ -141,7 +160,6 @@ def cycles_to_limit(
     scheme: str = "implicit",
     operator_samples: int = 181,
     operator_width=1e-6,
-    cut_state_gradient: bool = True,
     slots: int | None = None,
     warmup_cycles: int = 1,
     cycle_rtol: float = CYCLE_RTOL,
@@ -153,9 +171,11 @@ def cycles_to_limit(
     ``limit`` [m] (see the module notes for the stepping and the derivative).
 
     ``steps``: slots the fastest-wearing joint takes to reach the limit (the
-    accuracy knob; the error falls as 1 / steps).  ``slots``: scan slots
-    (default 2 x steps + 4: enough for the slowest joint once the fastest is
-    done).  ``warmup_cycles`` dynamic cycles run first with their wear
+    accuracy knob; the error falls as 1 / steps).  ``scheme``: "implicit" or
+    "euler" (module notes); ``operator_samples`` states per cycle and
+    ``operator_width`` [m] contact band of `wear_operator`.  ``slots``: scan
+    slots (default 3 x steps + 4: the implicit gain per slot is below
+    limit / steps, and the slowest joint carries on once the fastest is done).  ``warmup_cycles`` dynamic cycles run first with their wear
     discarded (the pin's start-up transient).  Pure and jit-able; a solver
     failure or a joint that never reaches the limit is reported in ``status``.
     """
@@ -166,7 +186,7 @@ def cycles_to_limit(
         raise InputError(f"scheme must be one of {SCHEMES}, got {scheme!r}")
     if int(steps) < 1:
         raise InputError(f"steps must be >= 1, got {steps}")
-    n_slots = 2 * int(steps) + 4 if slots is None else int(slots)
+    n_slots = 3 * int(steps) + 4 if slots is None else int(slots)
     if n_slots < 1:
         raise InputError(f"slots must be >= 1, got {slots}")
     found = [clearance_element(mech, j) for j in joints]
@@ -195,19 +215,14 @@ def cycles_to_limit(
 
     def do(c):
         implicit = scheme == "implicit"
-        # The state a cycle starts from carries no derivative (see module notes)
-        y_start = lax.stop_gradient(c["y"]) if cut_state_gradient else c["y"]
-        r = run_cycle(c["h"], y_start, c["t"], n_save=operator_samples if implicit else None)
+        # the state a slot starts from carries no derivative (module notes)
+        r = run_cycle(c["h"], lax.stop_gradient(c["y"]), c["t"],
+                      n_save=operator_samples if implicit else None)
         m_old = jnp.stack([jnp.max(h) for h in c["h"]])
         dn_joint = jnp.stack([_cycles_to_gain(h, dh, m + dh_target)
                               for h, dh, m in zip(c["h"], r.depth_increment, m_old)])
         dn = jnp.min(jnp.where(c["done"], _MAX_STEP_CYCLES, dn_joint))
-        rate, t_end, ok = r.depth_increment, c["t"] + period, r.ok
-        if scheme == "heun":  # trapezoidal rule in N: rate at both ends of the step
-            h_pred = tuple(h + dn * dh for h, dh in zip(c["h"], rate))
-            r2 = run_cycle(h_pred, r.y_end, t_end)
-            rate = tuple(0.5 * (a + b) for a, b in zip(rate, r2.depth_increment))
-            r, t_end, ok = r2, t_end + period, ok & r2.ok
+        rate = r.depth_increment
         if implicit:  # linearly implicit Euler: (I + dN A) dh_step = dN f(h)
             worn = _with_profiles(mech, indices, bases, c["h"])
             rate = tuple(jnp.linalg.solve(jnp.eye(dh.shape[0]) + dn * wear_operator(
@@ -217,15 +232,15 @@ def cycles_to_limit(
         cross = ~c["done"] & (m_new >= limit)
         gain = jnp.where(cross, m_new - m_old, 1.0)
         n_cross = c["n"] + dn * (limit - m_old) / gain
-        bad = ~ok
+        bad = ~r.ok
         out = dict(c)
         out["h"] = tuple(jnp.where(bad, h, hn) for h, hn in zip(c["h"], h_new))
         out["y"] = jnp.where(bad, c["y"], r.y_end)
-        out["t"] = t_end
+        out["t"] = c["t"] + period
         out["n"] = jnp.where(bad, c["n"], c["n"] + dn)
         out["life"] = jnp.where(cross & ~bad, n_cross, c["life"])
         out["done"] = c["done"] | (cross & ~bad)
-        out["dyn"] = c["dyn"] + (2 if scheme == "heun" else 1)
+        out["dyn"] = c["dyn"] + 1
         out["status"] = jnp.where(bad, STATUS_SOLVER, c["status"])
         return out, dn
 

@@ -129,7 +129,7 @@ class ClearanceJoint(AbstractForceElement):
         rates = [res.memory_rate]
         if self.wear is not None:
             slide = self.sliding_rate(kin)
-            rates.append(self.wear.coefficient * res.pressure * slide)
+            rates.append(self.wear.depth_rate(res.pressure, slide))
             rates.append(jnp.atleast_1d(res.normal_load * slide))
         return q, jnp.concatenate(rates)
 

@@ -116,3 +116,42 @@ class LinearSpring(AbstractForceElement):
         f_i = tension * u
         q = frames.wrench(self.body_i, f_i, at=pi) + frames.wrench(self.body_j, -f_i, at=pj)
         return q, aux
+
+
+class GuideFriction(AbstractForceElement):
+    """Coulomb friction of a body sliding in a ground guide along ``axis``:
+    F = -mu N tanh(v / v_s) axis at the body's centre of mass.
+
+    ``normal_force`` N [N] is given, not computed from the guide's constraint
+    reaction (e.g. the slider's weight when the guide carries it).  The sign
+    function is smoothed over ``slip_width`` v_s [m/s]; at ``coefficient`` 0 the
+    element adds exactly zero.
+    """
+
+    name: str = eqx.field(static=True)
+    body: str = eqx.field(static=True)
+    coefficient: Float[Array, ""]
+    normal_force: Float[Array, ""]
+    axis: Float[Array, "2"]
+    slip_width: Float[Array, ""]
+
+    def __init__(self, name, body, coefficient, normal_force, axis=(1.0, 0.0), slip_width=1e-2):
+        self.name, self.body = name, body
+        check_finite(f"guide friction {name!r}: coefficient", coefficient)
+        check_positive(f"guide friction {name!r}: normal_force [N]", normal_force,
+                       allow_zero=True)
+        check_positive(f"guide friction {name!r}: slip_width [m/s]", slip_width)
+        a = _vec2(f"guide friction {name!r}: axis", axis)
+        self.coefficient = jnp.asarray(coefficient, dtype=float)
+        self.normal_force = jnp.asarray(normal_force, dtype=float)
+        self.axis = a / safe_norm(a, floor=1e-12)
+        self.slip_width = jnp.asarray(slip_width, dtype=float)
+
+    @property
+    def bodies(self):
+        return (self.body,)
+
+    def forces(self, frames, aux, t):
+        v = frames.velocity(self.body)[:2] @ self.axis
+        f = -self.coefficient * self.normal_force * jnp.tanh(v / self.slip_width) * self.axis
+        return frames.wrench(self.body, f), aux

@@ -35,3 +35,9 @@ class ArchardWear(eqx.Module):
     def from_mm3_per_Nm(cls, k_mm3_per_Nm) -> "ArchardWear":
         """From the tribologists' unit: 5.05e-4 mm^3/(N m) (PTFE on steel)."""
         return cls(jnp.asarray(k_mm3_per_Nm, dtype=float) * MM3_PER_NM)
+
+    def depth_rate(self, pressure, sliding_rate):
+        """dh/dt [m/s] at contact pressure ``pressure`` [Pa] (per node) and
+        sliding speed ``sliding_rate`` [m/s]: k p ds/dt.  Subclasses change
+        the law (e.g. `diffwear.calibrate.effects.ModifiedArchardWear`)."""
+        return self.coefficient * pressure * sliding_rate

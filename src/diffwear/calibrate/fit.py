@@ -1,0 +1,232 @@
+"""Weighted least squares through the full simulator.
+
+`Problem` turns a `Dataset` into a residual vector r = (model - data) / sigma
+(each point weighted by its series' stated 1-sigma noise) as a pure JAX
+function of the unknowns z:
+
+* fitted rig parameters (``Dataset.fit_names``), each as v = v0 exp(tau x)
+  (positive by construction; tau = std / v0 from the dataset, else 0.1);
+* one effect strength s = scale x (linear: zero strength is the base model
+  and the score test of `identify` is taken there).  Which effect is selected
+  by a one-hot vector passed as data, so the base fit and every effect's
+  refit share one compiled solver.
+
+`fit` solves min ||r_fit(z)||^2 with optimistix's Levenberg-Marquardt
+(Jacobian by forward-mode autodiff), then reports the parameters with their
+1-sigma uncertainties from the Gauss-Newton covariance (J^T J)^-1 of the fit
+points, and the residuals of the held-out points.  A solver failure raises
+`SolverError`; a model failure (integrator) inside the fit is reported as
+such, never as NaN parameters.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from ..errors import InputError, SolverError
+from .dataset import Dataset
+from .effects import EFFECTS, NAMES
+from .model import BASE_NAMES, MAX_EXTRAPOLATION, Observation, RigHistory, rig_defaults
+
+DEFAULT_LOG_SCALE = 0.1  # tau of a fitted parameter without a stated std
+
+
+@dataclass(frozen=True)
+class ModelSettings:
+    """Resolution of the forward model (see `model.RigHistory`)."""
+
+    dynamic_cycles: int | None = None   # default: the fewest with A <= MAX_EXTRAPOLATION
+    n_theta: int = 90
+    force_samples: int = 91
+    cycle_rtol: float = 1e-6
+
+    def model(self, cycles: float) -> RigHistory:
+        d = self.dynamic_cycles or max(1, math.ceil(cycles / MAX_EXTRAPOLATION))
+        return RigHistory(cycles=float(cycles), dynamic_cycles=d, n_theta=self.n_theta,
+                          force_samples=self.force_samples, cycle_rtol=self.cycle_rtol,
+                          cycle_atol=self.cycle_rtol)
+
+
+class Problem(eqx.Module):
+    """The dataset as residuals of the model (see module notes)."""
+
+    model: RigHistory
+    observations: tuple
+    y: np.ndarray = eqx.field(static=True)
+    sigma: np.ndarray = eqx.field(static=True)
+    holdout: np.ndarray = eqx.field(static=True)
+    series_of_point: np.ndarray = eqx.field(static=True)
+    fit_names: tuple = eqx.field(static=True)
+    base0: dict
+    tau: np.ndarray = eqx.field(static=True)
+
+    @classmethod
+    def from_dataset(cls, data: Dataset, settings: ModelSettings = ModelSettings()):
+        if data.preset != "rig":
+            raise InputError(f"{data.path}: preset {data.preset!r}: only 'rig' is modelled")
+        model = settings.model(data.max_cycles)
+        obs, ys, sig, hold, which = [], [], [], [], []
+        for k, s in enumerate(data.series):
+            obs.append(Observation(s.kind, np.asarray(s.x), model.extrapolation,
+                                   model.dynamic_cycles, cycles=float(s.cycles or 0.0),
+                                   basis=s.basis or "mass"))
+            ys.append(s.y)
+            sig.append(np.full(s.y.shape, s.sigma))
+            hold.append(s.holdout)
+            which.append(np.full(s.y.shape, k))
+        base0 = rig_defaults()
+        tau = []
+        for name, p in data.parameters.items():
+            base0[name] = p.value
+        for name in data.fit_names:
+            p = data.parameters[name]
+            tau.append(p.std / p.value if p.std else DEFAULT_LOG_SCALE)
+        return cls(model, tuple(obs), np.concatenate(ys), np.concatenate(sig),
+                   np.concatenate(hold), np.concatenate(which), tuple(data.fit_names),
+                   {k: jnp.asarray(v, dtype=float) for k, v in base0.items()},
+                   np.asarray(tau, dtype=float))
+
+    @property
+    def n_base(self) -> int:
+        return len(self.fit_names)
+
+    def base(self, x) -> dict:
+        out = dict(self.base0)
+        for i, name in enumerate(self.fit_names):
+            out[name] = self.base0[name] * jnp.exp(self.tau[i] * x[i])
+        return out
+
+    def predict(self, x, strengths):
+        h = self.model(self.base(x), strengths)
+        pred = jnp.concatenate([o(h) for o in self.observations])
+        # an integrator failure poisons every prediction: reported, not fitted
+        return jnp.where(h.ok, pred, jnp.nan)
+
+    def residual(self, x, strengths):
+        return (self.predict(x, strengths) - self.y) / self.sigma
+
+
+SCALES = np.array([e.scale for e in EFFECTS])
+
+
+def _effect_residual(z, args):
+    """Residuals of the fit points at z = (x_base, s / scale); args = (problem,
+    one-hot effect vector)."""
+    problem, onehot = args
+    strengths = onehot * SCALES * z[-1]
+    r = problem.residual(z[:-1], strengths)
+    return r[~problem.holdout]
+
+
+@dataclass
+class FitResult:
+    """One fit: ``effect`` (None: the base model), parameter values (SI) and
+    1-sigma uncertainties, the strength and its uncertainty, chi-square of the
+    fit points and of the held-out points, normalised residuals of all points."""
+
+    effect: str | None
+    params: dict
+    params_std: dict
+    strength: float
+    strength_std: float
+    chi2_fit: float
+    n_fit: int
+    chi2_holdout: float
+    n_holdout: int
+    residual: np.ndarray
+    prediction: np.ndarray
+    iterations: int
+    wall_time_s: float
+    notes: dict = field(default_factory=dict)
+
+    @property
+    def dof(self) -> int:
+        return self.n_fit - len(self.params) - (self.effect is not None)
+
+    @property
+    def rmse_holdout(self) -> float:
+        """RMS of the held-out residuals, in units of the stated noise."""
+        return math.sqrt(self.chi2_holdout / self.n_holdout) if self.n_holdout else math.nan
+
+    @property
+    def rmse_fit(self) -> float:
+        return math.sqrt(self.chi2_fit / self.n_fit)
+
+
+class Fitter:
+    """Compiled pieces shared by all fits of one problem."""
+
+    def __init__(self, problem: Problem, *, rtol=1e-6, atol=1e-6, max_steps=40):
+        self.problem = problem
+        self.solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
+        self.max_steps = max_steps
+        self._residual = jax.jit(lambda x, s: problem.residual(x, s))
+        self._jacobian = jax.jit(jax.jacfwd(lambda x, s: problem.residual(x, s), argnums=(0, 1)))
+        self._solve = eqx.filter_jit(self._solve_impl)
+
+    def _solve_impl(self, z0, onehot):
+        return optx.least_squares(_effect_residual, self.solver, z0, args=(self.problem, onehot),
+                                  options={"jac": "fwd"}, max_steps=self.max_steps, throw=False)
+
+    def residual(self, x, strengths) -> np.ndarray:
+        return np.asarray(self._residual(jnp.asarray(x), jnp.asarray(strengths)))
+
+    def jacobian(self, x, strengths) -> tuple[np.ndarray, np.ndarray]:
+        """(dr/dx_base, dr/dstrengths) of all points, forward mode."""
+        jx, js = self._jacobian(jnp.asarray(x), jnp.asarray(strengths))
+        return np.asarray(jx), np.asarray(js)
+
+    def fit(self, effect: str | None = None, x0=None, s0: float = 0.0) -> FitResult:
+        p = self.problem
+        nb = p.n_base
+        onehot = np.zeros(len(NAMES))
+        if effect is not None:
+            onehot[NAMES.index(effect)] = 1.0
+        x0 = np.zeros(nb) if x0 is None else np.asarray(x0, dtype=float)
+        scale = SCALES[NAMES.index(effect)] if effect is not None else 1.0
+        z0 = jnp.asarray(np.concatenate([x0, [s0 / scale]]))
+        t0 = time.perf_counter()
+        sol = self._solve(z0, jnp.asarray(onehot))
+        z = np.asarray(jax.block_until_ready(sol.value))
+        wall = time.perf_counter() - t0
+        steps = int(sol.stats["num_steps"])
+        what = "base model" if effect is None else f"base model + {effect}"
+        if not np.all(np.isfinite(z)):
+            raise SolverError(f"calibration of the {what}: the model failed during the fit "
+                              f"(non-finite parameters after {steps} steps)")
+        if sol.result != optx.RESULTS.successful:
+            raise SolverError(f"calibration of the {what}: Levenberg-Marquardt stopped without "
+                              f"converging ({sol.result}) after {steps} steps")
+        x, s = z[:nb], z[nb] * scale if effect is not None else 0.0
+        strengths = onehot * s
+        r = self.residual(x, strengths)
+        if not np.all(np.isfinite(r)):
+            raise SolverError(f"calibration of the {what}: the model failed at the solution "
+                              "(integrator failure: non-finite predictions)")
+        jx, js = self.jacobian(x, strengths)
+        fit_rows = ~p.holdout
+        j = jx[fit_rows]
+        if effect is not None:
+            j = np.column_stack([j, js[fit_rows, NAMES.index(effect)]])
+        cov = np.linalg.pinv(j.T @ j)
+        std_z = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        base = p.base(jnp.asarray(x))
+        params = {n: float(base[n]) for n in p.fit_names}
+        params_std = {n: float(params[n] * p.tau[i] * std_z[i])
+                      for i, n in enumerate(p.fit_names)}
+        pred = r * p.sigma + p.y
+        return FitResult(
+            effect=effect, params=params, params_std=params_std, strength=float(s),
+            strength_std=float(std_z[nb]) if effect is not None else 0.0,
+            chi2_fit=float(np.sum(r[fit_rows] ** 2)), n_fit=int(fit_rows.sum()),
+            chi2_holdout=float(np.sum(r[p.holdout] ** 2)), n_holdout=int(p.holdout.sum()),
+            residual=r, prediction=pred, iterations=steps, wall_time_s=wall,
+            notes={"x": x.tolist(), "jacobian_base": jx, "jacobian_effects": js})

@@ -109,15 +109,16 @@ def load(path: str | Path) -> Study:
     return loads(data, file=file)
 
 
-def decode(data: bytes, file: str) -> str:
-    """UTF-8 text of ``data`` (a leading byte-order mark is dropped)."""
+def decode(data: bytes, file: str, note: str = "TOML files are UTF-8") -> str:
+    """UTF-8 text of ``data`` (a leading byte-order mark is dropped); ``note`` ends
+    the error message's "allowed" part."""
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as err:
         line = data[: err.start].count(b"\n") + 1
         raise InputError(
             f"{file}: line {line}: byte {err.start} ({data[err.start:err.start + 1]!r}) is not "
-            f"UTF-8 ({err.reason}); allowed: UTF-8 text (TOML files are UTF-8)"
+            f"UTF-8 ({err.reason}); allowed: UTF-8 text ({note})"
         ) from None
     return text.removeprefix("\ufeff")
 

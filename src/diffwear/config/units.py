@@ -53,7 +53,9 @@ DIMENSIONS: dict[str, Dimension] = {
         "rad/s": Unit(_F(1)), "deg/s": Unit(_F(1, 180), 1), "rev/s": Unit(_F(2), 1),
         "rpm": Unit(_F(1, 30), 1),
     }, "30 rpm"),
-    "mass": Dimension("kg", {"kg": Unit(_F(1)), "g": Unit(_F(1, 1000))}, "10 kg"),
+    "mass": Dimension("kg", {
+        "kg": Unit(_F(1)), "g": Unit(_F(1, 1000)), "mg": Unit(_F(1, 10**6)),
+    }, "10 kg"),
     "inertia": Dimension("kg m^2", {
         "kg m^2": Unit(_F(1)), "kg cm^2": Unit(_F(1, 10**4)), "kg mm^2": Unit(_F(1, 10**6)),
         "g cm^2": Unit(_F(1, 10**7)), "g mm^2": Unit(_F(1, 10**9)),
@@ -80,6 +82,13 @@ DIMENSIONS: dict[str, Dimension] = {
         "Pa": Unit(_F(1)), "kPa": Unit(_F(1000)), "MPa": Unit(_F(10**6)),
         "GPa": Unit(_F(10**9)),
     }, "207 GPa"),
+    # worn volume (calibration data); mass / density gives it from a weighing
+    "volume": Dimension("m^3", {
+        "m^3": Unit(_F(1)), "cm^3": Unit(_F(1, 10**6)), "mm^3": Unit(_F(1, 10**9)),
+    }, "116 mm^3"),
+    "density": Dimension("kg/m^3", {
+        "kg/m^3": Unit(_F(1)), "g/cm^3": Unit(_F(1000)), "kg/dm^3": Unit(_F(1000)),
+    }, "2.25 g/cm^3"),
     # Hertz contact stiffness K of F = K delta^1.5 (Lankarani-Nikravesh law)
     "contact stiffness": Dimension("N/m^1.5", {"N/m^1.5": Unit(_F(1))}, "7e10 N/m^1.5"),
     # Archard k: worn volume per (normal load x sliding distance); 1/Pa = m^3/(N m)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 
+import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -137,7 +138,9 @@ class RigHistory(eqx.Module):
         mech, y0 = self.mechanism(base, strengths)
         el = mech.element(JOINT)
         period, a = self.period, self.extrapolation
-        kw = dict(rtol=self.cycle_rtol, atol=self.cycle_atol)
+        # forward-mode adjoint: the calibration differentiates with jacfwd
+        # (few parameters, many residuals)
+        kw = dict(rtol=self.cycle_rtol, atol=self.cycle_atol, adjoint=diffrax.ForwardMode())
         warm = wear_cycle(mech, JOINT, y0, 0.0, period, **kw)
         n = self.n_theta
 

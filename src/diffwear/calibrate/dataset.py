@@ -32,13 +32,11 @@ import numpy as np
 from ..config import units
 from ..config.loader import decode
 from ..config.schema import (
-    REQUIRED,
     Context,
     Field,
     Number,
     Quantity,
     Text,
-    check_table,
     check_unknown,
     read_array_of_tables,
     read_table,
@@ -327,7 +325,7 @@ def _section(ctx: Context, data: Mapping, key: str, fields: Mapping[str, Field],
         if required:
             raise ctx.error(key, "missing section", f"[{key}] with {example}")
         raw = {}
-    return read_table(ctx, key, raw, fields, example)
+    return read_table(ctx, key, _table(ctx, key, raw, f"[{key}] with {example}"), fields)
 
 
 def _build(folder: Path, ctx: Context, data: Mapping) -> Dataset:
@@ -377,7 +375,8 @@ def _parameters(ctx: Context, raw) -> dict[str, Parameter]:
     example = 'k = { value = "5.05e-4 mm^3/(N m)", fit = true }'
     if raw is None:
         raise ctx.error("parameters", "missing section", f"[parameters] with e.g. {example}")
-    table = check_table(ctx, "parameters", raw, f"<name> = {{ value, std, fit }}, e.g. {example}")
+    table = _table(ctx, "parameters", raw, f"[parameters] with <name> = {{ value, std, fit }}, "
+                   f"e.g. {example}")
     for name in table:
         if name not in PARAMETERS:
             raise ctx.error(f"parameters.{name}",
@@ -388,8 +387,7 @@ def _parameters(ctx: Context, raw) -> dict[str, Parameter]:
         if name not in table:
             continue
         path = f"parameters.{name}"
-        entry = check_table(ctx, path, table[name],
-                            f"{name} = {{ value = ..., std = ..., fit = true }}")
+        entry = _table(ctx, path, table[name], f"{name} = {{ value = ..., std = ..., fit = ... }}")
         v = read_table(ctx, path, entry, _parameter_fields(dimension))
         out[name] = Parameter(name, v["value"], v["std"], v["fit"])
     if not any(p.fit for p in out.values()):
@@ -397,6 +395,12 @@ def _parameters(ctx: Context, raw) -> dict[str, Parameter]:
         raise ctx.error("parameters", f"no parameter has fit = true (given: {given})",
                         f"fit = true on at least one parameter to calibrate: {PARAMETER_RULE}")
     return out
+
+
+def _table(ctx: Context, path: str, raw, allowed: str) -> dict:
+    if not isinstance(raw, dict):
+        raise ctx.error(path, f"expected a table, got {toml_type(raw)} {show(raw)}", allowed)
+    return raw
 
 
 def _series(ctx: Context, folder: Path, k: int, table: dict, density: float | None,
@@ -417,6 +421,9 @@ def _series(ctx: Context, folder: Path, k: int, table: dict, density: float | No
         raise ctx.error(f"{path}.cycles", f"not allowed for a {kind} series (its CSV has a "
                         "cycles column, one count per row)",
                         "remove the key; cycles = <count> is for profile and force series")
+    if "cycles" not in table and spec.cycles_key:
+        raise ctx.error(f"{path}.cycles", f"missing key (the cycle count at which the {kind} "
+                        "was measured)", "cycles = <count> >= 0, e.g. cycles = 2000")
     if "basis" in table and kind != "volume":
         raise ctx.error(f"{path}.basis", f"not allowed for a {kind} series",
                         "basis only on volume series")
@@ -520,8 +527,8 @@ def _header(file: str, line: int, cells: list[str], kind: str) -> tuple[str, str
     seen = set()
     for c in cells:
         if not c:
-            raise _csv_error(file, line, None, f"empty column name in header {show(','.join(cells))}",
-                             rule)
+            raise _csv_error(file, line, None,
+                             f"empty column name in header {show(','.join(cells))}", rule)
         if c in seen:
             raise _csv_error(file, line, c, "the column is named twice", rule)
         seen.add(c)

@@ -7,7 +7,6 @@ settings (2 cores: the file runs in about two minutes, 125 s measured).
 
 from __future__ import annotations
 
-import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp

@@ -11,8 +11,8 @@ function of the unknowns z:
   by a one-hot vector passed as data, so the base fit and every effect's
   refit share one compiled solver.
 
-`fit` solves min ||r_fit(z)||^2 with optimistix's Levenberg-Marquardt
-(Jacobian by forward-mode autodiff), then reports the parameters with their
+`fit` solves min ||r_fit(z)||^2 by Levenberg-Marquardt (`Fitter`; Jacobian by
+forward-mode autodiff), then reports the parameters with their
 1-sigma uncertainties from the Gauss-Newton covariance (J^T J)^-1 of the fit
 points, and the residuals of the held-out points.  A solver failure raises
 `SolverError`; a model failure (integrator) inside the fit is reported as
@@ -29,7 +29,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 
 from ..errors import InputError, SolverError
 from .dataset import Dataset
@@ -55,18 +54,20 @@ class ModelSettings:
                           cycle_atol=self.cycle_rtol)
 
 
-class Problem(eqx.Module):
-    """The dataset as residuals of the model (see module notes)."""
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """The dataset as residuals of the model (see module notes).  Plain data
+    closed over by the jitted functions (hashable by identity)."""
 
     model: RigHistory
     observations: tuple
-    y: np.ndarray = eqx.field(static=True)
-    sigma: np.ndarray = eqx.field(static=True)
-    holdout: np.ndarray = eqx.field(static=True)
-    series_of_point: np.ndarray = eqx.field(static=True)
-    fit_names: tuple = eqx.field(static=True)
+    y: np.ndarray
+    sigma: np.ndarray
+    holdout: np.ndarray
+    series_of_point: np.ndarray
+    fit_names: tuple
     base0: dict
-    tau: np.ndarray = eqx.field(static=True)
+    tau: np.ndarray
 
     @classmethod
     def from_dataset(cls, data: Dataset, settings: ModelSettings = ModelSettings()):
@@ -117,15 +118,6 @@ class Problem(eqx.Module):
 SCALES = np.array([e.scale for e in EFFECTS])
 
 
-def _effect_residual(z, args):
-    """Residuals of the fit points at z = (x_base, s / scale); args = (problem,
-    one-hot effect vector)."""
-    problem, onehot = args
-    strengths = onehot * SCALES * z[-1]
-    r = problem.residual(z[:-1], strengths)
-    return r[~problem.holdout]
-
-
 @dataclass
 class FitResult:
     """One fit: ``effect`` (None: the base model), parameter values (SI) and
@@ -162,19 +154,74 @@ class FitResult:
 
 
 class Fitter:
-    """Compiled pieces shared by all fits of one problem."""
+    """Compiled pieces shared by all fits of one problem, and the
+    Levenberg-Marquardt iteration (Marquardt's diagonal scaling).
 
-    def __init__(self, problem: Problem, *, rtol=1e-6, atol=1e-6, max_steps=40):
+    Why not optimistix here: its trust-region LM took 39+ steps on this
+    problem (the model's adaptive steps make chi2 slightly rough at the 1e-3
+    scale, and its ratio test keeps shrinking the region), about 4 minutes per
+    fit; the plain Marquardt loop below accepts a Gauss-Newton-like step in 3-6
+    iterations.  Each iteration is one forward-mode pass giving r and J
+    together (`jax.jacfwd` with ``has_aux``), compiled once for the base fit and
+    every refit (the effect is selected by a one-hot vector passed as data).
+    Unknowns z are in units of each parameter's stated spread (tau) or of an
+    effect's scale, so the step tolerance ``xtol`` reads "1 % of a spread".
+    """
+
+    def __init__(self, problem: Problem, *, xtol=1e-2, ftol=1e-4, max_steps=20):
         self.problem = problem
-        self.solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
-        self.max_steps = max_steps
+        self.xtol, self.ftol, self.max_steps = xtol, ftol, max_steps
         self._residual = jax.jit(lambda x, s: problem.residual(x, s))
         self._jacobian = jax.jit(jax.jacfwd(lambda x, s: problem.residual(x, s), argnums=(0, 1)))
-        self._solve = eqx.filter_jit(self._solve_impl)
 
-    def _solve_impl(self, z0, onehot):
-        return optx.least_squares(_effect_residual, self.solver, z0, args=(self.problem, onehot),
-                                  options={"jac": "fwd"}, max_steps=self.max_steps, throw=False)
+        def both(z, onehot):
+            r = self._fit_residual(z, onehot)
+            return r, r
+
+        self._value_and_jac = jax.jit(jax.jacfwd(both, has_aux=True))
+        self.evaluations = 0
+
+    def _fit_residual(self, z, onehot):
+        """Residuals of the fit points at z = (x_base, s / scale); ``onehot``
+        selects the effect (zeros: the base model)."""
+        p = self.problem
+        strengths = onehot * SCALES * z[-1]
+        return p.residual(z[:-1], strengths)[~p.holdout]
+
+    def _evaluate(self, z, onehot):
+        jac, r = self._value_and_jac(jnp.asarray(z), onehot)
+        self.evaluations += 1
+        return np.asarray(r), np.asarray(jac)
+
+    def _levenberg_marquardt(self, z, onehot, free, what):
+        r, jac = self._evaluate(z, onehot)
+        if not np.all(np.isfinite(r)):
+            raise SolverError(f"calibration of the {what}: the model failed at the start "
+                              "(integrator failure: non-finite predictions)")
+        chi2, lam, steps = float(r @ r), 1e-3, 0
+        for steps in range(1, self.max_steps + 1):
+            j = jac[:, free]
+            a, g = j.T @ j, j.T @ r
+            d = np.maximum(np.diag(a), 1e-12 * max(np.max(np.diag(a)), 1e-300))
+            while True:
+                dz = np.zeros_like(z)
+                dz[free] = np.linalg.solve(a + lam * np.diag(d), -g)
+                r_new, jac_new = self._evaluate(z + dz, onehot)
+                chi2_new = float(r_new @ r_new) if np.all(np.isfinite(r_new)) else math.inf
+                if chi2_new <= chi2:
+                    break
+                lam *= 4.0
+                if np.max(np.abs(dz)) < self.xtol:
+                    # even a step of < xtol raises chi2: a minimum, down to the
+                    # model's adaptive-step noise
+                    return z, steps, jac
+            drop = chi2 - chi2_new
+            z, r, jac, chi2 = z + dz, r_new, jac_new, chi2_new
+            lam = max(lam / 3.0, 1e-7)
+            if np.max(np.abs(dz)) < self.xtol or drop < self.ftol * chi2:
+                return z, steps, jac
+        raise SolverError(f"calibration of the {what}: Levenberg-Marquardt did not converge in "
+                          f"{self.max_steps} steps (chi2 {chi2:.6g})")
 
     def residual(self, x, strengths) -> np.ndarray:
         return np.asarray(self._residual(jnp.asarray(x), jnp.asarray(strengths)))
@@ -192,32 +239,26 @@ class Fitter:
             onehot[NAMES.index(effect)] = 1.0
         x0 = np.zeros(nb) if x0 is None else np.asarray(x0, dtype=float)
         scale = SCALES[NAMES.index(effect)] if effect is not None else 1.0
-        z0 = jnp.asarray(np.concatenate([x0, [s0 / scale]]))
-        t0 = time.perf_counter()
-        sol = self._solve(z0, jnp.asarray(onehot))
-        z = np.asarray(jax.block_until_ready(sol.value))
-        wall = time.perf_counter() - t0
-        steps = int(sol.stats["num_steps"])
+        z0 = np.concatenate([x0, [s0 / scale]])
+        free = np.ones(nb + 1, bool)
+        free[nb] = effect is not None
         what = "base model" if effect is None else f"base model + {effect}"
-        if not np.all(np.isfinite(z)):
-            raise SolverError(f"calibration of the {what}: the model failed during the fit "
-                              f"(non-finite parameters after {steps} steps)")
-        if sol.result != optx.RESULTS.successful:
-            raise SolverError(f"calibration of the {what}: Levenberg-Marquardt stopped without "
-                              f"converging ({sol.result}) after {steps} steps")
+        t0 = time.perf_counter()
+        z, steps, jz = self._levenberg_marquardt(z0, jnp.asarray(onehot), free, what)
+        wall = time.perf_counter() - t0
         x, s = z[:nb], z[nb] * scale if effect is not None else 0.0
         strengths = onehot * s
         r = self.residual(x, strengths)
         if not np.all(np.isfinite(r)):
             raise SolverError(f"calibration of the {what}: the model failed at the solution "
                               "(integrator failure: non-finite predictions)")
-        jx, js = self.jacobian(x, strengths)
         fit_rows = ~p.holdout
-        j = jx[fit_rows]
-        if effect is not None:
-            j = np.column_stack([j, js[fit_rows, NAMES.index(effect)]])
-        cov = np.linalg.pinv(j.T @ j)
-        std_z = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        # Gauss-Newton covariance of z from the last Jacobian (fit points)
+        cov = np.linalg.pinv(jz[:, free].T @ jz[:, free])
+        std_z = np.zeros(nb + 1)
+        std_z[free] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        # the base fit also keeps the Jacobian w.r.t. every strength: the score tests
+        jx, js = self.jacobian(x, strengths) if effect is None else (None, None)
         base = p.base(jnp.asarray(x))
         params = {n: float(base[n]) for n in p.fit_names}
         params_std = {n: float(params[n] * p.tau[i] * std_z[i])
@@ -225,7 +266,7 @@ class Fitter:
         pred = r * p.sigma + p.y
         return FitResult(
             effect=effect, params=params, params_std=params_std, strength=float(s),
-            strength_std=float(std_z[nb]) if effect is not None else 0.0,
+            strength_std=float(std_z[nb] * scale) if effect is not None else 0.0,
             chi2_fit=float(np.sum(r[fit_rows] ** 2)), n_fit=int(fit_rows.sum()),
             chi2_holdout=float(np.sum(r[p.holdout] ** 2)), n_holdout=int(p.holdout.sum()),
             residual=r, prediction=pred, iterations=steps, wall_time_s=wall,

@@ -39,6 +39,9 @@ LR_CRITICAL = 10.83    # chi-square(1) at p = 0.001
 STRENGTH_SIGMAS = 3.0  # |s| / std(s) of an adopted effect
 GOF_SIGMAS = 4.0       # chi2 above dof + 4 sqrt(2 dof): residual not noise
 DEFAULT_TOP = 3
+# An effect is refitted only if the fit points leave degrees of freedom after
+# it: with none, any candidate fits exactly and nothing can be told apart.
+MIN_DOF_FOR_EFFECT = 2
 
 
 @dataclass
@@ -155,7 +158,11 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     log("scores: " + ", ".join(f"{s.effect} {s.statistic:.3g}" for s in scores))
     refits, qualifying = {}, []
     x0 = np.asarray(base.notes["x"])
-    for s in scores[:top]:
+    too_few = base.n_fit - problem.n_base - 1 < MIN_DOF_FOR_EFFECT
+    if too_few:
+        log(f"{base.n_fit} fit points for {problem.n_base} parameters: too few to fit an effect "
+            "strength as well; candidates are scored, not refitted")
+    for s in ([] if too_few else scores[:top]):
         if s.statistic <= 0.0:
             continue
         eff = EFFECTS[NAMES.index(s.effect)]

@@ -19,6 +19,7 @@ makes them) and periodic-linear in angle between grid nodes.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import diffrax
 import equinox as eqx
@@ -52,6 +53,11 @@ BASE_NAMES = ("k", "clearance", "depth", "diameter", "mu", "free_length")
 # mm^3 at A = 1000 / 500 / 250: the peak still oscillates at A = 500 (-5 %),
 # the volume has converged (0.3 %).  250 keeps the profile within a few %.
 MAX_EXTRAPOLATION = 250.0
+# Contact-onset band of the EFM springs: 1 um (as the Ch. 8 life model,
+# design.two_joint): with the law's default band the forward-mode tangents of
+# a cycle are ~100x the central differences (the smoothed onset is nearly a
+# jump at fixed steps); with 1 um they agree (tests/test_calibrate.py).
+PENETRATION_WIDTH = 1e-6  # m
 MAX_DEPTH_TEMPERATURE = 1e-7  # m, smooth max of the profile (as sweep.RigWear)
 
 
@@ -94,6 +100,7 @@ class RigHistory(eqx.Module):
     force_samples: int = eqx.field(static=True, default=91)
     cycle_rtol: float = eqx.field(static=True, default=1e-6)
     cycle_atol: float = eqx.field(static=True, default=1e-6)
+    penetration_width: float | None = eqx.field(static=True, default=PENETRATION_WIDTH)
     p: SliderCrankParameters = TABLE_7_1
 
     def __check_init__(self):
@@ -124,7 +131,8 @@ class RigHistory(eqx.Module):
                                           extra_forces=(friction,))
         design = WearJointDesign(base["k"], base["clearance"], base["depth"], base["diameter"],
                                  RIG_JOINT.wall, base["mu"], RIG_JOINT.restitution)
-        mech = with_wear_joint(mech0, design, n_theta=self.n_theta)
+        mech = with_wear_joint(mech0, design, n_theta=self.n_theta,
+                               penetration_width=self.penetration_width)
         index, _ = clearance_element(mech, JOINT)
         wear = ModifiedArchardWear(base["k"], strengths[INDEX["pressure_exponent"]],
                                    strengths[INDEX["pv_wear"]])
@@ -183,21 +191,23 @@ def periodic_interp(x, xp, fp):
     return jnp.interp(x, xp, fp, period=2 * jnp.pi)
 
 
-class Observation(eqx.Module):
+@dataclass(frozen=True, eq=False)
+class Observation:
     """One measured series as a function of the `History` (SI values).
 
     ``kind``: "profile" (depth at bushing angles ``x`` after ``cycles``),
     "volume" (worn volume at cycle counts ``x``; ``basis`` "mass": wear only,
     "profile": wear + creep), "max_depth" (at cycle counts ``x``), "force"
     (|joint force| at crank angles ``x`` during the dynamic cycle that starts
-    nearest ``cycles``).  ``extrapolation``/``dynamic_cycles``: the model's."""
+    nearest ``cycles``).  ``extrapolation``/``dynamic_cycles``: the model's.
+    A plain (hashable by identity) object: it is closed over, not traced."""
 
-    kind: str = eqx.field(static=True)
-    x: np.ndarray = eqx.field(static=True)
-    extrapolation: float = eqx.field(static=True)
-    dynamic_cycles: int = eqx.field(static=True)
-    cycles: float = eqx.field(static=True, default=0.0)
-    basis: str = eqx.field(static=True, default="mass")
+    kind: str
+    x: np.ndarray
+    extrapolation: float
+    dynamic_cycles: int
+    cycles: float = 0.0
+    basis: str = "mass"
 
     @property
     def force_cycle(self) -> int:

@@ -71,6 +71,9 @@ def synthesize(folder, *, name: str, effect: str | None = None, strength: float 
         return np.asarray(Observation(kind, np.asarray(x, float), a, d, cycles=cycles,
                                       basis=basis)(history))
 
+    def held(counts):
+        return np.asarray(counts, float) >= plan.holdout_from_cycles
+
     series = []
     theta = 2 * np.pi * np.arange(plan.profile_angles) / plan.profile_angles
     for n in plan.profile_cycles:
@@ -80,16 +83,18 @@ def synthesize(folder, *, name: str, effect: str | None = None, strength: float 
         depth = np.maximum(depth + rng.normal(0.0, plan.profile_sigma, theta.shape), 0.0)
         series.append(Series(f"profile_{int(n):05d}", "profile",
                              Path(f"profile_{int(n):05d}.csv"), n, theta, depth,
-                             plan.profile_sigma))
+                             plan.profile_sigma, holdout=np.full(theta.shape, held(n))))
     vc = np.asarray(plan.volume_cycles, float)
     mass = observe("volume", vc) * PTFE_DENSITY + rng.normal(0.0, plan.mass_sigma, vc.shape)
     series.append(Series("worn_volume", "volume", Path("worn_mass.csv"), None, vc,
-                         mass / PTFE_DENSITY, plan.mass_sigma / PTFE_DENSITY, basis="mass"))
+                         mass / PTFE_DENSITY, plan.mass_sigma / PTFE_DENSITY, holdout=held(vc),
+                         basis="mass"))
     angle = 2 * np.pi * np.arange(plan.force_angles) / plan.force_angles
     for n in plan.force_cycles:
         force = observe("force", angle, n) + rng.normal(0.0, plan.force_sigma, angle.shape)
         series.append(Series(f"force_{int(n):05d}", "force", Path(f"force_{int(n):05d}.csv"),
-                             n, angle, force, plan.force_sigma))
+                             n, angle, force, plan.force_sigma,
+                             holdout=np.full(angle.shape, held(n))))
     params = {}
     for key, value in base.items():
         if key in plan.fit:

@@ -1,0 +1,236 @@
+"""``diffwear calibrate DATA_DIR --out DIR``: the measured-data loop and its report.
+
+Writes ``summary.json`` (effect_identified, effect_strength,
+effect_strength_std, heldout_rmse_before/after, candidates, ...),
+``residuals.csv`` (every point: series, kind, x, data, base and final model,
+normalised residuals, held out or not), ``fit_<series>.png`` (data against the
+base and the final model), ``residual_structure.png`` (residual against bushing
+angle, against cycle count, and the force residual's harmonic spectrum),
+``candidates.png`` (score statistics) and ``report.md`` linking them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..io import OutputDir  # noqa: E402
+from .dataset import load_dataset  # noqa: E402
+from .effects import EFFECTS  # noqa: E402
+from .fit import ModelSettings  # noqa: E402
+from .identify import GOF_SIGMAS, LR_CRITICAL, STRENGTH_SIGMAS, Calibration, calibrate  # noqa: E402
+
+DESCRIPTION = "calibrate the rig model on measured wear data and identify a missing effect"
+UNIT = {"profile": (1e6, "um", "bushing angle [rad]"), "max_depth": (1e3, "mm", "cycles"),
+        "volume": (1e9, "mm^3", "cycles"), "force": (1.0, "N", "crank angle [rad]")}
+
+
+def residual_structure(c: Calibration) -> dict:
+    """Where the base fit's residual sits (numbers for the report)."""
+    p, r = c.problem, c.base.residual
+    out = {}
+    kinds = [s.kind for s in c.dataset.series]
+    which = p.series_of_point
+    prof = np.isin(which, [k for k, kd in enumerate(kinds) if kd == "profile"])
+    if prof.any():
+        theta = np.concatenate([s.x for s in c.dataset.series if s.kind == "profile"])
+        bins = np.linspace(0, 2 * np.pi, 13)
+        idx = np.clip(np.digitize(theta, bins) - 1, 0, 11)
+        rp = r[prof]
+        out["profile_rms_by_30deg_sector"] = [
+            float(np.sqrt(np.mean(rp[idx == b] ** 2))) if np.any(idx == b) else None
+            for b in range(12)]
+    cyc = np.concatenate([s.cycle_counts for s in c.dataset.series])
+    for kind in ("profile", "volume", "max_depth", "force"):
+        m = np.isin(which, [k for k, kd in enumerate(kinds) if kd == kind])
+        if not m.any():
+            continue
+        levels = np.unique(cyc[m])
+        out[f"{kind}_mean_residual_by_cycles"] = {
+            f"{n:g}": float(np.mean(r[m & (cyc == n)])) for n in levels[:40]}
+    force = [k for k, kd in enumerate(kinds) if kd == "force"]
+    if force:
+        k = force[0]
+        m = which == k
+        x = c.dataset.series[k].x
+        if x.size >= 8:
+            # harmonic content of the residual (crank orders), uneven angles
+            # allowed: least squares on cos/sin of orders 1..8
+            orders = np.arange(1, min(9, x.size // 2))
+            basis = np.column_stack([f(o * x) for o in orders for f in (np.cos, np.sin)])
+            coef, *_ = np.linalg.lstsq(basis, r[m] - r[m].mean(), rcond=None)
+            amp = np.hypot(coef[0::2], coef[1::2])
+            out["force_residual_harmonics"] = {int(o): float(a) for o, a in zip(orders, amp)}
+            # slider reversal: crank angle 0 and pi (+-20 deg) vs elsewhere
+            near = np.minimum(np.abs(np.angle(np.exp(1j * x))),
+                              np.abs(np.angle(np.exp(1j * (x - np.pi))))) < np.radians(20)
+            rr = r[m]
+            out["force_residual_rms_near_reversal"] = float(np.sqrt(np.mean(rr[near] ** 2))) \
+                if near.any() else None
+            out["force_residual_rms_elsewhere"] = float(np.sqrt(np.mean(rr[~near] ** 2))) \
+                if (~near).any() else None
+    if any(s.kind == "volume" and s.basis == "mass" for s in c.dataset.series) and prof.any():
+        # data-only check: volume of the measured profiles vs weighed volume
+        out["note_mass_vs_profile"] = ("compare the 'volume' residual (mass-based) with the "
+                                       "profile residual: a profile that grows without mass "
+                                       "loss (creep) shows as a positive profile residual and "
+                                       "an unbiased mass residual")
+    return out
+
+
+def _plots(out: OutputDir, c: Calibration) -> list[str]:
+    files = []
+    p = c.problem
+    which = p.series_of_point
+    for k, s in enumerate(c.dataset.series):
+        m = which == k
+        scale, unit, xlabel = UNIT[s.kind]
+        fig, ax = plt.subplots(figsize=(6.4, 3.6))
+        ax.errorbar(s.x, s.y * scale, yerr=s.sigma * scale, fmt=".", ms=3, color="k",
+                    label="data", alpha=0.7)
+        order = np.argsort(s.x)
+        ax.plot(s.x[order], c.base.prediction[m][order] * scale, "-", label="base fit")
+        if c.chosen is not c.base:
+            ax.plot(s.x[order], c.chosen.prediction[m][order] * scale, "--",
+                    label=f"with {c.chosen.effect}")
+        if s.holdout.any():
+            ax.plot(s.x[s.holdout], s.y[s.holdout] * scale, "o", mfc="none", color="r",
+                    ms=6, label="held out")
+        title = s.name + (f" (N = {s.cycles:g})" if s.cycles is not None else "")
+        ax.set(xlabel=xlabel, ylabel=f"{s.kind} [{unit}]", title=title)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        name = f"fit_{s.name}.png"
+        fig.savefig(out.file(name), dpi=110)
+        plt.close(fig)
+        files.append(name)
+    # residual structure
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
+    cyc = np.concatenate([s.cycle_counts for s in c.dataset.series])
+    for k, s in enumerate(c.dataset.series):
+        m = which == k
+        if s.kind == "profile":
+            axes[0].plot(s.x, c.base.residual[m], ".", ms=3, label=f"N = {s.cycles:g}")
+        axes[1].plot(cyc[m], c.base.residual[m], ".", ms=3, label=s.name)
+    axes[0].set(xlabel="bushing angle [rad]", ylabel="base residual [sigma]",
+                title="profile residual vs angle")
+    axes[1].set(xlabel="cycles", ylabel="base residual [sigma]", title="residual vs cycles")
+    for ax in axes[:2]:
+        ax.axhline(0, color="0.5", lw=0.8)
+        ax.legend(fontsize=6)
+    h = residual_structure(c).get("force_residual_harmonics")
+    if h:
+        axes[2].bar(list(h), list(h.values()))
+        axes[2].set(xlabel="crank order", ylabel="amplitude [sigma]",
+                    title="force residual harmonics")
+    else:
+        axes[2].set_axis_off()
+    fig.tight_layout()
+    fig.savefig(out.file("residual_structure.png"), dpi=110)
+    plt.close(fig)
+    files.append("residual_structure.png")
+    fig, ax = plt.subplots(figsize=(6.4, 3.2))
+    ax.barh([s.effect for s in c.scores][::-1], [s.statistic for s in c.scores][::-1])
+    ax.axvline(LR_CRITICAL, color="r", ls="--", lw=1, label="p = 0.001")
+    ax.set(xscale="symlog", xlabel="score statistic (chi-square(1) under 'no effect')")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out.file("candidates.png"), dpi=110)
+    plt.close(fig)
+    files.append("candidates.png")
+    return files
+
+
+def _fmt(v, digits=4):
+    return "n/a" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{digits}g}"
+
+
+def _report(c: Calibration, summary: dict, files: list[str]) -> str:
+    d = c.dataset
+    lines = [f"# Calibration: {d.name}", "", d.description or "", "",
+             f"Dataset `{d.path}`: {len(d.series)} series, "
+             f"{c.base.n_fit} fit points, {c.base.n_holdout} held-out points; fitted: "
+             f"{', '.join(d.fit_names)}.  Model: {summary['model']['dynamic_cycles']} dynamic "
+             f"cycles of A = {summary['model']['extrapolation']:g} real cycles, "
+             f"{summary['model']['n_theta']} profile nodes.  Residuals are in units of each "
+             "series' stated 1-sigma noise.", ""]
+    for note in d.notes:
+        lines += [f"> {note}", ""]
+    if c.base.n_fit <= len(d.fit_names) + 2:
+        lines += [f"**What these data can support:** {c.base.n_fit} numbers for "
+                  f"{len(d.fit_names)} fitted parameters leave {c.base.dof} degree(s) of "
+                  "freedom: enough to calibrate, not to tell candidate effects apart (a "
+                  "score test needs residual structure: profiles at several cycle counts, "
+                  "a mass history or a force trace).", ""]
+    ident = summary["effect_identified"]
+    lines += ["## Result", "",
+              f"- effect identified: **{ident}**"
+              + (f", strength {_fmt(summary['effect_strength'])} +- "
+                 f"{_fmt(summary['effect_strength_std'], 2)} (1 sigma)" if ident != "none"
+                 else ""),
+              f"- residual unexplained: {'**yes**' if summary['residual_unexplained'] else 'no'}"
+              f" (chi2 {c.gof['chi2']:.1f} on {c.gof['dof']} dof; noise allows "
+              f"{c.gof['limit']:.1f})", ""]
+    lines += ["| | base model | final model |", "|---|---|---|",
+              f"| held-out RMSE [sigma] | {_fmt(summary['heldout_rmse_before'])} | "
+              f"{_fmt(summary['heldout_rmse_after'])} |",
+              f"| fit RMSE [sigma] | {_fmt(summary['fit_rmse_before'])} | "
+              f"{_fmt(summary['fit_rmse_after'])} |"]
+    final = c.chosen if ident != "none" else c.base
+    for n in d.fit_names:
+        lines.append(f"| {n} | {_fmt(c.base.params[n])} +- {_fmt(c.base.params_std[n], 2)} | "
+                     f"{_fmt(final.params[n])} +- {_fmt(final.params_std[n], 2)} |")
+    lines += ["", "## Candidates", "",
+              "Score test at zero strength from the base fit (module "
+              "`diffwear.calibrate.identify`); the best few refitted.  A candidate qualifies "
+              f"with a likelihood-ratio drop > {LR_CRITICAL}, |s| >= {STRENGTH_SIGMAS} sigma on "
+              "the allowed side and a lower held-out chi2; the penalised criterion (BIC) "
+              "chooses among them, and the result must leave noise-sized residuals "
+              f"(chi2 <= dof + {GOF_SIGMAS} sqrt(2 dof)).", "",
+              "| effect | score | p | refit strength | held-out RMSE | qualifies |",
+              "|---|---|---|---|---|---|"]
+    for cand in summary["candidates"]:
+        refit = ("" if "refit_strength" not in cand else
+                 f"{_fmt(cand['refit_strength'])} +- {_fmt(cand['refit_strength_std'], 2)}")
+        ho = _fmt(cand.get("refit_heldout_rmse")) if "refit_strength" in cand else ""
+        q = ("yes" if cand.get("qualifies") else "no") if "refit_strength" in cand else ""
+        lines.append(f"| {cand['name']} | {_fmt(cand['score'])} | {_fmt(cand['p_value'], 2)} | "
+                     f"{refit} | {ho} | {q} |")
+    lines += ["", "Library: " + "; ".join(f"`{e.name}`: {e.description}" for e in EFFECTS), "",
+              "## Residual structure (base fit)", ""]
+    for key, value in residual_structure(c).items():
+        if isinstance(value, dict):
+            value = ", ".join(f"{k}: {_fmt(v, 3)}" for k, v in value.items())
+        elif isinstance(value, list):
+            value = ", ".join(_fmt(v, 3) for v in value)
+        lines.append(f"- {key.replace('_', ' ')}: {value}")
+    lines += ["", "## Plots", ""] + [f"![{f}]({f})" for f in files]
+    lines += ["", f"Wall time {c.wall_time_s:.0f} s.", ""]
+    return "\n".join(lines)
+
+
+def run(data_dir, out: OutputDir, *, settings: ModelSettings = ModelSettings(), top: int = 3,
+        log=print) -> dict:
+    data = load_dataset(data_dir)  # the caller loads first too (bad input before --out)
+    c = calibrate(data, settings, top=top, log=log)
+    summary = c.summary()
+    files = _plots(out, c)
+    p = c.problem
+    final = c.chosen if summary["effect_identified"] != "none" else c.base
+    names = [s.name for s in data.series]
+    out.csv("residuals.csv", {
+        "series": p.series_of_point, "x": np.concatenate([s.x for s in data.series]),
+        "data": p.y, "base_model": c.base.prediction, "final_model": final.prediction,
+        "base_residual": c.base.residual, "final_residual": final.residual,
+        "held_out": p.holdout.astype(int)})
+    summary["series"] = names
+    summary["plots"] = files
+    out.text("report.md", _report(c, summary, files))
+    out.json("summary.json", summary)
+    log(f"wrote {out.path}")
+    return summary

@@ -232,7 +232,8 @@ def test_write_dataset_refuses_to_overwrite(tmp_path):
 
 
 def test_documented_example_loads(tmp_path):
-    doc = (ROOT / "src" / "diffwear" / "calibrate" / "FORMAT.md").read_text()
+    readme = (ROOT / "README.md").read_text()
+    doc = readme.split("### The dataset format")[1].split("\n## ")[0]
     manifest = re.search(r"```toml\n(.*?)```", doc, re.S).group(1)
     csvs = dict(re.findall(r"`([\w.-]+\.csv)`:\n\n```csv\n(.*?)```", doc, re.S))
     assert len(csvs) >= 3

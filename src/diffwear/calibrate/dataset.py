@@ -2,8 +2,8 @@
 
 `load_dataset` reads a folder into a `Dataset` (everything in SI units);
 `write_dataset` writes one (used by data generators) so that loading it back
-gives the same values to ~1 ulp.  The format is documented in ``FORMAT.md``
-next to this file.
+gives the same values to ~1 ulp.  The format is documented in the README
+("The dataset format").
 
 Every problem raises `InputError` naming the file (``dataset.toml`` or the
 CSV), the key path or the CSV line and column, the bad value and what is
@@ -685,7 +685,7 @@ def _rule_holdout(s: Series, holdout_from: float | None) -> np.ndarray:
 
 def _manifest_text(name, description, preset, parameters, series, bushing_density,
                    holdout_from_cycles) -> str:
-    lines = ["# measured wear data (diffwear.calibrate format, see FORMAT.md)",
+    lines = ["# measured wear data (diffwear.calibrate format, see the diffwear README)",
              "[dataset]", f"name = {_toml_string(name)}"]
     if description:
         lines.append(f"description = {_toml_string(description)}")

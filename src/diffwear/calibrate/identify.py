@@ -16,8 +16,8 @@
    (with held-out data) its held-out chi-square is lower than the base model's.
    Among qualifying candidates the penalised criterion chi2_fit + chi2_holdout
    + ln(n_fit) per added strength (BIC) decides.
-4. Goodness of fit: the chosen model must leave residuals consistent with the
-   stated noise, chi2 <= dof + `GOF_SIGMAS` sqrt(2 dof) over all points.
+4. Goodness of fit: the chosen model must leave fit-point residuals
+   consistent with the stated noise, chi2 <= dof + `GOF_SIGMAS` sqrt(2 dof).
    Otherwise nothing in the library explains the data: ``effect_identified``
    is "none" and ``residual_unexplained`` is true (the best partial candidate
    is reported, not adopted).
@@ -131,9 +131,10 @@ def score_tests(fitter: Fitter, base: FitResult) -> list[Score]:
 
 
 def _gof(fit: FitResult) -> dict:
-    chi2 = fit.chi2_fit + fit.chi2_holdout
-    n = fit.n_fit + fit.n_holdout
-    dof = max(n - len(fit.params) - (fit.effect is not None), 1)
+    """Goodness of fit on the fit points.  (Held-out residuals also carry the
+    parameter uncertainty propagated forward, so they are compared before and
+    after, not against the noise.)"""
+    chi2, dof = fit.chi2_fit, max(fit.dof, 1)
     limit = dof + GOF_SIGMAS * math.sqrt(2 * dof)
     return {"chi2": chi2, "dof": dof, "limit": limit, "consistent_with_noise": chi2 <= limit}
 

@@ -161,3 +161,16 @@ def test_resumed_wear_study_equals_uninterrupted(interrupted_dir, tmp_path):
     a, b = (json.loads((d / "summary.json").read_text()) for d in (out, ref))
     for key in ("max_wear_depth_mm", "wear_volume_mm3", "archard_k_times_load_sliding_mm3"):
         assert a[key] == pytest.approx(b[key], rel=1e-12), key
+
+
+@pytest.mark.parametrize("command", [[], ["study"], ["run"], ["sweep"], ["design"],
+                                     ["calibrate"]])
+def test_every_command_has_help(command, capsys):
+    """`diffwear [COMMAND] --help` prints usage with the consistent options and exits 0."""
+    with pytest.raises(SystemExit) as e:
+        main([*command, "--help"])
+    assert e.value.code == 0
+    text = capsys.readouterr().out
+    assert "usage: diffwear" in text
+    if command:
+        assert "--out" in text and "--quiet" in text

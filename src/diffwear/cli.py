@@ -142,7 +142,7 @@ def _calibrate(args: argparse.Namespace) -> int:
     from .calibrate.study import run
     from .io import OutputDir
 
-    load_dataset(args.data)  # every input check happens before --out is touched
+    data = load_dataset(args.data)  # every input check happens before --out is touched
     if not 1 <= args.top <= 5:
         raise InputError(f"--top must be an integer in [1, 5], got {args.top}")
     if args.dynamic_cycles is not None and not 1 <= args.dynamic_cycles <= 2000:
@@ -153,7 +153,7 @@ def _calibrate(args: argparse.Namespace) -> int:
     settings = ModelSettings(dynamic_cycles=args.dynamic_cycles, n_theta=args.n_theta)
     out = OutputDir(args.out, overwrite=args.overwrite)
     log = (lambda *a, **k: None) if args.quiet else print
-    run(args.data, out, settings=settings, top=args.top, log=log)
+    run(data, out, settings=settings, top=args.top, log=log)
     return 0
 
 
@@ -161,6 +161,13 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message):  # argparse exits with 2 already; keep its message
         self.print_usage(sys.stderr)
         self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _output_options(p: argparse.ArgumentParser, *, required: bool) -> None:
+    """--out and --overwrite, shared by every command that writes results."""
+    p.add_argument("--out", required=required,
+                   help="output folder (created; must not hold earlier results)")
+    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -172,8 +179,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("study", help="run a named thesis study (see --list)")
     p.add_argument("name", nargs="?", help="study name; omit or use --list to list them")
     p.add_argument("--list", action="store_true", help="list the studies and exit")
-    p.add_argument("--out", help="output folder (created; must not hold earlier results)")
-    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    _output_options(p, required=False)
     p.add_argument("--method", choices=("constant", "adaptive", "error"),
                    help="wear extrapolation over cycles (wear studies; default constant)")
     p.add_argument("--cycles", type=int, default=None,
@@ -187,8 +193,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("design", help="solve a bushing design problem (thesis Ch. 8; see --list)")
     p.add_argument("name", nargs="?", help="design problem: two-joint")
     p.add_argument("--list", action="store_true", help="list the design problems and exit")
-    p.add_argument("--out", help="output folder (created; must not hold earlier results)")
-    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    _output_options(p, required=False)
     p.add_argument("--quick", action="store_true",
                    help="coarse model (3 wear steps to the limit) and 2 x 2 maps: minutes, "
                         "for a smoke run; the default model takes 10 steps")
@@ -197,9 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("run", help="simulate a mechanism file (TOML; see README 'Mechanism files')")
     p.add_argument("file", help="mechanism file, e.g. design_studies/ideal_slider_crank.toml")
-    p.add_argument("--out", required=True,
-                   help="output folder (created; must not hold earlier results)")
-    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    _output_options(p, required=True)
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_run)
 
@@ -212,9 +215,7 @@ def build_parser() -> argparse.ArgumentParser:
                        epilog="Exit codes: 0 success, 2 bad input, 3 a point failed (results "
                        "are written all the same).")
     p.add_argument("file", help="sweep file, e.g. design_studies/sweep_rig_clearance_k.toml")
-    p.add_argument("--out", required=True,
-                   help="output folder (created; must not hold earlier results)")
-    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    _output_options(p, required=True)
     p.add_argument("--chunk-size", type=int, default=None,
                    help="points per vmap call (default: the file's [run] chunk_size, else all)")
     p.add_argument("--cluster", metavar="ADDRESS", default=None,
@@ -228,15 +229,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("calibrate", help="fit the rig model to measured wear data and identify "
                        "a missing effect (see README 'Measured data')",
                        description="Fit the dataset's uncertain parameters through the full "
-                       "simulator (optimistix Levenberg-Marquardt), rank the candidate effects "
+                       "simulator (Levenberg-Marquardt, forward-mode Jacobians), rank the candidate effects "
                        "by score tests, refit the best, and report the held-out error before "
                        "and after: report.md, summary.json, residuals.csv, plots.",
                        epilog="Exit codes: 0 success, 2 bad input, 3 solver failure.")
     p.add_argument("data", help="dataset folder (dataset.toml + CSV files), e.g. "
                    "design_studies/calibration/synthetic_run_in")
-    p.add_argument("--out", required=True,
-                   help="output folder (created; must not hold earlier results)")
-    p.add_argument("--overwrite", action="store_true", help="replace results already in --out")
+    _output_options(p, required=True)
     p.add_argument("--top", type=int, default=3,
                    help="candidates refitted after the score test (default 3)")
     p.add_argument("--dynamic-cycles", type=int, default=None,

@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..config import units
-from ..config.loader import decode
+from ..config.loader import decode, read_input
 from ..config.schema import (
     Context,
     Field,
@@ -297,15 +297,7 @@ def load_dataset(folder: str | Path) -> Dataset:
         raise InputError(f"{folder}: is a file, not a folder; allowed: {FOLDER_RULE}")
     manifest = folder / MANIFEST
     file = str(manifest)
-    allowed = f"allowed: {FOLDER_RULE}"
-    try:
-        data = manifest.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{file}: no such file; {allowed}") from None
-    except IsADirectoryError:
-        raise InputError(f"{file}: is a folder, not a file; {allowed}") from None
-    except OSError as err:
-        raise InputError(f"{file}: cannot be read ({err.strerror})") from None
+    data = read_input(manifest, FOLDER_RULE)
     text = decode(data, file)
     if not text.strip():
         raise InputError(f"{file}: the file is empty; allowed: a TOML manifest with [dataset], "

@@ -25,7 +25,6 @@ import math
 import time
 from dataclasses import dataclass, field
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -33,7 +32,7 @@ import numpy as np
 from ..errors import InputError, SolverError
 from .dataset import Dataset
 from .effects import EFFECTS, NAMES
-from .model import BASE_NAMES, MAX_EXTRAPOLATION, Observation, RigHistory, rig_defaults
+from .model import MAX_EXTRAPOLATION, Observation, RigHistory, rig_defaults
 
 DEFAULT_LOG_SCALE = 0.1  # tau of a fitted parameter without a stated std
 
@@ -171,30 +170,29 @@ class Fitter:
     def __init__(self, problem: Problem, *, xtol=1e-2, ftol=1e-4, max_steps=20):
         self.problem = problem
         self.xtol, self.ftol, self.max_steps = xtol, ftol, max_steps
-        self._residual = jax.jit(lambda x, s: problem.residual(x, s))
         self._jacobian = jax.jit(jax.jacfwd(lambda x, s: problem.residual(x, s), argnums=(0, 1)))
 
         def both(z, onehot):
-            r = self._fit_residual(z, onehot)
-            return r, r
+            """(fit-point residuals: differentiated, all residuals: carried)."""
+            p = self.problem
+            r = p.residual(z[:-1], onehot * SCALES * z[-1])
+            return r[~p.holdout], r
 
         self._value_and_jac = jax.jit(jax.jacfwd(both, has_aux=True))
         self.evaluations = 0
 
-    def _fit_residual(self, z, onehot):
-        """Residuals of the fit points at z = (x_base, s / scale); ``onehot``
-        selects the effect (zeros: the base model)."""
-        p = self.problem
-        strengths = onehot * SCALES * z[-1]
-        return p.residual(z[:-1], strengths)[~p.holdout]
-
     def _evaluate(self, z, onehot):
-        jac, r = self._value_and_jac(jnp.asarray(z), onehot)
+        """At z = (x_base, s / scale), ``onehot`` selecting the effect (zeros:
+        the base model): residuals of all points and the fit points' Jacobian."""
+        jac, r_all = self._value_and_jac(jnp.asarray(z), onehot)
         self.evaluations += 1
-        return np.asarray(r), np.asarray(jac)
+        return np.asarray(r_all), np.asarray(jac)
 
     def _levenberg_marquardt(self, z, onehot, free, what):
-        r, jac = self._evaluate(z, onehot)
+        """(z, steps, fit-point Jacobian, all residuals) at the accepted minimum."""
+        fit_rows = ~self.problem.holdout
+        r_all, jac = self._evaluate(z, onehot)
+        r = r_all[fit_rows]
         if not np.all(np.isfinite(r)):
             raise SolverError(f"calibration of the {what}: the model failed at the start "
                               "(integrator failure: non-finite predictions)")
@@ -206,7 +204,8 @@ class Fitter:
             while True:
                 dz = np.zeros_like(z)
                 dz[free] = np.linalg.solve(a + lam * np.diag(d), -g)
-                r_new, jac_new = self._evaluate(z + dz, onehot)
+                r_all_new, jac_new = self._evaluate(z + dz, onehot)
+                r_new = r_all_new[fit_rows]
                 chi2_new = float(r_new @ r_new) if np.all(np.isfinite(r_new)) else math.inf
                 if chi2_new <= chi2:
                     break
@@ -214,17 +213,14 @@ class Fitter:
                 if np.max(np.abs(dz)) < self.xtol:
                     # even a step of < xtol raises chi2: a minimum, down to the
                     # model's adaptive-step noise
-                    return z, steps, jac
+                    return z, steps, jac, r_all
             drop = chi2 - chi2_new
-            z, r, jac, chi2 = z + dz, r_new, jac_new, chi2_new
+            z, r, r_all, jac, chi2 = z + dz, r_new, r_all_new, jac_new, chi2_new
             lam = max(lam / 3.0, 1e-7)
             if np.max(np.abs(dz)) < self.xtol or drop < self.ftol * chi2:
-                return z, steps, jac
+                return z, steps, jac, r_all
         raise SolverError(f"calibration of the {what}: Levenberg-Marquardt did not converge in "
                           f"{self.max_steps} steps (chi2 {chi2:.6g})")
-
-    def residual(self, x, strengths) -> np.ndarray:
-        return np.asarray(self._residual(jnp.asarray(x), jnp.asarray(strengths)))
 
     def jacobian(self, x, strengths) -> tuple[np.ndarray, np.ndarray]:
         """(dr/dx_base, dr/dstrengths) of all points, forward mode."""
@@ -244,12 +240,11 @@ class Fitter:
         free[nb] = effect is not None
         what = "base model" if effect is None else f"base model + {effect}"
         t0 = time.perf_counter()
-        z, steps, jz = self._levenberg_marquardt(z0, jnp.asarray(onehot), free, what)
+        z, steps, jz, r = self._levenberg_marquardt(z0, jnp.asarray(onehot), free, what)
         wall = time.perf_counter() - t0
         x, s = z[:nb], z[nb] * scale if effect is not None else 0.0
         strengths = onehot * s
-        r = self.residual(x, strengths)
-        if not np.all(np.isfinite(r)):
+        if not np.all(np.isfinite(r)):  # a held-out point the model could not reach
             raise SolverError(f"calibration of the {what}: the model failed at the solution "
                               "(integrator failure: non-finite predictions)")
         fit_rows = ~p.holdout

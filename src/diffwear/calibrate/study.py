@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..io import OutputDir  # noqa: E402
-from .dataset import load_dataset  # noqa: E402
+from .dataset import Dataset  # noqa: E402
 from .effects import EFFECTS  # noqa: E402
 from .fit import ModelSettings  # noqa: E402
 from .identify import GOF_SIGMAS, LR_CRITICAL, STRENGTH_SIGMAS, Calibration, calibrate  # noqa: E402
@@ -214,9 +214,10 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> str:
     return "\n".join(lines)
 
 
-def run(data_dir, out: OutputDir, *, settings: ModelSettings = ModelSettings(), top: int = 3,
-        log=print) -> dict:
-    data = load_dataset(data_dir)  # the caller loads first too (bad input before --out)
+def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSettings(),
+        top: int = 3, log=print) -> dict:
+    """The loop on a loaded dataset (`load_dataset`: bad input is found before
+    ``out`` exists), writing the outputs listed in the module notes."""
     c = calibrate(data, settings, top=top, log=log)
     summary = c.summary()
     files = _plots(out, c)

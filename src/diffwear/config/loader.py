@@ -96,17 +96,22 @@ OUTPUT_KEYS = ("reactions", "contact")
 def load(path: str | Path) -> Study:
     """Load a mechanism file; raise `InputError` naming the file for any problem."""
     path = Path(path)
+    data = read_input(path, "a path to a .toml mechanism file")
+    return loads(data, file=str(path))
+
+
+def read_input(path: Path, allowed: str) -> bytes:
+    """The bytes of an input file; `InputError` naming it (and what is
+    ``allowed``) when it is missing, a directory or unreadable."""
     file = str(path)
-    allowed = "allowed: a path to a .toml mechanism file"
     try:
-        data = path.read_bytes()
+        return Path(path).read_bytes()
     except FileNotFoundError:
-        raise InputError(f"{file}: no such file; {allowed}") from None
+        raise InputError(f"{file}: no such file; allowed: {allowed}") from None
     except IsADirectoryError:
-        raise InputError(f"{file}: is a directory; {allowed}") from None
+        raise InputError(f"{file}: is a directory, not a file; allowed: {allowed}") from None
     except OSError as err:
         raise InputError(f"{file}: cannot be read ({err.strerror})") from None
-    return loads(data, file=file)
 
 
 def decode(data: bytes, file: str, note: str = "TOML files are UTF-8") -> str:

@@ -191,13 +191,9 @@ def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep file; `InputError` naming file and key for any problem."""
     path = Path(path)
     file = str(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{file}: no such file; allowed: a path to a .toml sweep file") from None
-    except IsADirectoryError:
-        raise InputError(f"{file}: is a directory; allowed: a path to a .toml sweep file") from None
-    from .loader import decode
+    from .loader import decode, read_input
+
+    data = read_input(path, "a path to a .toml sweep file")
 
     text = decode(data, file)
     try:

@@ -102,8 +102,66 @@ def test_design_two_joint_quick(tmp_path):
                 "model_evaluations", "wall_time_s"):
         assert key in s
     assert s["rel_gap"] < 5e-3
-    assert s["trend"]["life_rises_with_depth_falls_with_diameter"]
+    assert s["trend"]["life_rises_with_depth"]
     assert s["longest_common_life"]["rel_gap"] < 5e-3
     for name in ("report.md", "history.csv", "life_maps.csv", "life_map_joint1.png"):
         assert (out / name).stat().st_size > 0
     assert main(["design", "two-joint", "--quick", "--quiet", "--out", str(out)]) == 2
+
+
+def test_design_two_joint_small_case(tmp_path):
+    """The CLI on a small case (coarse model: 2 wear steps, 36 profile nodes,
+    equal life only, 2 x 2 maps): the returned design has equal lives on a
+    fresh rerun of the same model, the thesis's trend holds, and every file of
+    the study is written."""
+    out = tmp_path / "design"
+    argv = ["design", "two-joint", "--steps", "2", "--n-theta", "36", "--map-points", "2",
+            "--problems", "equal-life", "--quiet", "--out", str(out)]
+    assert main(argv) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["settings"] == {"steps": 2, "map_points": 2, "n_theta": 36,
+                             "problems": ["equal-life"]}
+    assert s["rel_gap"] < 5e-3
+    x = np.array([s["d1_mm"], s["d2_mm"], s["h1_mm"], s["h2_mm"]]) * 1e-3
+    assert np.all((x >= LOWER) & (x <= UPPER))
+    # Over the box: life rises strongly with depth (EFM pressure ~ 1/h, so
+    # life ~ h: a ratio near 50/10 = 5) and hardly depends on the diameter:
+    # the depth rate k p v has p ~ F/(d h) and v ~ d, so d cancels to
+    # leading order (the thesis saw a weak fall).
+    trend = s["trend"]
+    assert trend["life_rises_with_depth"]
+    assert all(4.0 < r < 8.0 for r in trend["depth_life_ratio"])
+    assert all(abs(r) < 0.01 for r in trend["diameter_relative_change"])
+    assert "longest_common_life" not in s and "least_material" not in s
+    rows = (out / "life_maps.csv").read_text().splitlines()
+    assert len(rows) == 1 + 2 * 2 * 2
+    for name in ("report.md", "history.csv", "life_map_joint1.png", "life_map_joint2.png"):
+        assert (out / name).stat().st_size > 0
+    assert main(argv) == 2  # never overwrites
+
+
+def test_map_trend_reads_monotonicity_and_ratios():
+    from diffwear.design.study import map_trend
+    d, h = np.linspace(20, 70, 3), np.linspace(10, 50, 4)
+    maps = {"d_m": d, "h_m": h,
+            "cyc1": 1e4 * h[None, :] * (d[:, None] / 20) ** -0.1,   # falls with d
+            "cyc2": 1e4 * h[None, :] * (d[:, None] / 20) ** 0.02}   # rises with d
+    t = map_trend(maps)
+    assert t["rises_with_depth"] == [True, True]
+    assert t["falls_with_diameter"] == [True, False]
+    assert not t["life_falls_with_diameter"] and t["life_rises_with_depth"]
+    np.testing.assert_allclose(t["depth_life_ratio"], [5.0, 5.0])
+    r1, r2 = 3.5 ** -0.1, 3.5 ** 0.02
+    np.testing.assert_allclose(t["diameter_relative_change"],
+                               [(r1 - 1) / (0.5 * (r1 + 1)), (r2 - 1) / (0.5 * (r2 + 1))])
+
+
+@pytest.mark.parametrize("option, value, word", [
+    ("--steps", "0", "--steps"), ("--steps", "101", "--steps"),
+    ("--map-points", "0", "--map-points"), ("--n-theta", "5", "--n-theta"),
+    ("--problems", "fastest", "fastest"), ("--problems", ",", "--problems")])
+def test_design_cli_bad_sizes(tmp_path, capsys, option, value, word):
+    out = tmp_path / "design"
+    assert main(["design", "two-joint", option, value, "--out", str(out)]) == 2
+    assert word in capsys.readouterr().err
+    assert not out.exists()

@@ -130,9 +130,12 @@ def _design(args: argparse.Namespace) -> int:
         raise InputError(f"unknown design problem {args.name!r}; available: {study.NAME}")
     if args.out is None:
         raise InputError("design: --out DIR is required")
+    settings = study.settings(quick=args.quick, steps=args.steps,
+                              map_points=args.map_points, n_theta=args.n_theta,
+                              problems=args.problems)
     out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
     log = (lambda *a, **k: None) if args.quiet else print
-    study.run(out, quick=args.quick, log=log)
+    study.run(out, settings=settings, log=log)
     return 0
 
 
@@ -197,6 +200,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true",
                    help="coarse model (3 wear steps to the limit) and 2 x 2 maps: minutes, "
                         "for a smoke run; the default model takes 10 steps")
+    p.add_argument("--steps", type=int, default=None,
+                   help="wear steps to the limit of the faster joint (1-100; default 10, "
+                        "--quick 3): fewer is faster and coarser")
+    p.add_argument("--map-points", type=int, default=None,
+                   help="life-map grid points per axis (1-50; default 5, --quick 2)")
+    p.add_argument("--n-theta", type=int, default=None,
+                   help="bushing profile nodes per joint (12-720; default 90)")
+    p.add_argument("--problems", default=None, metavar="NAMES",
+                   help="comma-separated: equal-life, longest-common-life, least-material "
+                        "(default all three; equal life is always solved)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_design)
 

@@ -40,9 +40,13 @@ def oval_bore(theta, cycles, amplitude=4e-6, angle=0.3):
 
 
 # name -> (effect, strength, distortion, seed, description)
+# pressure_exponent was 0.5 at first: identified (0.528 +- 0.056) but its
+# held-out error before the effect was only 1.87 sigma, so no model could cut
+# it threefold (issue #8's bar); at 1.0 (wear ~ p^2, within the exponents
+# reported for polymers) the effect stands clear of the noise.
 DATASETS = {
     "synthetic_run_in": ("run_in", 2.0, None, 11, "Rig campaign A (synthetic)"),
-    "synthetic_pressure_exponent": ("pressure_exponent", 0.5, None, 12,
+    "synthetic_pressure_exponent": ("pressure_exponent", 1.0, None, 12,
                                     "Rig campaign B (synthetic)"),
     "synthetic_creep": ("creep", 0.3, None, 13, "Rig campaign C (synthetic)"),
     "synthetic_guide_friction": ("guide_friction", 0.15, None, 14, "Rig campaign D (synthetic)"),

@@ -697,6 +697,63 @@ def ch8_optimisation(repeats: int) -> dict:
     return {"available": True, **design.benchmark_case(quick=repeats <= QUICK_REPEATS)}
 
 
+CALIBRATION_DATASET = Path(__file__).resolve().parents[1] / "design_studies" / "calibration" \
+    / "synthetic_run_in"
+
+
+def calibration_loop(repeats: int) -> dict:
+    """Issue 8's loop on one dataset (the shipped ``synthetic_run_in``
+    campaign, 221 fit points, k and free length plus the effects).  Full: the
+    whole ``diffwear calibrate`` (load, base fit, scores, 3 refits, report and
+    plots), once: its wall time is the number to hold against the 10-minute
+    goal.  Quick (CI): a coarse profile grid (30 nodes) and one
+    Marquardt iteration's value + forward-mode Jacobian pass, against one
+    forward run, so the case cannot rot."""
+    import tempfile
+
+    import jax
+    import numpy as np
+
+    from diffwear.calibrate import load_dataset
+    from diffwear.calibrate.effects import NAMES
+    from diffwear.calibrate.fit import Fitter, ModelSettings, Problem
+    from diffwear.calibrate.study import run as calibrate
+    from diffwear.io import OutputDir
+
+    data = load_dataset(CALIBRATION_DATASET)
+    if repeats > QUICK_REPEATS:
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            s = calibrate(data, OutputDir(Path(tmp) / "out"), log=lambda *a, **k: None)
+            wall = time.perf_counter() - t0
+        return {"dataset": data.name, "wall_time_s": wall, "run_s": wall,
+                "note": f"whole loop: {s['effect_identified']} "
+                        f"{s['effect_strength']:.3g} +- {s['effect_strength_std']:.2g}, held-out "
+                        f"{s['heldout_rmse_before']:.3g} -> {s['heldout_rmse_after']:.3g} sigma",
+                "effect_identified":
+                s["effect_identified"], "effect_strength": s["effect_strength"],
+                "heldout_rmse_before": s["heldout_rmse_before"],
+                "heldout_rmse_after": s["heldout_rmse_after"],
+                "dynamic_cycles": s["model"]["dynamic_cycles"],
+                "goal_s": 600.0}
+    problem = Problem.from_dataset(data, ModelSettings(n_theta=30))
+    fitter = Fitter(problem)
+    z = np.zeros(problem.n_base + 1)  # the stated values, no effect
+    onehot = np.zeros(len(NAMES))
+    forward = jax.jit(lambda z: problem.residual(z[:-1], onehot * z[-1]))
+    _, first = timed(forward, z)
+    _, run_s = timed(forward, z)
+    _, first_j = timed(fitter._evaluate, z, onehot)
+    _, jac_s = timed(fitter._evaluate, z, onehot)
+    return {"dataset": data.name, "points": int(problem.y.size),
+            "compile_forward_s": first - run_s, "forward_s": run_s,
+            "compile_value_and_jacobian_s": first_j - jac_s, "value_and_jacobian_s": jac_s,
+            "jacobian_over_forward": jac_s / run_s, "parameters": problem.n_base,
+            "compile_s": first_j - jac_s, "run_s": jac_s, "ratio_gradient_to_forward": jac_s / run_s,
+            "note": "quick: one value + Jacobian pass (30 nodes)",
+            "effects": len(NAMES)}
+
+
 CASES: dict[str, Callable[[int], dict]] = {
     "ideal slider-crank, 2 s": ideal_slider_crank,
     **{f"clearance cycle, {law.upper()} c={c:g} mm": clearance_cycle(law, c)
@@ -706,6 +763,7 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig-21400 gradient (4 parameters)": rig_gradient,
     "rig cycle profile": rig_profile,
     "ch8-optimisation": ch8_optimisation,
+    "calibration loop": calibration_loop,
     "scipy-peer": scipy_peer,
     "exudyn-peer": exudyn_peer,
 }

@@ -47,7 +47,7 @@ def test_cases_registry_and_unknown_case(bench):
 
 
 CI_CASES = ("ideal slider-crank, 2 s", "clearance cycle, EFM c=0.5 mm", "scipy-peer",
-            "ch8-optimisation")
+            "ch8-optimisation", "calibration loop")
 
 
 def test_quick_benchmark_subprocess_ci_cases(tmp_path):
@@ -89,6 +89,12 @@ def test_quick_benchmark_subprocess_ci_cases(tmp_path):
     # the rig's mean joint force: 90-170 N of spring force over the stroke
     # (presets: k_s (1.0 - x3 - L0) with x3 = 0.127..0.279 m)
     assert 90.0 < peer["mean_joint_force_N"] < 170.0
+
+    cal = cases["calibration loop"]  # the shipped run-in campaign, k and free length
+    assert cal["dataset"] == "synthetic-run-in" and cal["parameters"] == 2
+    assert cal["points"] == 440
+    for key in ("forward_s", "value_and_jacobian_s", "ratio_gradient_to_forward"):
+        assert math.isfinite(cal[key]) and cal[key] > 0.0, key
 
     ch8 = cases["ch8-optimisation"]
     assert isinstance(ch8["available"], bool)

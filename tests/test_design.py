@@ -66,6 +66,14 @@ def test_least_material_solves_both_depths_at_the_lower_diameter():
     assert res.notes["kkt"]["optimal"]
 
 
+def test_least_material_out_of_reach_is_named():
+    """At d = 20 mm, h = 50 mm joint 1 lives 80,000 x 5 = 400,000 cycles: a
+    450,000-cycle target cannot be met (the optimiser would run onto the h1
+    bound), so it is refused up front, naming the joint and its best life."""
+    with pytest.raises(InputError, match=r"joint 1 reaches the wear limit after 400,000"):
+        least_material(PowerLawLife(), 450_000)
+
+
 def test_bushing_volume_closed_form():
     # d = 20 mm: R = 10 mm, wall 0.6653 R; h = 10 mm
     w = (15.875 / 9.533 - 1) * 10e-3

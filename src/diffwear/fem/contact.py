@@ -87,7 +87,7 @@ class ContactSolution(eqx.Module):
         if not ok:
             raise SolverError(
                 f"{what}: the complementarity solve did not converge: max |residual| "
-                f"{float(self.info.residual):.3g} (tolerance {TOL:g}) after "
+                f"{float(self.info.residual):.3g} (tolerance {self.info.tol:g}) after "
                 f"{int(self.info.steps)} Newton steps.  Check the load (a force far "
                 "beyond the elastic range of the bushing) and the mesh.")
         return self
@@ -117,9 +117,10 @@ class RingContact(eqx.Module):
         if c is not None and a is not None and not c < a:
             raise InputError(f"ring contact: clearance {float(c)!r} m leaves no pin in a "
                              f"ring of inner radius {float(a)!r} m")
+        compliance, tributary = _condense(mesh, youngs_modulus, poisson_ratio)
         return cls(
-            compliance=inner_compliance(mesh, youngs_modulus, poisson_ratio),
-            tributary=tributary_lengths(mesh),
+            compliance=compliance,
+            tributary=tributary,
             boundary_radius=mesh.boundary_radius,
             theta=mesh.theta,
             pin_radius=mesh.inner_radius - jnp.asarray(clearance, dtype=float),
@@ -147,14 +148,26 @@ class RingContact(eqx.Module):
             gap=self.initial_gap(e) + self.compliance @ f,
             resultant=self.length * (f @ self.directions), theta=self.theta, info=info)
 
-    def solve_offset(self, offset) -> ContactSolution:
-        """Contact for a prescribed pin offset e [m] (|e| < R)."""
+    @staticmethod
+    def _checked(sol: ContactSolution) -> ContactSolution:
+        """Outside jit (concrete values) the solution is checked at once, so a
+        failure raises `SolverError`; under jit call ``raise_if_failed``."""
+        if concrete(sol.info.residual) is not None:
+            sol.raise_if_failed()
+        return sol
+
+    def solve_offset(self, offset, *, tol: float = TOL) -> ContactSolution:
+        """Contact for a prescribed pin offset e [m] (|e| < R); ``tol``: Newton
+        tolerance on the dimensionless max |Phi|."""
         e = jnp.asarray(offset, dtype=float)
         _check_vector("pin offset e [m]", e)
         ev = concrete(e)
         if ev is not None and np.hypot(*ev) >= float(concrete(self.pin_radius)):
             raise InputError(f"ring contact: pin offset |e| = {np.hypot(*ev)!r} m must be "
                              f"below the pin radius {float(concrete(self.pin_radius))!r} m")
+        return self._checked(_solve_offset(self, e, tol))
+
+    def _solve_offset(self, e, tol):
         ell = jnp.maximum(jnp.sqrt(jnp.sum(e * e)),
                           jnp.max(self.boundary_radius) - self.pin_radius)
         ell = jax.lax.stop_gradient(jnp.where(ell > 0, ell, 1.0))
@@ -166,10 +179,10 @@ class RingContact(eqx.Module):
             g = prob.initial_gap(e_arg) + prob.compliance @ f
             return ncp.fischer_burmeister(x, g / l_g)
 
-        x, info = ncp.solve(residual, jnp.zeros_like(self.theta), (self, e), tol=TOL)
+        x, info = ncp.solve(residual, jnp.zeros_like(self.theta), (self, e), tol=tol)
         return self._solution(e, x * f_s, info)
 
-    def solve_force(self, force) -> ContactSolution:
+    def solve_force(self, force, *, tol: float = TOL) -> ContactSolution:
         """Contact for a prescribed force F [N] of the pin on the ring (F != 0):
         unknowns f and e, with L sum_j f_j u_j = F."""
         force = jnp.asarray(force, dtype=float)
@@ -178,6 +191,9 @@ class RingContact(eqx.Module):
         if fv is not None and np.hypot(*fv) == 0.0:
             raise InputError("ring contact: joint force F must be nonzero (at F = 0 the pin "
                              "position inside the clearance is not determined)")
+        return self._checked(_solve_force(self, force, tol))
+
+    def _solve_force(self, force, tol):
         mag = jnp.sqrt(jnp.sum(force * force))
         unit = force / mag
         gap0 = jnp.max(self.boundary_radius) - self.pin_radius
@@ -198,8 +214,18 @@ class RingContact(eqx.Module):
 
         # start: pin touching the nearest wall point along F, nothing loaded
         z0 = jnp.concatenate([jnp.zeros(n), unit * (jnp.min(self.boundary_radius) - self.pin_radius) / l_g])
-        z, info = ncp.solve(residual, jax.lax.stop_gradient(z0), (self, force), tol=TOL)
+        z, info = ncp.solve(residual, jax.lax.stop_gradient(z0), (self, force), tol=tol)
         return self._solution(z[n:] * l_g, z[:n] * f_s, info)
+
+
+@eqx.filter_jit
+def _condense(mesh, youngs_modulus, poisson_ratio):
+    return inner_compliance(mesh, youngs_modulus, poisson_ratio), tributary_lengths(mesh)
+
+
+# compiled once per problem shape and tolerance (a Python float: static)
+_solve_offset = eqx.filter_jit(RingContact._solve_offset)
+_solve_force = eqx.filter_jit(RingContact._solve_force)
 
 
 def _check_vector(what: str, v) -> None:

@@ -61,6 +61,7 @@ class NewtonInfo(eqx.Module):
     converged: Bool[Array, ""]
     residual: Float[Array, ""]
     steps: Int[Array, ""]
+    tol: float = eqx.field(static=True)
 
 
 def _newton(residual: Callable, z0, args, tol: float, max_steps: int):
@@ -99,7 +100,7 @@ def _newton(residual: Callable, z0, args, tol: float, max_steps: int):
     psi0, r0 = merit(z0)
     z, _, r, k = jax.lax.while_loop(cond, body, (z0, psi0, r0, jnp.asarray(0)))
     res = jnp.max(jnp.abs(r))
-    return z, NewtonInfo(converged=res <= tol, residual=res, steps=k)
+    return z, NewtonInfo(converged=res <= tol, residual=res, steps=k, tol=tol)
 
 
 def solve(residual: Callable, z0: Float[Array, " m"], args, *, tol: float = 1e-12,

@@ -47,21 +47,21 @@ def test_patch_test_constant_strain_is_exact():
     nodes, elements, boundary = _patch()
     grad_u = np.array([[1.0e-3, -0.4e-3], [0.7e-3, -0.2e-3]])  # du_i/dx_j
     u_exact = (np.asarray(nodes) @ grad_u.T + np.array([2e-4, -1e-4])).ravel()
-    k = assemble(nodes, elements, E_PTFE, NU_PTFE)
+    k = jax.jit(assemble)(nodes, elements, E_PTFE, NU_PTFE)
     fixed = np.stack([2 * boundary, 2 * boundary + 1], axis=-1).ravel()
     u = solve_prescribed(k, fixed, jnp.asarray(u_exact[fixed]))
     assert np.max(np.abs(u - u_exact)) < 1e-10 * np.max(np.abs(u_exact))
     eps = np.array([grad_u[0, 0], grad_u[1, 1], grad_u[0, 1] + grad_u[1, 0]])
     sigma = np.asarray(plane_strain_matrix(E_PTFE, NU_PTFE)) @ eps
-    s = stresses(nodes, elements, u, E_PTFE, NU_PTFE)
+    s = jax.jit(stresses)(nodes, elements, u, E_PTFE, NU_PTFE)
     assert np.max(np.abs(s - sigma)) < 1e-10 * np.max(np.abs(sigma))
 
 
 def test_ring_condensation_equals_dense_schur_complement():
     depth = 1e-4 * (1.0 + np.sin(np.arange(16) * 2 * np.pi / 16))  # worn, 0.2 mm peak
     mesh = ring_mesh(0.01, 0.014, 16, 3, depth)
-    s = inner_stiffness(mesh, E_PTFE, NU_PTFE)
-    k = assemble(mesh.nodes, mesh.elements, E_PTFE, NU_PTFE)
+    s = eqx.filter_jit(inner_stiffness)(mesh, E_PTFE, NU_PTFE)
+    k = jax.jit(assemble)(mesh.nodes, mesh.elements, E_PTFE, NU_PTFE)
     m, free = 2 * 16, 2 * 16 * 2 * 3  # inner dofs; dofs off the fixed outer ring
     kf = k[:free, :free]
     dense = kf[:m, :m] - kf[:m, m:] @ jnp.linalg.solve(kf[m:, m:], kf[m:, :m])
@@ -81,9 +81,13 @@ def test_pressurised_ring_converges_to_lame():
     a, b, p = 0.01, 0.02, 1e6
     exact = _lame_inner_displacement(a, b, E_PTFE, NU_PTFE, p)
     errors = []
+
+    @eqx.filter_jit
+    def inner_displacement(mesh):
+        return inner_compliance(mesh, E_PTFE, NU_PTFE) @ (p * tributary_lengths(mesh))
+
     for n_theta, n_r in [(16, 1), (32, 2), (64, 4)]:
-        mesh = ring_mesh(a, b, n_theta, n_r)
-        u = eqx.filter_jit(inner_compliance)(mesh, E_PTFE, NU_PTFE) @ (p * tributary_lengths(mesh))
+        u = inner_displacement(ring_mesh(a, b, n_theta, n_r))
         errors.append(np.max(np.abs(u - exact)) / exact)
     # measured: 6.5e-3, 6.7e-4, 5.1e-5 (max over the inner nodes)
     rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
@@ -158,14 +162,14 @@ def test_worn_ring_oblique_force_complementarity_and_offset_roundtrip():
 
 
 def test_gradients_match_central_differences():
-    n, a, b, nu, length = 48, 0.01, 0.015, NU_PTFE, 0.01
+    n, a, b, nu, length = 32, 0.01, 0.015, NU_PTFE, 0.01
     th = 2 * np.pi * np.arange(n) / n
     depth0 = 5e-6 * np.exp(-((th - 0.2) / 0.5) ** 2)
 
     def outputs(q):
         force, e, c, dk = q
         depth = jnp.asarray(depth0).at[2].add(dk)
-        prob = RingContact.build(ring_mesh(a, b, n, 3, depth), e, nu, c, length)
+        prob = RingContact.build(ring_mesh(a, b, n, 2, depth), e, nu, c, length)
         sol = prob.solve_force(force * jnp.array([np.cos(0.2), np.sin(0.2)]))
         return jnp.array([sol.peak_pressure, sol.offset[0], sol.offset[1]])
 

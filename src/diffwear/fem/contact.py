@@ -7,8 +7,8 @@ given-force problem also the pin-centre offset e [m] from the ring centre.
 Gap.  The pin (radius R = a - clearance) is centred at e.  Along the ray theta_j
 from the ring centre its surface is at rho_j = e . u_j + sqrt(R^2 - (e x u_j)^2)
 (u_j = (cos theta_j, sin theta_j); exact, not the small-offset form
-e . u_j + R, which differs by |e x u_j|^2 / (2R) ~ 1e-7 a at e = 1e-3 a, the
-size of the error this avoids), so the undeformed gap is
+e . u_j + R, which differs by up to |e x u_j|^2 / (2R) = 5e-7 a at
+|e| = 1e-3 a: the error this avoids), so the undeformed gap is
 g0_j = r_b(theta_j) - rho_j with r_b = a + depth_j the worn surface, and after
 deformation g = g0 + u_r = g0 + C f.  The pin's pressure is taken to act
 radially and the gap to be measured radially: both neglect the pin surface's

@@ -13,7 +13,7 @@ import pytest
 from diffwear.cli import main
 from diffwear.design import (LOWER, UPPER, bushing_volume, check_design, equal_life,
                              finite_difference_jacobian, least_material, longest_common_life)
-from diffwear.errors import InputError
+from diffwear.errors import InputError, SolverError
 
 
 class PowerLawLife:
@@ -64,6 +64,19 @@ def test_least_material_solves_both_depths_at_the_lower_diameter():
     np.testing.assert_allclose(res.x[:2], LOWER[:2])
     np.testing.assert_allclose(res.x[2:], 10e-3 * 150_000 / np.asarray(model.a), rtol=1e-5)
     assert res.notes["kkt"]["optimal"]
+
+
+def test_step_limit_keeps_an_answer_only_within_the_residual_bar():
+    """On the closed-form model LM converges in 8 steps.  Cut at 6 steps its
+    equal-life gap is 1.3e-4 on a fresh evaluation (below ACCEPT_RESIDUAL =
+    5e-3): kept, flagged in the notes; cut at 3 steps the gap is 0.18: a
+    SolverError that quotes it."""
+    x0 = np.array([45e-3, 45e-3, 30e-3, 30e-3])
+    res = equal_life(PowerLawLife(), x0, max_steps=6)
+    assert res.rel_gap < 5e-3 and "step limit (6) reached" in res.notes["stopped"]
+    assert "stopped" not in equal_life(PowerLawLife(), x0).notes
+    with pytest.raises(SolverError, match=r"after 3 steps .* \(residual 1\.8"):
+        equal_life(PowerLawLife(), x0, max_steps=3)
 
 
 def test_least_material_out_of_reach_is_named():

@@ -110,6 +110,10 @@ def levenberg_marquardt(rtol: float, atol: float) -> optx.LevenbergMarquardt:
     return eqx.tree_at(lambda s: s.search, solver, search)
 
 
+# A solve that hits its step limit is still an answer when every residual of
+# a fresh rerun is within this: issue 6's bar (equal life within 0.5 %), and
+# 0.5 % of a target life.
+ACCEPT_RESIDUAL = 5e-3
 START_MARGIN = 0.1  # free variables start at least 10 % of their range inside the box
 FD_REL_STEP = 1e-3  # central-difference step, relative to each design variable
 
@@ -189,14 +193,26 @@ def _solve(model: TwoJointLife, problem: str, residual, x_fixed, free, *, rtol, 
     u = jax.block_until_ready(sol.value)
     x = np.asarray(base.at[index].set(from_free(u, lo, hi)))
     wall = time.perf_counter() - t0
-    if sol.result != optx.RESULTS.successful:
-        raise SolverError(f"{problem}: the optimiser stopped without converging "
-                          f"({sol.result}) after {int(sol.stats['num_steps'])} steps at "
-                          f"x = {np.round(x * 1e3, 4).tolist()} mm")
     cycles = model.life(x)  # a fresh run of the model at the answer
+    notes = {}
+    if sol.result != optx.RESULTS.successful:
+        # The step test (rtol/atol on u and on the objective) can wait forever
+        # on the model's own noise (~3e-4 relative in the life at cycle_rtol
+        # 1e-6): the full run's least-material solve sat at the answer for
+        # most of its 30 steps.  What the user asked for is the residual, so
+        # an answer whose fresh rerun meets ACCEPT_RESIDUAL is kept, flagged.
+        r = float(np.max(np.abs(np.asarray(residual(jnp.asarray(x), jnp.asarray(cycles))))))
+        if not (sol.result == optx.RESULTS.nonlinear_max_steps_reached
+                and r <= ACCEPT_RESIDUAL):
+            raise SolverError(f"{problem}: the optimiser stopped without converging "
+                              f"({sol.result}) after {int(sol.stats['num_steps'])} steps at "
+                              f"x = {np.round(x * 1e3, 4).tolist()} mm (residual {r:.2e})")
+        notes["stopped"] = (f"step limit ({max_steps}) reached with the residual at {r:.2e} "
+                            f"<= {ACCEPT_RESIDUAL:g} on a fresh rerun: accepted")
     # model runs: the primal ones, 2 x (number of variables) per Jacobian, the final check
     runs = len(history) + 2 * len(free) * len(jacobians) + 1
-    return DesignResult(problem, x, cycles, int(sol.stats["num_steps"]), runs, wall, history)
+    return DesignResult(problem, x, cycles, int(sol.stats["num_steps"]), runs, wall, history,
+                        notes)
 
 
 def _life_gap(x, c):

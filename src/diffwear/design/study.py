@@ -157,7 +157,7 @@ def run(out: OutputDir, *, settings: dict | None = None, log=print) -> dict:
         solved["least_material"] = least_material(model, target, corner_cycles=corner)
         solved["least_material"].notes["target_source"] = why
 
-    log(f"[{NAME}] life maps ({settings['map_points']}^2 points per joint, vmap) ...")
+    log(f"[{NAME}] life maps ({settings['map_points']}^2 points per joint) ...")
     maps = life_maps(model, eq.x, settings["map_points"])
     total = time.perf_counter() - t0
     trend = map_trend(maps)
@@ -184,7 +184,7 @@ def run(out: OutputDir, *, settings: dict | None = None, log=print) -> dict:
         "start_mm": (START * 1e3).tolist(),
         "model": {"steps": model.steps, "scheme": model.scheme, "n_theta": model.n_theta,
                   "cycle_rtol": model.cycle_rtol, "wear_limit_mm": model.limit * 1e3,
-                  "jacobian": "central differences, 1e-3 relative (8 runs in one vmap)"},
+                  "jacobian": "central differences, 1e-3 relative (8 runs in one lax.map)"},
         "trend": trend,
         "thesis_optimum_table_8_4": {
             "x_mm": (TABLE_8_4 * 1e3).tolist(), "cyc1": float(thesis_cycles[0]),

@@ -80,10 +80,12 @@ def _fit_line(res, which):
     return tuple(np.polyfit(s[sel], d[sel], 1))
 
 
-def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, log=print) -> dict:
+def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, sensitivity: bool = True,
+        log=print) -> dict:
     """``cycles``: simulated sweeps before the linear extrapolation (the
     thesis's "cycles" of Table 4-2: 100,000).  A smaller value scales every
-    run of the study down in proportion (the direct run too), for tests."""
+    run of the study down in proportion (the direct run too), for tests.
+    ``sensitivity=False`` skips the sensitivity runs (tests)."""
     if not (isinstance(cycles, int) and cycles >= 2 * EXTRAPOLATION):
         raise InputError(f"pin-pivot: --cycles (simulated sweeps) must be an integer >= "
                          f"{2 * EXTRAPOLATION}, got {cycles!r}")
@@ -122,34 +124,11 @@ def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, log=print) -> dict:
              "max_pin_mm_at_816000": 1e3 * pin_816, "max_pivot_mm_at_816000": 1e3 * pivot_816,
              "peak_pressure_MPa_last_sweep": float(base.peak_pressure[-1]) / 1e6,
              "run_s": run_time}]
-    rows.append(variant("k = 1.2e-5 mm^3/(N m)",
-                        eqx.tree_at(lambda m: m.wear_coefficient, model,
-                                    jnp.asarray(THESIS_K_HIGH, dtype=float))))
-    rows.append(variant("load fixed to the pin (pivot turns)",
-                        dataclasses.replace(model, load_frame="pin")))
-    for steps in (5, 20):  # A scaled so that the wear added per step stays the same
-        a_steps = EXTRAPOLATION * setup.steps_per_sweep / steps
-        rows.append(variant(f"{steps} steps per sweep (A = {a_steps:g})",
-                            dataclasses.replace(model, steps=steps), extrapolation=a_steps))
-    for factor in (0.5, 2.0):
-        rows.append(variant(f"compliance x {factor:g}",
-                            eqx.tree_at(lambda m: m.contact.compliance, model,
-                                        model.contact.compliance * factor)))
-    rows.append(variant(f"A = {EXTRAPOLATION // 2}", model, extrapolation=EXTRAPOLATION // 2))
-    rows.append(variant(f"mesh: n_theta {2 * setup.n_theta} (steps of 2 nodes)",
-                        PinPivot.build(setup.replace(n_theta=2 * setup.n_theta))))
-    scaling = []
-    for f in (0.5, 2.0):
-        scaled = setup.replace(pin_radius=f * setup.pin_radius, clearance=f * setup.clearance,
-                               pivot_outer_radius=f * setup.pivot_outer_radius,
-                               length=f * setup.length)
-        row = variant(f"all dimensions x {f:g} (R = {1e3 * scaled.pin_radius:g} mm)",
-                      PinPivot.build(scaled))
-        rows.append(row)
-        scaling.append((scaled.pin_radius, row["max_pin_mm_at_816000"]))
-    fixed_c = setup.replace(pin_radius=2 * setup.pin_radius,
-                            pivot_outer_radius=2 * setup.pivot_outer_radius)
-    rows.append(variant("R x 2, clearance kept (10 um)", PinPivot.build(fixed_c)))
+    if sensitivity:
+        rows += _sensitivity(variant, model, setup)
+    scaling = [(r["radius_m"], r["max_pin_mm_at_816000"]) for r in rows if "radius_m" in r]
+    for r in rows:
+        r.pop("radius_m", None)
 
     # final contact pressure at mid-stroke (phi = 0), the pivot's frame
     sol, p_pivot, _ = eqx.filter_jit(model.solve)(base.h_pivot, base.h_pin, jnp.asarray(0.0))
@@ -169,7 +148,8 @@ def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, log=print) -> dict:
         "max_pivot_mm": mm * np.asarray(base.max_pivot),
         "peak_pressure_MPa": np.asarray(base.peak_pressure) / 1e6,
     })
-    out.csv("sensitivity.csv", {k: [r[k] for r in rows] for k in rows[0] if k != "case"})
+    if sensitivity:  # numbers only: rows in the order of the report's table
+        out.csv("sensitivity.csv", {k: [r[k] for r in rows] for k in rows[0] if k != "case"})
     plots.profile_figure(
         out.file("wear_profiles.png"), angle_deg=angle,
         simulated={f"pin, {cycles:,} sweeps": mm * np.asarray(base.h_pin),
@@ -240,9 +220,42 @@ def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, log=print) -> dict:
     return summary
 
 
+def _sensitivity(variant, model, setup):
+    """The base run with one change each (rows of the report's table)."""
+    rows = [variant("k = 1.2e-5 mm^3/(N m)",
+                    eqx.tree_at(lambda m: m.wear_coefficient, model,
+                                jnp.asarray(THESIS_K_HIGH, dtype=float))),
+            variant("load fixed to the pin (pivot turns)",
+                    dataclasses.replace(model, load_frame="pin"))]
+    for steps in (5, 20):  # A scaled so that the wear added per step stays the same
+        a_steps = EXTRAPOLATION * setup.steps_per_sweep / steps
+        rows.append(variant(f"{steps} steps per sweep (A = {a_steps:g})",
+                            dataclasses.replace(model, steps=steps), extrapolation=a_steps))
+    for factor in (0.5, 2.0):
+        rows.append(variant(f"compliance x {factor:g}",
+                            eqx.tree_at(lambda m: m.contact.compliance, model,
+                                        model.contact.compliance * factor)))
+    rows.append(variant(f"A = {EXTRAPOLATION // 2}", model, extrapolation=EXTRAPOLATION // 2))
+    rows.append(variant(f"mesh: n_theta {2 * setup.n_theta} (steps of 2 nodes)",
+                        PinPivot.build(setup.replace(n_theta=2 * setup.n_theta))))
+    for f in (0.5, 2.0):
+        scaled = setup.replace(pin_radius=f * setup.pin_radius, clearance=f * setup.clearance,
+                               pivot_outer_radius=f * setup.pivot_outer_radius,
+                               length=f * setup.length)
+        row = variant(f"all dimensions x {f:g} (R = {1e3 * scaled.pin_radius:g} mm)",
+                      PinPivot.build(scaled))
+        rows.append({**row, "radius_m": scaled.pin_radius})
+    fixed_c = setup.replace(pin_radius=2 * setup.pin_radius,
+                            pivot_outer_radius=2 * setup.pivot_outer_radius)
+    rows.append(variant("R x 2, clearance kept (10 um)", PinPivot.build(fixed_c)))
+    return rows
+
+
 def _report(s, setup, cycles, direct_sweeps, rows, scaling) -> str:
     mm = 1e3
     r_mm = mm * setup.pin_radius
+    k_rows = [r for r in rows if r["case"].startswith("k = 1.2e-5")]
+    k_high = f"{k_rows[0]['max_pin_mm_at_816000']:.3f} mm" if k_rows else "(sensitivity runs off)"
     lines = [
         f"# {NAME}\n",
         "Thesis Chapter 4 (Tables 4-1..4-3, Fig. 4-9): a steel pin oscillating +-30 deg in a "
@@ -285,8 +298,7 @@ def _report(s, setup, cycles, direct_sweeps, rows, scaling) -> str:
         f"**{s['max_pin_mm_at_408000_test_cycles']:.3f} mm** | **1.867 mm** (k 1.0e-5); "
         "measured ~2.00 mm |",
         f"| max pivot wear, same | {s['max_pivot_mm_at_408000_test_cycles']:.3f} mm | - |",
-        f"| max pin wear, k = 1.2e-5, same | {rows[1]['max_pin_mm_at_816000']:.3f} mm | "
-        "2.028 mm |",
+        f"| max pin wear, k = 1.2e-5, same | {k_high} | 2.028 mm |",
         f"| max pin / pivot wear at 408,000 *sweeps* (the other count) | "
         f"{s['max_pin_mm_at_408000_sweeps']:.3f} / {s['max_pivot_mm_at_408000_sweeps']:.3f} mm | - |",
         f"| direct simulation of {direct_sweeps:,.0f} sweeps: max pin (line from the "
@@ -322,16 +334,19 @@ def _report(s, setup, cycles, direct_sweeps, rows, scaling) -> str:
         lines.append(f"| {r['case']} | {r['max_pin_mm_simulated']:.4f} | "
                      f"{r['max_pin_mm_at_816000']:.3f} | {r['max_pivot_mm_at_816000']:.3f} | "
                      f"{r['peak_pressure_MPa_last_sweep']:.0f} | {r['run_s']:.1f} |")
-    (r1, d1), (r2, d2) = scaling
+    size = ""
+    if scaling:
+        (r1, d1), (r2, d2) = scaling
+        size = (f"Scaling every dimension: R = {mm * r1:g} mm -> {d1:.3f} mm, R = {r_mm:g} mm -> "
+                f"{s['max_pin_mm_at_408000_test_cycles']:.3f} mm, R = {mm * r2:g} mm -> "
+                f"{d2:.3f} mm (depth / R constant).  ")
     lines += [
         "",
         "**Size.** At a fixed projected pressure the force per unit length is 2 R p, the "
         "contact pressures depend only on the shape (ratios c/R, h/R, p/E), and the sliding "
-        "distance per sweep is R x 60 deg: the wear depth scales with R.  Scaling every "
-        f"dimension: R = {mm * r1:g} mm -> {d1:.3f} mm, R = {r_mm:g} mm -> "
-        f"{s['max_pin_mm_at_408000_test_cycles']:.3f} mm, R = {mm * r2:g} mm -> {d2:.3f} mm "
-        "(depth / R constant).  Keeping the clearance while doubling R changes the answer only "
-        "through the run-in (row *R x 2, clearance kept*).\n",
+        "distance per sweep is R x 60 deg: the wear depth scales with R.  " + size +
+        "Keeping the clearance while doubling R changes the answer only through the run-in "
+        "(row *R x 2, clearance kept*).\n",
         "**Steps per sweep, mesh, A, compliance.** Each changes one ingredient of the "
         "numerics; the table shows by how much the answer moves.  Both compliances are "
         "computed on the unworn meshes; halving or doubling them bounds the effect of the "

@@ -228,7 +228,7 @@ def _sensitivity(variant, model, setup):
             variant("load fixed to the pin (pivot turns)",
                     dataclasses.replace(model, load_frame="pin"))]
     for steps in (5, 20):  # A scaled so that the wear added per step stays the same
-        a_steps = EXTRAPOLATION * setup.steps_per_sweep / steps
+        a_steps = EXTRAPOLATION * steps / setup.steps_per_sweep  # A ds fixed: A ~ steps
         rows.append(variant(f"{steps} steps per sweep (A = {a_steps:g})",
                             dataclasses.replace(model, steps=steps), extrapolation=a_steps))
     for factor in (0.5, 2.0):

@@ -26,7 +26,6 @@ def profile_figure(path, *, angle_deg, simulated, direct, pressure, title):
     for label, prof in direct.items():
         axes[0].plot(*_closed(a, prof[order]), "--", lw=1.2, label=label)
     axes[0].set_ylabel("wear depth [mm]")
-    axes[0].set_yscale("symlog", linthresh=1e-3)
     axes[0].grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     axes[0].set_title(title, fontsize=10)

@@ -182,18 +182,25 @@ class RingContact(eqx.Module):
         x, info = ncp.solve(residual, jnp.zeros_like(self.theta), (self, e), tol=tol)
         return self._solution(e, x * f_s, info)
 
-    def solve_force(self, force, *, tol: float = TOL) -> ContactSolution:
+    def solve_force(self, force, *, tol: float = TOL, offset_guess=None) -> ContactSolution:
         """Contact for a prescribed force F [N] of the pin on the ring (F != 0):
-        unknowns f and e, with L sum_j f_j u_j = F."""
+        unknowns f and e, with L sum_j f_j u_j = F.  ``offset_guess`` [m]: the
+        Newton start for e (default: the pin touching the nearest wall point
+        along F); in a deeply worn ring the nearest wall point can lie far from
+        the solution (the pin sits in the pocket), and a start there (e.g. the
+        previous solution of a sequence of solves) saves many damped steps."""
         force = jnp.asarray(force, dtype=float)
         _check_vector("joint force F [N]", force)
         fv = concrete(force)
         if fv is not None and np.hypot(*fv) == 0.0:
             raise InputError("ring contact: joint force F must be nonzero (at F = 0 the pin "
                              "position inside the clearance is not determined)")
-        return self._checked(_solve_force(self, force, tol))
+        if offset_guess is not None:
+            offset_guess = jnp.asarray(offset_guess, dtype=float)
+            _check_vector("offset guess e [m]", offset_guess)
+        return self._checked(_solve_force(self, force, tol, offset_guess))
 
-    def _solve_force(self, force, tol):
+    def _solve_force(self, force, tol, offset_guess=None):
         mag = jnp.sqrt(jnp.sum(force * force))
         unit = force / mag
         gap0 = jnp.max(self.boundary_radius) - self.pin_radius
@@ -212,8 +219,10 @@ class RingContact(eqx.Module):
             eq = (prob.length * (f @ u) - f_target) / jax.lax.stop_gradient(mag)
             return jnp.concatenate([ncp.fischer_burmeister(x, g / l_g), eq])
 
-        # start: pin touching the nearest wall point along F, nothing loaded
-        z0 = jnp.concatenate([jnp.zeros(n), unit * (jnp.min(self.boundary_radius) - self.pin_radius) / l_g])
+        # start: pin touching the nearest wall point along F (or the guess), nothing loaded
+        e0 = unit * (jnp.min(self.boundary_radius) - self.pin_radius) if offset_guess is None \
+            else offset_guess
+        z0 = jnp.concatenate([jnp.zeros(n), e0 / l_g])
         z, info = ncp.solve(residual, jax.lax.stop_gradient(z0), (self, force), tol=tol)
         return self._solution(z[n:] * l_g, z[:n] * f_s, info)
 

@@ -1,0 +1,69 @@
+"""Figures of the ``pin-pivot`` study (cf. thesis Figs. 4-7, 4-9)."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def _closed(angle_deg, y):
+    """Profiles on -180 .. 180 deg, the first point repeated at +180."""
+    return np.append(angle_deg, angle_deg[0] + 360.0), np.append(y, y[0])
+
+
+def profile_figure(path, *, angle_deg, simulated, direct, pressure, title):
+    """Wear profiles of pin and pivot (each in its own frame, angle from the
+    load direction at mid-stroke) after the simulated sweeps and after the
+    direct run, and the contact pressure at mid-stroke at the end."""
+    order = np.argsort(angle_deg)
+    a = angle_deg[order]
+    fig, axes = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    for (label, prof), style in zip(simulated.items(), ("-", "-")):
+        axes[0].plot(*_closed(a, prof[order]), style, lw=1.6, label=label)
+    for label, prof in direct.items():
+        axes[0].plot(*_closed(a, prof[order]), "--", lw=1.2, label=label)
+    axes[0].set_ylabel("wear depth [mm]")
+    axes[0].grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    axes[0].set_title(title, fontsize=10)
+    axes[1].plot(*_closed(a, pressure[order]), "k-", lw=1.4)
+    axes[1].set_ylabel("pressure at φ = 0 [MPa]")
+    axes[1].set_xlabel("angle from the load direction [deg] (pin: in the pin's frame)")
+    axes[1].set_xlim(-180, 180)
+    axes[1].set_xticks(np.arange(-180, 181, 30))
+    axes[1].grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def history_figure(path, *, sweeps, max_pin_mm, max_pivot_mm, fit_pin, fit_pivot, target,
+                   direct, thesis, title):
+    """Max wear of pin and pivot against sweeps (cf. Fig. 4-9), the linear
+    extrapolation to ``target`` sweeps, the direct run and the thesis values."""
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    s = np.concatenate([[0.0], sweeps])
+    ax.plot(s / 1e3, np.concatenate([[0.0], max_pin_mm]), "-", lw=1.8, label="pin (simulated)")
+    ax.plot(s / 1e3, np.concatenate([[0.0], max_pivot_mm]), "-", lw=1.8, label="pivot (simulated)")
+    xs = np.array([sweeps[-1] * 0.5, target])
+    for (slope, icpt), lab in ((fit_pin, "pin"), (fit_pivot, "pivot")):
+        ax.plot(xs / 1e3, (icpt + slope * xs) * 1e3, ":", lw=1.2, label=f"{lab}: linear extrapolation")
+    if direct is not None:
+        ds, dpin, dpiv = direct
+        ax.plot(ds / 1e3, dpin, "--", lw=1.0, label="pin (direct run)")
+        ax.plot(ds / 1e3, dpiv, "--", lw=1.0, label="pivot (direct run)")
+    for (label, value), mk in zip(thesis.items(), ("s", "^", "D")):
+        ax.plot(target / 1e3, value, mk, color="k", ms=6, label=f"thesis: {label} {value} mm")
+    ax.set_xlabel("sweeps [x 1000] (one sweep = -30 -> 30 deg; a test cycle = 2 sweeps)")
+    ax.set_ylabel("max wear depth [mm]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

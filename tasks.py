@@ -7,7 +7,9 @@
 Each creates ``.venv`` (stdlib ``venv``) on first use, installs the package with
 its test extras, then runs.  Only Python >= 3.11 and pip are needed beforehand.
 Extra arguments after the command are passed through (to ``pytest`` or to
-``diffwear study``).
+``diffwear study``).  ``test`` runs pytest on every core (pytest-xdist,
+``-n auto --dist loadfile``) unless the arguments choose ``-n`` / ``--dist``
+/ ``-p`` themselves (``-p no:xdist`` or ``-n 0`` for a serial run).
 """
 
 from __future__ import annotations
@@ -53,7 +55,15 @@ def main(argv: list[str]) -> int:
     ensure_env()
     cmd, rest = argv[0], argv[1:]
     if cmd == "test":
-        return _run(PY, "-m", "pytest", *rest)
+        # One pytest worker per core, whole files per worker (a file's module
+        # fixtures compile once).  Most of the suite is single-threaded XLA
+        # compilation and small-array loops, so a serial run leaves cores idle.
+        # One BLAS thread per worker: the FEM tests' Cholesky factorisations
+        # ran up to 100x slower with OpenBLAS threads oversubscribing the cores.
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+        chosen = any(a.startswith(("-n", "--numprocesses", "--dist", "-p")) for a in rest)
+        parallel = [] if chosen else ["-n", "auto", "--dist", "loadfile"]
+        return _run(PY, "-m", "pytest", *parallel, *rest)
     out = ROOT / "out" / "ideal-slider-crank"
     return _run(BIN / "diffwear", "study", "ideal-slider-crank", "--out", out, *rest)
 

@@ -193,7 +193,7 @@ class RingContact(eqx.Module):
                              "position inside the clearance is not determined)")
         return self._checked(_solve_force(self, force, tol))
 
-    def _solve_force(self, force, tol):
+    def _solve_force(self, force, tol, start_offset=None):
         mag = jnp.sqrt(jnp.sum(force * force))
         unit = force / mag
         gap0 = jnp.max(self.boundary_radius) - self.pin_radius
@@ -212,8 +212,11 @@ class RingContact(eqx.Module):
             eq = (prob.length * (f @ u) - f_target) / jax.lax.stop_gradient(mag)
             return jnp.concatenate([ncp.fischer_burmeister(x, g / l_g), eq])
 
-        # start: pin touching the nearest wall point along F, nothing loaded
-        z0 = jnp.concatenate([jnp.zeros(n), unit * (jnp.min(self.boundary_radius) - self.pin_radius) / l_g])
+        # start: pin touching the nearest wall point along F, nothing loaded (or the
+        # caller's ``start_offset`` [m], e.g. a retry on a worn profile)
+        e0 = (unit * (jnp.min(self.boundary_radius) - self.pin_radius) if start_offset is None
+              else start_offset)
+        z0 = jnp.concatenate([jnp.zeros(n), e0 / l_g])
         z, info = ncp.solve(residual, jax.lax.stop_gradient(z0), (self, force), tol=tol)
         return self._solution(z[n:] * l_g, z[:n] * f_s, info)
 

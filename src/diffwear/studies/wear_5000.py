@@ -35,7 +35,7 @@ THESIS = {  # Table 6-4 (digest section 4)
 
 def run(out: OutputDir, *, cycles: int = WEAR_5000_CYCLES, method: str = "constant",
         extrapolation: float | None = None, log=print, resume: bool = False,
-        progress: bool = False) -> dict:
+        progress: bool = False, contact: str = "efm") -> dict:
     mech0, q_guess = slider_crank(TABLE_2_1)
     y0 = common.initial_state(mech0, q_guess, with_wear_joint(mech0, WEAR_5000, n_theta=N_THETA))
     return common.run_wear_study(

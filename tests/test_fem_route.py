@@ -196,3 +196,8 @@ def test_bad_contact_option(tmp_path, capsys):
     assert cli.main(["study", "rig-21400", "--contact", "fem", "--method", "adaptive",
                      "--cycles", "10", "--out", str(tmp_path / "z"), "--quiet"]) == 2
     assert "--method constant only" in capsys.readouterr().err
+    import inspect
+
+    from diffwear.studies import STUDIES
+    for name in ("rig-21400", "wear-5000"):  # both wear studies take the option
+        assert inspect.signature(STUDIES[name].run).parameters["contact"].default == "efm"

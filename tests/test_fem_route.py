@@ -136,13 +136,13 @@ def test_gradient_wrt_youngs_modulus_matches_central_difference(thin_cycle):
 
 
 @pytest.mark.skipif(not os.environ.get("DIFFWEAR_LONG_TESTS"),
-                    reason="two short FEM-route evolutions, ~1-2 min: DIFFWEAR_LONG_TESTS=1")
+                    reason="two short FEM-route evolutions, ~25 s: DIFFWEAR_LONG_TESTS=1")
 def test_refresh_interval_agrees_with_every_cycle_rebuild():
     """M = 1 (compliance rebuilt every wear cycle) against M = 3 (built once from
     the unworn ring; wear enters only through the gap) over 3 wear cycles of
-    A = 3,000 (~0.1 mm of wear on the rig's thick ring, a quarter of the full
-    run's depth): measured relative difference ~1e-3 in max depth and volume,
-    tolerance 1 %.  Also the volume bookkeeping of the evolution: worn volume
+    A = 3,000 (0.24 mm of wear on the rig's thick ring, half the full run's
+    depth): measured relative differences 1.9e-4 (max depth) and 2.6e-4
+    (volume), tolerance 2e-3.  Also the volume bookkeeping of the evolution: worn volume
     = k x A-weighted sum of (FE normal load x sliding), tolerance 3e-3."""
     mech0, q_guess = rig_slider_crank(TABLE_7_1)
     mech = with_wear_joint(mech0, RIG_JOINT, n_theta=N)
@@ -164,9 +164,9 @@ def test_refresh_interval_agrees_with_every_cycle_rebuild():
         vol = float(worn_volume(res.depth, el.bushing_radius, el.law.depth))
         out[m] = (float(res.depth.max()), vol)
         assert abs(vol / float(el.wear.coefficient * res.load_sliding) - 1) < 3e-3
-    assert out[1.0][0] > 5e-5  # real wear: > 0.05 mm
-    assert abs(out[3.0][0] / out[1.0][0] - 1) < 1e-2
-    assert abs(out[3.0][1] / out[1.0][1] - 1) < 1e-2
+    assert out[1.0][0] > 2e-4  # real wear: > 0.2 mm (measured 0.241 mm)
+    assert abs(out[3.0][0] / out[1.0][0] - 1) < 2e-3
+    assert abs(out[3.0][1] / out[1.0][1] - 1) < 2e-3
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -153,6 +153,39 @@ def rig_21400(repeats: int) -> dict:
             "repeats": min(repeats, 2)}
 
 
+def rig_21400_fem_route(repeats: int) -> dict:
+    """``rig-21400`` by the FEM wear route (README "FEM wear route": FE ring
+    contact for the wear pressure, 65 samples per cycle, compliance rebuilt every
+    wear cycle) next to the EFM route, each compiled once and run once (a run is
+    30-90 s); ``ratio_fem_to_efm`` is the issue-5 cost measure (done when < 5;
+    thesis 11 h / 7 h = 1.6)."""
+    from diffwear.presets import RIG_CYCLES
+    from diffwear.studies import _wear_common as common
+    from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, TARGET_DYNAMIC, _setup
+    from diffwear.presets import with_wear_joint
+    from diffwear.wear.fem_route import default_model
+
+    mech0, _, y0 = _setup()
+    a = common.default_constant_a(RIG_CYCLES, TARGET_DYNAMIC)
+
+    def mech_of_p(p):
+        return with_wear_joint(mech0, common.design_of(p, RIG_JOINT), n_theta=N_THETA)
+
+    kw = dict(method="constant", extrapolation=a, max_dynamic=4 * TARGET_DYNAMIC,
+              wall=RIG_JOINT.wall, n_theta=N_THETA)
+    p = common.params_of(RIG_JOINT)
+    out = {}
+    for tag, fem in (("efm", None), ("fem", default_model(RIG_JOINT))):
+        res, ct, wt, _ = common.run_evolution(mech_of_p, p, y0, RIG_CYCLES, PERIOD, fem=fem, **kw)
+        res.check(f"benchmark rig-21400 {tag} route")
+        nums = common.route_numbers(res, RIG_JOINT, wt, ct)
+        out.update({f"{tag}_{k}": v for k, v in nums.items()})
+    return {"compile_s": out["fem_compile_time_s"], "run_s": out["fem_wall_time_s"],
+            "dynamic_cycles": out["fem_dynamic_cycles_simulated"],
+            "ratio_fem_to_efm": out["fem_wall_time_s"] / out["efm_wall_time_s"], **out,
+            "repeats": 1}
+
+
 SWEEP_CHUNK = 16
 
 
@@ -758,6 +791,7 @@ CASES: dict[str, Callable[[int], dict]] = {
     **{f"clearance cycle, {law.upper()} c={c:g} mm": clearance_cycle(law, c)
        for law in ("ln", "kv", "efm") for c in (0.0005, 0.05, 0.5, 5.0)},
     "rig-21400 (constant A)": rig_21400,
+    "rig-21400 FEM vs EFM route": rig_21400_fem_route,
     "vmap sweep 64 points vs 64 single runs": vmap_sweep,
     "rig-21400 gradient (4 parameters)": rig_gradient,
     "rig cycle profile": rig_profile,
@@ -823,6 +857,7 @@ COLUMNS = (  # metric key, header, format
     ("ratio_sweep_unordered_to_single", "sweep / single runs", "{:.2f}"),
     ("ratio_gradient_to_forward", "gradient / forward", "{:.1f}"),
     ("speedup_per_cycle", "peer / diffwear per cycle", "{:.1f}"),
+    ("ratio_fem_to_efm", "FEM / EFM route", "{:.2f}"),
     ("note", "note", "{}"),
 )
 

@@ -41,7 +41,7 @@ def _study(args: argparse.Namespace) -> int:
     if args.cycles is not None and not 0 < args.cycles <= MAX_CYCLES:
         raise InputError(f"--cycles must be an integer in [1, {MAX_CYCLES:.0e}], got {args.cycles}")
     accepted = inspect.signature(STUDIES[args.name].run).parameters
-    for option in ("cycles", "method"):
+    for option in ("cycles", "method", "contact"):
         value = getattr(args, option)
         if value is None:
             continue
@@ -185,6 +185,10 @@ def build_parser() -> argparse.ArgumentParser:
     _output_options(p, required=False)
     p.add_argument("--method", choices=("constant", "adaptive", "error"),
                    help="wear extrapolation over cycles (wear studies; default constant)")
+    p.add_argument("--contact", choices=("efm", "fem"),
+                   help="pressure model of the wear (wear studies): efm (default; elastic "
+                        "foundation) or fem (finite-element ring loaded by the joint force; "
+                        "runs the EFM route too for the comparison)")
     p.add_argument("--cycles", type=int, default=None,
                    help="number of real crank cycles (wear studies)")
     p.add_argument("--resume", metavar="DIR",

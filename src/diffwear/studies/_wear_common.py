@@ -16,6 +16,7 @@ from ..errors import InputError
 from ..wear import worn_mechanism, evolve, wear_cycle, worn_volume
 from ..wear.evolution import (ChunkedEvolution, Evolver, load_checkpoint,
                               save_checkpoint)
+from ..wear.fem_route import FemEvolver, default_model
 
 JOINT = "crank_rod"
 N_SAVE = 401
@@ -38,12 +39,18 @@ def initial_state(mech0, q_guess, mech):
 
 CHECKPOINT = "checkpoint.npz"
 CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
+# checkpoint keys added later, with the value that checkpoints written before meant
+META_DEFAULTS = {"contact": "efm"}
+CONTACTS = ("efm", "fem")  # --contact: the pressure of the wear (the dynamics: always EFM)
 
 
 def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, max_dynamic,
                   wall, n_theta, rtol=1e-2, atol=1e-6, out=None, meta=None, resume=False,
-                  progress=False, chunks=CHUNKS):
+                  progress=False, chunks=CHUNKS, fem=None):
     """Compile (timed) and run (timed) the whole evolution.
+
+    ``fem``: a `FemWearModel` for the FEM wear route (`wear.fem_route`), else
+    (None) the EFM route.
 
     Without ``out``: one jitted function.  With ``out`` (an `OutputDir`): in
     ``chunks`` chunks of scan slots (`ChunkedEvolution`, same result), saving
@@ -54,9 +61,18 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
     """
     kw = dict(period=period, method=method, extrapolation=extrapolation,
               max_dynamic=max_dynamic, wall_thickness=wall, rtol=rtol, atol=atol)
+    def make(p):
+        if fem is None:
+            return Evolver(mech_of_p(p), JOINT, cycles, **kw)
+        return FemEvolver(mech_of_p(p), JOINT, cycles, fem=fem, **kw)
+
     if out is None:
         def fn(p, y0):
-            return evolve(mech_of_p(p), JOINT, y0, cycles, **kw)
+            if fem is None:
+                return evolve(mech_of_p(p), JOINT, y0, cycles, **kw)
+            ev = make(p)
+            state, hist = ev.run(ev.init(y0), ev.n_slots)
+            return ev.result(state, hist)
 
         t0 = time.perf_counter()
         compiled = jax.jit(fn).lower(p, y0).compile()
@@ -68,7 +84,11 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
     from tqdm.auto import tqdm
 
     meta = {**(meta or {}), "cycles": float(cycles), "method": method,
-            "extrapolation": float(extrapolation), "n_theta": int(n_theta)}
+            "extrapolation": float(extrapolation), "n_theta": int(n_theta),
+            "contact": "efm" if fem is None else "fem"}
+    if fem is not None:
+        meta.update(fem_refresh_interval=float(fem.refresh_interval),
+                    fem_samples=fem.n_samples, fem_layers=fem.n_layers, fem_force=fem.force)
     path = out.path / CHECKPOINT
     start = None
     if resume:
@@ -76,14 +96,11 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
             raise InputError(f"--resume {out.path}: no {CHECKPOINT} there to resume from")
         start, saved = load_checkpoint(path)
         for key, value in meta.items():
-            if saved.get(key) != value:
+            if saved.get(key, META_DEFAULTS.get(key)) != value:
                 raise InputError(
                     f"--resume {out.path}: the checkpoint belongs to a run with {key} = "
                     f"{saved.get(key)!r}, this run has {key} = {value!r}; resume with the "
                     "options of the interrupted run")
-
-    def make(p):
-        return Evolver(mech_of_p(p), JOINT, cycles, **kw)
 
     n_slots = make(p).n_slots
     run = ChunkedEvolution(make, p, y0, max(1, math.ceil(n_slots / chunks)))
@@ -109,36 +126,112 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
     return res, compile_time, time.perf_counter() - t0, info
 
 
+def check_contact(contact) -> str:
+    if contact not in CONTACTS:
+        raise InputError(f"--contact must be one of {', '.join(CONTACTS)} (the pressure "
+                         f"model of the wear), got {contact!r}")
+    return contact
+
+
 def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, period, method,
                    extrapolation, target_dynamic, n_theta, thesis: dict, description: str, log,
-                   resume=False, progress=False, extra_summary=None, extra_report=()) -> dict:
+                   resume=False, progress=False, extra_summary=None, extra_report=(),
+                   contact="efm", fem=None) -> dict:
     """The body of a wear study: ``design``'s wear joint swapped into ``mech0``
     (differentiable in k, clearance, depth, diameter), the evolution over
     ``cycles`` (constant A = cycles / ``target_dynamic`` unless ``extrapolation``
     is given; checkpointed into ``out``), all outputs, then `EvolutionResult.check`
-    (a run that stopped early raises after its results are written)."""
+    (a run that stopped early raises after its results are written).
+
+    ``contact="fem"``: the wear pressure from the FE ring (`wear.fem_route`;
+    ``fem`` a `FemWearModel`, default `default_model(design)`); the EFM route is
+    run first (one jit, not checkpointed) so that the report compares both."""
+    check_contact(contact)
+    if contact == "fem" and method != "constant":
+        raise InputError(f"--contact fem runs with --method constant only (constant A, as "
+                         f"the thesis's FEM route), got --method {method}")
+
     def mech_of_p(p):
         return with_wear_joint(mech0, design_of(p, design), n_theta=n_theta)
 
     params = params_of(design)
     a = extrapolation or default_constant_a(cycles, target_dynamic)
-    log(f"[{name}] {cycles} cycles, method {method}, A {a} ...")
+    common_kw = dict(method=method, extrapolation=a, max_dynamic=4 * target_dynamic,
+                     wall=design.wall, n_theta=n_theta)
+    extra_summary, extra_report = dict(extra_summary or {}), list(extra_report)
+    label = "diffwear"
+    if contact == "fem":
+        fem = default_model(design) if fem is None else fem
+        log(f"[{name}] EFM route for the comparison: {cycles} cycles, A {a} ...")
+        efm, efm_ct, efm_wt, _ = run_evolution(mech_of_p, params, y0, cycles, period, **common_kw)
+        efm_summary = route_numbers(efm, design, efm_wt, efm_ct)
+        log(f"[{name}] EFM route: max depth {efm_summary['max_wear_depth_mm']:.4f} mm, volume "
+            f"{efm_summary['wear_volume_mm3']:.2f} mm^3, {efm_wt:.1f} s (+{efm_ct:.1f} s compile)")
+        label = "diffwear (FEM route)"
+        description = (description + f" Wear pressure: FEM route (thesis Ch. 5): the EFM "
+                       f"dynamics' joint force ({fem.force}) at {fem.n_samples + 1} times per "
+                       f"cycle on a plane-strain Q9 ring ({n_theta} x {fem.n_layers}, E "
+                       f"{float(fem.youngs_modulus) / 1e9:g} GPa, nu "
+                       f"{float(fem.poisson_ratio):g}, outer R "
+                       f"{float(fem.outer_radius) * 1e3:.3f} mm), compliance rebuilt every "
+                       f"{float(fem.refresh_interval):g} wear cycle(s).")
+    log(f"[{name}] {cycles} cycles, method {method}, A {a}, contact {contact} ...")
     res, ct, wt, info = run_evolution(
-        mech_of_p, params, y0, cycles, period, method=method, extrapolation=a,
-        max_dynamic=4 * target_dynamic, wall=design.wall, n_theta=n_theta, out=out,
-        meta={"study": name}, resume=resume, progress=progress)
+        mech_of_p, params, y0, cycles, period, **common_kw, out=out,
+        meta={"study": name}, resume=resume, progress=progress,
+        fem=fem if contact == "fem" else None)
+    extra_summary["contact"] = contact
+    if contact == "fem":
+        fem_summary = route_numbers(res, design, wt, ct)
+        ratio = wt / efm_wt
+        extra_summary.update(
+            fem_route={**fem_summary, "refresh_interval": float(fem.refresh_interval),
+                       "samples_per_cycle": fem.n_samples + 1, "layers": fem.n_layers,
+                       "force": fem.force, "youngs_modulus_Pa": float(fem.youngs_modulus),
+                       "poisson_ratio": float(fem.poisson_ratio),
+                       "outer_radius_m": float(fem.outer_radius)},
+            efm_route=efm_summary, wall_time_ratio_fem_to_efm=ratio)
+        extra_report += route_table(fem_summary, efm_summary, ratio)
     summary = write_outputs(
         out, name=name, mech=mech_of_p(params), design=design, res=res, y0=y0, period=period,
         cycles=cycles, compile_time=ct, wall_time=wt, thesis=thesis, method=method,
         extrapolation=a, description=description, log=log,
-        extra_summary={**(extra_summary or {}), **info}, extra_report=extra_report)
+        extra_summary={**extra_summary, **info}, extra_report=extra_report, label=label)
     res.check(name)
     return summary
 
 
+def route_numbers(res, design: WearJointDesign, wall_time, compile_time) -> dict:
+    """Max depth, volume, Archard volume, times of one route's result."""
+    volume = float(worn_volume(res.depth, design.bushing_radius, design.depth)) * 1e9
+    extra = {}
+    if res.state is not None and "fem_explicit" in res.state:  # FEM route (wear.fem_route)
+        extra["explicit_fallback_cycles"] = int(np.asarray(res.state["fem_explicit"]))
+    return {**extra, "max_wear_depth_mm": float(np.max(np.asarray(res.depth))) * 1e3,
+            "wear_volume_mm3": volume,
+            "archard_k_times_load_sliding_mm3": float(design.k * res.load_sliding) * 1e9,
+            "dynamic_cycles_simulated": int(res.dynamic_cycles), "status": int(res.status),
+            "wall_time_s": wall_time, "compile_time_s": compile_time}
+
+
+def route_table(fem: dict, efm: dict, ratio: float) -> list[str]:
+    """Report lines: the FEM route next to the EFM route (both run here)."""
+    rows = ["", "FEM route next to the EFM route (both run here, same dynamics):", "",
+            "| route | max depth [mm] | volume [mm^3] | k x sum(N ds) [mm^3] | wall time [s] "
+            "| compile [s] |", "|---|---|---|---|---|---|"]
+    for tag, d in (("FEM", fem), ("EFM", efm)):
+        rows.append(f"| {tag} | {d['max_wear_depth_mm']:.4f} | {d['wear_volume_mm3']:.2f} | "
+                    f"{d['archard_k_times_load_sliding_mm3']:.2f} | {d['wall_time_s']:.1f} | "
+                    f"{d['compile_time_s']:.1f} |")
+    rows += ["", f"- wall time FEM / EFM route: {ratio:.2f} (thesis: 11 h / 7 h = 1.6 on the "
+             "rig, 162 / 92 min = 1.8 on wear-5000)"]
+    return rows
+
+
 def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, cycles,
                   compile_time, wall_time, thesis: dict, method: str, extrapolation,
-                  description: str, log, extra_summary=None, extra_report=()):
+                  description: str, log, extra_summary=None, extra_report=(),
+                  label: str = "diffwear"):
     from .. import plots_wear
 
     el = mech.element(JOINT)
@@ -215,7 +308,7 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
     summary["files"] = sorted(set(out.files)) + ["report.md", "summary.json"]
     rows = [
         f"# {name}\n", description + "\n",
-        "| quantity | diffwear | " + " | ".join(thesis) + " |",
+        f"| quantity | {label} | " + " | ".join(thesis) + " |",
         "|---" * (2 + len(thesis)) + "|",
         f"| max wear depth [mm] | {summary['max_wear_depth_mm']:.4f} | "
         + " | ".join(f"{v.get('max_wear_depth_mm', '')}" for v in thesis.values()) + " |",

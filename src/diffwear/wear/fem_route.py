@@ -1,0 +1,395 @@
+"""Archard wear with the contact pressure of a finite-element ring: the thesis's
+FEM route (Ch. 5).
+
+The dynamics still run with the elastic-foundation (EFM) clearance joint: it
+supplies the joint force and the pin's relative rotation.  The wear pressure
+is not the EFM's: for each dynamic cycle the joint force at ``n_samples + 1``
+equally spaced times is applied to the rigid pin in the plane-strain bushing
+ring (`diffwear.fem.RingContact`, given-force, frictionless contact), and the
+depth increment on the profile grid theta_k is
+
+    dh_k = k integral p_k(t) R_b |omega_rel(t)| dt
+         ~ k sum_i w_i p_k(t_i) R_b |omega_rel(t_i)|,       (trapezoid weights w_i)
+
+the quadrature of the integral that the EFM route integrates exactly as ODE
+states (`wear.cycle`).  The thesis did the same with ANSYS: the joint reaction
+of each dynamic analysis, at discrete crank positions, loaded the FE bushing,
+and the element pressures gave the Archard increments (Ch. 5, "Wear
+prediction procedure").  The profile then evolves by A x dh (constant A) with
+the EFM route's bookkeeping (`Evolver`), and the worn profile feeds back into
+both the dynamics' EFM clearance c0 + h and the FE mesh's inner surface a + h.
+
+Friction.  The FE contact is frictionless; the dynamics' joint force contains
+the Coulomb friction of the pin (mu = 0.13: tangential part ~ mu x normal).
+``force="resultant"`` (default) applies the whole joint force, as the thesis
+applied the dynamics' joint reaction to its frictionless ANSYS contact (Ch. 5);
+its direction is then rotated from the normal resultant by up to
+atan(mu) = 7.4 deg and its magnitude is larger by up to sqrt(1 + mu^2) - 1 =
+0.8 %.  ``force="normal"`` applies only the normal part of the joint force as
+the EFM splits it (sum of the spring loads p_k R_b d dtheta along u_k), the
+choice for comparing pressure models at equal normal load (the Winkler-limit
+test).
+
+Pressure for wear.  The FE nodal forces f_j [N/m] are turned into pressures
+with the tributary lengths w0_j of the *unworn* round ring (R_b dtheta in
+Simpson weights): the EFM route's convention (pressure per unworn arc
+R_b dtheta, sliding R_b |omega|, volume d R_b integral h dtheta), so that the
+worn volume equals k x sum(total normal load x sliding) up to the quadrature of
+the nodal pressures (Simpson in the loads, rectangle rule in the volume).
+With the worn surface's lengths (a + h) dtheta the volume would fall short of
+the Archard volume by ~h / a (5 % at the rig's peak) for bookkeeping alone.
+
+Stiffness of the wear step: a linearly implicit update.  The EFM route adds
+A x dh(h) (explicit Euler in the cycle count).  A wear step is stable while
+A k s K < 2 for every profile mode (s = 2 pi R_b sliding per cycle, K the
+pressure per unit depth of the mode).  The EFM's springs have one K = E_W / L
+(rig: A k s K = 428 x 5.05e-13 x 0.060 x 1.48e11 = 1.9, just stable); the
+elastic ring is stiffer for short modes, K ~ E* pi / lambda for a wavelength
+lambda below the wall thickness (E* = E / (1 - nu^2)): ~20 x the EFM's at
+lambda = 2 node spacings, so the explicit step turns the worn pocket into a
+node-to-node zigzag (measured on the rig: 0.530 mm peak, neighbours 0.45 mm).
+The FEM route therefore takes the linearly implicit (Rosenbrock-Euler) step
+
+    (I - A J) Delta h = A dh(h),     J = d(dh)/dh at h,
+
+with J from the contact's implicit derivative (forward mode through the FE
+solves, ``jacobian_samples`` of the cycle's samples, compliance held), which
+damps every mode instead of amplifying it and equals A dh where the wear is
+uniform; Delta h is floored at 0 (material is only removed).
+
+Geometry refresh.  The condensed compliance C of the worn ring is rebuilt from
+the current profile every ``refresh_interval`` = M wear cycles (mesh and
+condensation, ~0.1 s at 180 x 4); in between, wear enters only through the
+initial gap (boundary radius a + h) with the last C kept.  M = 1 rebuilds every
+cycle.  The FE grid is the profile grid (same n_theta nodes, theta_j =
+2 pi j / n): no interpolation.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+from jaxtyping import Array, Float
+
+from .._checks import check_positive, check_range, concrete
+from ..errors import InputError
+from ..fem import RingContact, ring_mesh
+from ..fem.condense import inner_compliance, tributary_lengths
+from ..fem.contact import TOL
+from ..mechanism import Mechanism
+from .cycle import CycleResult, clearance_element, wear_cycle
+from .evolution import EvolutionResult, Evolver, _with_profile
+
+FORCE_MODES = ("resultant", "normal")
+
+# Joint forces below this are treated as no contact (pressure 0): the given-force
+# problem is undetermined at F = 0 (`RingContact.solve_force`).  1e-6 N is 1e-8
+# of the rig's ~140 N mean joint force; a free-flying pin in the EFM dynamics
+# carries ~1e-12 N (smoothed spring onset).
+MIN_JOINT_FORCE = 1e-6  # N
+
+# A sample's FE solve counts as failed (SolverError via the evolution status) when
+# its dimensionless residual max |Phi| exceeds this.  The solve aims at
+# `fem.contact.TOL` = 1e-12 and may stop at its round-off floor just above it
+# (seen once in a rig run with M = 5); 1e-9 of the gap scale (~0.1 mm) is a
+# gap error of 1e-13 m and a force error of 1e-9 of the load: nothing for wear.
+ACCEPT_RESIDUAL = 1e-9
+
+# Defaults, chosen by convergence checks on the rig (README "FEM wear route"):
+# n_samples: the rig's cycle increment changes by < 1e-3 (max) from 64 to 256
+# samples; n_r: 4 Q9 layers through the wall (peak pressure within 1e-3 of 8).
+DEFAULT_SAMPLES = 64
+DEFAULT_LAYERS = 4
+DEFAULT_REFRESH = 1
+# Samples of the cycle (of the n_samples + 1) that form J of the implicit step:
+# J only has to carry the stiffness of the contact region (it is not the
+# increment), 8 intervals over the cycle: rig contact moves by < 20 deg.
+DEFAULT_JACOBIAN_SAMPLES = 8
+
+
+class FemWearModel(eqx.Module):
+    """Settings of the FEM route.  Numbers a user may sweep are arrays.
+
+    youngs_modulus E [Pa], poisson_ratio nu: the bushing ring's material;
+    outer_radius b [m]: the ring is held at r = b; refresh_interval M: wear
+    cycles between rebuilds of the condensed compliance (integer >= 1; an array,
+    so that one compiled evolution serves every M); n_samples: quadrature
+    intervals per dynamic cycle (FE solves: n_samples + 1); n_layers: Q9 element
+    layers through the wall; force: "resultant" or "normal" (module docstring).
+    """
+
+    youngs_modulus: Float[Array, ""]
+    poisson_ratio: Float[Array, ""]
+    outer_radius: Float[Array, ""]
+    refresh_interval: Float[Array, ""]
+    n_samples: int = eqx.field(static=True)
+    n_layers: int = eqx.field(static=True)
+    force: str = eqx.field(static=True)
+    jacobian_samples: int = eqx.field(static=True)
+
+    def __init__(self, youngs_modulus, poisson_ratio, outer_radius, *,
+                 refresh_interval=DEFAULT_REFRESH, n_samples: int = DEFAULT_SAMPLES,
+                 n_layers: int = DEFAULT_LAYERS, force: str = "resultant",
+                 jacobian_samples: int = DEFAULT_JACOBIAN_SAMPLES):
+        check_positive("FEM route: Young's modulus E [Pa]", youngs_modulus)
+        check_range("FEM route: Poisson ratio nu", poisson_ratio, -1.0, 0.5,
+                    low_open=True, high_open=True)
+        check_positive("FEM route: bushing outer radius b [m]", outer_radius)
+        m = concrete(refresh_interval)
+        if m is not None and (m.shape != () or not np.isfinite(m) or m < 1 or m != np.round(m)):
+            raise InputError(f"FEM route: refresh_interval (wear cycles between rebuilds of "
+                             f"the ring compliance) must be an integer >= 1, got "
+                             f"{np.asarray(refresh_interval).tolist()!r}")
+        for name, v, low in (("n_samples (quadrature intervals per cycle)", n_samples, 2),
+                             ("n_layers (element layers through the wall)", n_layers, 1),
+                             ("jacobian_samples (intervals of the implicit step's J)",
+                              jacobian_samples, 1)):
+            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < low:
+                raise InputError(f"FEM route: {name} must be an integer >= {low}, got {v!r}")
+        if force not in FORCE_MODES:
+            raise InputError(f"FEM route: force must be one of {FORCE_MODES}, got {force!r}")
+        f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731
+        self.youngs_modulus, self.poisson_ratio = f(youngs_modulus), f(poisson_ratio)
+        self.outer_radius, self.refresh_interval = f(outer_radius), f(refresh_interval)
+        if jacobian_samples > n_samples:
+            raise InputError(f"FEM route: jacobian_samples ({jacobian_samples}) must not exceed "
+                             f"n_samples ({n_samples})")
+        self.n_samples, self.n_layers, self.force = int(n_samples), int(n_layers), force
+        self.jacobian_samples = int(jacobian_samples)
+
+
+class JointSamples(eqx.Module):
+    """The joint along a saved trajectory: FE load [N] (pin on bushing, bushing
+    frame), sliding speed R_b |omega_rel| [m/s], EFM total normal load [N]."""
+
+    force: Float[Array, "T 2"]
+    sliding_rate: Float[Array, " T"]
+    efm_normal_load: Float[Array, " T"]
+
+
+def joint_samples(mech: Mechanism, joint: str, ys: Float[Array, "T s"], force: str = "resultant"
+                  ) -> JointSamples:
+    """Evaluate the clearance joint ``joint`` at every saved state ``ys``."""
+    index, el = clearance_element(mech, joint)
+    sl = mech.aux_slice(joint)
+    theta = el.profile.theta
+    u = jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)
+
+    def one(y):
+        q, qd, aux = mech.split(y)
+        kin, res = el.contact(mech.frames(q, qd), aux[sl])
+        if force == "resultant":
+            f = -res.force  # ContactResult.force acts on the pin; the ring gets -F
+        else:  # the springs' loads along u_k: the normal part of the pin's push
+            load = res.pressure * kin.bushing_radius * el.law.depth * el.profile.dtheta
+            f = load @ u
+        return f, el.sliding_rate(kin), res.normal_load
+
+    return JointSamples(*jax.vmap(one)(ys))
+
+
+def unworn_tributary(model: FemWearModel, bushing_radius, n_theta: int) -> Float[Array, " n"]:
+    """w0_j [m]: tributary lengths of the unworn ring (the wear pressure's arc)."""
+    return tributary_lengths(ring_mesh(bushing_radius, model.outer_radius, n_theta,
+                                       model.n_layers))
+
+
+def ring_compliance(model: FemWearModel, bushing_radius, depth) -> Float[Array, "n n"]:
+    """C of the ring worn by ``depth`` [m] (mesh + condensation)."""
+    mesh = ring_mesh(bushing_radius, model.outer_radius, depth.shape[0], model.n_layers, depth)
+    return inner_compliance(mesh, model.youngs_modulus, model.poisson_ratio)
+
+
+def ring_contact(compliance, tributary, bushing_radius, pin_radius, depth, length) -> RingContact:
+    """The pin contact with compliance ``compliance`` (possibly of an older
+    profile) and the inner surface at a + ``depth`` (the current profile)."""
+    n = depth.shape[0]
+    return RingContact(compliance=compliance, tributary=tributary,
+                       boundary_radius=bushing_radius + depth,
+                       theta=2.0 * jnp.pi * jnp.arange(n) / n,
+                       pin_radius=jnp.asarray(pin_radius, dtype=float),
+                       length=jnp.asarray(length, dtype=float))
+
+
+class FemIncrement(eqx.Module):
+    """One cycle's FE wear: depth increment [m], k-free load x sliding [N m],
+    pressures at the samples [Pa], whether every FE solve converged."""
+
+    depth_increment: Float[Array, " n"]
+    load_sliding: Float[Array, ""]
+    pressure: Float[Array, "T n"]
+    normal_load: Float[Array, " T"]
+    ok: Array
+
+
+def trapezoid_weights(ts: Float[Array, " T"]) -> Float[Array, " T"]:
+    """w_i with sum_i w_i g(t_i) the trapezoid rule on the (ordered) times ``ts``."""
+    dt = jnp.diff(ts)
+    return 0.5 * (jnp.concatenate([dt, jnp.zeros(1)]) + jnp.concatenate([jnp.zeros(1), dt]))
+
+
+def fem_increment(contact: RingContact, samples: JointSamples, ts, k) -> FemIncrement:
+    """dh_k = k sum_i w_i p_k(t_i) s_i and sum_i w_i N_i s_i (s = R_b |omega|, N
+    the FE total normal load L sum_j f_j) for the loads ``samples`` at ``ts``."""
+    f = samples.force
+    mag = jnp.sqrt(jnp.sum(f * f, axis=-1))
+    loaded = mag > MIN_JOINT_FORCE
+    f_safe = jnp.where(loaded[:, None], f, jnp.array([1.0, 0.0]))  # any valid load; result dropped
+
+    theta = contact.theta
+    n = theta.shape[0]
+
+    def solve(x):
+        s = contact._solve_force(x, TOL)
+
+        def retry(_):
+            # Semismooth Newton from the default start (pin touching the least worn
+            # point along F) can stall on a deep pocket (seen once on the rig at
+            # M = 5: 100 steps, residual 1e-4); start at the worn wall along F.
+            unit = x / jnp.sqrt(jnp.sum(x * x))
+            ang = jnp.mod(jnp.arctan2(unit[1], unit[0]), 2 * jnp.pi) * n / (2 * jnp.pi)
+            j = jnp.round(ang).astype(int) % n
+            return contact._solve_force(
+                x, TOL, offset_guess=unit * (contact.boundary_radius[j] - contact.pin_radius))
+
+        s = lax.cond(s.info.residual <= ACCEPT_RESIDUAL, lambda _: s, retry, None)
+        return (s.pressure, contact.length * jnp.sum(s.nodal_force),
+                s.info.residual <= ACCEPT_RESIDUAL)
+
+    p, load, conv = lax.map(solve, f_safe)
+    p = jnp.where(loaded[:, None], p, 0.0)
+    load = jnp.where(loaded, load, 0.0)
+    w = trapezoid_weights(ts) * samples.sliding_rate
+    dh = jnp.asarray(k, dtype=float) * (w @ p)
+    ok = jnp.all(conv | ~loaded) & jnp.all(jnp.isfinite(dh))
+    return FemIncrement(depth_increment=dh, load_sliding=w @ load, pressure=p,
+                        normal_load=load, ok=ok)
+
+
+def implicit_step(contact: RingContact, samples: JointSamples, ts, inc: FemIncrement, k, a,
+                  jacobian_samples: int) -> tuple[Float[Array, " n"], Float[Array, ""], Array]:
+    """(Delta h, load x sliding of the step, explicit fallback used): Delta h solves
+    (I - a J) Delta h = a dh (dh = ``inc.depth_increment``), J = d(dh)/d(depth)
+    from ``jacobian_samples`` + 1 of the samples (trapezoid over the cycle),
+    compliance held; floored at 0.  The load x sliding is linearised the same
+    way, a (ls + (d ls / d depth) . Delta h), so that k x it stays the step's
+    volume (the Archard bookkeeping of an implicit step: the loads at the end of
+    the step).  See the module docstring."""
+    n_t = ts.shape[0]
+    idx = np.unique(np.round(np.linspace(0, n_t - 1, jacobian_samples + 1)).astype(int))
+    sub = jax.tree.map(lambda x: x[idx], samples)
+    frozen = jax.lax.stop_gradient(contact)
+
+    def dh(extra_depth):  # at the current profile plus ``extra_depth``
+        ct = eqx.tree_at(lambda c: c.boundary_radius, frozen,
+                         frozen.boundary_radius + extra_depth)
+        r = fem_increment(ct, sub, ts[idx], k)
+        return r.depth_increment, r.load_sliding
+
+    n = inc.depth_increment.shape[0]
+    jac, d_ls = jax.jacfwd(dh)(jnp.zeros(n))
+    step = jnp.linalg.solve(jnp.eye(n) - a * jac, a * inc.depth_increment)
+    step = jnp.maximum(step, 0.0)
+    ls = a * (inc.load_sliding + d_ls @ step)
+    # A non-finite J (a degenerate contact node at a J sample: the implicit
+    # derivative does not exist there; seen on the rig with M = 5) falls back to
+    # the explicit step for this cycle, counted in the evolution state.
+    good = jnp.all(jnp.isfinite(step)) & jnp.isfinite(ls)
+    return (jnp.where(good, step, a * inc.depth_increment),
+            jnp.where(good, ls, a * inc.load_sliding), ~good)
+
+
+class FemEvolver(Evolver):
+    """`Evolver` (method "constant") whose depth increments come from the FE
+    ring; the evolution state carries the compliance ``fem_C`` and the wear
+    cycles since it was built, ``fem_age``, and the cycles that fell back to the
+    explicit step, ``fem_explicit``."""
+
+    def __init__(self, mech: Mechanism, joint: str, cycles, *, fem: FemWearModel,
+                 method: str = "constant", **kw):
+        if method != "constant":
+            raise InputError(f"the FEM wear route supports method 'constant' only (constant "
+                             f"A, as the thesis's FEM runs), got {method!r}")
+        if not isinstance(fem, FemWearModel):
+            raise InputError(f"fem must be a FemWearModel, got {type(fem).__name__}")
+        super().__init__(mech, joint, cycles, method=method, **kw)
+        _, el = clearance_element(mech, joint)
+        rb, b = concrete(el.bushing_radius), concrete(fem.outer_radius)
+        if rb is not None and b is not None and not b > rb:
+            raise InputError(f"FEM route: bushing outer radius {float(b)!r} m must exceed the "
+                             f"bore radius {float(rb)!r} m")
+        self.fem, self.el = fem, el
+        self.w0 = unworn_tributary(fem, el.bushing_radius, el.profile.n)
+
+    def compliance(self, h):
+        return ring_compliance(self.fem, self.el.bushing_radius, h)
+
+    def fem_cycle(self, c, a_i) -> tuple[CycleResult, FemIncrement, tuple, dict]:
+        """One dynamic cycle at profile c["h"] with its FE wear, the implicit
+        profile step for A = ``a_i``, and the refreshed compliance state."""
+        fem, el = self.fem, self.el
+        stale = c["fem_age"] >= fem.refresh_interval
+        cmat = lax.cond(stale, lambda h: self.compliance(h), lambda h: c["fem_C"], c["h"])
+        age = jnp.where(stale, 0.0, c["fem_age"]) + 1.0
+        mech = _with_profile(self.mech, self.index, self.c_base + c["h"])
+        r = wear_cycle(mech, self.joint, c["y"], c["t"], self.period,
+                       n_save=fem.n_samples + 1, **self.cycle_kw)
+        samples = joint_samples(mech, self.joint, r.ys, fem.force)
+        contact = ring_contact(cmat, self.w0, el.bushing_radius, el.pin_radius, c["h"],
+                               el.law.depth)
+        inc = fem_increment(contact, samples, r.ts, self.k)
+        step, ls, fallback = implicit_step(contact, samples, r.ts, inc, self.k, a_i,
+                                           fem.jacobian_samples)
+        return r, inc, (step, ls), {"fem_C": cmat, "fem_age": age,
+                                    "fem_explicit": c["fem_explicit"] + fallback}
+
+    def init(self, y0) -> dict:
+        c = super().init(y0)
+        c.update(fem_C=self.compliance(c["h"]), fem_age=jnp.zeros(()),
+                 fem_explicit=jnp.zeros(()))
+        return c
+
+    def _step_constant(self, c, _):
+        """Constant A with the FE increment (else as `Evolver._step_constant`)."""
+        def do(c):
+            a_i = jnp.minimum(self.a, self.cycles_arr - c["n"])
+            r, inc, (step, ls), fem_state = self.fem_cycle(c, a_i)
+            ok = r.ok & inc.ok & jnp.all(jnp.isfinite(step))
+            out = self.finish(c, c["h"] + step, r.y_end, c["t"] + self.period, a_i, ls, ok)
+            out["dyn"] = c["dyn"] + 1
+            out.update(fem_state)
+            return out, a_i
+
+        c2, a_i, go = self.when_active(do, c)
+        return c2, self.record(c2, a_i, go)
+
+
+def evolve_fem(mech: Mechanism, joint: str, y0, cycles, *, period, fem: FemWearModel,
+               extrapolation=1.0, **kw) -> EvolutionResult:
+    """`evolve` (method "constant") with the FE wear pressure; ``kw`` as `evolve`
+    (wall_thickness, warmup_cycles, cycle tolerances, ...)."""
+    ev = FemEvolver(mech, joint, cycles, fem=fem, period=period, extrapolation=extrapolation,
+                    **kw)
+    state, hist = ev.run(ev.init(y0), ev.n_slots)
+    return ev.result(state, hist)
+
+
+def default_model(design, *, refresh_interval=DEFAULT_REFRESH, n_samples=DEFAULT_SAMPLES,
+                  n_layers=DEFAULT_LAYERS, force="resultant",
+                  jacobian_samples=DEFAULT_JACOBIAN_SAMPLES) -> FemWearModel:
+    """The FEM route for a `presets.WearJointDesign`: PTFE ring (Table 3-2:
+    E 0.5 GPa, nu 0.38, the EFM's material), outer radius bore + wall."""
+    from ..contact import PTFE
+
+    return FemWearModel(PTFE.youngs_modulus, PTFE.poisson_ratio,
+                        design.bushing_radius + design.wall, refresh_interval=refresh_interval,
+                        n_samples=n_samples, n_layers=n_layers, force=force,
+                        jacobian_samples=jacobian_samples)
+
+
+__all__ = ["FORCE_MODES", "MIN_JOINT_FORCE", "FemWearModel", "JointSamples", "joint_samples",
+           "FemIncrement", "fem_increment", "FemEvolver", "evolve_fem", "default_model",
+           "ring_compliance", "ring_contact", "unworn_tributary", "trapezoid_weights"]

@@ -143,7 +143,7 @@ def test_bad_options_and_missing_file(tmp_path, capsys):
     f = tmp_path / "ok.toml"
     f.write_text('model = "rig-wear"\n' + GOOD_GRID)
     assert main(["sweep", str(f), "--out", str(tmp_path / "o"), "--chunk-size", "0"]) == 2
-    assert "--chunk-size must be an integer in [1, 100000], got 0" in capsys.readouterr().err
+    assert "--chunk-size must be an integer in [1, 100,000], got 0" in capsys.readouterr().err
     assert main(["sweep", str(tmp_path / "nope.toml"), "--out", str(tmp_path / "o")]) == 2
     assert "nope.toml: no such file" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()

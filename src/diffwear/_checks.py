@@ -59,3 +59,11 @@ def check_range(
         lo = "(" if low_open else "["
         hi = ")" if high_open else "]"
         raise InputError(f"{what} must lie in {lo}{low}, {high}{hi}, got {v.tolist()}")
+
+
+def check_int_option(option: str, value: Any, low: int, high: int) -> None:
+    """A command-line count (``--cycles``, ``--steps``, ...): an integer in
+    [low, high], else `InputError` naming the option, the range and the value."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or \
+            not low <= value <= high:
+        raise InputError(f"{option} must be an integer in [{low:,}, {high:,}], got {value!r}")

@@ -11,6 +11,7 @@ import inspect
 import sys
 from collections.abc import Sequence
 
+from ._checks import check_int_option
 from .errors import DiffwearError, InputError
 
 # Upper bound of --cycles: 1e8 crank cycles is ~6 years at 30 rpm.
@@ -38,8 +39,8 @@ def _study(args: argparse.Namespace) -> int:
     if args.out is None:
         raise InputError("study: --out DIR is required")
     kwargs = {}
-    if args.cycles is not None and not 0 < args.cycles <= MAX_CYCLES:
-        raise InputError(f"--cycles must be an integer in [1, {MAX_CYCLES:.0e}], got {args.cycles}")
+    if args.cycles is not None:
+        check_int_option("--cycles", args.cycles, 1, MAX_CYCLES)
     accepted = inspect.signature(STUDIES[args.name].run).parameters
     for option in ("cycles", "method", "contact"):
         value = getattr(args, option)
@@ -85,11 +86,10 @@ def _sweep(args: argparse.Namespace) -> int:
     from .sweep import study
 
     spec = load_sweep(args.file)  # every input check happens before --out is touched
-    if args.chunk_size is not None and not 1 <= args.chunk_size <= MAX_POINTS:
-        raise InputError(f"--chunk-size must be an integer in [1, {MAX_POINTS}], "
-                         f"got {args.chunk_size}")
-    if args.workers is not None and not 1 <= args.workers <= 1024:
-        raise InputError(f"--workers must be an integer in [1, 1024], got {args.workers}")
+    if args.chunk_size is not None:
+        check_int_option("--chunk-size", args.chunk_size, 1, MAX_POINTS)
+    if args.workers is not None:
+        check_int_option("--workers", args.workers, 1, 1024)
     if args.workers is not None and args.cluster is not None:
         raise InputError("--cluster ADDRESS and --workers N exclude each other (--workers "
                          "starts a local cluster)")
@@ -146,13 +146,10 @@ def _calibrate(args: argparse.Namespace) -> int:
     from .io import OutputDir
 
     data = load_dataset(args.data)  # every input check happens before --out is touched
-    if not 1 <= args.top <= 5:
-        raise InputError(f"--top must be an integer in [1, 5], got {args.top}")
-    if args.dynamic_cycles is not None and not 1 <= args.dynamic_cycles <= 2000:
-        raise InputError(f"--dynamic-cycles must be an integer in [1, 2000], "
-                         f"got {args.dynamic_cycles}")
-    if not 12 <= args.n_theta <= 720:
-        raise InputError(f"--n-theta must be an integer in [12, 720], got {args.n_theta}")
+    check_int_option("--top", args.top, 1, 5)
+    if args.dynamic_cycles is not None:
+        check_int_option("--dynamic-cycles", args.dynamic_cycles, 1, 2000)
+    check_int_option("--n-theta", args.n_theta, 12, 720)
     settings = ModelSettings(dynamic_cycles=args.dynamic_cycles, n_theta=args.n_theta)
     out = OutputDir(args.out, overwrite=args.overwrite)
     log = (lambda *a, **k: None) if args.quiet else print

@@ -19,6 +19,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._checks import check_int_option
 from ..errors import InputError
 from ..io import OutputDir
 from .optimise import (LONGEST_LIFE_CORNER, equal_life, jacobian, least_material,
@@ -52,10 +53,7 @@ def settings(*, quick: bool = False, problems: str | None = None, **overrides) -
     for key, value in overrides.items():
         if value is None:
             continue
-        lo, hi = LIMITS[key]
-        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-            raise InputError(f"--{key.replace('_', '-')} must be an integer in [{lo}, {hi}], "
-                             f"got {value!r}")
+        check_int_option(f"--{key.replace('_', '-')}", value, *LIMITS[key])
         chosen[key] = value
     return chosen
 

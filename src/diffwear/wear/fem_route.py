@@ -243,7 +243,7 @@ def fem_increment(contact: RingContact, samples: JointSamples, ts, k) -> FemIncr
     n = theta.shape[0]
 
     def solve(x):
-        s = contact._solve_force(x, TOL)
+        s = contact.solve_force(x, tol=TOL)  # under tracing: no concrete checks, no raise
 
         def retry(_):
             # Semismooth Newton from the default start (pin touching the least worn
@@ -252,8 +252,8 @@ def fem_increment(contact: RingContact, samples: JointSamples, ts, k) -> FemIncr
             unit = x / jnp.sqrt(jnp.sum(x * x))
             ang = jnp.mod(jnp.arctan2(unit[1], unit[0]), 2 * jnp.pi) * n / (2 * jnp.pi)
             j = jnp.round(ang).astype(int) % n
-            return contact._solve_force(
-                x, TOL, offset_guess=unit * (contact.boundary_radius[j] - contact.pin_radius))
+            return contact.solve_force(
+                x, tol=TOL, offset_guess=unit * (contact.boundary_radius[j] - contact.pin_radius))
 
         s = lax.cond(s.info.residual <= ACCEPT_RESIDUAL, lambda _: s, retry, None)
         return (s.pressure, contact.length * jnp.sum(s.nodal_force),

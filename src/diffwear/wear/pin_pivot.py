@@ -260,7 +260,7 @@ class PinPivot(eqx.Module):
                            self.contact.boundary_radius + gap_wear)
         if offset_guess is None:  # the pin touching the (worn) bore along F: theta = 0
             offset_guess = jnp.array([prob.boundary_radius[0] - prob.pin_radius, 0.0])
-        sol = prob._solve_force(self.force, TOL, offset_guess)
+        sol = prob.solve_force(self.force, tol=TOL, offset_guess=offset_guess)
         # the FB solution leaves |f| ~ 1e-16 max f off contact, either sign: no node gains material
         sol = eqx.tree_at(lambda c: c.nodal_force, sol, jnp.maximum(sol.nodal_force, 0.0))
         f = sol.nodal_force

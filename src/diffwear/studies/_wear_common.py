@@ -13,7 +13,7 @@ from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..errors import InputError
-from ..wear import worn_mechanism, evolve, wear_cycle, worn_volume
+from ..wear import worn_mechanism, wear_cycle, worn_volume
 from ..wear.evolution import (ChunkedEvolution, Evolver, load_checkpoint,
                               save_checkpoint)
 from ..wear.fem_route import FemEvolver, default_model
@@ -61,15 +61,14 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
     """
     kw = dict(period=period, method=method, extrapolation=extrapolation,
               max_dynamic=max_dynamic, wall_thickness=wall, rtol=rtol, atol=atol)
+
     def make(p):
         if fem is None:
             return Evolver(mech_of_p(p), JOINT, cycles, **kw)
         return FemEvolver(mech_of_p(p), JOINT, cycles, fem=fem, **kw)
 
     if out is None:
-        def fn(p, y0):
-            if fem is None:
-                return evolve(mech_of_p(p), JOINT, y0, cycles, **kw)
+        def fn(p, y0):  # as `evolve` / `evolve_fem`, for either route
             ev = make(p)
             state, hist = ev.run(ev.init(y0), ev.n_slots)
             return ev.result(state, hist)
@@ -182,7 +181,8 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
         fem=fem if contact == "fem" else None)
     extra_summary["contact"] = contact
     if contact == "fem":
-        fem_summary = route_numbers(res, design, wt, ct)
+        fem_summary = {"explicit_fallback_cycles": int(np.asarray(res.state["fem_explicit"])),
+                       **route_numbers(res, design, wt, ct)}
         ratio = wt / efm_wt
         extra_summary.update(
             fem_route={**fem_summary, "refresh_interval": float(fem.refresh_interval),
@@ -204,10 +204,7 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
 def route_numbers(res, design: WearJointDesign, wall_time, compile_time) -> dict:
     """Max depth, volume, Archard volume, times of one route's result."""
     volume = float(worn_volume(res.depth, design.bushing_radius, design.depth)) * 1e9
-    extra = {}
-    if res.state is not None and "fem_explicit" in res.state:  # FEM route (wear.fem_route)
-        extra["explicit_fallback_cycles"] = int(np.asarray(res.state["fem_explicit"]))
-    return {**extra, "max_wear_depth_mm": float(np.max(np.asarray(res.depth))) * 1e3,
+    return {"max_wear_depth_mm": float(np.max(np.asarray(res.depth))) * 1e3,
             "wear_volume_mm3": volume,
             "archard_k_times_load_sliding_mm3": float(design.k * res.load_sliding) * 1e9,
             "dynamic_cycles_simulated": int(res.dynamic_cycles), "status": int(res.status),
@@ -238,10 +235,7 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
     n = el.profile.n
     theta = np.asarray(el.profile.theta)
     depth = np.asarray(res.depth)
-    rb, bd = float(design.bushing_radius), float(design.depth)
-    volume = float(worn_volume(res.depth, rb, bd))
-    mass_g = volume * PTFE_DENSITY * 1e3
-    archard_volume = float(design.k * res.load_sliding)
+    numbers = route_numbers(res, design, wall_time, compile_time)
 
     # first (after the warm-up) and last dynamic cycles, saved densely
     cyc = jax.jit(lambda m, y, t: wear_cycle(m, JOINT, y, t, period, n_save=N_SAVE))
@@ -288,17 +282,11 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
         "study": name,
         "cycles": float(res.cycles),
         "cycles_requested": float(cycles),
-        "max_wear_depth_mm": float(depth.max() * 1e3),
+        **numbers,
         "max_wear_angle_rad": float(theta[np.argmax(depth)]),
-        "wear_volume_mm3": volume * 1e9,
-        "worn_mass_g": mass_g,
-        "archard_k_times_load_sliding_mm3": archard_volume * 1e9,
-        "dynamic_cycles_simulated": int(res.dynamic_cycles),
+        "worn_mass_g": numbers["wear_volume_mm3"] * 1e-9 * PTFE_DENSITY * 1e3,
         "method": method,
         "extrapolation": extrapolation,
-        "status": int(res.status),
-        "wall_time_s": wall_time,
-        "compile_time_s": compile_time,
         "mean_joint_force_first_cycle_N": float(np.mean(np.asarray(hist_first.force_magnitude))),
         "mean_normal_load_first_cycle_N": float(np.mean(np.asarray(hist_first.normal_load))),
         "n_theta": n,

@@ -23,14 +23,22 @@ def concrete(value: Any) -> np.ndarray | None:
     return np.asarray(value, dtype=float)
 
 
+def _numbers(what: str, value: Any) -> np.ndarray | None:
+    """`concrete`, with a value that is not a number an `InputError` naming ``what``."""
+    try:
+        return concrete(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{what} must be a number, got {value!r}") from None
+
+
 def check_finite(what: str, value: Any) -> None:
-    v = concrete(value)
+    v = _numbers(what, value)
     if v is not None and not np.all(np.isfinite(v)):
         raise InputError(f"{what} must be finite, got {v.tolist()}")
 
 
 def check_positive(what: str, value: Any, *, allow_zero: bool = False) -> None:
-    v = concrete(value)
+    v = _numbers(what, value)
     if v is None:
         return
     check_finite(what, v)
@@ -49,7 +57,7 @@ def check_range(
     low_open: bool = False,
     high_open: bool = False,
 ) -> None:
-    v = concrete(value)
+    v = _numbers(what, value)
     if v is None:
         return
     check_finite(what, v)

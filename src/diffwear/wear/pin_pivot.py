@@ -78,6 +78,7 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array, Bool, Float
 
+from .._checks import check_range
 from ..errors import InputError, SolverError
 from ..fem.condense import tributary_lengths
 from ..fem.contact import TOL, RingContact
@@ -169,15 +170,8 @@ class PinPivotSetup:
 
 
 def _check_number(name, what, value, low, high, *, low_open=False, high_open=False):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"pin-pivot: {name} ({what}) must be a number, got {value!r}") from None
-    ok = math.isfinite(v) and (v > low if low_open else v >= low) and (v < high if high_open else v <= high)
-    if not ok:
-        lo, hi = ("(" if low_open else "["), (")" if high_open else "]")
-        raise InputError(f"pin-pivot: {name} ({what}) must lie in {lo}{low:g}, {high:g}{hi}, "
-                         f"got {value!r}")
+    check_range(f"pin-pivot: {name} ({what})", value, low, high, low_open=low_open,
+                high_open=high_open)
 
 
 def periodic_sample(values: Float[Array, " n"], shift) -> Float[Array, " n"]:

@@ -21,8 +21,8 @@ def profile_figure(path, *, angle_deg, simulated, direct, pressure, title):
     order = np.argsort(angle_deg)
     a = angle_deg[order]
     fig, axes = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
-    for (label, prof), style in zip(simulated.items(), ("-", "-")):
-        axes[0].plot(*_closed(a, prof[order]), style, lw=1.6, label=label)
+    for label, prof in simulated.items():
+        axes[0].plot(*_closed(a, prof[order]), "-", lw=1.6, label=label)
     for label, prof in direct.items():
         axes[0].plot(*_closed(a, prof[order]), "--", lw=1.2, label=label)
     axes[0].set_ylabel("wear depth [mm]")

@@ -34,6 +34,7 @@ from ..wear.pin_pivot import (
     PinPivot,
     PinPivotSetup,
     linear_extrapolation,
+    steady_line,
     run_wear,
 )
 
@@ -70,14 +71,6 @@ def _extrapolated(res, target):
     pin, s_pin = linear_extrapolation(res.sweeps, res.max_pin, target)
     pivot, s_piv = linear_extrapolation(res.sweeps, res.max_pivot, target)
     return pin, pivot, s_pin, s_piv
-
-
-def _fit_line(res, which):
-    s, d = np.asarray(res.sweeps), np.asarray(getattr(res, which))
-    sel = s >= 0.5 * s[-1]
-    if sel.sum() < 2:
-        sel[-2:] = True
-    return tuple(np.polyfit(s[sel], d[sel], 1))
 
 
 def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, sensitivity: bool = True,
@@ -161,7 +154,8 @@ def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, sensitivity: bool = 
     plots.history_figure(
         out.file("wear_history.png"), sweeps=np.asarray(base.sweeps),
         max_pin_mm=mm * np.asarray(base.max_pin), max_pivot_mm=mm * np.asarray(base.max_pivot),
-        fit_pin=_fit_line(base, "max_pin"), fit_pivot=_fit_line(base, "max_pivot"),
+        fit_pin=steady_line(base.sweeps, base.max_pin),
+        fit_pivot=steady_line(base.sweeps, base.max_pivot),
         target=TARGET_SWEEPS,
         direct=(np.asarray(direct.sweeps), mm * np.asarray(direct.max_pin),
                 mm * np.asarray(direct.max_pivot)),

@@ -362,13 +362,21 @@ def linear_extrapolation(sweeps, depth, target: float, fit_from: float = 0.5) ->
     ~linear once the wear is steady, so fit a line to the part after
     ``fit_from`` x the last simulated sweep count and read it at ``target``.
     Returns (depth at target [m], slope [m per sweep])."""
+    slope, icpt = steady_line(sweeps, depth, fit_from)
+    return icpt + slope * target, slope
+
+
+def steady_line(sweeps, depth, fit_from: float = 0.5) -> tuple[float, float]:
+    """(slope [m per sweep], intercept [m]) of the line through the depth
+    history after ``fit_from`` x the last sweep count (at least its last two
+    points): the line `linear_extrapolation` reads off."""
     s, d = np.asarray(sweeps, dtype=float), np.asarray(depth, dtype=float)
     sel = s >= fit_from * s[-1]
     if sel.sum() < 2:
         sel = np.zeros_like(sel)
         sel[-2:] = True
     slope, icpt = np.polyfit(s[sel], d[sel], 1)
-    return float(icpt + slope * target), float(slope)
+    return float(slope), float(icpt)
 
 
 @eqx.filter_jit

@@ -112,3 +112,30 @@ def test_too_few_steps_raise_solver_error():
     assert msg.startswith("pendulum:") and "10 steps" in msg
     assert "1 of 5 saved times reached" in msg  # only t = 0
     assert not re.search(r"\b(inf|nan)\b", msg)  # unreached times are inf in diffrax
+
+
+@pytest.mark.parametrize("value, high, message", [
+    (0, 10, "--n must be an integer in [1, 10], got 0"),
+    (11, 10, "--n must be an integer in [1, 10], got 11"),
+    (2.0, 10, "--n must be an integer in [1, 10], got 2.0"),
+    (True, 10, "--n must be an integer in [1, 10], got True"),
+    (0, None, "--n must be an integer >= 1, got 0"),
+    ("3", None, "--n must be an integer >= 1, got '3'"),
+])
+def test_integer_option_names_option_range_and_value(value, high, message):
+    from diffwear._checks import check_int_option
+
+    with pytest.raises(InputError) as err:
+        check_int_option("--n", value, 1, high)
+    assert str(err.value) == message
+    check_int_option("--n", 10**9 if high is None else high, 1, high)  # the bound itself passes
+
+
+def test_cli_and_engine_share_the_wear_choices():
+    from diffwear.choices import WEAR_CONTACTS, WEAR_METHODS
+    from diffwear.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    study = sub.choices["study"]
+    choices = {a.dest: tuple(a.choices) for a in study._actions if a.choices}
+    assert choices["contact"] == WEAR_CONTACTS and choices["method"] == WEAR_METHODS

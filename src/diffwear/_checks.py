@@ -69,9 +69,11 @@ def check_range(
         raise InputError(f"{what} must lie in {lo}{low}, {high}{hi}, got {v.tolist()}")
 
 
-def check_int_option(option: str, value: Any, low: int, high: int) -> None:
-    """A command-line count (``--cycles``, ``--steps``, ...): an integer in
-    [low, high], else `InputError` naming the option, the range and the value."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or \
-            not low <= value <= high:
-        raise InputError(f"{option} must be an integer in [{low:,}, {high:,}], got {value!r}")
+def check_int_option(option: str, value: Any, low: int, high: int | None = None) -> None:
+    """A count (``--cycles``, ``n_samples``, ...): an integer in [low, high]
+    (``high`` None: >= low), else `InputError` naming the option, the allowed
+    range and the value."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low \
+            or (high is not None and value > high):
+        allowed = f">= {low:,}" if high is None else f"in [{low:,}, {high:,}]"
+        raise InputError(f"{option} must be an integer {allowed}, got {value!r}")

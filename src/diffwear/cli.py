@@ -12,6 +12,7 @@ import sys
 from collections.abc import Sequence
 
 from ._checks import check_int_option
+from .choices import WEAR_CONTACTS, WEAR_METHODS
 from .errors import DiffwearError, InputError
 
 # Upper bound of --cycles: 1e8 crank cycles is ~6 years at 30 rpm.
@@ -180,9 +181,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("name", nargs="?", help="study name; omit or use --list to list them")
     p.add_argument("--list", action="store_true", help="list the studies and exit")
     _output_options(p, required=False)
-    p.add_argument("--method", choices=("constant", "adaptive", "error"),
+    p.add_argument("--method", choices=WEAR_METHODS,
                    help="wear extrapolation over cycles (wear studies; default constant)")
-    p.add_argument("--contact", choices=("efm", "fem"),
+    p.add_argument("--contact", choices=WEAR_CONTACTS,
                    help="pressure model of the wear (wear studies): efm (default; elastic "
                         "foundation) or fem (finite-element ring loaded by the joint force; "
                         "runs the EFM route too for the comparison)")

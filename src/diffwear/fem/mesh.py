@@ -37,7 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from .._checks import check_finite, check_positive, concrete
+from .._checks import check_finite, check_int_option, check_positive, concrete
 from ..errors import InputError
 
 #: Smallest number of nodes around: 4 elements of 90 degrees.  A quadratic arc
@@ -110,9 +110,7 @@ def ring_mesh(inner_radius, outer_radius, n_theta: int, n_r: int, depth=None) ->
             or n_theta < MIN_THETA_NODES or n_theta % 2:
         raise InputError(f"ring mesh: n_theta (nodes around the ring) must be an even "
                          f"integer >= {MIN_THETA_NODES}, got {n_theta!r}")
-    if not isinstance(n_r, (int, np.integer)) or isinstance(n_r, bool) or n_r < 1:
-        raise InputError(f"ring mesh: n_r (element layers through the wall) must be an "
-                         f"integer >= 1, got {n_r!r}")
+    check_int_option("ring mesh: n_r (element layers through the wall)", n_r, 1)
     n_theta, n_r = int(n_theta), int(n_r)
     check_positive("ring mesh: inner radius a [m]", inner_radius)
     check_positive("ring mesh: outer radius b [m]", outer_radius)

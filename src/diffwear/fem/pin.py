@@ -41,7 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from .._checks import check_positive, concrete
+from .._checks import check_int_option, check_positive, concrete
 from ..errors import InputError
 from .condense import inner_compliance
 from .mesh import MIN_THETA_NODES, connectivity
@@ -77,8 +77,7 @@ def pin_mesh(radius, bore_radius, n_theta: int, n_r: int) -> PinMesh:
             or n_theta < MIN_THETA_NODES or n_theta % 2:
         raise InputError(f"pin mesh: n_theta (nodes around the pin) must be an even integer "
                          f">= {MIN_THETA_NODES}, got {n_theta!r}")
-    if not isinstance(n_r, (int, np.integer)) or isinstance(n_r, bool) or n_r < 1:
-        raise InputError(f"pin mesh: n_r (element layers) must be an integer >= 1, got {n_r!r}")
+    check_int_option("pin mesh: n_r (element layers)", n_r, 1)
     check_positive("pin mesh: pin radius R [m]", radius)
     check_positive("pin mesh: held bore radius r0 [m]", bore_radius)
     r_c, r0_c = concrete(radius), concrete(bore_radius)

@@ -12,6 +12,7 @@ import numpy as np
 from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
+from ..choices import WEAR_CONTACTS as CONTACTS
 from ..errors import InputError
 from ..wear import worn_mechanism, wear_cycle, worn_volume
 from ..wear.evolution import (ChunkedEvolution, Evolver, load_checkpoint,
@@ -41,7 +42,6 @@ CHECKPOINT = "checkpoint.npz"
 CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
 # checkpoint keys added later, with the value that checkpoints written before meant
 META_DEFAULTS = {"contact": "efm"}
-CONTACTS = ("efm", "fem")  # --contact: the pressure of the wear (the dynamics: always EFM)
 
 
 def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, max_dynamic,

@@ -23,7 +23,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import plots_pin_pivot as plots
-from ..errors import InputError
+from .._checks import check_int_option
 from ..io import OutputDir
 from ..wear.pin_pivot import (
     SWEEPS_PER_TEST_CYCLE,
@@ -79,9 +79,7 @@ def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, sensitivity: bool = 
     thesis's "cycles" of Table 4-2: 100,000).  A smaller value scales every
     run of the study down in proportion (the direct run too), for tests.
     ``sensitivity=False`` skips the sensitivity runs (tests)."""
-    if not (isinstance(cycles, int) and cycles >= 2 * EXTRAPOLATION):
-        raise InputError(f"pin-pivot: --cycles (simulated sweeps) must be an integer >= "
-                         f"{2 * EXTRAPOLATION}, got {cycles!r}")
+    check_int_option("pin-pivot: --cycles (simulated sweeps)", cycles, 2 * EXTRAPOLATION)
     t_start = time.perf_counter()
     direct_sweeps = 2 * cycles  # 816,000 would wear the pin to ~0.6 R: beyond the model
     setup = PinPivotSetup()

@@ -57,6 +57,7 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array, Float
 
+from ..choices import WEAR_METHODS
 from ..errors import InputError, SolverError
 from ..mechanism import Mechanism
 from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle
@@ -215,8 +216,9 @@ class Evolver:
                  wall_thickness=None, warmup_cycles=1, adaptive=None,
                  cycle_rtol=CYCLE_RTOL, cycle_atol=CYCLE_ATOL, adjoint=None,
                  max_steps=200_000):
-        if method not in ("constant", "adaptive", "error"):
-            raise InputError(f"method must be 'constant', 'adaptive' or 'error', got {method!r}")
+        if method not in WEAR_METHODS:
+            raise InputError(f"method must be one of {', '.join(map(repr, WEAR_METHODS))}, "
+                             f"got {method!r}")
         self.index, el = clearance_element(mech, joint)
         self.mech, self.joint, self.method, self.period = mech, joint, method, period
         self.extrapolation, self.warmup_cycles = extrapolation, warmup_cycles

@@ -74,7 +74,7 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array, Float
 
-from .._checks import check_positive, check_range, concrete
+from .._checks import check_int_option, check_positive, check_range, concrete
 from ..errors import InputError
 from ..fem import RingContact, ring_mesh
 from ..fem.condense import inner_compliance, tributary_lengths
@@ -147,8 +147,7 @@ class FemWearModel(eqx.Module):
                              ("n_layers (element layers through the wall)", n_layers, 1),
                              ("jacobian_samples (intervals of the implicit step's J)",
                               jacobian_samples, 1)):
-            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < low:
-                raise InputError(f"FEM route: {name} must be an integer >= {low}, got {v!r}")
+            check_int_option(f"FEM route: {name}", v, low)
         if force not in FORCE_MODES:
             raise InputError(f"FEM route: force must be one of {FORCE_MODES}, got {force!r}")
         f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731

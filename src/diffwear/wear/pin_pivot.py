@@ -78,7 +78,7 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array, Bool, Float
 
-from .._checks import check_range
+from .._checks import check_int_option, check_range
 from ..errors import InputError, SolverError
 from ..fem.condense import tributary_lengths
 from ..fem.contact import TOL, RingContact
@@ -150,9 +150,7 @@ class PinPivotSetup:
                              f"{self.load_frame!r}")
         for name, low in [("steps_per_sweep", 1), ("n_theta", MIN_THETA_NODES), ("n_r_pivot", 1),
                           ("n_r_pin", 1)]:
-            v = getattr(self, name)
-            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < low:
-                raise InputError(f"pin-pivot: {name} must be an integer >= {low}, got {v!r}")
+            check_int_option(f"pin-pivot: {name}", getattr(self, name), low)
         if self.n_theta % 2:
             raise InputError(f"pin-pivot: n_theta must be even, got {self.n_theta!r}")
 

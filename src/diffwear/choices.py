@@ -1,0 +1,7 @@
+"""Named choices of public options, in one module without heavy imports (the
+command line builds its parser from them before it imports JAX)."""
+
+# How a wear evolution extrapolates over cycles (`diffwear.wear.evolve`, --method).
+WEAR_METHODS = ("constant", "adaptive", "error")
+# The pressure model of the wear (--contact); the dynamics always use the EFM.
+WEAR_CONTACTS = ("efm", "fem")

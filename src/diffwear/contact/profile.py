@@ -8,6 +8,7 @@ from jaxtyping import Array, Float
 
 from .._checks import check_positive, concrete
 from ..errors import InputError
+from ..mechanism.geometry import grid_angles
 
 
 class BushingProfile(eqx.Module):
@@ -45,7 +46,7 @@ class BushingProfile(eqx.Module):
 
     @property
     def theta(self) -> Float[Array, " n"]:
-        return 2.0 * jnp.pi * jnp.arange(self.n) / self.n
+        return grid_angles(self.n)
 
     @property
     def dtheta(self) -> float:

@@ -138,6 +138,16 @@ class RingContact(eqx.Module):
         across = u[:, 0] * offset[1] - u[:, 1] * offset[0]
         return self.boundary_radius - along - jnp.sqrt(self.pin_radius**2 - across**2)
 
+    def wall_offset(self, force) -> Float[Array, "2"]:
+        """The pin offset e [m] along F that touches the (worn) wall at the node
+        nearest F's direction: a `solve_force` start for a worn ring, where the
+        pin sits in the pocket rather than at the least worn point."""
+        unit = force / jnp.sqrt(jnp.sum(force * force))
+        n = self.theta.shape[0]
+        ang = jnp.mod(jnp.arctan2(unit[1], unit[0]), 2 * jnp.pi) * n / (2 * jnp.pi)
+        j = jnp.round(ang).astype(int) % n
+        return unit * (self.boundary_radius[j] - self.pin_radius)
+
     def _scales(self, length_scale):
         """(gap scale l [m], force scale l / mean C_jj [N/m]): Phi in O(1) units."""
         return length_scale, length_scale / jnp.mean(jnp.diag(self.compliance))

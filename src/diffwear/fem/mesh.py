@@ -39,6 +39,7 @@ from jaxtyping import Array, Float, Int
 
 from .._checks import check_finite, check_int_option, check_positive, concrete
 from ..errors import InputError
+from ..mechanism.geometry import grid_angles
 
 #: Smallest number of nodes around: 4 elements of 90 degrees.  A quadratic arc
 #: over 90 degrees is within 1.1 % of the circle (sampled); with fewer elements
@@ -65,7 +66,7 @@ class RingMesh(eqx.Module):
 
     @property
     def theta(self) -> Float[Array, " n_theta"]:
-        return 2.0 * jnp.pi * jnp.arange(self.n_theta) / self.n_theta
+        return grid_angles(self.n_theta)
 
     @property
     def n_nodes(self) -> int:
@@ -98,6 +99,15 @@ def connectivity(n_theta: int, n_r: int) -> np.ndarray:
     return np.concatenate(layers, axis=0)
 
 
+def check_theta_nodes(what: str, n_theta) -> None:
+    """Nodes around a Q9 ring or disc: an even integer >= `MIN_THETA_NODES`
+    (two nodes per element), else `InputError` naming ``what`` and the value."""
+    if not isinstance(n_theta, (int, np.integer)) or isinstance(n_theta, bool) \
+            or n_theta < MIN_THETA_NODES or n_theta % 2:
+        raise InputError(f"{what} must be an even integer >= {MIN_THETA_NODES}, "
+                         f"got {n_theta!r}")
+
+
 def ring_mesh(inner_radius, outer_radius, n_theta: int, n_r: int, depth=None) -> RingMesh:
     """A Q9 mesh of the ring a <= r <= b, inner surface worn by ``depth`` [m].
 
@@ -106,10 +116,7 @@ def ring_mesh(inner_radius, outer_radius, n_theta: int, n_r: int, depth=None) ->
     Radii and depth may be JAX tracers (the mesh is differentiable in them);
     concrete values are validated and raise `InputError`.
     """
-    if not isinstance(n_theta, (int, np.integer)) or isinstance(n_theta, bool) \
-            or n_theta < MIN_THETA_NODES or n_theta % 2:
-        raise InputError(f"ring mesh: n_theta (nodes around the ring) must be an even "
-                         f"integer >= {MIN_THETA_NODES}, got {n_theta!r}")
+    check_theta_nodes("ring mesh: n_theta (nodes around the ring)", n_theta)
     check_int_option("ring mesh: n_r (element layers through the wall)", n_r, 1)
     n_theta, n_r = int(n_theta), int(n_r)
     check_positive("ring mesh: inner radius a [m]", inner_radius)
@@ -141,7 +148,7 @@ def ring_mesh(inner_radius, outer_radius, n_theta: int, n_r: int, depth=None) ->
             raise InputError(f"ring mesh: worn wall too thin: {float(wall)!r} m left of "
                              f"{float(b_c - a_c)!r} m (minimum {MIN_WALL_FRACTION:.0%} of the "
                              f"unworn wall) at node {int(np.argmax(d_c))}")
-    theta = 2.0 * jnp.pi * jnp.arange(n_theta) / n_theta
+    theta = grid_angles(n_theta)
     s = jnp.arange(2 * n_r + 1) / (2 * n_r)  # 0 at the inner surface, 1 at r = b
     r_in = a + depth
     r = r_in[None, :] + s[:, None] * (b - r_in)[None, :]  # (2 n_r + 1, n_theta)

@@ -43,8 +43,9 @@ from jaxtyping import Array, Float, Int
 
 from .._checks import check_int_option, check_positive, concrete
 from ..errors import InputError
+from ..mechanism.geometry import grid_angles
 from .condense import inner_compliance
-from .mesh import MIN_THETA_NODES, connectivity
+from .mesh import check_theta_nodes, connectivity
 
 
 class PinMesh(eqx.Module):
@@ -59,7 +60,7 @@ class PinMesh(eqx.Module):
 
     @property
     def theta(self) -> Float[Array, " n_theta"]:
-        return 2.0 * jnp.pi * jnp.arange(self.n_theta) / self.n_theta
+        return grid_angles(self.n_theta)
 
 
 def pin_connectivity(n_theta: int, n_r: int) -> np.ndarray:
@@ -73,10 +74,7 @@ def pin_mesh(radius, bore_radius, n_theta: int, n_r: int) -> PinMesh:
     """Q9 mesh of the pin cross-section r0 <= r <= R, ``n_theta`` nodes around
     (even, >= 8), ``n_r`` element layers spaced geometrically from R to r0
     (mid-layer nodes halfway through each layer)."""
-    if not isinstance(n_theta, (int, np.integer)) or isinstance(n_theta, bool) \
-            or n_theta < MIN_THETA_NODES or n_theta % 2:
-        raise InputError(f"pin mesh: n_theta (nodes around the pin) must be an even integer "
-                         f">= {MIN_THETA_NODES}, got {n_theta!r}")
+    check_theta_nodes("pin mesh: n_theta (nodes around the pin)", n_theta)
     check_int_option("pin mesh: n_r (element layers)", n_r, 1)
     check_positive("pin mesh: pin radius R [m]", radius)
     check_positive("pin mesh: held bore radius r0 [m]", bore_radius)
@@ -91,7 +89,7 @@ def pin_mesh(radius, bore_radius, n_theta: int, n_r: int) -> PinMesh:
     mid = 0.5 * (layer[:-1] + layer[1:])
     radii = jnp.stack([layer[:-1], mid], axis=-1).reshape(-1)
     radii = jnp.concatenate([radii, layer[-1:]])  # (2 n_r + 1,): ring 0 = surface
-    theta = 2.0 * jnp.pi * jnp.arange(n_theta) / n_theta
+    theta = grid_angles(n_theta)
     nodes = jnp.stack([radii[:, None] * jnp.cos(theta), radii[:, None] * jnp.sin(theta)],
                       axis=-1).reshape(-1, 2)
     return PinMesh(nodes=nodes, elements=jnp.asarray(pin_connectivity(n_theta, n_r)),

@@ -6,6 +6,13 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 
+def grid_angles(n: int) -> Float[Array, " n"]:
+    """theta_k = 2 pi k / n, k = 0..n-1 [rad]: the periodic angular grid of the
+    bushing profiles and of the FE ring and pin meshes (the FEM wear route maps
+    profile nodes to FE nodes one to one because both use this grid)."""
+    return 2.0 * jnp.pi * jnp.arange(n) / n
+
+
 def rotation(phi: Float[Array, ""]) -> Float[Array, "2 2"]:
     """A(phi): body-frame vectors to the global frame."""
     c, s = jnp.cos(phi), jnp.sin(phi)

@@ -80,6 +80,7 @@ from ..fem import RingContact, ring_mesh
 from ..fem.condense import inner_compliance, tributary_lengths
 from ..fem.contact import TOL
 from ..mechanism import Mechanism
+from ..mechanism.geometry import grid_angles
 from .cycle import CycleResult, clearance_element, wear_cycle
 from .evolution import EvolutionResult, Evolver, _with_profile
 
@@ -208,7 +209,7 @@ def ring_contact(compliance, tributary, bushing_radius, pin_radius, depth, lengt
     n = depth.shape[0]
     return RingContact(compliance=compliance, tributary=tributary,
                        boundary_radius=bushing_radius + depth,
-                       theta=2.0 * jnp.pi * jnp.arange(n) / n,
+                       theta=grid_angles(n),
                        pin_radius=jnp.asarray(pin_radius, dtype=float),
                        length=jnp.asarray(length, dtype=float))
 
@@ -238,9 +239,6 @@ def fem_increment(contact: RingContact, samples: JointSamples, ts, k) -> FemIncr
     loaded = mag > MIN_JOINT_FORCE
     f_safe = jnp.where(loaded[:, None], f, jnp.array([1.0, 0.0]))  # any valid load; result dropped
 
-    theta = contact.theta
-    n = theta.shape[0]
-
     def solve(x):
         s = contact.solve_force(x, tol=TOL)  # under tracing: no concrete checks, no raise
 
@@ -248,11 +246,7 @@ def fem_increment(contact: RingContact, samples: JointSamples, ts, k) -> FemIncr
             # Semismooth Newton from the default start (pin touching the least worn
             # point along F) can stall on a deep pocket (seen once on the rig at
             # M = 5: 100 steps, residual 1e-4); start at the worn wall along F.
-            unit = x / jnp.sqrt(jnp.sum(x * x))
-            ang = jnp.mod(jnp.arctan2(unit[1], unit[0]), 2 * jnp.pi) * n / (2 * jnp.pi)
-            j = jnp.round(ang).astype(int) % n
-            return contact.solve_force(
-                x, tol=TOL, offset_guess=unit * (contact.boundary_radius[j] - contact.pin_radius))
+            return contact.solve_force(x, tol=TOL, offset_guess=contact.wall_offset(x))
 
         s = lax.cond(s.info.residual <= ACCEPT_RESIDUAL, lambda _: s, retry, None)
         return (s.pressure, contact.length * jnp.sum(s.nodal_force),

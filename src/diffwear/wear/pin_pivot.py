@@ -82,7 +82,7 @@ from .._checks import check_int_option, check_range
 from ..errors import InputError, SolverError
 from ..fem.condense import tributary_lengths
 from ..fem.contact import TOL, RingContact
-from ..fem.mesh import MIN_THETA_NODES, ring_mesh
+from ..fem.mesh import check_theta_nodes, ring_mesh
 from ..fem.pin import pin_compliance, pin_mesh
 
 MM3_PER_NM = 1e-9  # 1 mm^3/(N m) = 1e-9 1/Pa
@@ -148,11 +148,9 @@ class PinPivotSetup:
         if self.load_frame not in LOAD_FRAMES:
             raise InputError(f"pin-pivot: load_frame must be one of {LOAD_FRAMES}, got "
                              f"{self.load_frame!r}")
-        for name, low in [("steps_per_sweep", 1), ("n_theta", MIN_THETA_NODES), ("n_r_pivot", 1),
-                          ("n_r_pin", 1)]:
-            check_int_option(f"pin-pivot: {name}", getattr(self, name), low)
-        if self.n_theta % 2:
-            raise InputError(f"pin-pivot: n_theta must be even, got {self.n_theta!r}")
+        for name in ("steps_per_sweep", "n_r_pivot", "n_r_pin"):
+            check_int_option(f"pin-pivot: {name}", getattr(self, name), 1)
+        check_theta_nodes("pin-pivot: n_theta", self.n_theta)
 
     @property
     def force(self) -> float:
@@ -251,7 +249,7 @@ class PinPivot(eqx.Module):
         prob = eqx.tree_at(lambda c: c.boundary_radius, self.contact,
                            self.contact.boundary_radius + gap_wear)
         if offset_guess is None:  # the pin touching the (worn) bore along F: theta = 0
-            offset_guess = jnp.array([prob.boundary_radius[0] - prob.pin_radius, 0.0])
+            offset_guess = prob.wall_offset(self.force)
         sol = prob.solve_force(self.force, tol=TOL, offset_guess=offset_guess)
         # the FB solution leaves |f| ~ 1e-16 max f off contact, either sign: no node gains material
         sol = eqx.tree_at(lambda c: c.nodal_force, sol, jnp.maximum(sol.nodal_force, 0.0))
@@ -310,8 +308,7 @@ def wear_history(model: PinPivot, n_computed: int, scale):
     standing for ``scale`` real sweeps; jitted once per (mesh, n_computed)."""
     n = model.n_theta
     zero = jnp.zeros(n)
-    e0 = model.force / jnp.linalg.norm(model.force) * (model.contact.boundary_radius[0]
-                                                        - model.contact.pin_radius)
+    e0 = model.contact.wall_offset(model.force)
     state0 = (zero, zero, jnp.asarray(0.0), jnp.asarray(True), jnp.asarray(0.0), e0)
 
     def one(state, c):

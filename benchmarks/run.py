@@ -126,14 +126,12 @@ def rig_21400(repeats: int) -> dict:
     after one warm-up cycle), compiled once; one or two steady repeats."""
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
-    from diffwear.studies.rig_21400 import (
-        N_THETA, PERIOD, RIG_JOINT, TARGET_DYNAMIC, _setup, with_wear_joint)
+    from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, TARGET_DYNAMIC, _setup
     from diffwear.wear import worn_volume
 
     mech0, mech, y0 = _setup()
     a = common.default_constant_a(RIG_CYCLES, TARGET_DYNAMIC)
-    mech_of_p = lambda p: with_wear_joint(mech0, common.design_of(p, RIG_JOINT),  # noqa: E731
-                                          n_theta=N_THETA)
+    mech_of_p = common.mech_builder(mech0, RIG_JOINT, N_THETA)
     import jax
 
     from diffwear.wear import evolve
@@ -162,14 +160,11 @@ def rig_21400_fem_route(repeats: int) -> dict:
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
     from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, TARGET_DYNAMIC, _setup
-    from diffwear.presets import with_wear_joint
     from diffwear.wear.fem_route import default_model
 
     mech0, _, y0 = _setup()
     a = common.default_constant_a(RIG_CYCLES, TARGET_DYNAMIC)
-
-    def mech_of_p(p):
-        return with_wear_joint(mech0, common.design_of(p, RIG_JOINT), n_theta=N_THETA)
+    mech_of_p = common.mech_builder(mech0, RIG_JOINT, N_THETA)
 
     kw = dict(method="constant", extrapolation=a, max_dynamic=4 * TARGET_DYNAMIC,
               wall=RIG_JOINT.wall, n_theta=N_THETA)
@@ -284,18 +279,19 @@ def rig_gradient(repeats: int) -> dict:
 
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
-    from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, _setup, with_wear_joint
+    from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, _setup
     from diffwear.wear import evolve, smooth_max, worn_volume
 
     quick = repeats <= QUICK_REPEATS
     dyn = GRAD_DYNAMIC_QUICK if quick else GRAD_DYNAMIC
     mech0, _, y0 = _setup()
     p0 = common.params_of(RIG_JOINT)
+    mech_of_p = common.mech_builder(mech0, RIG_JOINT, N_THETA)
 
     def outputs(adjoint):
         def f(x):
             p = p0 * (1.0 + x)
-            m = with_wear_joint(mech0, common.design_of(p, RIG_JOINT), n_theta=N_THETA)
+            m = mech_of_p(p)
             r = evolve(m, common.JOINT, y0, RIG_CYCLES, period=PERIOD,
                        extrapolation=RIG_CYCLES / dyn, wall_thickness=RIG_JOINT.wall,
                        adjoint=adjoint)

@@ -32,6 +32,14 @@ def design_of(p, base: WearJointDesign) -> WearJointDesign:
     return WearJointDesign(p[0], p[1], p[2], p[3], base.wall, base.mu, base.restitution)
 
 
+def mech_builder(mech0, design: WearJointDesign, n_theta: int):
+    """p -> ``mech0`` with the wear joint of `design_of`(p, ``design``): the
+    mechanism as a function of the differentiable inputs (`params_of`)."""
+    def mech_of_p(p):
+        return with_wear_joint(mech0, design_of(p, design), n_theta=n_theta)
+    return mech_of_p
+
+
 def initial_state(mech0, q_guess, mech):
     """y0 of ``mech`` (the wear version of the ideal ``mech0``): the ideal
     mechanism's consistent state with the pin centred."""
@@ -150,9 +158,7 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
         raise InputError(f"--contact fem runs with --method constant only (constant A, as "
                          f"the thesis's FEM route), got --method {method}")
 
-    def mech_of_p(p):
-        return with_wear_joint(mech0, design_of(p, design), n_theta=n_theta)
-
+    mech_of_p = mech_builder(mech0, design, n_theta)
     params = params_of(design)
     a = extrapolation or default_constant_a(cycles, target_dynamic)
     common_kw = dict(method=method, extrapolation=a, max_dynamic=4 * target_dynamic,

@@ -73,6 +73,15 @@ def _extrapolated(res, target):
     return pin, pivot, s_pin, s_piv
 
 
+def _row(label, res, run_s, pin_816, pivot_816) -> dict:
+    """One row of the sensitivity table (depths in mm, pressure in MPa)."""
+    return {"case": label, "max_pin_mm_simulated": 1e3 * float(res.max_pin[-1]),
+            "max_pivot_mm_simulated": 1e3 * float(res.max_pivot[-1]),
+            "max_pin_mm_at_816000": 1e3 * pin_816, "max_pivot_mm_at_816000": 1e3 * pivot_816,
+            "peak_pressure_MPa_last_sweep": float(res.peak_pressure[-1]) / 1e6,
+            "run_s": run_s}
+
+
 def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, sensitivity: bool = True,
         log=print) -> dict:
     """``cycles``: simulated sweeps before the linear extrapolation (the
@@ -103,18 +112,10 @@ def run(out: OutputDir, *, cycles: int = THESIS_SIM_SWEEPS, sensitivity: bool = 
         pin, pivot, _, _ = _extrapolated(res, TARGET_SWEEPS)
         log(f"[{NAME}]   {label}: max pin {1e3 * float(res.max_pin[-1]):.4f} mm at {sweeps:,.0f} "
             f"sweeps ({dt:.1f} s)")
-        return {"case": label, "max_pin_mm_simulated": 1e3 * float(res.max_pin[-1]),
-                "max_pivot_mm_simulated": 1e3 * float(res.max_pivot[-1]),
-                "max_pin_mm_at_816000": 1e3 * pin, "max_pivot_mm_at_816000": 1e3 * pivot,
-                "peak_pressure_MPa_last_sweep": float(res.peak_pressure[-1]) / 1e6,
-                "run_s": dt}
+        return _row(label, res, dt, pin, pivot)
 
     log(f"[{NAME}] sensitivity runs ...")
-    rows = [{"case": "base (as above)", "max_pin_mm_simulated": 1e3 * float(base.max_pin[-1]),
-             "max_pivot_mm_simulated": 1e3 * float(base.max_pivot[-1]),
-             "max_pin_mm_at_816000": 1e3 * pin_816, "max_pivot_mm_at_816000": 1e3 * pivot_816,
-             "peak_pressure_MPa_last_sweep": float(base.peak_pressure[-1]) / 1e6,
-             "run_s": run_time}]
+    rows = [_row("base (as above)", base, run_time, pin_816, pivot_816)]
     if sensitivity:
         rows += _sensitivity(variant, model, setup)
     scaling = [(r["radius_m"], r["max_pin_mm_at_816000"]) for r in rows if "radius_m" in r]

@@ -197,8 +197,7 @@ def build(v, bodies) -> ClearanceJoint:
 
 def ideal(joint: ClearanceJoint) -> RevoluteJoint:
     """The ideal revolute at the same points (assembly at t = 0: pin centred)."""
-    return RevoluteJoint(joint.name, joint.pin_body, joint.bushing_body, joint.pin_point,
-                         joint.bushing_point)
+    return joint.ideal()
 
 
 CLEARANCE = ElementType(

@@ -92,6 +92,11 @@ class ClearanceJoint(AbstractForceElement):
             parts.append(jnp.zeros(self.profile.n + 1))
         return jnp.concatenate(parts)
 
+    def ideal(self) -> RevoluteJoint:
+        """The ideal revolute joint at the same points (pin centred, no clearance)."""
+        return RevoluteJoint(self.name, self.pin_body, self.bushing_body, self.pin_point,
+                             self.bushing_point)
+
     # ----------------------------------------------------------------- physics
     def kinematics(self, frames: Frames) -> PinKinematics:
         """Pin offset and its rate in the bushing frame."""

@@ -102,6 +102,16 @@ def _step_jvp(primals, tangents):
     return _apply(_step(x, width), dx, x_dot, dw, w_dot)
 
 
+def ramp_integral(x, width):
+    """The antiderivative of `ramp` that is 0 for x <= 0: x^3 (8 w - 3 x) / (12 w^2)
+    inside the band, 5 w^2 / 12 + (x^2 - w^2) / 2 above it (the energy of a
+    smoothed one-sided spring of unit stiffness)."""
+    below, above = _band(x, width)
+    inside = x * x * x * (8.0 * width - 3.0 * x) / (12.0 * width * width)
+    return jnp.where(below, 0.0, jnp.where(above, 5.0 * width * width / 12.0
+                                           + 0.5 * (x * x - width * width), inside))
+
+
 def sign(x, width):
     """sign(x) smoothed: x / sqrt(x^2 + width^2)."""
     return x / jnp.sqrt(x * x + width * width)

@@ -6,9 +6,11 @@ Table 8-3 box and the solvers need no projection.  Variables not solved for
 are held at given values (possibly on a bound).
 
 All three problems are (small) nonlinear least-squares problems solved by
-optimistix's Levenberg-Marquardt; the model's Jacobian comes from central
-differences (`finite_difference_jacobian`, 8 runs), the
-reparametrisation's from autodiff:
+optimistix's Levenberg-Marquardt.  The model's Jacobian comes from automatic
+differentiation when the model's derivative is the slope of its life (the
+quasi-static model: ``model.exact_gradients``), else from central differences
+(`finite_difference_jacobian`, 8 runs: the dynamic model); the
+reparametrisation's always from autodiff:
 
 * `equal_life`: r = (cyc1 - cyc2) / mean(cyc1, cyc2) over all 4 variables
   (the thesis's objective (cyc1 - cyc2)^2 is r^2 up to the scale; 1 equation,
@@ -26,11 +28,18 @@ reparametrisation's from autodiff:
 
 The corner arguments are verified, not assumed: `kkt_check` evaluates the
 Karush-Kuhn-Tucker sign conditions with the model's gradients at the answer.
+
+`space_mapped` solves a problem on a fast model (quasi-static, exact
+gradients) and corrects it on a reference model (dynamic): output space
+mapping (Bandler et al., IEEE Trans. MTT 52, 2004), shifting the fast model's
+lives by the reference-minus-fast difference at the current design and
+solving again, until the reference model meets the problem's residual bar.
 """
 
 from __future__ import annotations
 
 import time
+from functools import partial
 from dataclasses import dataclass, field
 
 import equinox as eqx
@@ -152,48 +161,146 @@ def finite_difference_jacobian(model, rel_step: float = FD_REL_STEP, on_jacobian
     return f
 
 
+def jacobian_method(model) -> str:
+    """"autodiff" when ``model.exact_gradients``, else "finite-difference"."""
+    return "autodiff" if getattr(model, "exact_gradients", False) else "finite-difference"
+
+
+class CompiledLife:
+    """A life model with exact gradients, compiled once: each call gives the
+    lives and their Jacobian (`jax.jacfwd`).  Inside a traced solver it enters
+    as a host callback with a custom JVP, so the solver's own compiled loop
+    stays small and every solve, space-mapping round and Jacobian of a study
+    reuses one compiled model (one compile of the quasi-static life with its
+    derivative takes ~15 s; optimistix's least-squares loop with the model
+    inlined took ~35 s per problem)."""
+
+    def __init__(self, model):
+        self.model = model
+        self._compiled = jax.jit(lambda x: _value_and_jacobian(model, x))
+        self._last: tuple | None = None
+
+    def value_and_jacobian(self, x) -> tuple[np.ndarray, np.ndarray]:
+        x = np.asarray(x, dtype=np.float64)
+        if self._last is None or not np.array_equal(self._last[0], x):
+            value, jac = self._compiled(jnp.asarray(x))
+            self._last = (x, np.asarray(value, np.float64), np.asarray(jac, np.float64))
+        return self._last[1], self._last[2]
+
+    def life(self, x) -> np.ndarray:
+        return self.value_and_jacobian(x)[0]
+
+    def __call__(self, x):
+        return _host_life(self, x)
+
+
+def _value_and_jacobian(model, x):
+    """(model(x), jacfwd(model)(x)) from one forward-mode pass (one trace)."""
+    basis = jnp.eye(x.shape[0], dtype=x.dtype)
+    value, columns = jax.vmap(lambda v: jax.jvp(model, (x,), (v,)), out_axes=(None, -1))(basis)
+    return value, columns
+
+
+_VALUE = jax.ShapeDtypeStruct((2,), jnp.float64)
+_JACOBIAN = jax.ShapeDtypeStruct((2, 4), jnp.float64)
+
+
+@partial(jax.custom_jvp, nondiff_argnums=(0,))
+def _host_life(life: CompiledLife, x):
+    return jax.pure_callback(lambda x: life.value_and_jacobian(x)[0], _VALUE, x)
+
+
+@_host_life.defjvp
+def _host_life_jvp(life, primals, tangents):
+    (x,), (v,) = primals, tangents
+    value, jac = jax.pure_callback(life.value_and_jacobian, (_VALUE, _JACOBIAN), x)
+    return value, jac @ v
+
+
+_COMPILED: dict[int, tuple] = {}
+
+
+def compiled(model) -> CompiledLife:
+    """The `CompiledLife` of ``model`` (made once per model object)."""
+    key = id(model)
+    if key not in _COMPILED or _COMPILED[key][0] is not model:
+        _COMPILED[key] = (model, CompiledLife(model))
+    return _COMPILED[key][1]
+
+
+def _differentiable(model, on_jacobian=None):
+    """``model`` as a traceable function with the right derivative: its
+    `CompiledLife` (autodiff) or its central-difference wrapper."""
+    if jacobian_method(model) == "autodiff":
+        return compiled(model)
+    return finite_difference_jacobian(model, on_jacobian=on_jacobian)
+
+
+def life_of(model, x) -> np.ndarray:
+    """[cyc1, cyc2] of ``model`` at ``x`` (through its `CompiledLife` when it has one)."""
+    if isinstance(model, ShiftedLife):
+        return life_of(model.model, x) + np.asarray(model.shift)
+    if jacobian_method(model) == "autodiff":
+        return compiled(model).life(x)
+    return model.life(x)
+
+
+# Every model evaluation inside a solve, appended by `_record` (a host callback):
+# one module-level recorder, so that the compiled solve is the same function
+# from call to call and jit's cache serves repeated solves (space mapping).
+_HISTORY: list[dict] = []
+
+
+def _record(x, cycles, r):
+    _HISTORY.append({"x_mm": (np.asarray(x) * 1e3).tolist(),
+                     "cycles": np.asarray(cycles).tolist(),
+                     "residual": np.asarray(r).tolist()})
+
+
+def _design_residual(u, args):
+    """Residual of a design problem at free coordinates ``u`` (all 4 variables;
+    the fixed ones are masked to ``base``); ``shift``: space-mapping shift."""
+    life, residual, base, free, shift = args
+    x = jnp.where(free, from_free(u, jnp.asarray(LOWER), jnp.asarray(UPPER)), base)
+    cycles = life(x) + shift
+    r = residual(x, cycles)
+    jax.debug.callback(_record, x, cycles, r)
+    return r
+
+
 def _solve(model: TwoJointLife, problem: str, residual, x_fixed, free, *, rtol, atol,
            max_steps) -> DesignResult:
     """Levenberg-Marquardt on residual(x, cycles) over the ``free`` variables."""
     x_fixed = np.asarray(x_fixed, dtype=float)
     check_design(x_fixed, what=f"{problem}: start")
     free = np.asarray(free, dtype=bool)
-    lo, hi = jnp.asarray(LOWER[free]), jnp.asarray(UPPER[free])
     # a start near a bound moves inside: the sigmoid is flat there (a Newton
     # step from u = logit(1 - 1e-6) overshoots to the far bound)
-    margin = START_MARGIN * (UPPER - LOWER)[free]
-    x0 = np.clip(x_fixed[free], LOWER[free] + margin, UPPER[free] - margin)
-    history: list[dict] = []
-
-    def record(x, cycles, r):
-        history.append({"x_mm": (np.asarray(x) * 1e3).tolist(),
-                        "cycles": np.asarray(cycles).tolist(),
-                        "residual": np.asarray(r).tolist()})
-
+    margin = START_MARGIN * (UPPER - LOWER)
+    x0 = np.where(free, np.clip(x_fixed, LOWER + margin, UPPER - margin), x_fixed)
+    u0 = to_free(jnp.asarray(np.clip(x0, LOWER + margin, UPPER - margin)),
+                 jnp.asarray(LOWER), jnp.asarray(UPPER))
     base = jnp.asarray(x_fixed)
-    index = jnp.asarray(np.flatnonzero(free))
-
+    _HISTORY.clear()
     jacobians: list[int] = []
-    life = finite_difference_jacobian(model, on_jacobian=lambda _: jacobians.append(1))
-
-    def fn(u, _):
-        x = base.at[index].set(from_free(u, lo, hi))
-        cycles = life(x)
-        r = residual(x, cycles)
-        jax.debug.callback(record, x, cycles, r)
-        return r
+    shift = jnp.zeros(2)
+    if isinstance(model, ShiftedLife):
+        model, shift = model.model, jnp.asarray(model.shift, dtype=float)
+    life = _differentiable(model, on_jacobian=lambda _: jacobians.append(1))
+    args = (life, residual, base, jnp.asarray(free), shift)
 
     # Levenberg-Marquardt, not plain Gauss-Newton: through the sigmoid an
     # undamped step can land where the sigmoid is flat and never come back
     # (seen on the closed-form test model: u -> -2886).
     solver = levenberg_marquardt(rtol, atol)
     t0 = time.perf_counter()
-    sol = optx.least_squares(fn, solver, to_free(jnp.asarray(x0), lo, hi),
-                             max_steps=max_steps, throw=False)
+    sol = optx.least_squares(_design_residual, solver, u0, args=args, max_steps=max_steps,
+                             throw=False)
     u = jax.block_until_ready(sol.value)
-    x = np.asarray(base.at[index].set(from_free(u, lo, hi)))
+    history = list(_HISTORY)
+    x = np.where(free, np.asarray(from_free(u, jnp.asarray(LOWER), jnp.asarray(UPPER))), x_fixed)
     wall = time.perf_counter() - t0
-    cycles = model.life(x)  # a fresh run of the model at the answer
+    cycles = life_of(model, x) + np.asarray(shift)  # a fresh run of the model at the answer
     notes = {}
     if sol.result != optx.RESULTS.successful:
         # The step test (rtol/atol on u and on the objective) can wait forever
@@ -209,10 +316,21 @@ def _solve(model: TwoJointLife, problem: str, residual, x_fixed, free, *, rtol, 
                               f"x = {np.round(x * 1e3, 4).tolist()} mm (residual {r:.2e})")
         notes["stopped"] = (f"step limit ({max_steps}) reached with the residual at {r:.2e} "
                             f"<= {ACCEPT_RESIDUAL:g} on a fresh rerun: accepted")
-    # model runs: the primal ones, 2 x (number of variables) per Jacobian, the final check
-    runs = len(history) + 2 * len(free) * len(jacobians) + 1
+    # model runs: the primal ones, 2 x (number of variables) per central-difference
+    # Jacobian, the final check
+    runs = len(history) + 2 * int(free.sum()) * len(jacobians) + 1
+    notes["jacobian_method"] = jacobian_method(model)
     return DesignResult(problem, x, cycles, int(sol.stats["num_steps"]), runs, wall, history,
                         notes)
+
+
+class _AtTarget(eqx.Module):
+    """Residual cyc_j / T - 1 of both joints at the target life T [cycles]."""
+
+    target: jnp.ndarray
+
+    def __call__(self, x, c):
+        return c / self.target - 1.0
 
 
 def _life_gap(x, c):
@@ -232,7 +350,7 @@ def longest_common_life(model: TwoJointLife, *, rtol=1e-4, atol=1e-4,
                         max_steps=30) -> DesignResult:
     """Equal life with the longest common life (see the module notes)."""
     corner = LONGEST_LIFE_CORNER.copy()
-    c = model.life(corner)
+    c = life_of(model, corner)
     weak = int(np.argmin(c))
     strong = 1 - weak
     x = corner.copy()
@@ -261,7 +379,7 @@ def least_material(model: TwoJointLife, target_cycles: float, *, rtol=1e-4, atol
     t = float(target_cycles)
     if not t > 0:
         raise InputError(f"least_material: target life must be > 0 cycles, got {t}")
-    c = model.life(LONGEST_LIFE_CORNER) if corner_cycles is None else np.asarray(corner_cycles)
+    c = life_of(model, LONGEST_LIFE_CORNER) if corner_cycles is None else np.asarray(corner_cycles)
     short = [j for j in (0, 1) if c[j] < t]
     if short:
         j = short[0]
@@ -270,10 +388,7 @@ def least_material(model: TwoJointLife, target_cycles: float, *, rtol=1e-4, atol
                          f"the wear limit after {c[j]:,.0f} cycles")
     x = np.array([LOWER[0], LOWER[1], 0.5 * (LOWER[2] + UPPER[2]), 0.5 * (LOWER[3] + UPPER[3])])
 
-    def residual(x, c):
-        return c / t - 1.0
-
-    res = _solve(model, "least material", residual, x, [False, False, True, True], rtol=rtol,
+    res = _solve(model, "least material", _AtTarget(jnp.asarray(t)), x, [False, False, True, True], rtol=rtol,
                  atol=atol, max_steps=max_steps)
     res.notes.update({"target_cycles": t,
                       "kkt": kkt_check(model, res.x, "least material", res.cycles)})
@@ -311,10 +426,75 @@ def kkt_check(model: TwoJointLife, x, problem: str, cycles) -> dict:
 
 
 def jacobian(model: TwoJointLife, x) -> np.ndarray:
-    """d(cyc1, cyc2)/d(d1, d2, h1, h2) [cycles/m] at ``x`` (central differences)."""
+    """d(cyc1, cyc2)/d(d1, d2, h1, h2) [cycles/m] at ``x`` (`jacobian_method`)."""
     return np.asarray(_jacobian(model, jnp.asarray(x, dtype=float)))
 
 
-@eqx.filter_jit
 def _jacobian(model: TwoJointLife, x):
+    if isinstance(model, ShiftedLife):
+        model = model.model
+    if jacobian_method(model) == "autodiff":
+        return compiled(model).value_and_jacobian(x)[1]
+    return _fd_jacobian(model, x)
+
+
+@eqx.filter_jit
+def _fd_jacobian(model, x):
     return jax.jacfwd(finite_difference_jacobian(model))(x)
+
+
+class ShiftedLife(eqx.Module):
+    """``model``'s lives plus a constant ``shift`` [cycles] (space mapping)."""
+
+    model: TwoJointLife
+    shift: jnp.ndarray
+
+    @property
+    def exact_gradients(self) -> bool:
+        return getattr(self.model, "exact_gradients", False)
+
+    def __call__(self, x):
+        return self.model(x) + self.shift
+
+    def life(self, x) -> np.ndarray:
+        return life_of(self.model, x) + np.asarray(self.shift)
+
+
+def space_mapped(solve, fast, reference, residual, *, tol: float = ACCEPT_RESIDUAL,
+                 max_reference_runs: int = 6, log=None) -> DesignResult:
+    """Solve a design problem on ``fast`` and correct it on ``reference``.
+
+    ``solve(model) -> DesignResult`` solves the problem on a life model;
+    ``residual(x, cycles)`` is the problem's residual (the answer is accepted
+    when max |residual| <= ``tol`` with the reference model's lives).  Each
+    round runs the reference model once at the current answer, shifts the fast
+    model by the difference and solves again.  Returns the last answer with
+    the reference lives in ``cycles`` and, in ``notes``: ``reference_runs``,
+    ``fast_cycles``, ``shift``, ``rounds`` (per round x, reference and fast
+    lives, residual); `SolverError` if the bar is not met within
+    ``max_reference_runs``.
+    """
+    t0 = time.perf_counter()
+    shift = np.zeros(2)
+    rounds, evaluations, iterations = [], 0, 0
+    for k in range(max_reference_runs):
+        res = solve(fast if k == 0 else ShiftedLife(fast, jnp.asarray(shift)))
+        evaluations += res.model_evaluations
+        iterations += res.iterations
+        ref = life_of(reference, res.x)
+        own = life_of(fast, res.x)
+        r = float(np.max(np.abs(np.asarray(residual(jnp.asarray(res.x), jnp.asarray(ref))))))
+        rounds.append({"x_mm": (res.x * 1e3).tolist(), "reference_cycles": ref.tolist(),
+                       "fast_cycles": own.tolist(), "residual": r})
+        if log is not None:
+            log(f"  round {k + 1}: x = {np.round(res.x * 1e3, 3).tolist()} mm, reference "
+                f"lives {np.round(ref).tolist()}, residual {r:.2e}")
+        if r <= tol:
+            notes = {**res.notes, "reference_runs": k + 1, "fast_cycles": own.tolist(),
+                     "shift": (ref - own).tolist(), "rounds": rounds}
+            return DesignResult(res.problem, res.x, ref, iterations, evaluations,
+                                time.perf_counter() - t0, res.history, notes)
+        shift = ref - own  # the correction at the current design
+    raise SolverError(f"{res.problem}: the reference model's residual is {r:.2e} > {tol:g} "
+                      f"after {max_reference_runs} reference runs (space mapping did not "
+                      f"converge); last design {np.round(res.x * 1e3, 4).tolist()} mm")

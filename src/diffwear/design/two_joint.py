@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import math
 
-import diffrax
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
@@ -48,7 +47,9 @@ from ..presets import (
     slider_crank,
     with_wear_joint,
 )
-from ..wear import LifeResult, cycles_to_limit
+from ..quasistatic import QuasiStatic
+from ..wear import AbstractWearModel, LifeResult, cycles_to_limit
+from ..wear.status import STATUS_TEXT
 
 JOINTS = ("crank_rod", "rod_slider")
 BUSHING_BODY = "rod"
@@ -94,30 +95,23 @@ def bushing(diameter, depth, *, clearance=CLEARANCE_CH8, k=K_PTFE_MM3_PER_NM * 1
 class TwoJointLife(eqx.Module):
     """cycles-to-limit of both joints as a function of x = (d1, d2, h1, h2) [m].
 
-    ``model(x)`` -> [cyc1, cyc2] (jit-able, differentiable in forward and
-    reverse mode, vmap-able); ``model.evaluate(x)`` -> the `LifeResult`;
-    ``model.life(x)`` checks the status (`SolverError` on failure) and returns
-    NumPy cycles.  Static settings: ``steps`` (slots to the limit of the
-    fastest joint), ``scheme`` ("implicit"), ``n_theta`` (profile grid),
-    ``cycle_rtol`` (dynamic cycle tolerance, rtol = atol), ``forward_mode``
-    (diffrax `ForwardMode` adjoint, for `jax.jacfwd`/`jvp`; default False:
-    the checkpointed reverse mode, for `jax.grad`/`jacrev`).  The autodiff
-    derivative of the life is not usable at the Ch. 8 settings: at the
-    default tolerance its tangents reach 1e20-1e44; at ``cycle_rtol=1e-8``
-    `jax.jacfwd` matches central differences for a shallow limit (0.2 mm)
-    and for the first joint to reach 2 mm, but not for the other joint (off
-    by ~30x; measured, see `diffwear.wear.life`).  The optimisers use
-    `diffwear.design.finite_difference_jacobian`.
+    ``model(x)`` -> [cyc1, cyc2] (jit-able, vmap-able, differentiable);
+    ``model.evaluate(x)`` -> the `LifeResult`; ``model.life(x)`` checks the
+    status (`SolverError` on failure) and returns NumPy cycles.
+
+    ``wear_model``: `QuasiStatic()` (default: smooth, exact gradients by
+    `jax.jacfwd` / `jax.grad`, checked against central differences) or
+    `Dynamic(...)` (the reference; its pointwise derivative at the 2 mm limit
+    is not usable, see `diffwear.wear.life`: use
+    `diffwear.design.finite_difference_jacobian` with it).  ``n_theta``:
+    profile grid; ``limit``: wear-depth limit [m].
     """
 
-    steps: int = eqx.field(static=True, default=5)
-    scheme: str = eqx.field(static=True, default="implicit")
+    wear_model: AbstractWearModel = QuasiStatic()
     n_theta: int = eqx.field(static=True, default=90)
-    cycle_rtol: float = eqx.field(static=True, default=1e-6)
     limit: float = eqx.field(static=True, default=WEAR_LIMIT)
-    forward_mode: bool = eqx.field(static=True, default=False)
     # Contact-onset band of the EFM springs [m].  The default 10 nm made the
-    # reverse-mode derivative of one cycle's wear 1000x off the central
+    # reverse-mode derivative of one dynamic cycle's wear 1000x off the central
     # difference on this mechanism (springs crossing the band inside one
     # integrator step); 1 um (2 % of the ~50 um penetration at 2 kN) gives
     # 0.15 % agreement (measured, one cycle at the Table 8-4 design).  The
@@ -125,6 +119,11 @@ class TwoJointLife(eqx.Module):
     # of the contact arc carry less load.
     penetration_width: float = eqx.field(static=True, default=1e-6)
     p: SliderCrankParameters = TABLE_2_1
+
+    @property
+    def exact_gradients(self) -> bool:
+        """Autodiff Jacobians are meaningful (the quasi-static model)."""
+        return self.wear_model.exact_gradients
 
     @property
     def period(self) -> float:
@@ -139,6 +138,17 @@ class TwoJointLife(eqx.Module):
                                    n_theta=self.n_theta, penetration_width=self.penetration_width)
         return ideal, q_guess, mech
 
+    def prepared(self) -> "TwoJointLife":
+        """This model with the quasi-static joint loads computed once (they do
+        not depend on the bushing design): cheaper evaluations and compiles."""
+        if not isinstance(self.wear_model, QuasiStatic) or self.wear_model.fixed_loads is not None:
+            return self
+        x = jnp.asarray(0.5 * (LOWER + UPPER))
+        ideal, q_guess, mech = self.mechanism(x)
+        y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
+        loads = self.wear_model.loads(mech, JOINTS, y0, self.period)
+        return eqx.tree_at(lambda m: m.wear_model, self, self.wear_model.with_loads(loads))
+
     def evaluate(self, x: Float[Array, "4"]) -> LifeResult:
         check_design(x)
         x = jnp.asarray(x, dtype=float)
@@ -146,9 +156,7 @@ class TwoJointLife(eqx.Module):
         # the ideal kinematics at t = 0 do not depend on the design
         y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
         return cycles_to_limit(mech, JOINTS, y0, period=self.period, limit=self.limit,
-                               steps=self.steps, scheme=self.scheme,
-                               cycle_rtol=self.cycle_rtol, cycle_atol=self.cycle_rtol,
-                               adjoint=diffrax.ForwardMode() if self.forward_mode else None)
+                               model=self.wear_model)
 
     def __call__(self, x: Float[Array, "4"]) -> Float[Array, "2"]:
         return self.evaluate(x).cycles
@@ -159,10 +167,9 @@ class TwoJointLife(eqx.Module):
         res = _evaluate(self, jnp.asarray(x, dtype=float))
         status = int(res.status)
         if status != 0:
-            why = ("the dynamic integration failed" if status == 2 else
-                   "a joint did not reach the wear limit within the scan slots")
-            raise SolverError(f"cycles_to_limit at design {np.asarray(x) * 1e3} mm: {why} "
-                              f"(status {status})")
+            raise SolverError(f"{self.wear_model.name} life at design "
+                              f"{np.round(np.asarray(x) * 1e3, 4).tolist()} mm: "
+                              f"{STATUS_TEXT.get(status, 'failed')} (status {status})")
         return np.asarray(res.cycles)
 
 

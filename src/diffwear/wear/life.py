@@ -105,8 +105,8 @@ from jaxtyping import Array, Float
 from ..errors import InputError
 from ..mechanism import Mechanism
 from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle_joints
+from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_SOLVER
 
-STATUS_OK, STATUS_SOLVER, STATUS_INCOMPLETE = 0, 2, 3
 SCHEMES = ("implicit", "euler")
 
 # A per-cycle depth increment below this [m] counts as "not wearing" (1e-18 m
@@ -132,8 +132,8 @@ class LifeResult(eqx.Module):
 
     cycles: Float[Array, " J"]
     depth: tuple
-    status: Array                # 0 ok, 2 solver failure, 3 a joint never reached the limit
-    dynamic_cycles: Array        # dynamic cycles simulated (incl. warm-up)
+    status: Array                # `diffwear.wear.status`: 0 ok, 2 solver failure, 3 incomplete, ...
+    dynamic_cycles: Array        # dynamic cycles simulated (incl. warm-up; 0: quasi-static)
     history: dict
 
 
@@ -185,7 +185,7 @@ def _cycles_to_gain(h, dh, target):
     return jnp.min(jnp.where(wearing, (target - h) / safe, _MAX_STEP_CYCLES))
 
 
-def cycles_to_limit(
+def dynamic_cycles_to_limit(
     mech: Mechanism,
     joints: tuple[str, ...],
     y0: Float[Array, " s"],

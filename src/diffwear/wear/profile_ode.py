@@ -43,8 +43,8 @@ from jax import lax
 from jaxtyping import Array, Bool, Float
 
 from .peak import peak_depth
+from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_PIERCED, STATUS_SOLVER
 
-STATUS_OK, STATUS_PIERCED, STATUS_SOLVER, STATUS_INCOMPLETE = 0, 1, 2, 3
 # A peak wear rate below this [m per cycle] (1 nm per 1e9 cycles) means the
 # joint does not wear: it sets no step, and a life is never reached.
 NO_WEAR_RATE = 1e-18

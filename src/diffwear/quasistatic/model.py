@@ -1,0 +1,205 @@
+"""`QuasiStatic`: the quasi-static wear model as a strategy object.
+
+One settled cycle of the ideal mechanism gives every wearing joint's loads
+(`cycle_loads`); each joint's profile then evolves in the cycle count by
+`diffwear.wear.profile_ode`, its wear per cycle from the pin's equilibrium on
+the EFM springs (`QuasiStaticJoint`).  Without the pin offset fed back into
+the kinematics (it changes the link lengths by at most the wear depth; the
+measured effect on the Ch. 7 rig and the Ch. 8 lives is in the docs) the
+joints do not interact, so they evolve side by side: stacked and vmapped when
+their grids match (one loop in the compiled program), one after another
+otherwise.
+
+Every result carries a contact check, `QuasiStaticJoint.contact_margin`: a
+margin below 1 anywhere in the cycle of the unworn joint sets status
+`STATUS_CONTACT_LOSS` (the pin flies across the clearance: the reduction does
+not hold; use `Dynamic`).  Table 2-1 slider-crank: the 5 mm clearance is
+flagged (margin 0.21; thesis Fig. 3-7: contact briefly lost), 0.5 mm is not
+(2.1).  The margin at the final profile is reported beside it: a groove much
+deeper than the clearance can let the pin lift off its flank where the load
+turns fast (Ch. 8 joint 2 near its 2 mm limit: 0.25 over 1 % of the cycle,
+carrying ~0.1 % of the wear), which the results report as a warning; the lives
+there still agree with the dynamic model (docs: the agreement table).
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from ..mechanism import GROUND, Mechanism
+from ..wear.life import LifeResult
+from ..wear.model import AbstractWearModel
+from ..wear.profile_ode import ProfileHistory, ProfileSolution, integrate_profile
+from ..wear.status import STATUS_CONTACT_LOSS, STATUS_OK, STATUS_SOLVER
+from .joint import QuasiStaticJoint
+from .loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
+
+
+class QuasiStaticEvolution(eqx.Module):
+    """Wear of each joint after ``cycles`` real cycles (quasi-static model).
+
+    depth: final wear profiles [m], one per joint (tuple)
+    cycles: real cycles represented
+    status: `diffwear.wear.status` code (worst over the joints)
+    joint_status: per joint
+    contact_margin: per joint, the smallest `QuasiStaticJoint.contact_margin`
+        over the cycle of the unworn joint (< 1: status contact loss)
+    contact_margin_worn: the same at the final profile (< 1: a warning)
+    history: one `ProfileHistory` per joint (the integrator's steps)
+    """
+
+    depth: tuple
+    cycles: Float[Array, ""]
+    status: Array
+    joint_status: Array
+    contact_margin: Float[Array, " J"]
+    contact_margin_worn: Float[Array, " J"]
+    history: tuple
+
+
+def joint_mass(mech: Mechanism, joint) -> Float[Array, ""]:
+    """Mass [kg] for the contact check: the heavier of the joint's two bodies
+    (a conservative stand-in for the effective mass of the pin's relative
+    motion; the ground counts as neither)."""
+    masses = [b.mass for b in mech.bodies if b.name in (joint.pin_body, joint.bushing_body)
+              and b.name != GROUND]
+    return jnp.max(jnp.stack([jnp.asarray(m, dtype=float) for m in masses]))
+
+
+def _stackable(trees) -> bool:
+    first = jax.tree.structure(trees[0])
+    shapes = [jnp.shape(x) for x in jax.tree.leaves(trees[0])]
+    return all(jax.tree.structure(t) == first
+               and [jnp.shape(x) for x in jax.tree.leaves(t)] == shapes for t in trees[1:])
+
+
+class QuasiStatic(AbstractWearModel):
+    """The quasi-static wear model (module notes; `QuasiStaticJoint` for the
+    physics and where it holds).
+
+    ``samples``: equally spaced samples of the load cycle (quadrature of the
+    wear; 180 changes the Ch. 8 lives by < 1e-4 against 360); ``steps``: the
+    accuracy knob of the wear ODE in the cycle count
+    (`diffwear.wear.profile_ode`; 40 puts the Ch. 8 lives within ~0.2 % of
+    their converged values, the Ch. 7 rig's depth within 1e-6); ``warmup_cycles``:
+    settling cycles of a mechanism that is not fully driven; ``load_rtol``:
+    tolerance of the ideal mechanism's solve; ``contact_mass`` [kg]: mass for
+    the contact check (default `joint_mass`).
+    """
+
+    name: ClassVar[str] = "quasi-static"
+    exact_gradients: ClassVar[bool] = True
+    samples: int = eqx.field(static=True, default=180)
+    steps: int = eqx.field(static=True, default=40)
+    warmup_cycles: int = eqx.field(static=True, default=0)
+    load_rtol: float = eqx.field(static=True, default=1e-8)
+    contact_mass: Float[Array, ""] | None = None
+    fixed_loads: CycleLoads | None = None
+
+    def with_loads(self, loads: CycleLoads) -> "QuasiStatic":
+        """This model with the joint loads given (`loads`): for studies whose
+        parameters leave the ideal mechanism unchanged (bushing dimensions,
+        clearance, wear coefficient, friction), which then skip its solve."""
+        return eqx.tree_at(lambda m: m.fixed_loads, self, loads,
+                           is_leaf=lambda x: x is None)
+
+    # --------------------------------------------------------------- pieces
+    def loads(self, mech: Mechanism, joints, y0, period) -> CycleLoads:
+        """Loads of ``joints`` over one settled cycle of the ideal mechanism
+        (``fixed_loads`` if given)."""
+        if self.fixed_loads is not None:
+            return self.fixed_loads
+        return cycle_loads(mech, tuple(joints), y0, period, samples=self.samples,
+                           warmup_cycles=self.warmup_cycles, rtol=self.load_rtol,
+                           atol=self.load_rtol)
+
+    def joints(self, mech: Mechanism, joints) -> tuple[QuasiStaticJoint, ...]:
+        return tuple(QuasiStaticJoint.from_joint(j) for j in clearance_joints(mech, joints))
+
+    def masses(self, mech: Mechanism, joints) -> tuple:
+        if self.contact_mass is not None:
+            m = jnp.asarray(self.contact_mass, dtype=float)
+            return tuple(m for _ in joints)
+        return tuple(joint_mass(mech, j) for j in clearance_joints(mech, joints))
+
+    def _each(self, mech, joints, y0, period, **target):
+        """Per joint: (ProfileSolution, (unworn, worn) contact margins); and
+        the loads' success."""
+        loads = self.loads(mech, joints, y0, period)
+        models = self.joints(mech, joints)
+        masses = self.masses(mech, joints)
+        life_mode = "limit" in target
+        # steps needed: steps + 1 for a life (each gains up to limit / steps), at
+        # most steps + 1 for a run of fixed length (the first step is the longest)
+        slots = self.steps + self.steps // 4 + 4 if life_mode else self.steps + 2
+
+        def one(j: QuasiStaticJoint, lo: JointLoads, mass):
+            def evaluate(h):
+                dh, _, eq = j.cycle_wear(h, lo)
+                return dh, eq.ok, j.wear_response(h, lo, eq)
+
+            sol = integrate_profile(evaluate, jnp.zeros(j.n), steps=self.steps,
+                                    max_steps=slots, **target)
+            margins = jnp.stack([jnp.min(j.contact_margin(jnp.zeros(j.n), lo, mass)),
+                                 jnp.min(j.contact_margin(sol.depth, lo, mass))])
+            return sol, margins
+
+        parts = (models, loads.joints, masses)
+        if len(models) > 1 and all(_stackable(p) for p in parts):
+            # one vmapped loop: XLA's CPU runtime was seen to hang (idle,
+            # never returning) running two such loops side by side in one
+            # program under forward-mode differentiation
+            stacked = [jax.tree.map(lambda *a: jnp.stack(a), *p) for p in parts]
+            sols, margins = jax.vmap(one)(*stacked)
+            per_joint = [(jax.tree.map(lambda a: a[i], sols), margins[i])
+                         for i in range(len(models))]
+        else:
+            per_joint = [one(*args) for args in zip(*parts)]
+        return per_joint, loads.ok
+
+    @staticmethod
+    def _status(per_joint, loads_ok):
+        status = jnp.stack([
+            jnp.where(~loads_ok, STATUS_SOLVER,
+                      jnp.where((sol.status == STATUS_OK) & (margins[0] < 1.0),
+                                STATUS_CONTACT_LOSS, sol.status))
+            for sol, margins in per_joint])
+        return status, jnp.max(status)
+
+    # -------------------------------------------------------------- results
+    def life(self, mech, joints, y0, *, period, limit) -> LifeResult:
+        per_joint, ok = self._each(mech, joints, y0, period, limit=limit)
+        joint_status, status = self._status(per_joint, ok)
+        sols: list[ProfileSolution] = [s for s, _ in per_joint]
+        history = {"cycles": jnp.stack([s.history.cycles for s in sols]),
+                   "max_depth": jnp.stack([s.history.peak for s in sols]),
+                   "valid": jnp.stack([s.history.valid for s in sols]),
+                   "joint_status": joint_status,
+                   "contact_margin": jnp.stack([m[0] for _, m in per_joint]),
+                   "contact_margin_worn": jnp.stack([m[1] for _, m in per_joint])}
+        return LifeResult(cycles=jnp.stack([s.life for s in sols]),
+                          depth=tuple(s.depth for s in sols), status=status,
+                          dynamic_cycles=jnp.zeros((), int), history=history)
+
+    def evolve(self, mech, joints, y0, *, period, cycles,
+               wall_thickness=None) -> QuasiStaticEvolution:
+        """Wear of ``joints`` after ``cycles`` real cycles from unworn bushings;
+        ``wall_thickness`` [m]: stop a joint whose peak depth reaches it."""
+        wall = jnp.inf if wall_thickness is None else jnp.asarray(wall_thickness, dtype=float)
+        per_joint, ok = self._each(mech, joints, y0, period, cycles=cycles, wall=wall)
+        joint_status, status = self._status(per_joint, ok)
+        sols = [s for s, _ in per_joint]
+        return QuasiStaticEvolution(
+            depth=tuple(s.depth for s in sols), cycles=jnp.asarray(cycles, dtype=float),
+            status=status, joint_status=joint_status,
+            contact_margin=jnp.stack([m[0] for _, m in per_joint]),
+            contact_margin_worn=jnp.stack([m[1] for _, m in per_joint]),
+            history=tuple(s.history for s in sols))
+
+
+__all__ = ["QuasiStatic", "QuasiStaticEvolution", "ProfileHistory", "joint_mass"]

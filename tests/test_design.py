@@ -131,18 +131,22 @@ def test_design_two_joint_quick(tmp_path):
 
 
 def test_design_two_joint_small_case(tmp_path):
-    """The CLI on a small case (coarse model: 2 wear steps, 36 profile nodes,
-    equal life only, 2 x 2 maps): the returned design has equal lives on a
-    fresh rerun of the same model, the thesis's trend holds, and every file of
-    the study is written."""
+    """The CLI on a small case (coarse models: 10 quasi-static and 2 dynamic
+    wear steps, 36 profile nodes, equal life only, 2 x 2 maps): optimised on
+    the quasi-static model with autodiff Jacobians, the answer has equal lives
+    on the dynamic model (within 0.5 %) after at most 6 dynamic runs, the
+    thesis's trend holds, and every file of the study is written."""
     out = tmp_path / "design"
-    argv = ["design", "two-joint", "--steps", "2", "--n-theta", "36", "--map-points", "2",
-            "--problems", "equal-life", "--quiet", "--out", str(out)]
+    argv = ["design", "two-joint", "--steps", "10", "--dynamic-steps", "2", "--n-theta", "36",
+            "--map-points", "2", "--problems", "equal-life", "--quiet", "--out", str(out)]
     assert main(argv) == 0
     s = json.loads((out / "summary.json").read_text())
-    assert s["settings"] == {"steps": 2, "map_points": 2, "n_theta": 36,
-                             "problems": ["equal-life"]}
+    assert s["settings"] == {"model": "quasi-static", "steps": 10, "dynamic_steps": 2,
+                             "map_points": 2, "n_theta": 36, "problems": ["equal-life"]}
+    assert s["model"] == "quasi-static" and s["jacobian_method"] == "autodiff"
+    assert s["corrected_on"] == "dynamic"
     assert s["rel_gap"] < 5e-3
+    assert s["reference_runs"] <= 6 and s["dynamic_runs"] == s["reference_runs"] + 1
     x = np.array([s["d1_mm"], s["d2_mm"], s["h1_mm"], s["h2_mm"]]) * 1e-3
     assert np.all((x >= LOWER) & (x <= UPPER))
     # Over the box: life rises strongly with depth (EFM pressure ~ 1/h, so
@@ -178,7 +182,8 @@ def test_map_trend_reads_monotonicity_and_ratios():
 
 
 @pytest.mark.parametrize("option, value, word", [
-    ("--steps", "0", "--steps"), ("--steps", "101", "--steps"),
+    ("--steps", "0", "--steps"), ("--steps", "401", "--steps"),
+    ("--dynamic-steps", "0", "--dynamic-steps"), ("--model", "exact", "--model"),
     ("--map-points", "0", "--map-points"), ("--n-theta", "5", "--n-theta"),
     ("--problems", "fastest", "fastest"), ("--problems", ",", "--problems")])
 def test_design_cli_bad_sizes(tmp_path, capsys, option, value, word):

@@ -1,5 +1,6 @@
-"""`cycles_to_limit`: the crossing against a hand calculation, and its
-forward-mode derivative against central differences while the wear stays shallow.
+"""`cycles_to_limit` on the dynamic model: the crossing against a hand
+calculation, and its forward-mode derivative against central differences while
+the wear stays shallow (the quasi-static model's life: tests/test_quasi_static.py).
 
 Both use the Ch. 8 two-joint model at the Table 8-3 box centre on coarse
 settings (2 cores: the file runs in about two minutes, 125 s measured).
@@ -16,7 +17,7 @@ import pytest
 from diffwear.contact import centred_state
 from diffwear.design.two_joint import JOINTS, TwoJointLife
 from diffwear.dynamics import consistent_state
-from diffwear.wear import cycles_to_limit
+from diffwear.wear import Dynamic, cycles_to_limit
 from diffwear.wear.cycle import clearance_element, wear_cycle_joints
 
 X = jnp.array([45e-3, 45e-3, 30e-3, 30e-3])  # the centre of the Table 8-3 box [m]
@@ -32,7 +33,7 @@ def test_crossing_matches_a_hand_calculation():
     the life interpolates the maximum depth linearly, which equals it while
     the deepest node stays the deepest (checked within 1e-3)."""
     limit = 0.05e-3
-    model = TwoJointLife(steps=1, scheme="euler", n_theta=45, limit=limit)
+    model = TwoJointLife(wear_model=Dynamic(steps=1, scheme="euler"), n_theta=45, limit=limit)
     ideal, q_guess, mech = model.mechanism(X)
     y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
     period = model.period
@@ -75,8 +76,8 @@ def test_life_jacfwd_matches_central_differences_while_wear_is_shallow():
     their grooves) and a tight cycle tolerance (1e-8; at the default 1e-6 the
     integrator's error is a visible part of the derivative).  At the 2 mm
     limit of Ch. 8 this does not hold (see `diffwear.wear.life`)."""
-    model = TwoJointLife(steps=2, limit=0.2e-3, n_theta=45, cycle_rtol=1e-8,
-                         forward_mode=True)
+    model = TwoJointLife(wear_model=Dynamic(steps=2, cycle_rtol=1e-8, cycle_atol=1e-8,
+                                            forward_mode=True), limit=0.2e-3, n_theta=45)
     jac = np.asarray(eqx.filter_jit(lambda x: jax.jacfwd(model)(x))(X))
     assert np.all(np.isfinite(jac))
     f = eqx.filter_jit(model)

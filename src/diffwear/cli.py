@@ -132,8 +132,8 @@ def _design(args: argparse.Namespace) -> int:
     if args.out is None:
         raise InputError("design: --out DIR is required")
     settings = study.settings(quick=args.quick, steps=args.steps,
-                              map_points=args.map_points, n_theta=args.n_theta,
-                              problems=args.problems)
+                              dynamic_steps=args.dynamic_steps, map_points=args.map_points,
+                              n_theta=args.n_theta, problems=args.problems, model=args.model)
     out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
     log = (lambda *a, **k: None) if args.quiet else print
     study.run(out, settings=settings, log=log)
@@ -199,19 +199,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("name", nargs="?", help="design problem: two-joint")
     p.add_argument("--list", action="store_true", help="list the design problems and exit")
     _output_options(p, required=False)
+    p.add_argument("--model", default=None, metavar="MODEL",
+                   help="quasi-static (default): optimise with exact autodiff Jacobians and "
+                        "correct on the dynamic model; dynamic: optimise the dynamic model "
+                        "itself with central-difference Jacobians (slow)")
     p.add_argument("--quick", action="store_true",
-                   help="coarse model (3 wear steps to the limit) and 2 x 2 maps: minutes, "
-                        "for a smoke run; the default model takes 10 steps")
+                   help="coarse models (10 quasi-static, 3 dynamic wear steps) and 2 x 2 "
+                        "maps, for a smoke run")
     p.add_argument("--steps", type=int, default=None,
-                   help="wear steps to the limit of the faster joint (1-100; default 10, "
-                        "--quick 3): fewer is faster and coarser")
+                   help="quasi-static wear steps to the limit (1-400; default 40, --quick 10)")
+    p.add_argument("--dynamic-steps", type=int, default=None,
+                   help="dynamic wear steps to the limit of the faster joint (1-100; default "
+                        "10, --quick 3)")
     p.add_argument("--map-points", type=int, default=None,
-                   help="life-map grid points per axis (1-50; default 5, --quick 2)")
+                   help="life-map grid points per axis (1-50; default 4, --quick 2)")
     p.add_argument("--n-theta", type=int, default=None,
                    help="bushing profile nodes per joint (12-720; default 90)")
     p.add_argument("--problems", default=None, metavar="NAMES",
-                   help="comma-separated: equal-life, longest-common-life, least-material "
-                        "(default all three; equal life is always solved)")
+                   help="comma-separated: equal-life, longest-common-life, least-material, "
+                        "robust, or all (default equal-life; equal life is always solved)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_design)
 

@@ -324,7 +324,7 @@ def _solve(model: TwoJointLife, problem: str, residual, x_fixed, free, *, rtol, 
                         notes)
 
 
-class _AtTarget(eqx.Module):
+class AtTarget(eqx.Module):
     """Residual cyc_j / T - 1 of both joints at the target life T [cycles]."""
 
     target: jnp.ndarray
@@ -333,7 +333,7 @@ class _AtTarget(eqx.Module):
         return c / self.target - 1.0
 
 
-def _life_gap(x, c):
+def life_gap(x, c):
     """The scale-free equal-life residual (cyc1 - cyc2) / mean(cyc1, cyc2)."""
     return jnp.atleast_1d((c[0] - c[1]) / (0.5 * (c[0] + c[1])))
 
@@ -341,8 +341,8 @@ def _life_gap(x, c):
 def equal_life(model: TwoJointLife, x0, *, rtol=1e-4, atol=1e-4,
                max_steps=30) -> DesignResult:
     """min (cyc1 - cyc2)^2 over (d1, d2, h1, h2) in the Table 8-3 box from ``x0``
-    (the thesis's problem), as the residual `_life_gap`."""
-    return _solve(model, "equal life", _life_gap, x0, [True] * 4, rtol=rtol, atol=atol,
+    (the thesis's problem), as the residual `life_gap`."""
+    return _solve(model, "equal life", life_gap, x0, [True] * 4, rtol=rtol, atol=atol,
                   max_steps=max_steps)
 
 
@@ -356,7 +356,7 @@ def longest_common_life(model: TwoJointLife, *, rtol=1e-4, atol=1e-4,
     x = corner.copy()
     free = [False] * 4
     free[strong + 2] = True  # the stronger joint's depth
-    res = _solve(model, "longest common life", _life_gap, x, free, rtol=rtol, atol=atol,
+    res = _solve(model, "longest common life", life_gap, x, free, rtol=rtol, atol=atol,
                  max_steps=max_steps)
     res.notes.update({"weaker_joint": weak + 1, "corner_cycles": c.tolist(),
                       "kkt": kkt_check(model, res.x, "longest common life", res.cycles)})
@@ -388,7 +388,7 @@ def least_material(model: TwoJointLife, target_cycles: float, *, rtol=1e-4, atol
                          f"the wear limit after {c[j]:,.0f} cycles")
     x = np.array([LOWER[0], LOWER[1], 0.5 * (LOWER[2] + UPPER[2]), 0.5 * (LOWER[3] + UPPER[3])])
 
-    res = _solve(model, "least material", _AtTarget(jnp.asarray(t)), x, [False, False, True, True], rtol=rtol,
+    res = _solve(model, "least material", AtTarget(jnp.asarray(t)), x, [False, False, True, True], rtol=rtol,
                  atol=atol, max_steps=max_steps)
     res.notes.update({"target_cycles": t,
                       "kkt": kkt_check(model, res.x, "least material", res.cycles)})

@@ -129,12 +129,16 @@ class TwoJointLife(eqx.Module):
     def period(self) -> float:
         return 2 * math.pi / float(self.p.omega)
 
-    def mechanism(self, x):
-        """The wearing mechanism for design x and its ideal parent."""
+    def mechanism(self, x, wear_scale=None):
+        """The wearing mechanism for design x and its ideal parent;
+        ``wear_scale`` (2,): each bushing's wear coefficient over the nominal
+        5.05e-4 mm^3/(N m) (default 1, 1)."""
         ideal, q_guess = slider_crank(self.p)
         mech = ideal
-        for joint, d, h in zip(JOINTS, (x[0], x[1]), (x[2], x[3])):
-            mech = with_wear_joint(mech, bushing(d, h), joint=joint, bushing_body=BUSHING_BODY,
+        scale = jnp.ones(2) if wear_scale is None else jnp.asarray(wear_scale, dtype=float)
+        for joint, d, h, s in zip(JOINTS, (x[0], x[1]), (x[2], x[3]), scale):
+            mech = with_wear_joint(mech, bushing(d, h, k=s * K_PTFE_MM3_PER_NM * 1e-9),
+                                   joint=joint, bushing_body=BUSHING_BODY,
                                    n_theta=self.n_theta, penetration_width=self.penetration_width)
         return ideal, q_guess, mech
 
@@ -143,16 +147,13 @@ class TwoJointLife(eqx.Module):
         not depend on the bushing design): cheaper evaluations and compiles."""
         if not isinstance(self.wear_model, QuasiStatic) or self.wear_model.fixed_loads is not None:
             return self
-        x = jnp.asarray(0.5 * (LOWER + UPPER))
-        ideal, q_guess, mech = self.mechanism(x)
-        y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
-        loads = self.wear_model.loads(mech, JOINTS, y0, self.period)
+        loads = _loads(self, jnp.asarray(0.5 * (LOWER + UPPER)))
         return eqx.tree_at(lambda m: m.wear_model, self, self.wear_model.with_loads(loads))
 
-    def evaluate(self, x: Float[Array, "4"]) -> LifeResult:
+    def evaluate(self, x: Float[Array, "4"], wear_scale=None) -> LifeResult:
         check_design(x)
         x = jnp.asarray(x, dtype=float)
-        ideal, q_guess, mech = self.mechanism(x)
+        ideal, q_guess, mech = self.mechanism(x, wear_scale)
         # the ideal kinematics at t = 0 do not depend on the design
         y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
         return cycles_to_limit(mech, JOINTS, y0, period=self.period, limit=self.limit,
@@ -171,6 +172,13 @@ class TwoJointLife(eqx.Module):
                               f"{np.round(np.asarray(x) * 1e3, 4).tolist()} mm: "
                               f"{STATUS_TEXT.get(status, 'failed')} (status {status})")
         return np.asarray(res.cycles)
+
+
+@eqx.filter_jit
+def _loads(model: TwoJointLife, x):
+    ideal, q_guess, mech = model.mechanism(x)
+    y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
+    return model.wear_model.loads(mech, JOINTS, y0, model.period)
 
 
 @eqx.filter_jit

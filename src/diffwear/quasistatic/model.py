@@ -134,9 +134,12 @@ class QuasiStatic(AbstractWearModel):
         models = self.joints(mech, joints)
         masses = self.masses(mech, joints)
         life_mode = "limit" in target
-        # steps needed: steps + 1 for a life (each gains up to limit / steps), at
-        # most steps + 1 for a run of fixed length (the first step is the longest)
-        slots = self.steps + self.steps // 4 + 4 if life_mode else self.steps + 2
+        # slots needed: steps + 1 for a life (each step gains up to limit / steps
+        # of peak depth; measured steps + 1 on the Ch. 8 designs), at most
+        # steps + 1 for a run of fixed length (the first step is the longest).
+        # Under vmap every slot runs, so they are counted tight; a life that
+        # needs more is reported (status 3), not cut.
+        slots = self.steps + 3
 
         def one(j: QuasiStaticJoint, lo: JointLoads, mass):
             def evaluate(h):

@@ -325,12 +325,14 @@ def _solve(model: TwoJointLife, problem: str, residual, x_fixed, free, *, rtol, 
 
 
 class AtTarget(eqx.Module):
-    """Residual cyc_j / T - 1 of both joints at the target life T [cycles]."""
+    """Residual cyc_j / T - 1 of the joints at the target life T [cycles];
+    ``active`` (2,) masks joints whose life is not held at T (0: excluded)."""
 
     target: jnp.ndarray
+    active: jnp.ndarray = eqx.field(default_factory=lambda: jnp.ones(2))
 
     def __call__(self, x, c):
-        return c / self.target - 1.0
+        return self.active * (c / self.target - 1.0)
 
 
 def life_gap(x, c):
@@ -386,12 +388,23 @@ def least_material(model: TwoJointLife, target_cycles: float, *, rtol=1e-4, atol
         raise InputError(f"least material: a life of {t:,.0f} cycles is out of reach with "
                          f"d = 20 mm: at h = 50 mm (the Table 8-3 bound) joint {j + 1} reaches "
                          f"the wear limit after {c[j]:,.0f} cycles")
-    x = np.array([LOWER[0], LOWER[1], 0.5 * (LOWER[2] + UPPER[2]), 0.5 * (LOWER[3] + UPPER[3])])
-
-    res = _solve(model, "least material", AtTarget(jnp.asarray(t)), x, [False, False, True, True], rtol=rtol,
-                 atol=atol, max_steps=max_steps)
-    res.notes.update({"target_cycles": t,
-                      "kkt": kkt_check(model, res.x, "least material", res.cycles)})
+    # a joint that outlives the target with the shallowest bushing stays there
+    # (h at its lower bound: the constraint cyc_j >= T is not active)
+    shallow = np.array([LOWER[0], LOWER[1], LOWER[2], LOWER[3]])
+    c_low = life_of(model, shallow)
+    active = c_low < t
+    x = np.where(np.r_[False, False, active], 0.5 * (LOWER + UPPER), shallow)
+    if not active.any():
+        return DesignResult("least material", shallow, c_low, 0, 1, 0.0, [],
+                            {"target_cycles": t, "jacobian_method": jacobian_method(model),
+                             "note": "both joints outlive the target at h = 10 mm"})
+    res = _solve(model, "least material", AtTarget(jnp.asarray(t), jnp.asarray(active, float)),
+                 x, np.r_[False, False, active], rtol=rtol, atol=atol, max_steps=max_steps)
+    res.notes["target_cycles"] = t
+    if active.all():
+        res.notes["kkt"] = kkt_check(model, res.x, "least material", res.cycles)
+    else:
+        res.notes["at_lower_bound"] = [f"h{j + 1}" for j in (0, 1) if not active[j]]
     return res
 
 

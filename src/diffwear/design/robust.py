@@ -40,8 +40,9 @@ from .two_joint import LOWER, UPPER, TwoJointLife
 
 SCATTER = 0.5        # +-50 % (95 % interval of the log-normal k)
 RELIABILITY = 0.9    # the 10th percentile of the weaker joint's life must reach the target
-PENALTY = 50.0       # weight of the constraint violation (relative) against V / V_start
-SOFTNESS = 2e-3      # smoothing of the penalty's kink (relative life)
+PENALTY = 20.0       # weight of the relative shortfall (an exact L1 penalty) against V / V_start
+MARGIN = 1.005       # aim 0.5 % above the target: the sampled percentile is noisy
+REACH = 0.95         # a target above this fraction of the best P10 in the box is lowered to it
 
 
 def log_sigma(scatter: float = SCATTER) -> float:
@@ -72,11 +73,14 @@ def percentile_of(cycles, *, reliability: float = RELIABILITY, scatter: float = 
 
 def robust_least_material(model: TwoJointLife, target_cycles: float, *,
                           reliability: float = RELIABILITY, scatter: float = SCATTER,
-                          batch: int = 512, steps: int = 60, learning_rate: float = 0.08,
+                          batch: int = 1024, steps: int = 80, learning_rate: float = 0.1,
                           seed: int = 0, log=None) -> DesignResult:
     """Least bushing material with the weaker joint's life >= ``target_cycles``
     in ``reliability`` of the mechanisms (module notes), by optax Adam over
-    (h1, h2) with d1 = d2 = 20 mm; ``batch`` k pairs sampled per step."""
+    (h1, h2) with d1 = d2 = 20 mm; ``batch`` k pairs sampled per step.  A
+    target beyond reach (above `REACH` of the percentile at d = 20 mm,
+    h = 50 mm, the longest lives in the box) is lowered to it and both are
+    reported (``asked_cycles``, ``target_cycles``)."""
     if jacobian_method(model) != "autodiff":
         raise InputError("robust design needs a model with exact gradients (the quasi-static "
                          "model): its stochastic gradients are autodiff gradients of the lives")
@@ -84,6 +88,11 @@ def robust_least_material(model: TwoJointLife, target_cycles: float, *,
     if not t > 0:
         raise InputError(f"robust design: target life must be > 0 cycles, got {t}")
     life = compiled(model)
+    best = percentile_of(life.life(np.concatenate([LOWER[:2], UPPER[2:]])),
+                         reliability=reliability, scatter=scatter)["percentile"]
+    asked = t
+    if t > REACH * best:
+        t = float(np.floor(REACH * best / 1000.0) * 1000.0)
     lo, hi = jnp.asarray(LOWER[2:]), jnp.asarray(UPPER[2:])
     d = LOWER[:2]
     h0 = 0.5 * (LOWER[2:] + UPPER[2:])
@@ -98,9 +107,8 @@ def robust_least_material(model: TwoJointLife, target_cycles: float, *,
         x = jnp.concatenate([jnp.asarray(d), h])
         c = cycles + jac @ (h - jax.lax.stop_gradient(h))
         p = jnp.quantile(weakest_life(c, kappa), q)
-        short = (t - p) / t
-        penalty = SOFTNESS * jax.nn.softplus(short / SOFTNESS)
-        return bushing_volume(x) / v_start + PENALTY * penalty, p
+        short = jnp.maximum((MARGIN * t - p) / t, 0.0)
+        return bushing_volume(x) / v_start + PENALTY * short, p
 
     grad = jax.jit(jax.value_and_grad(objective, has_aux=True))
     optimiser = optax.adam(optax.cosine_decay_schedule(learning_rate, steps, alpha=0.05))
@@ -126,7 +134,8 @@ def robust_least_material(model: TwoJointLife, target_cycles: float, *,
     x = np.concatenate([d, np.asarray(from_free(u, lo, hi))])
     cycles = life_of(model, x)
     check = percentile_of(cycles, reliability=reliability, scatter=scatter)
-    notes = {"target_cycles": t, "reliability": reliability, "k_scatter": scatter,
+    notes = {"target_cycles": t, "asked_cycles": asked, "best_percentile_in_box": best,
+             "reliability": reliability, "k_scatter": scatter,
              "batch": batch, "percentile_check": check, "jacobian_method": "autodiff",
              "optimiser": f"optax adam, {steps} steps, cosine-decayed rate {learning_rate}"}
     return DesignResult("robust least material", x, cycles, steps, steps + 1,

@@ -79,10 +79,12 @@ def _damped_newton(x0, u, c, scale, width, ratio, pull, direction):
 
     def parts(x):
         delta = u @ (scale * x) - c
+        # the energy is a merit function for the line search only: that of the
+        # single ramp (exact outside the onset band, where all but a few springs are)
         energy = ratio * jnp.sum(smoothing.ramp_integral(delta, width)) / scale**2 \
             - pull * (direction @ x)
-        grad = ratio * smoothing.ramp(delta, width) @ u / scale - pull * direction
-        hess = ratio * (u.T * smoothing.step(delta, width)) @ u
+        grad = ratio * spring(delta, width) @ u / scale - pull * direction
+        hess = ratio * (u.T * spring_slope(delta, width)) @ u
         return energy, grad, hess
 
     def converged(grad):
@@ -123,6 +125,19 @@ def _solve_2x2(m, r):
     return jnp.where(ok, adj @ r / jnp.where(ok, det, 1.0), jnp.nan)
 
 
+def spring(delta, width):
+    """Pressure / k_f of an EFM spring at rest: the dynamic law's
+    ramp(k_f ramp(delta)) / k_f (`ElasticFoundation.pressure` with no
+    penetration rate: its contact onset, then its no-tension clamp, each
+    smoothed over ``width``), so that both models load the springs alike."""
+    return smoothing.ramp(smoothing.ramp(delta, width), width)
+
+
+def spring_slope(delta, width):
+    """d spring / d delta: the contact indicator D of the module notes."""
+    return smoothing.step(smoothing.ramp(delta, width), width) * smoothing.step(delta, width)
+
+
 def _directions(n: int) -> Float[Array, "n 2"]:
     theta = grid_angles(n)
     return jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)
@@ -135,7 +150,7 @@ def pin_offset(clearance: Float[Array, " n"], load: Float[Array, "2"], contact_s
     (W', module notes) on the springs of profile ``clearance`` [m], and 1.0 if
     the solve converged (else 0.0).  ``contact_stiffness`` = k_f R_b d pi / 2
     [N/m] (the springs are kk = contact_stiffness dtheta / (pi / 2) each);
-    ``width`` [m]: the contact-onset band.
+    ``width`` [m]: the contact-onset band of `spring`.
 
     Solved in units of the starting guess (a well-scaled 2 x 2 problem) by
     `_damped_newton`.  The derivative is the implicit-function theorem in
@@ -167,10 +182,10 @@ def _pin_offset_jvp(primals, tangents):
     ratio = 4.0 / n
 
     def force(c, load, kc, width):
-        return ratio * smoothing.ramp(u @ e - c, width) @ u - load / kc
+        return ratio * spring(u @ e - c, width) @ u - load / kc
 
     _, dr = jax.jvp(force, primals, tangents)
-    h = ratio * (u.T * smoothing.step(u @ e - c, width)) @ u
+    h = ratio * (u.T * spring_slope(u @ e - c, width)) @ u
     return (e, ok), (-_solve_2x2(h, dr), jnp.zeros_like(ok))
 
 
@@ -246,8 +261,7 @@ class QuasiStaticJoint(eqx.Module):
         width = self.foundation.penetration_width
         offset, ok = jax.vmap(lambda w: pin_offset(c, w, kc, width))(self.effective_load(loads))
         delta = offset @ self.directions.T - c
-        pressure = self.foundation.stiffness * smoothing.ramp(
-            delta, self.foundation.penetration_width)
+        pressure = self.foundation.stiffness * spring(delta, self.foundation.penetration_width)
         normal_load = self.spring_area * jnp.sum(pressure, axis=-1)
         return Equilibrium(offset=offset, pressure=pressure, normal_load=normal_load,
                            ok=jnp.all(ok > 0.5) & jnp.all(jnp.isfinite(offset)))
@@ -275,7 +289,7 @@ class QuasiStaticJoint(eqx.Module):
         width = self.foundation.penetration_width
         slide = self.sliding_rate(loads)
         delta = eq.offset @ u.T - c                               # (S, n)
-        contact = smoothing.step(delta, width)                    # D, (S, n)
+        contact = spring_slope(delta, width)                      # D, (S, n)
         # d rate / d p per node (the law may be nonlinear in p)
         dp = jax.jvp(lambda p: self.wear.depth_rate(p, slide[:, None]), (eq.pressure,),
                      (jnp.ones_like(eq.pressure),))[1]

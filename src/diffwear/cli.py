@@ -140,6 +140,24 @@ def _design(args: argparse.Namespace) -> int:
     return 0
 
 
+def _life(args: argparse.Namespace) -> int:
+    from .design import life_point
+    from .io import OutputDir
+
+    if args.name != life_point.NAME:
+        raise InputError(f"unknown life problem {args.name!r}; available: {life_point.NAME}")
+    if args.out is None:
+        raise InputError("life: --out DIR is required")
+    x = life_point.design_from_mm((args.d1, args.d2, args.h1, args.h2))
+    if args.model not in life_point.MODELS:
+        raise InputError(f"--model: unknown model {args.model!r}; choose from "
+                         f"{', '.join(life_point.MODELS)}")
+    out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
+    log = (lambda *a, **k: None) if args.quiet else print
+    life_point.run(out, x, model=args.model, with_jacobian=args.jacobian, log=log)
+    return 0
+
+
 def _calibrate(args: argparse.Namespace) -> int:
     from .calibrate import load_dataset
     from .calibrate.fit import ModelSettings
@@ -220,6 +238,22 @@ def build_parser() -> argparse.ArgumentParser:
                         "robust, or all (default equal-life; equal life is always solved)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_design)
+
+    p = sub.add_parser("life", help="cycles to the wear limit of one design (thesis Ch. 8), "
+                       "with its Jacobian", epilog="Exit codes: 0 success, 2 bad input, "
+                       "3 solver failure (or the model does not hold: contact loss).")
+    p.add_argument("name", help="life problem: two-joint")
+    for v, what in (("d1", "bore diameter of joint 1"), ("d2", "bore diameter of joint 2"),
+                    ("h1", "bushing depth of joint 1"), ("h2", "bushing depth of joint 2")):
+        p.add_argument(f"--{v}", type=float, default=None, metavar="MM",
+                       help=f"{what} [mm] (Table 8-3 box: d 20-70, h 10-50)")
+    p.add_argument("--model", default="quasi-static", metavar="MODEL",
+                   help="quasi-static (default; exact autodiff Jacobian) or dynamic")
+    p.add_argument("--jacobian", action="store_true",
+                   help="also d(cyc1, cyc2)/d(d1, d2, h1, h2) in cycles per mm")
+    _output_options(p, required=False)
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=_life)
 
     p = sub.add_parser("run", help="simulate a mechanism file (TOML; see README 'Mechanism files')")
     p.add_argument("file", help="mechanism file, e.g. design_studies/ideal_slider_crank.toml")

@@ -153,13 +153,19 @@ def test_geometric_similarity_depth_scales_with_radius(small):
 
 def test_load_fixed_to_the_pin_swaps_the_roles(small):
     """With the load fixed to the pin, the pin's wear stays under the load and
-    the pivot's spreads: the pin is now the deeper one."""
+    the pivot's spreads: the pin is now the deeper one, and it wears about as
+    deep as the pivot did with the roles swapped.  The largest depth of this
+    coarse model (48 nodes, 4 steps per sweep) is rough in its inputs: a 1e-12
+    relative change of k moves it by 0.5 %, 1e-9 by up to 7 % (the contact edge
+    jumps a node), while the worn volume moves by < 0.4 %; so the roles are
+    compared by volume to 1 % and by depth to 10 %."""
     pin_frame = dataclasses.replace(small, load_frame="pin")
     a = run_wear(small, 20_000, 1000.0)
     b = run_wear(pin_frame, 20_000, 1000.0)
     assert float(a.max_pivot[-1]) > float(a.max_pin[-1])
     assert float(b.max_pin[-1]) > float(b.max_pivot[-1])
-    np.testing.assert_allclose(b.max_pin[-1], a.max_pivot[-1], rtol=2e-2)
+    np.testing.assert_allclose(np.sum(b.h_pin), np.sum(a.h_pivot), rtol=1e-2)
+    np.testing.assert_allclose(b.max_pin[-1], a.max_pivot[-1], rtol=1e-1)
 
 
 def test_linear_extrapolation_of_a_line_is_exact():

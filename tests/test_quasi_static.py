@@ -245,3 +245,37 @@ def test_life_jacobian_matches_central_differences_at_the_2mm_limit():
     np.testing.assert_allclose(grads, jac, rtol=0, atol=1e-8 * np.abs(jac).max())
     # life rises with the joint's own depth everywhere in the box
     assert np.all(jac[:, 0, 2] > 0) and np.all(jac[:, 1, 3] > 0)
+
+
+# ------------------------------------------------------------ the wear studies
+def test_wear_study_on_the_quasi_static_model(tmp_path):
+    """``diffwear study wear-5000 --model quasi-static``: every output, and the
+    same numbers as the model called directly."""
+    import json
+
+    from diffwear.cli import main
+
+    out = tmp_path / "w"
+    assert main(["study", "wear-5000", "--model", "quasi-static", "--cycles", "500", "--quiet",
+                 "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["model"] == "quasi-static" and s["status"] == 0 and s["cycles"] == 500
+    profile = np.loadtxt(out / "wear_profile.csv", delimiter=",", skiprows=1)
+    assert s["max_wear_depth_mm"] == pytest.approx(profile[:, 1].max(), rel=1e-9)
+    history = np.loadtxt(out / "wear_history.csv", delimiter=",", skiprows=1)
+    assert history[0, 0] == 0 and history[-1, 0] == pytest.approx(500)
+    assert history[-1, 2] == pytest.approx(s["wear_volume_mm3"], rel=1e-9)
+    for name in ("report.md", "wear_profile.png", "wear_history.png",
+                 "contact_locus_and_force.png", "joint_force_last_cycle.csv"):
+        assert (out / name).stat().st_size > 0
+
+
+@pytest.mark.parametrize("extra, word", [(["--method", "adaptive"], "--method"),
+                                          (["--contact", "fem"], "--contact")])
+def test_wear_study_options_of_the_dynamic_model_are_refused(tmp_path, capsys, extra, word):
+    from diffwear.cli import main
+
+    out = tmp_path / "w"
+    assert main(["study", "wear-5000", "--model", "quasi-static", *extra, "--out",
+                 str(out)]) == 2
+    assert word in capsys.readouterr().err

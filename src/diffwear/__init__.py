@@ -10,7 +10,9 @@ _jax.config.update("jax_enable_x64", True)
 
 from . import dynamics, mechanism, presets  # noqa: E402
 from .errors import DiffwearError, InputError, SolverError  # noqa: E402
+from .gradcheck import GradCheck, gradcheck  # noqa: E402
 
 __version__ = "0.1.0"
 
-__all__ = ["dynamics", "mechanism", "presets", "DiffwearError", "InputError", "SolverError"]
+__all__ = ["dynamics", "mechanism", "presets", "DiffwearError", "InputError", "SolverError",
+           "GradCheck", "gradcheck"]

@@ -5,3 +5,5 @@ command line builds its parser from them before it imports JAX)."""
 WEAR_METHODS = ("constant", "adaptive", "error")
 # The pressure model of the wear (--contact); the dynamics always use the EFM.
 WEAR_CONTACTS = ("efm", "fem")
+# The wear model (--model): the dynamic reference or the quasi-static joint.
+WEAR_MODELS = ("dynamic", "quasi-static")

@@ -12,7 +12,7 @@ import sys
 from collections.abc import Sequence
 
 from ._checks import check_int_option
-from .choices import WEAR_CONTACTS, WEAR_METHODS
+from .choices import WEAR_CONTACTS, WEAR_METHODS, WEAR_MODELS
 from .errors import DiffwearError, InputError
 
 # Upper bound of --cycles: 1e8 crank cycles is ~6 years at 30 rpm.
@@ -43,7 +43,7 @@ def _study(args: argparse.Namespace) -> int:
     if args.cycles is not None:
         check_int_option("--cycles", args.cycles, 1, MAX_CYCLES)
     accepted = inspect.signature(STUDIES[args.name].run).parameters
-    for option in ("cycles", "method", "contact"):
+    for option in ("cycles", "method", "contact", "model"):
         value = getattr(args, option)
         if value is None:
             continue
@@ -205,6 +205,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="pressure model of the wear (wear studies): efm (default; elastic "
                         "foundation) or fem (finite-element ring loaded by the joint force; "
                         "runs the EFM route too for the comparison)")
+    p.add_argument("--model", choices=WEAR_MODELS,
+                   help="wear model (wear studies): dynamic (default; the reference) or "
+                        "quasi-static (the pin at the equilibrium of the EFM springs: seconds)")
     p.add_argument("--cycles", type=int, default=None,
                    help="number of real crank cycles (wear studies)")
     p.add_argument("--resume", metavar="DIR",

@@ -10,11 +10,11 @@ import numpy as np  # noqa: E402
 
 
 def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, clearance_mm,
-                 thesis):
+                 thesis, label="diffwear (EFM)", markers="simulated dynamic cycles"):
     figs = []
     # wear profile with the thesis maxima drawn in
     fig, ax = plt.subplots(figsize=(7, 3.6))
-    ax.plot(theta, depth_mm, lw=1.6, label="diffwear (EFM)")
+    ax.plot(theta, depth_mm, lw=1.6, label=label)
     for (label, ref), style in zip(thesis.items(), ("--", ":", "-.")):
         if "max_wear_depth_mm" in ref:
             ax.axhline(ref["max_wear_depth_mm"], ls=style, color="k", lw=0.9,
@@ -47,7 +47,7 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    axes[0].set_title(f"{name}: wear vs cycles (markers: simulated dynamic cycles)")
+    axes[0].set_title(f"{name}: wear vs cycles (markers: {markers})")
     fig.tight_layout()
     fig.savefig(out.file("wear_history.png"), dpi=120)
     plt.close(fig)

@@ -21,7 +21,7 @@ from .._checks import check_positive, concrete
 from ..errors import InputError
 from ..mechanism import AbstractForceElement, Frames, Mechanism, RevoluteJoint
 from ..mechanism.constraints import _vec2
-from ..mechanism.geometry import perp, rotation
+from ..mechanism.geometry import perp, rotation, safe_angle, safe_norm
 from ..wear.archard import SLIP_RATE_WIDTH, ArchardWear
 from . import smoothing
 from .friction import CoulombFriction
@@ -213,7 +213,7 @@ class ContactHistory(eqx.Module):
 
     @property
     def force_magnitude(self) -> Float[Array, " T"]:
-        return jnp.sqrt(jnp.sum(self.force**2, axis=-1))
+        return safe_norm(self.force)
 
 
 def contact_history(mech: Mechanism, joint: str, ys: Float[Array, "T s"]) -> ContactHistory:
@@ -233,7 +233,7 @@ def contact_history(mech: Mechanism, joint: str, ys: Float[Array, "T s"]) -> Con
         theta = element.profile.theta
         gap = (jnp.cos(theta) * kin.offset[0] + jnp.sin(theta) * kin.offset[1]
                - element.profile.clearance)
-        angle = jnp.mod(jnp.arctan2(kin.offset[1], kin.offset[0]), 2 * jnp.pi)
+        angle = jnp.mod(safe_angle(kin.offset), 2 * jnp.pi)
         return -(a_j @ res.force), res.normal_load, kin.offset, jnp.max(gap), angle, res.pressure
 
     return ContactHistory(*jax.vmap(one)(ys))

@@ -29,15 +29,24 @@ def cross(a: Float[Array, "2"], b: Float[Array, "2"]) -> Float[Array, ""]:
     return a[0] * b[1] - a[1] * b[0]
 
 
-def safe_norm(v: Float[Array, "2"], floor: float = 0.0) -> Float[Array, ""]:
-    """|v| with a finite gradient at v = 0 (the "double where").
+def safe_norm(v: Float[Array, "... 2"], floor: float = 0.0) -> Float[Array, "..."]:
+    """|v| over the last axis with a finite gradient at v = 0 (the "double
+    where": the gradient there is 0).
 
     ``floor`` > 0 returns sqrt(|v|^2 + floor^2) - a smooth norm whose width is
     ``floor`` (same units as ``v``).
     """
-    sq = jnp.sum(v * v)
+    sq = jnp.sum(v * v, axis=-1)
     if floor > 0.0:
         return jnp.sqrt(sq + floor * floor)
     is_zero = sq == 0.0
     safe_sq = jnp.where(is_zero, 1.0, sq)
     return jnp.where(is_zero, 0.0, jnp.sqrt(safe_sq))
+
+
+def safe_angle(v: Float[Array, "... 2"]) -> Float[Array, "..."]:
+    """atan2(v_y, v_x) [rad] with a finite gradient at v = 0 (angle 0 there)."""
+    is_zero = jnp.all(v == 0.0, axis=-1)
+    x = jnp.where(is_zero, 1.0, v[..., 0])
+    y = jnp.where(is_zero, 0.0, v[..., 1])
+    return jnp.arctan2(y, x)

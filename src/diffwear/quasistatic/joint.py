@@ -53,7 +53,7 @@ from ..contact.clearance_joint import ClearanceJoint
 from ..contact.friction import CoulombFriction
 from ..contact.laws import ElasticFoundation, _interp_periodic
 from ..errors import InputError
-from ..mechanism.geometry import grid_angles
+from ..mechanism.geometry import grid_angles, safe_angle, safe_norm
 from ..wear.archard import SLIP_RATE_WIDTH, ArchardWear
 from .loads import JointLoads
 
@@ -158,7 +158,7 @@ def pin_offset(clearance: Float[Array, " n"], load: Float[Array, "2"], contact_s
     c, kc = clearance, contact_stiffness
     n = c.shape[0]
     u = _directions(n)
-    size = jnp.sqrt(load @ load)
+    size = safe_norm(load)
     safe = jnp.maximum(size, _LOAD_FLOOR)
     direction = jnp.where(size > _LOAD_FLOOR, load / safe, jnp.array([1.0, 0.0]))
     wall = _interp_periodic(c, jnp.arctan2(direction[1], direction[0]))
@@ -309,12 +309,12 @@ class QuasiStaticJoint(eqx.Module):
         on the wall as the load turns (free flight; module notes).  ``mass``:
         the effective mass of the relative motion [kg]."""
         w = loads.force
-        angle = jnp.arctan2(w[:, 1], w[:, 0])
+        angle = safe_angle(w)
         turn = (jnp.roll(angle, -1) - jnp.roll(angle, 1))
         turn = turn - 2 * jnp.pi * jnp.round(turn / (2 * jnp.pi))
         rate = turn / (2.0 * loads.dt)
         c = self.clearance + depth
         wall = jax.vmap(lambda a: _interp_periodic(c, a))(angle)
         need = mass * wall * rate**2
-        size = jnp.sqrt(jnp.sum(w * w, axis=-1))
+        size = safe_norm(w)
         return size / jnp.maximum(need, 1e-300)

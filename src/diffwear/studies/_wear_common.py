@@ -13,6 +13,7 @@ from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..choices import WEAR_CONTACTS as CONTACTS
+from ..choices import WEAR_MODELS
 from ..errors import InputError
 from ..wear import worn_mechanism, wear_cycle, worn_volume
 from ..wear.evolution import (ChunkedEvolution, Evolver, load_checkpoint,
@@ -143,7 +144,7 @@ def check_contact(contact) -> str:
 def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, period, method,
                    extrapolation, target_dynamic, n_theta, thesis: dict, description: str, log,
                    resume=False, progress=False, extra_summary=None, extra_report=(),
-                   contact="efm", fem=None) -> dict:
+                   contact="efm", fem=None, model="dynamic") -> dict:
     """The body of a wear study: ``design``'s wear joint swapped into ``mech0``
     (differentiable in k, clearance, depth, diameter), the evolution over
     ``cycles`` (constant A = cycles / ``target_dynamic`` unless ``extrapolation``
@@ -154,6 +155,23 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
     ``fem`` a `FemWearModel`, default `default_model(design)`); the EFM route is
     run first (one jit, not checkpointed) so that the report compares both."""
     check_contact(contact)
+    if model not in WEAR_MODELS:
+        raise InputError(f"--model must be one of {', '.join(WEAR_MODELS)}, got {model!r}")
+    if model == "quasi-static":
+        for given, why in ((method != "constant", f"--method {method}"),
+                           (contact != "efm", f"--contact {contact}"),
+                           (resume, "--resume")):
+            if given:
+                raise InputError(f"{why} belongs to the dynamic model; the quasi-static model "
+                                 "integrates the wear in the cycle count itself (seconds, no "
+                                 "checkpoints) with the EFM pressure")
+        from . import _quasi_static_study
+
+        mech = mech_builder(mech0, design, n_theta)(params_of(design))
+        return _quasi_static_study.run(
+            out, name=name, mech=mech, design=design, y0=y0, cycles=cycles, period=period,
+            thesis=thesis, description=description, log=log, extra_summary=extra_summary,
+            extra_report=extra_report)
     if contact == "fem" and method != "constant":
         raise InputError(f"--contact fem runs with --method constant only (constant A, as "
                          f"the thesis's FEM route), got --method {method}")

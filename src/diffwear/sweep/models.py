@@ -35,6 +35,7 @@ from ..presets import (
     with_wear_joint,
 )
 from ..wear import evolve, smooth_max, wear_cycle, worn_mechanism, worn_volume
+from ..mechanism.geometry import safe_norm
 from ..wear.cycle import CYCLE_ATOL, CYCLE_RTOL
 
 JOINT = "crank_rod"
@@ -154,7 +155,7 @@ class ClearanceForce(eqx.Module):
         ctrl = diffrax.PIDController(rtol=self.rtol, atol=self.atol, pcoeff=0.3, icoeff=0.4)
         traj = simulate(mech, y0, ts[-1], ts=ts, stepsize_controller=ctrl)
         f = contact_history(mech, JOINT, traj.ys).force_magnitude[self.transient_cycles * n:]
-        return {"peak_force_N": jnp.max(f), "rms_force_N": jnp.sqrt(jnp.mean(f ** 2)),
+        return {"peak_force_N": jnp.max(f), "rms_force_N": safe_norm(f) / math.sqrt(f.shape[-1]),
                 "integrator_steps": jnp.asarray(traj.num_steps, dtype=float)}
 
 

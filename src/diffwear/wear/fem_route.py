@@ -80,7 +80,7 @@ from ..fem import RingContact, ring_mesh
 from ..fem.condense import inner_compliance, tributary_lengths
 from ..fem.contact import TOL
 from ..mechanism import Mechanism
-from ..mechanism.geometry import grid_angles
+from ..mechanism.geometry import grid_angles, safe_norm
 from .cycle import CycleResult, clearance_element, wear_cycle
 from .evolution import EvolutionResult, Evolver, _with_profile
 
@@ -235,7 +235,7 @@ def fem_increment(contact: RingContact, samples: JointSamples, ts, k) -> FemIncr
     """dh_k = k sum_i w_i p_k(t_i) s_i and sum_i w_i N_i s_i (s = R_b |omega|, N
     the FE total normal load L sum_j f_j) for the loads ``samples`` at ``ts``."""
     f = samples.force
-    mag = jnp.sqrt(jnp.sum(f * f, axis=-1))
+    mag = safe_norm(f)
     loaded = mag > MIN_JOINT_FORCE
     f_safe = jnp.where(loaded[:, None], f, jnp.array([1.0, 0.0]))  # any valid load; result dropped
 

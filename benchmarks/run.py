@@ -377,7 +377,8 @@ def rig_profile(repeats: int) -> dict:
     warm = fn(mech, y0, 0.0)
     traj, m = time_jitted(fn, (mech, warm.y_final, PERIOD), repeats)
     traj.raise_if_failed("benchmark rig profile", mech)
-    steps, acc, rej = int(traj.num_steps), int(traj.num_accepted_steps), int(traj.num_rejected_steps)
+    steps = int(traj.num_steps)
+    acc, rej = int(traj.num_accepted_steps), int(traj.num_rejected_steps)
     us_rhs = rhs_us(mech, traj.y_final)
 
     jac = jax.jit(jax.vmap(jax.jacfwd(lambda t, y: vector_field(t, y, (mech, Baumgarte())),
@@ -689,7 +690,8 @@ def exudyn_clearance_kv(exe: str, clearance: float = 0.5e-3) -> dict:
            "--kv-stiffness", repr(stiffness), "--clearance", repr(clearance)]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     if proc.returncode != 0:
-        raise RuntimeError(f"exudyn peer (clearance) failed: {proc.stdout[-2000:]}{proc.stderr[-2000:]}")
+        raise RuntimeError("exudyn peer (clearance) failed: "
+                           f"{proc.stdout[-2000:]}{proc.stderr[-2000:]}")
     d = json.loads(proc.stdout)
     t = np.asarray(ts)
     f_ex = np.interp(t, np.asarray(d["t"]), np.asarray(d["joint_force"]))
@@ -726,12 +728,116 @@ def ch8_optimisation(repeats: int) -> dict:
     return {"available": True, **design.benchmark_case(quick=repeats <= QUICK_REPEATS)}
 
 
+def rig_21400_quasi_static(repeats: int) -> dict:
+    """``rig-21400`` on the quasi-static model (`QuasiStatic()` defaults: 180
+    load samples, 40 steps of the wear ODE), compiled once; the dynamic
+    route's figure is the ``rig-21400 (constant A)`` case."""
+    import jax
+
+    from diffwear.presets import RIG_CYCLES
+    from diffwear.quasistatic import QuasiStatic
+    from diffwear.studies.rig_21400 import PERIOD, RIG_JOINT, _setup
+    from diffwear.wear import worn_volume
+
+    _, mech, y0 = _setup()
+    model = QuasiStatic()
+    fn = jax.jit(lambda m: model.evolve(m, ("crank_rod",), y0, period=PERIOD,
+                                        cycles=float(RIG_CYCLES), wall_thickness=RIG_JOINT.wall))
+    res, metrics = time_jitted(fn, (mech,), repeats)
+    el = mech.element("crank_rod")
+    depth = res.depth[0]
+    return {**metrics, "max_wear_depth_mm": float(depth.max()) * 1e3,
+            "wear_volume_mm3": float(worn_volume(depth, el.bushing_radius, el.law.depth)) * 1e9,
+            "status": int(res.status), "pair": "rig-21400 (constant A)", "goal_s": 0.5}
+
+
+def quasi_static_life_gradient(repeats: int) -> dict:
+    """Ch. 8 lives (cyc1, cyc2) at the Table 8-4 design on the quasi-static
+    model (`TwoJointLife().prepared()`, defaults) and their exact Jacobian
+    w.r.t. (d1, d2, h1, h2) by `jax.jacfwd` (4 tangents): cost of the Jacobian
+    over one forward run.  The dynamic route's pointwise life derivative is
+    not usable (docs: which derivatives to trust); its Jacobian is 8 central-
+    difference runs, i.e. a ratio of 8."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.design import TwoJointLife
+    from diffwear.design.two_joint import TABLE_8_4
+
+    model = TwoJointLife().prepared()
+    x = jnp.asarray(TABLE_8_4)
+    value, m_fwd = time_jitted(jax.jit(lambda x: model(x)), (x,), repeats)
+    jac, m_jac = time_jitted(jax.jit(jax.jacfwd(model)), (x,), repeats)
+    return {"cycles": np.asarray(value).tolist(), "jacobian_cycles_per_mm":
+            (np.asarray(jac) * 1e-3).tolist(), "forward_s": m_fwd["run_s"],
+            "forward_compile_s": m_fwd["compile_s"], "compile_s": m_jac["compile_s"],
+            "run_s": m_jac["run_s"], "ratio_gradient_to_forward": m_jac["run_s"] / m_fwd["run_s"],
+            "dynamic_ratio_central_differences": 8.0, "goal_ratio": 3.0}
+
+
+SWEEP_DESIGNS, SWEEP_DESIGNS_QUICK, SWEEP_CHUNK = 1000, 64, 250
+
+
+def quasi_static_life_sweep(repeats: int) -> dict:
+    """Lives of 1,000 designs (quick: 64) spread over the Table 8-3 box
+    (uniform, seeded) on the quasi-static model, `jax.vmap` in chunks of
+    ``SWEEP_CHUNK`` (one compile), at the sweep settings
+    `diffwear.design.SWEEP_MODEL` (their lives against the defaults' at the
+    Table 8-4 design are reported); once, compiles excluded.  Beside it: the
+    dynamic model's one life (steps 10) times the number of designs."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.design import SWEEP_MODEL, TwoJointLife
+    from diffwear.design.two_joint import LOWER, TABLE_8_4, UPPER
+    from diffwear.wear import Dynamic
+
+    quick = repeats <= QUICK_REPEATS
+    n = SWEEP_DESIGNS_QUICK if quick else SWEEP_DESIGNS
+    chunk = min(SWEEP_CHUNK, n)
+    rng = np.random.default_rng(3)
+    xs = LOWER + (UPPER - LOWER) * rng.uniform(size=(n, 4))
+    model = SWEEP_MODEL.prepared()
+    f = jax.jit(jax.vmap(model))
+    _, first = timed(f, jnp.asarray(xs[:chunk]))
+    t0 = time.perf_counter()
+    lives = np.concatenate([np.asarray(f(jnp.asarray(xs[i:i + chunk])))
+                            for i in range(0, n, chunk)])
+    run = time.perf_counter() - t0
+    sweep_84 = model.life(TABLE_8_4)
+    default = TwoJointLife().prepared()
+    default_84 = default.life(TABLE_8_4)
+    out = {"designs": n, "chunk": chunk, "run_s": run, "compile_s": max(first - run * chunk / n, 0),
+           "s_per_design": run / n, "finite": bool(np.all(np.isfinite(lives))),
+           "life_range": [float(lives.min()), float(lives.max())],
+           "table_8_4_sweep_settings": sweep_84.tolist(),
+           "table_8_4_default_settings": default_84.tolist(),
+           "sweep_settings_rel_error": float(np.max(np.abs(sweep_84 / default_84 - 1))),
+           "goal_s": 20.0}
+    if not quick:
+        check = np.asarray(jax.jit(jax.vmap(lambda x: default(x)))(jnp.asarray(xs[:32])))
+        out["sweep_settings_max_rel_error_32_designs"] = float(
+            np.max(np.abs(lives[:32] / check - 1)))
+        dyn = TwoJointLife(wear_model=Dynamic(steps=10))
+        dyn.life(TABLE_8_4)  # compile
+        t0 = time.perf_counter()
+        dyn.life(TABLE_8_4)
+        one = time.perf_counter() - t0
+        out.update({"dynamic_one_life_s": one, "dynamic_estimate_s": one * n,
+                    "speedup_vs_dynamic": one * n / run})
+    out["note"] = (f"{n} designs, {run / n * 1e3:.1f} ms each; settings within "
+                   f"{100 * out['sweep_settings_rel_error']:.2f} % of the defaults")
+    return out
+
+
 CALIBRATION_DATASET = Path(__file__).resolve().parents[1] / "design_studies" / "calibration" \
     / "synthetic_run_in"
 
 
 def calibration_loop(repeats: int) -> dict:
-    """Issue 8's loop on one dataset (the shipped ``synthetic_run_in``
+    """The calibration loop on one dataset (the shipped ``synthetic_run_in``
     campaign, 221 fit points, k and free length plus the effects).  Full: the
     whole ``diffwear calibrate`` (load, base fit, scores, 3 refits, report and
     plots), once: its wall time is the number to hold against the 10-minute
@@ -777,7 +883,8 @@ def calibration_loop(repeats: int) -> dict:
     # compile_s / run_s: the value + Jacobian pass (the table's columns)
     return {"dataset": data.name, "points": int(problem.y.size),
             "compile_forward_s": first - run_s, "forward_s": run_s,
-            "compile_s": first_j - jac_s, "run_s": jac_s, "ratio_gradient_to_forward": jac_s / run_s,
+            "compile_s": first_j - jac_s, "run_s": jac_s,
+            "ratio_gradient_to_forward": jac_s / run_s,
             "parameters": problem.n_base, "effects": len(NAMES),
             "note": "quick: one value + Jacobian pass (30 nodes)"}
 
@@ -792,6 +899,9 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig-21400 gradient (4 parameters)": rig_gradient,
     "rig cycle profile": rig_profile,
     "ch8-optimisation": ch8_optimisation,
+    "rig-21400 quasi-static": rig_21400_quasi_static,
+    "quasi-static life gradient (4 parameters)": quasi_static_life_gradient,
+    "quasi-static life sweep, 1000 designs": quasi_static_life_sweep,
     "calibration loop": calibration_loop,
     "scipy-peer": scipy_peer,
     "exudyn-peer": exudyn_peer,

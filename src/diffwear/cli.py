@@ -228,12 +228,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="coarse models (10 quasi-static, 3 dynamic wear steps) and 2 x 2 "
                         "maps, for a smoke run")
     p.add_argument("--steps", type=int, default=None,
-                   help="quasi-static wear steps to the limit (1-400; default 40, --quick 10)")
+                   help="quasi-static wear steps to the limit (5-400; default 40, --quick 10)")
     p.add_argument("--dynamic-steps", type=int, default=None,
                    help="dynamic wear steps to the limit of the faster joint (1-100; default "
                         "10, --quick 3)")
     p.add_argument("--map-points", type=int, default=None,
-                   help="life-map grid points per axis (1-50; default 4, --quick 2)")
+                   help="life-map grid points per axis (2-50; default 4, --quick 2)")
     p.add_argument("--n-theta", type=int, default=None,
                    help="bushing profile nodes per joint (12-720; default 90)")
     p.add_argument("--problems", default=None, metavar="NAMES",
@@ -287,7 +287,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("calibrate", help="fit the rig model to measured wear data and identify "
                        "a missing effect (see README 'Measured data')",
                        description="Fit the dataset's uncertain parameters through the full "
-                       "simulator (Levenberg-Marquardt, forward-mode Jacobians), rank the candidate effects "
+                       "simulator (Levenberg-Marquardt, forward-mode Jacobians), rank the "
+                       "candidate effects "
                        "by score tests, refit the best, and report the held-out error before "
                        "and after: report.md, summary.json, residuals.csv, plots.",
                        epilog="Exit codes: 0 success, 2 bad input, 3 solver failure.")

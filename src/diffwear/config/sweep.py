@@ -90,6 +90,8 @@ RIG_SETTINGS = {
     "dynamic_cycles": Integer(default=None, low=1, high=100_000),
     "n_theta": Integer(default=None, low=8, high=3600),
     "force_samples": Integer(default=None, low=3, high=100_000),
+    # the wear model: "dynamic" (default) or "quasi-static" (exact gradients, ms per point)
+    "wear_model": Text(default=None, choices=("dynamic", "quasi-static")),
 }
 CLEARANCE_SETTINGS = {
     "law": Text(default=None, choices=("ln", "kv", "efm")),
@@ -113,6 +115,12 @@ def _rig(**kw):
 
     if "cycles" in kw:
         kw["cycles"] = float(kw["cycles"])
+    if kw.get("wear_model") == "quasi-static":
+        from ..quasistatic import QuasiStatic
+
+        kw["wear_model"] = QuasiStatic()
+    else:
+        kw.pop("wear_model", None)
     return RigWear(**kw)
 
 

@@ -16,6 +16,7 @@ from .two_joint import (
     DIAMETER_BOUNDS,
     JOINTS,
     LOWER,
+    SWEEP_MODEL,
     TABLE_8_4,
     TABLE_8_5,
     UPPER,
@@ -29,6 +30,6 @@ from .two_joint import (
 __all__ = [
     "DesignResult", "bushing_volume", "equal_life", "finite_difference_jacobian",
     "jacobian", "kkt_check", "least_material", "longest_common_life", "benchmark_case",
-    "DEPTH_BOUNDS", "DIAMETER_BOUNDS", "JOINTS", "LOWER", "TABLE_8_4", "TABLE_8_5", "UPPER",
-    "VARIABLES", "WEAR_LIMIT", "TwoJointLife", "bushing", "check_design",
+    "DEPTH_BOUNDS", "DIAMETER_BOUNDS", "JOINTS", "LOWER", "SWEEP_MODEL", "TABLE_8_4", "TABLE_8_5",
+    "UPPER", "VARIABLES", "WEAR_LIMIT", "TwoJointLife", "bushing", "check_design",
 ]

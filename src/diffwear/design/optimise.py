@@ -39,8 +39,8 @@ solving again, until the reference model meets the problem's residual bar.
 from __future__ import annotations
 
 import time
-from functools import partial
 from dataclasses import dataclass, field
+from functools import partial
 
 import equinox as eqx
 import jax
@@ -50,7 +50,7 @@ import optimistix as optx
 from jax import lax
 
 from ..errors import InputError, SolverError
-from .two_joint import LOWER, UPPER, WALL_PER_RADIUS, TwoJointLife, check_design
+from .two_joint import LOWER, UPPER, VARIABLES, WALL_PER_RADIUS, TwoJointLife, check_design
 
 
 def to_free(x, lo, hi):
@@ -120,7 +120,7 @@ def levenberg_marquardt(rtol: float, atol: float) -> optx.LevenbergMarquardt:
 
 
 # A solve that hits its step limit is still an answer when every residual of
-# a fresh rerun is within this: issue 6's bar (equal life within 0.5 %), and
+# a fresh rerun is within this: the design's bar (equal life within 0.5 %), and
 # 0.5 % of a target life.
 ACCEPT_RESIDUAL = 5e-3
 START_MARGIN = 0.1  # free variables start at least 10 % of their range inside the box
@@ -177,13 +177,23 @@ class CompiledLife:
 
     def __init__(self, model):
         self.model = model
-        self._compiled = jax.jit(lambda x: _value_and_jacobian(model, x))
+        self._compiled = None
         self._last: tuple | None = None
+
+    def _executable(self):
+        # compiled ahead of time: a jitted function called both from a solver's
+        # host callback and from the main thread was traced and compiled twice
+        # (jit's cache is keyed on the calling thread's trace context; ~10 s)
+        if self._compiled is None:
+            spec = jax.ShapeDtypeStruct((len(VARIABLES),), jnp.float64)
+            self._compiled = jax.jit(lambda x: _value_and_jacobian(self.model, x)).lower(
+                spec).compile()
+        return self._compiled
 
     def value_and_jacobian(self, x) -> tuple[np.ndarray, np.ndarray]:
         x = np.asarray(x, dtype=np.float64)
         if self._last is None or not np.array_equal(self._last[0], x):
-            value, jac = self._compiled(jnp.asarray(x))
+            value, jac = self._executable()(jnp.asarray(x))
             self._last = (x, np.asarray(value, np.float64), np.asarray(jac, np.float64))
         return self._last[1], self._last[2]
 

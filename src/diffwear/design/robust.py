@@ -34,8 +34,15 @@ import optax
 
 from ..errors import InputError
 from ..sweep.sensitivity import Z95
-from .optimise import (DesignResult, bushing_volume, compiled, from_free, jacobian_method,
-                       life_of, to_free)
+from .optimise import (
+    DesignResult,
+    bushing_volume,
+    compiled,
+    from_free,
+    jacobian_method,
+    life_of,
+    to_free,
+)
 from .two_joint import LOWER, UPPER, TwoJointLife
 
 SCATTER = 0.5        # +-50 % (95 % interval of the log-normal k)

@@ -143,18 +143,26 @@ def _directions(n: int) -> Float[Array, "n 2"]:
     return jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)
 
 
-@jax.custom_jvp
 def pin_offset(clearance: Float[Array, " n"], load: Float[Array, "2"], contact_stiffness,
-               width):
+               width, guess=None):
     """Pin offset e [m] at equilibrium under the effective load ``load`` [N]
     (W', module notes) on the springs of profile ``clearance`` [m], and 1.0 if
     the solve converged (else 0.0).  ``contact_stiffness`` = k_f R_b d pi / 2
     [N/m] (the springs are kk = contact_stiffness dtheta / (pi / 2) each);
-    ``width`` [m]: the contact-onset band of `spring`.
+    ``width`` [m]: the contact-onset band of `spring`; ``guess`` [m]: a
+    starting offset (e.g. the solution at a nearby profile; default and where
+    not finite: the pin on the worn wall along the load).
 
-    Solved in units of the starting guess (a well-scaled 2 x 2 problem) by
-    `_damped_newton`.  The derivative is the implicit-function theorem in
-    closed form (`_pin_offset_jvp`): no unrolled iteration."""
+    Solved in units of the scale of the wall guess (a well-scaled 2 x 2
+    problem) by `_damped_newton`.  The derivative is the implicit-function
+    theorem in closed form (`_pin_offset_jvp`): no unrolled iteration, and
+    no dependence on the starting point."""
+    guess = jnp.full(2, jnp.nan) if guess is None else lax.stop_gradient(guess)
+    return _pin_offset(clearance, load, contact_stiffness, width, guess)
+
+
+@jax.custom_jvp
+def _pin_offset(clearance, load, contact_stiffness, width, guess):
     c, kc = clearance, contact_stiffness
     n = c.shape[0]
     u = _directions(n)
@@ -166,17 +174,19 @@ def pin_offset(clearance: Float[Array, " n"], load: Float[Array, "2"], contact_s
     pull = safe / (kc * scale)
     ratio = 4.0 / n  # kk / kc = dtheta / (pi / 2)
 
-    x, ok = _damped_newton(direction, u, c, scale, width, ratio, pull, direction)
+    start = jnp.where(jnp.all(jnp.isfinite(guess)), guess / scale, direction)
+    x, ok = _damped_newton(start, u, c, scale, width, ratio, pull, direction)
     return scale * x, ok.astype(c.dtype)
 
 
-@pin_offset.defjvp
+@_pin_offset.defjvp
 def _pin_offset_jvp(primals, tangents):
     """de = -H^-1 (dr/dtheta . dtheta) at the root of r(e) = sum_k kk ramp(u_k . e -
     c_k) u_k - W' (in units of kc), H = dr/de = (4/n) sum_k ramp'(delta_k) u_k u_k^T:
     the 2 x 2 solve in closed form."""
-    c, load, kc, width = primals
-    e, ok = pin_offset(*primals)
+    c, load, kc, width, guess = primals
+    e, ok = _pin_offset(*primals)
+    primals, tangents = primals[:4], tangents[:4]  # the guess does not move the root
     n = c.shape[0]
     u = _directions(n)
     ratio = 4.0 / n
@@ -254,12 +264,17 @@ class QuasiStaticJoint(eqx.Module):
         turned = jnp.stack([-w[:, 1], w[:, 0]], axis=-1)  # P W
         return (w - f[:, None] * turned) / (1.0 + f * f)[:, None]
 
-    def equilibrium(self, depth: Float[Array, " n"], loads: JointLoads) -> Equilibrium:
-        """Pin offsets, pressures and normal loads over the cycle for wear ``depth`` [m]."""
+    def equilibrium(self, depth: Float[Array, " n"], loads: JointLoads,
+                    guess: Float[Array, "S 2"] | None = None) -> Equilibrium:
+        """Pin offsets, pressures and normal loads over the cycle for wear
+        ``depth`` [m]; ``guess``: starting offsets (e.g. those of a nearby
+        profile: fewer Newton iterations, the same answer)."""
         c = self.clearance + depth
         kc = self.foundation.contact_stiffness(self.bushing_radius)
         width = self.foundation.penetration_width
-        offset, ok = jax.vmap(lambda w: pin_offset(c, w, kc, width))(self.effective_load(loads))
+        w_eff = self.effective_load(loads)
+        guess = jnp.full_like(w_eff, jnp.nan) if guess is None else guess
+        offset, ok = jax.vmap(lambda w, g: pin_offset(c, w, kc, width, g))(w_eff, guess)
         delta = offset @ self.directions.T - c
         pressure = self.foundation.stiffness * spring(delta, self.foundation.penetration_width)
         normal_load = self.spring_area * jnp.sum(pressure, axis=-1)
@@ -271,10 +286,10 @@ class QuasiStaticJoint(eqx.Module):
         """ds/dt = R_b |omega| [m/s] (thesis Eq. 5-3), |.| smoothed as in the dynamic route."""
         return self.bushing_radius * smoothing.magnitude(loads.omega, SLIP_RATE_WIDTH)
 
-    def cycle_wear(self, depth: Float[Array, " n"], loads: JointLoads):
+    def cycle_wear(self, depth: Float[Array, " n"], loads: JointLoads, guess=None):
         """(dh per cycle [m] (n,), integral of normal load x sliding [N m],
-        `Equilibrium`) at wear ``depth``."""
-        eq = self.equilibrium(depth, loads)
+        `Equilibrium`) at wear ``depth``; ``guess``: see `equilibrium`."""
+        eq = self.equilibrium(depth, loads, guess)
         slide = self.sliding_rate(loads)
         dh = loads.dt * jnp.sum(self.wear.depth_rate(eq.pressure, slide[:, None]), axis=0)
         load_sliding = loads.dt * jnp.sum(eq.normal_load * slide)

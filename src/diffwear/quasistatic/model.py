@@ -133,7 +133,6 @@ class QuasiStatic(AbstractWearModel):
         loads = self.loads(mech, joints, y0, period)
         models = self.joints(mech, joints)
         masses = self.masses(mech, joints)
-        life_mode = "limit" in target
         # slots needed: steps + 1 for a life (each step gains up to limit / steps
         # of peak depth; measured steps + 1 on the Ch. 8 designs), at most
         # steps + 1 for a run of fixed length (the first step is the longest).
@@ -142,12 +141,14 @@ class QuasiStatic(AbstractWearModel):
         slots = self.steps + 3
 
         def one(j: QuasiStaticJoint, lo: JointLoads, mass):
-            def evaluate(h):
-                dh, _, eq = j.cycle_wear(h, lo)
-                return dh, eq.ok, j.wear_response(h, lo, eq)
+            def evaluate(h, offsets):
+                # warm start: the pin offsets of the previous step's profile
+                dh, _, eq = j.cycle_wear(h, lo, offsets)
+                return dh, eq.ok, j.wear_response(h, lo, eq), eq.offset
 
             sol = integrate_profile(evaluate, jnp.zeros(j.n), steps=self.steps,
-                                    max_steps=slots, **target)
+                                    max_steps=slots, memory=jnp.full_like(lo.force, jnp.nan),
+                                    **target)
             margins = jnp.stack([jnp.min(j.contact_margin(jnp.zeros(j.n), lo, mass)),
                                  jnp.min(j.contact_margin(sol.depth, lo, mass))])
             return sol, margins

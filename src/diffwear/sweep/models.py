@@ -17,6 +17,7 @@ import jax.numpy as jnp
 
 from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state, simulate
+from ..mechanism.geometry import safe_norm
 from ..presets import (
     BUSHING_DEPTH_CH5,
     BUSHING_WALL_CH3,
@@ -34,8 +35,15 @@ from ..presets import (
     rig_slider_crank,
     with_wear_joint,
 )
-from ..wear import evolve, smooth_max, wear_cycle, worn_mechanism, worn_volume
-from ..mechanism.geometry import safe_norm
+from ..wear import (
+    AbstractWearModel,
+    Dynamic,
+    evolve,
+    smooth_max,
+    wear_cycle,
+    worn_mechanism,
+    worn_volume,
+)
 from ..wear.cycle import CYCLE_ATOL, CYCLE_RTOL
 
 JOINT = "crank_rod"
@@ -62,6 +70,12 @@ class RigWear(eqx.Module):
     time mean of |joint force| over one extra dynamic cycle run after the
     evolution on the final profile (``force_samples`` equally spaced states);
     ``status`` (`EvolutionResult.status`: 0 ok, 1 worn through, 2 solver failure).
+
+    ``wear_model``: `Dynamic()` (default: the settings above) or `QuasiStatic(...)`
+    (`diffwear.quasistatic`: milliseconds per point, exact gradients; its
+    ``mean_joint_force_N`` is the ideal mechanism's, which wear does not change
+    in that model, and ``status`` adds 4 = contact lost: the model does not
+    hold there).
     """
 
     cycles: float = eqx.field(static=True, default=float(RIG_CYCLES))
@@ -74,6 +88,7 @@ class RigWear(eqx.Module):
     cycle_rtol: float = eqx.field(static=True, default=CYCLE_RTOL)
     cycle_atol: float = eqx.field(static=True, default=CYCLE_ATOL)
     p: SliderCrankParameters = TABLE_7_1
+    wear_model: AbstractWearModel = Dynamic()
 
     param_names = ("k", "clearance", "depth", "diameter", "mu", "free_length")
 
@@ -99,10 +114,12 @@ class RigWear(eqx.Module):
         mech = with_wear_joint(mech0, design, n_theta=self.n_theta)
         # the ideal kinematics at t = 0 depend on no swept parameter
         y0 = centred_state(mech0, consistent_state(mech0, q_guess, check=False), mech)
+        el = mech.element(JOINT)
+        if not isinstance(self.wear_model, Dynamic):
+            return self._quasi_static(mech, y0, design, el)
         res = evolve(mech, JOINT, y0, self.cycles, period=self.period,
                      extrapolation=self.cycles / self.dynamic_cycles, wall_thickness=design.wall,
                      cycle_rtol=self.cycle_rtol, cycle_atol=self.cycle_atol)
-        el = mech.element(JOINT)
         worn = worn_mechanism(mech, JOINT, res.depth)
         cyc = wear_cycle(worn, JOINT, res.y, res.t, self.period, n_save=self.force_samples,
                          rtol=self.cycle_rtol, atol=self.cycle_atol)
@@ -111,6 +128,19 @@ class RigWear(eqx.Module):
             "max_depth_mm": smooth_max(res.depth, self.temperature) * 1e3,
             "volume_mm3": worn_volume(res.depth, el.bushing_radius, el.law.depth) * 1e9,
             "mean_joint_force_N": jnp.mean(force[:-1]),  # one period: drop the repeated end
+            "status": res.status.astype(float),
+        }
+
+    def _quasi_static(self, mech, y0, design, el) -> dict:
+        model = self.wear_model
+        res = model.evolve(mech, (JOINT,), y0, period=self.period, cycles=self.cycles,
+                           wall_thickness=design.wall)
+        loads = model.loads(mech, (JOINT,), y0, self.period).joints[0]
+        depth = res.depth[0]
+        return {
+            "max_depth_mm": smooth_max(depth, self.temperature) * 1e3,
+            "volume_mm3": worn_volume(depth, el.bushing_radius, el.law.depth) * 1e9,
+            "mean_joint_force_N": jnp.mean(safe_norm(loads.force)),
             "status": res.status.astype(float),
         }
 

@@ -106,12 +106,17 @@ def integrate_profile(
     max_cycles=1e12,
     wall=jnp.inf,
     extrapolate: bool = False,
+    memory=None,
 ) -> ProfileSolution:
     """Integrate dh/dN = w(h) from ``h0`` over ``cycles`` real cycles, or until
     the peak depth reaches ``limit`` [m] (exactly one of the two).
 
     ``evaluate(h) -> (w, ok, A)``: the cycle model (wear per cycle), a
-    success flag and the response matrix A = -dw/dh.  ``steps``: the accuracy knob (module notes); ``max_steps`` scan slots
+    success flag and the response matrix A = -dw/dh; with ``memory`` given,
+    ``evaluate(h, memory) -> (w, ok, A, memory)`` also carries a pytree from
+    one evaluation to the next (a solver's warm start: it must not change the
+    answer, only its cost).  ``steps``: the accuracy
+    knob (module notes); ``max_steps`` scan slots
     (default 4 steps + 8).  ``wall`` [m]: stop when the peak depth reaches it
     (status 1).  Pure, jit-able and differentiable (forward and reverse mode).
     """
@@ -121,7 +126,14 @@ def integrate_profile(
     life_mode = limit is not None
     n = h0.shape[0]
     eye = jnp.eye(n, dtype=h0.dtype)
-    w0, ok0, a0 = evaluate(h0)
+    if memory is None:
+        plain = evaluate
+
+        def evaluate(h, memory):
+            return (*plain(h), memory)
+
+        memory = jnp.zeros(())
+    w0, ok0, a0, memory0 = evaluate(h0, memory)
     m0 = peak_depth(h0)
     s0 = jax.jvp(peak_depth, (h0,), (w0,))[1]
     if life_mode:
@@ -133,7 +145,8 @@ def integrate_profile(
         dm = peak_depth(w0) * end / steps
         target = jnp.asarray(jnp.inf)
 
-    init = dict(h=h0, w=w0, a=a0, n=jnp.zeros(()), m=m0, s=s0, life=jnp.full((), jnp.nan),
+    init = dict(h=h0, w=w0, a=a0, memory=memory0, n=jnp.zeros(()), m=m0, s=s0,
+                life=jnp.full((), jnp.nan),
                 done=jnp.asarray(False), count=jnp.zeros((), int),
                 status=jnp.where(ok0, STATUS_OK, STATUS_SOLVER))
 
@@ -147,10 +160,10 @@ def integrate_profile(
         if extrapolate:
             half = 0.5 * dn
             mid = c["h"] + jnp.linalg.solve(eye + half * c["a"], half * c["w"])
-            w_mid, ok_mid, a_mid = evaluate(mid)
+            w_mid, ok_mid, a_mid, _ = evaluate(mid, c["memory"])
             h2 = mid + jnp.linalg.solve(eye + half * a_mid, half * w_mid)
             h = 2.0 * h2 - h
-        w, ok, a = evaluate(h)
+        w, ok, a, memory = evaluate(h, c["memory"])
         ok = ok & ok_mid
         m = peak_depth(h)
         s = jax.jvp(peak_depth, (h,), (w,))[1]
@@ -161,7 +174,7 @@ def integrate_profile(
         pierced = m >= wall
         status = jnp.where(~ok, STATUS_SOLVER, jnp.where(pierced, STATUS_PIERCED, STATUS_OK))
         out = dict(
-            h=h, w=w, a=a, n=n_new, m=m, s=s,
+            h=h, w=w, a=a, memory=memory, n=n_new, m=m, s=s,
             life=jnp.where(crossed, c["n"] + tau * dn, c["life"]),
             done=crossed | reached_end | (status != STATUS_OK),
             count=c["count"] + 1, status=status)

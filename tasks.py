@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """One-file bootstrap: the two commands of the README.
 
-    python3 tasks.py study   # default study: report + plots in out/ideal-slider-crank
+    python3 tasks.py study   # main job: the Ch. 7 rig study, report + plots in out/rig-21400
     python3 tasks.py test    # the test suite (what CI runs)
 
 Each creates ``.venv`` (stdlib ``venv``) on first use, installs the package with
@@ -64,8 +64,10 @@ def main(argv: list[str]) -> int:
         chosen = any(a.startswith(("-n", "--numprocesses", "--dist", "-p")) for a in rest)
         parallel = [] if chosen else ["-n", "auto", "--dist", "loadfile"]
         return _run(PY, "-m", "pytest", *parallel, *rest)
-    out = ROOT / "out" / "ideal-slider-crank"
-    return _run(BIN / "diffwear", "study", "ideal-slider-crank", "--out", out, *rest)
+    # the main job reruns into its own folder (--overwrite); a user's --out wins
+    out = [] if any(a.startswith("--out") for a in rest) else [
+        "--out", ROOT / "out" / "rig-21400", "--overwrite"]
+    return _run(BIN / "diffwear", "study", "rig-21400", *out, *rest)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Design study: sensitivity of the rig's wear to its parameters, and the
-spread of the wear coefficient (issue 7).
+spread of the wear coefficient.
 
 At the thesis rig (`sweep.models.RigWear` defaults, reduced to ``--cycles``
 real cycles in ``--dynamic`` dynamic cycles, ``--n-theta`` grid points):

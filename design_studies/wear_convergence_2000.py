@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Design study: does extrapolation change the answer?  (issue 4, full check)
+"""Design study: does extrapolation change the answer?  (full check)
 
 The Ch. 7 rig over 2,000 real cycles, simulated four ways:
 

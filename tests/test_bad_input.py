@@ -1,4 +1,4 @@
-"""Bad input (issue 2): every case raises `InputError` / `SolverError` with a
+"""Bad input: every case raises `InputError` / `SolverError` with a
 message that says what is wrong, never NaN or a bare NumPy/JAX error."""
 
 import math
@@ -6,12 +6,12 @@ import re
 
 import jax.numpy as jnp
 import pytest
+from linkages import four_bar
 
 from diffwear import InputError, SolverError
 from diffwear.dynamics import check_assembly, consistent_state, simulate
 from diffwear.mechanism import Body, Driver, Gravity, Mechanism, RevoluteJoint
 from diffwear.presets import slider_crank
-from linkages import four_bar
 
 
 def test_no_bodies():

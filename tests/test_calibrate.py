@@ -1,11 +1,10 @@
-"""Calibration against measured data (issue #8): effects, model, score test,
+"""Calibration against measured data : effects, model, score test,
 the whole loop on a small synthetic campaign, the CLI."""
 
 from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -218,8 +217,7 @@ def test_calibrate_cli_help(capsys):
 SHIPPED = ROOT / "design_studies" / "calibration"
 
 
-@pytest.mark.skipif(not os.environ.get("DIFFWEAR_LONG_TESTS"),
-                    reason="the shipped campaigns take minutes each: DIFFWEAR_LONG_TESTS=1")
+@pytest.mark.long  # the shipped campaigns take minutes each
 @pytest.mark.parametrize("name", ["synthetic_run_in", "synthetic_pressure_exponent",
                                   "synthetic_creep", "synthetic_guide_friction",
                                   "synthetic_no_effect", "synthetic_outside_library"])

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from diffwear.contact import PTFE, Material
+from diffwear.dynamics import simulate
 from diffwear.errors import SolverError
 from diffwear.presets import clearance_slider_crank
-from diffwear.dynamics import simulate
 from diffwear.studies.clearance_sweep import ideal_force, simulate_clearance
 
 CYCLES = 2
@@ -99,8 +99,10 @@ def test_gradients_match_finite_differences():
     f = jax.jit(lambda *a: _rotor_normal_load(*a, diffrax.RecursiveCheckpointAdjoint()))
     for i, rel_step in enumerate((1e-3, 1e-4, 1e-4)):
         h = float(x[i]) * rel_step
-        up = list(x); up[i] = x[i] + h
-        dn = list(x); dn[i] = x[i] - h
+        up = list(x)
+        up[i] = x[i] + h
+        dn = list(x)
+        dn[i] = x[i] - h
         fd = (float(f(*up)) - float(f(*dn))) / (2 * h)
         assert np.isfinite(float(fwd[i])) and abs(fd) > 0
         np.testing.assert_allclose(float(fwd[i]), fd, rtol=2e-3)
@@ -117,10 +119,9 @@ def test_step_limit_is_reported_with_the_joint():
 def test_two_clearance_joints_track_the_ideal_reactions():
     """A mechanism can have several clearance joints: crank-rod and rod-slider,
     both EFM at 0.0005 mm, follow the ideal joints' reactions."""
-    from diffwear.contact import ClearanceJoint, contact_history
+    from diffwear.contact import ClearanceJoint, CoulombFriction, contact_history, with_clearance
     from diffwear.dynamics import along_trajectory, consistent_state, reaction_wrench
     from diffwear.presets import efm_law, slider_crank
-    from diffwear.contact import CoulombFriction, with_clearance
 
     ideal, q_guess = slider_crank()
     y_ideal = consistent_state(ideal, q_guess)

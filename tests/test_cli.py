@@ -39,7 +39,8 @@ def test_study_writes_summary_tables_and_figures(study_dir):
     assert 0.0 <= summary["max_constraint_violation"] < 1e-6  # m
     assert summary["max_joint_force_N"] > 0.0
     assert summary["wall_time_s"] > 0.0
-    assert _header(study_dir / "reaction_crank_rod.csv") == ["t_s", "crank_angle_rad", "fx_N", "fy_N"]
+    assert _header(study_dir / "reaction_crank_rod.csv") == [
+        "t_s", "crank_angle_rad", "fx_N", "fy_N"]
     assert _header(study_dir / "crank_com.csv") == [
         "t_s", "x_m", "y_m", "vx_m_s", "vy_m_s", "ax_m_s2", "ay_m_s2"]
     pngs = [name for name in summary["files"] if name.endswith(".png")]

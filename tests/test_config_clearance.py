@@ -13,8 +13,14 @@ import pytest
 
 from diffwear import cli, runner
 from diffwear.config import load, loads
-from diffwear.contact import PTFE, STEEL, ClearanceJoint, ElasticFoundation, KelvinVoigt
-from diffwear.contact import LankaraniNikravesh
+from diffwear.contact import (
+    PTFE,
+    STEEL,
+    ClearanceJoint,
+    ElasticFoundation,
+    KelvinVoigt,
+    LankaraniNikravesh,
+)
 from diffwear.dynamics import simulate
 from diffwear.errors import InputError
 from diffwear.presets import (

@@ -125,7 +125,8 @@ def test_smoothing_derivative_rules_equal_autodiff_of_the_formulas():
 @pytest.mark.parametrize("clearance", [0.0, 5e-4])
 def test_no_nan_at_zero_eccentricity(clearance):
     ln = LankaraniNikravesh.from_materials(STEEL, PTFE, 0.02, 0.02 + clearance)
-    for law in (ln, KelvinVoigt.matched_to(ln), ElasticFoundation.from_material(PTFE, 5e-3, 0.0128)):
+    for law in (ln, KelvinVoigt.matched_to(ln),
+                ElasticFoundation.from_material(PTFE, 5e-3, 0.0128)):
         value, grad = _zero_offset_force(law, clearance)
         assert np.isfinite(float(value)) and np.all(np.isfinite(np.asarray(grad))), law
 

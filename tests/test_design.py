@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 
 import jax
 import jax.numpy as jnp
@@ -11,8 +10,16 @@ import numpy as np
 import pytest
 
 from diffwear.cli import main
-from diffwear.design import (LOWER, UPPER, bushing_volume, check_design, equal_life,
-                             finite_difference_jacobian, least_material, longest_common_life)
+from diffwear.design import (
+    LOWER,
+    UPPER,
+    bushing_volume,
+    check_design,
+    equal_life,
+    finite_difference_jacobian,
+    least_material,
+    longest_common_life,
+)
 from diffwear.errors import InputError, SolverError
 
 
@@ -111,8 +118,7 @@ def test_design_cli_lists_and_rejects():
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not os.environ.get("DIFFWEAR_LONG_TESTS"),
-                    reason="~10 min on 2 cores: set DIFFWEAR_LONG_TESTS=1 to run")
+@pytest.mark.long  # ~10 min on 2 cores
 def test_design_two_joint_quick(tmp_path):
     """The CLI on the coarse model: equal life within 0.5 % on a fresh rerun,
     the thesis's trend, and every summary field."""

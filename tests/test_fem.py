@@ -99,7 +99,8 @@ def _winkler(force, clearance, pin_radius, length, k):
     """Elastic-foundation pin contact, p = k (e cos t - c) on |t| < alpha,
     cos alpha = c / e, F = k R L e (alpha - sin alpha cos alpha): (alpha, e, p_max)."""
     def res(al):
-        return k * pin_radius * length * clearance / np.cos(al) * (al - np.sin(al) * np.cos(al)) - force
+        return (k * pin_radius * length * clearance / np.cos(al) * (al - np.sin(al) * np.cos(al))
+                - force)
     al = brentq(res, 1e-9, np.pi / 2 - 1e-12)
     e = clearance / np.cos(al)
     return al, e, k * (e - clearance)
@@ -135,7 +136,8 @@ def test_thick_wall_contact_mesh_converged():
     """a = 10 mm, b = 15 mm: the contact at n_theta = 96, n_r = 4 against the
     same problem on a mesh refined twice in each direction."""
     a, b, c, length, force = 0.01, 0.015, 20e-6, 0.01, jnp.array([2000.0, 0.0])
-    coarse = RingContact.build(ring_mesh(a, b, 96, 4), E_PTFE, NU_PTFE, c, length).solve_force(force)
+    coarse = RingContact.build(
+        ring_mesh(a, b, 96, 4), E_PTFE, NU_PTFE, c, length).solve_force(force)
     fine = RingContact.build(ring_mesh(a, b, 192, 8), E_PTFE, NU_PTFE, c, length).solve_force(force)
     for sol in (coarse, fine):
         _check_solution(sol, np.asarray(force))

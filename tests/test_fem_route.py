@@ -6,7 +6,6 @@ the Archard volume, M = 1 geometry refreshes, central differences.
 Small sizes throughout: the rig mechanism with a 72-node profile grid (5 deg),
 one dynamic cycle saved at 129 times and reused by every test."""
 
-import os
 
 import jax
 
@@ -18,11 +17,17 @@ import pytest  # noqa: E402
 
 from diffwear import cli  # noqa: E402
 from diffwear.errors import InputError  # noqa: E402
-from diffwear.presets import RIG_JOINT, TABLE_7_1, WearJointDesign, rig_slider_crank, with_wear_joint  # noqa: E402
+from diffwear.presets import (  # noqa: E402
+    RIG_JOINT,
+    TABLE_7_1,
+    WearJointDesign,
+    rig_slider_crank,
+    with_wear_joint,
+)
 from diffwear.studies import _wear_common as common  # noqa: E402
 from diffwear.studies.rig_21400 import PERIOD  # noqa: E402
-from diffwear.wear import wear_cycle, worn_volume  # noqa: E402
 from diffwear.wear import fem_route as fr  # noqa: E402
+from diffwear.wear import wear_cycle, worn_volume  # noqa: E402
 
 N = 72  # profile grid = FE inner-surface nodes (5 deg)
 SAMPLES = 128  # quadrature intervals of the saved cycle (subsampled below)
@@ -137,8 +142,7 @@ def test_gradient_wrt_youngs_modulus_matches_central_difference(thin_cycle):
     assert abs(g / fd - 1) < 1e-4
 
 
-@pytest.mark.skipif(not os.environ.get("DIFFWEAR_LONG_TESTS"),
-                    reason="two short FEM-route evolutions, ~25 s: DIFFWEAR_LONG_TESTS=1")
+@pytest.mark.long  # two short FEM-route evolutions, ~25 s
 def test_refresh_interval_agrees_with_every_cycle_rebuild():
     """M = 1 (compliance rebuilt every wear cycle) against M = 3 (built once from
     the unworn ring; wear enters only through the gap) over 3 wear cycles of

@@ -10,6 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from linkages import COUPLER, CRANK, CRANK_SPEED, GROUND_LINK, ROCKER, four_bar
 
 from diffwear.dynamics import (
     along_trajectory,
@@ -18,7 +19,6 @@ from diffwear.dynamics import (
     kinematic_analysis,
     simulate,
 )
-from linkages import COUPLER, CRANK, CRANK_SPEED, GROUND_LINK, ROCKER, four_bar
 
 T_END = 1.0  # s: one crank revolution at 2 pi rad/s
 TS = jnp.linspace(0.0, T_END, 201)

@@ -57,7 +57,8 @@ def test_schur_solve_derivative_rule_equals_autodiff():
         want = jax.jacfwd(flat(equations._schur_solve), argnums=i)(*args)
         for diff in (jax.jacfwd, jax.jacrev):
             got = diff(flat(equations.schur_solve), argnums=i)(*args)
-            np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * float(jnp.max(jnp.abs(want))))
+            np.testing.assert_allclose(got, want, rtol=0,
+                                       atol=1e-12 * float(jnp.max(jnp.abs(want))))
 
 
 def test_gradcheck_verdicts():

@@ -116,7 +116,7 @@ def test_volume_bookkeeping_and_symmetry(small):
     archard = float(small.wear_coefficient * res.load_sliding)
     for body in ("pin", "pivot"):
         assert abs(float(res.volume(small, body)) / archard - 1) < 1e-10
-    # the normal load exceeds |F| in a conformal contact (digest section 3)
+    # the normal load exceeds |F| in a conformal contact
     s_total = 20_000 * R * np.radians(60.0)
     assert res.load_sliding / s_total > 1.05 * SMALL.force
     for h in (np.asarray(res.h_pin), np.asarray(res.h_pivot)):
@@ -136,8 +136,10 @@ def test_wear_depends_on_k_times_sweeps_only(small):
     np.testing.assert_allclose(a.h_pin, b.h_pin, rtol=1e-9, atol=1e-15)
     np.testing.assert_allclose(a.h_pivot, b.h_pivot, rtol=1e-9, atol=1e-15)
     # early: 2.5e-12 m of wear against ~1e-6 m of elastic approach (1e-18 gave 1e-3)
-    early1 = run_wear(eqx.tree_at(lambda m: m.wear_coefficient, small, jnp.asarray(1e-21)), 2_000, 100.0)
-    early2 = run_wear(eqx.tree_at(lambda m: m.wear_coefficient, small, jnp.asarray(2e-21)), 2_000, 100.0)
+    early1 = run_wear(eqx.tree_at(lambda m: m.wear_coefficient, small, jnp.asarray(1e-21)),
+                      2_000, 100.0)
+    early2 = run_wear(eqx.tree_at(lambda m: m.wear_coefficient, small, jnp.asarray(2e-21)),
+                      2_000, 100.0)
     np.testing.assert_allclose(early2.h_pivot, 2 * early1.h_pivot, rtol=1e-5,
                                atol=1e-9 * float(early1.h_pivot.max()))
 
@@ -148,7 +150,8 @@ def test_geometric_similarity_depth_scales_with_radius(small):
     big = SMALL.replace(pin_radius=2 * R, clearance=2 * SMALL.clearance,
                         pivot_outer_radius=2 * SMALL.pivot_outer_radius, length=2 * SMALL.length)
     res = run_wear(PinPivot.build(big), 20_000, 1000.0)
-    np.testing.assert_allclose(res.h_pin, 2 * base.h_pin, rtol=1e-6, atol=1e-9 * float(base.h_pin.max()))
+    np.testing.assert_allclose(res.h_pin, 2 * base.h_pin, rtol=1e-6,
+                               atol=1e-9 * float(base.h_pin.max()))
 
 
 def test_load_fixed_to_the_pin_swaps_the_roles(small):

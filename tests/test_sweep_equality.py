@@ -1,4 +1,4 @@
-"""Issue 7's equality guarantees on a 16 x 16 (clearance, k) grid: the sweep
+"""The sweep's equality guarantees on a 16 x 16 (clearance, k) grid: the sweep
 equals the single runs, and the sharded sweep equals the unsharded one.
 
 The model is a cheap stand-in for the rig (one ODE, not the multibody wear

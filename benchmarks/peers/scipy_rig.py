@@ -3,7 +3,7 @@
 
 Not part of the package and imports nothing from it: a straightforward
 engineer's implementation of the same model, so that diffwear's speed can be
-compared at equal accuracy (issue #10).  The model, term by term as diffwear
+compared at equal accuracy.  The model, term by term as diffwear
 builds it (sources in the comments):
 
 * slider-crank, thesis Table 7-1, lengths are half-lengths (thesis Eq. 2-9):

@@ -1,4 +1,4 @@
-"""Generate the shipped synthetic measured datasets (issue #8).
+"""Generate the shipped synthetic measured datasets.
 
 Each dataset is the rig model (`diffwear.calibrate.model.RigHistory`) with ONE
 effect switched on, sampled by the standard campaign (`synthetic.Plan`: worn
@@ -25,8 +25,8 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-from diffwear.calibrate.synthetic import synthesize  # noqa: E402
 from diffwear.calibrate.model import rig_defaults  # noqa: E402
+from diffwear.calibrate.synthetic import synthesize  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 _D = rig_defaults()
@@ -42,7 +42,7 @@ def oval_bore(theta, cycles, amplitude=4e-6, angle=0.3):
 # name -> (effect, strength, distortion, seed, description)
 # pressure_exponent was 0.5 at first: identified (0.528 +- 0.056) but its
 # held-out error before the effect was only 1.87 sigma, so no model could cut
-# it threefold (issue #8's bar); at 1.0 (wear ~ p^2, within the exponents
+# it threefold (the identification bar); at 1.0 (wear ~ p^2, within the exponents
 # reported for polymers) the effect stands clear of the noise.
 DATASETS = {
     "synthetic_run_in": ("run_in", 2.0, None, 11, "Rig campaign A (synthetic)"),

@@ -12,7 +12,12 @@ from . import dynamics, mechanism, presets  # noqa: E402
 from .errors import DiffwearError, InputError, SolverError  # noqa: E402
 from .gradcheck import GradCheck, gradcheck  # noqa: E402
 
-__version__ = "0.1.0"
+try:  # the one version string is pyproject.toml's
+    from importlib.metadata import version as _version
+
+    __version__ = _version("diffwear")
+except Exception:  # pragma: no cover - running from a source tree without metadata
+    __version__ = "0+unknown"
 
 __all__ = ["dynamics", "mechanism", "presets", "DiffwearError", "InputError", "SolverError",
            "GradCheck", "gradcheck"]

@@ -41,7 +41,8 @@ def stacked(
     return path
 
 
-def polar_loci(path: Path, loci: Mapping[str, tuple[np.ndarray, np.ndarray]], *, title: str) -> Path:
+def polar_loci(path: Path, loci: Mapping[str, tuple[np.ndarray, np.ndarray]], *,
+               title: str) -> Path:
     """Contact loci in the bushing frame: one polar panel per case, radius = |e|."""
     n = len(loci)
     cols = min(4, n)

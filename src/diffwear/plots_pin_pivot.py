@@ -51,7 +51,8 @@ def history_figure(path, *, sweeps, max_pin_mm, max_pivot_mm, fit_pin, fit_pivot
     ax.plot(s / 1e3, np.concatenate([[0.0], max_pivot_mm]), "-", lw=1.8, label="pivot (simulated)")
     xs = np.array([sweeps[-1] * 0.5, target])
     for (slope, icpt), lab in ((fit_pin, "pin"), (fit_pivot, "pivot")):
-        ax.plot(xs / 1e3, (icpt + slope * xs) * 1e3, ":", lw=1.2, label=f"{lab}: linear extrapolation")
+        ax.plot(xs / 1e3, (icpt + slope * xs) * 1e3, ":", lw=1.2,
+                label=f"{lab}: linear extrapolation")
     if direct is not None:
         ds, dpin, dpiv = direct
         ax.plot(ds / 1e3, dpin, "--", lw=1.0, label="pin (direct run)")

@@ -1,8 +1,10 @@
 """The thesis mechanisms, with every number's source and every assumption.
 
 Source: S. M. Mukras, *Analysis and design of planar multibody systems with
-revolute joint wear*, PhD dissertation, University of Florida, 2009; tables as
-corrected in the project's thesis digest (the PDF text scrambles several).
+revolute joint wear*, PhD dissertation, University of Florida, 2009.  Several
+tables are typeset with scrambled or mislabelled entries; the values here are
+the ones consistent with the thesis's own plots and text (noted where they
+differ from the printed table).
 
 Slider-crank conventions (thesis Eq. 2-9): the tabulated lengths l1, l2 are
 **half-lengths** (joint to COM).  The crank turns about the origin; the crank
@@ -50,7 +52,7 @@ class SliderCrankParameters(eqx.Module):
 
 
 TABLE_2_1 = SliderCrankParameters(
-    l1=1.00, m1=10.00, inertia1=45.00,   # crank (Table 2-1; digest section 4)
+    l1=1.00, m1=10.00, inertia1=45.00,   # crank (Table 2-1)
     l2=1.75, m2=15.00, inertia2=35.00,   # connecting rod
     m3=30.00,                            # slider
 )
@@ -96,8 +98,8 @@ CLEARANCES_CH3 = (0.0005e-3, 0.05e-3, 0.5e-3, 5e-3)  # m, Table 3-2 (bushing R 2
 FRICTION_CH3 = 0.13  # Table 3-3
 RESTITUTION_CH3 = 0.8  # Table 3-3
 BUSHING_DEPTH_CH5 = 12.8e-3  # m, Tables 5-2 / 6-3
-# The Chapter 3-6 bushing outer radius is not in the thesis (digest Table 5-2
-# note).  We scale the rig bushing (Table 7-2: outer / inner = 15.875 / 9.533 =
+# The Chapter 3-6 bushing outer radius is not in the thesis (Table 5-2 gives
+# none).  We scale the rig bushing (Table 7-2: outer / inner = 15.875 / 9.533 =
 # 1.665) to the 20.005 mm bore of the wear example: outer radius 33.31 mm, wall
 # L = 13.31 mm.  The EFM stiffness k_f = E_W / L scales with 1 / L.
 WEAR_5000_OUTER_RADIUS = 20.005e-3 * 15.875 / 9.533  # m (= 33.31 mm, our choice)
@@ -121,7 +123,8 @@ def efm_law(bushing, bore_radius, wall, depth, restitution, mass, **kwargs):
     return ElasticFoundation.from_material(bushing, wall, depth, damping_time=tau, **kwargs)
 
 
-def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *, p: SliderCrankParameters = TABLE_2_1,
+def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *,
+                           p: SliderCrankParameters = TABLE_2_1,
                            friction=FRICTION_CH3, restitution=RESTITUTION_CH3,
                            pin_radius=PIN_RADIUS_CH3, depth=BUSHING_DEPTH_CH5,
                            wall=BUSHING_WALL_CH3, pin_material=None, bushing_material=None,
@@ -135,8 +138,15 @@ def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *, p: SliderCrankP
     Returns (mechanism, y0): y0 is the ideal mechanism's consistent state at
     t = 0 with the pin centred in the bushing (the thesis's start-up).
     """
-    from .contact import (PTFE, STEEL, CoulombFriction, KelvinVoigt, LankaraniNikravesh,
-                          centred_state, with_clearance)
+    from .contact import (
+        PTFE,
+        STEEL,
+        CoulombFriction,
+        KelvinVoigt,
+        LankaraniNikravesh,
+        centred_state,
+        with_clearance,
+    )
     from .dynamics import consistent_state
     from .errors import InputError
 
@@ -184,7 +194,8 @@ class WearJointDesign(eqx.Module):
     def __init__(self, k, clearance, depth, diameter, wall, mu=0.13, restitution=0.8):
         f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731
         self.k, self.clearance, self.depth = f(k), f(clearance), f(depth)
-        self.diameter, self.wall, self.mu, self.restitution = f(diameter), f(wall), f(mu), f(restitution)
+        self.diameter, self.wall, self.mu, self.restitution = (
+            f(diameter), f(wall), f(mu), f(restitution))
 
     @property
     def pin_radius(self):
@@ -227,7 +238,7 @@ def with_wear_joint(mech: Mechanism, design: WearJointDesign, *, joint: str = "c
 K_PTFE_MM3_PER_NM = 5.05e-4  # Tables 5-2/6-3/7-2: PTFE on steel, mm^3/(N m)
 PTFE_DENSITY = 2250.0        # kg/m^3 (Table 7-2: 2.25 g/cm^3)
 
-# Wear example of Ch. 5/6 (Tables 5-2, 5-3, 6-3; digest section 4): crank-rod
+# Wear example of Ch. 5/6 (Tables 5-2, 5-3, 6-3): crank-rod
 # clearance 0.005 mm, pin R 20 mm, depth 12.8 mm, k 5.05e-4 mm^3/(N m), mu 0.13,
 # 30 rpm, 5,000 cycles; bushing wall as chosen above (BUSHING_WALL_CH3).
 WEAR_5000 = WearJointDesign(
@@ -286,7 +297,8 @@ RIG_SPRING_FREE_LENGTH = 0.5479  # m, calibrated (see above)
 # -1.22 / 437 m to 0.5490 m.  After the wear cycle took the PID gains of
 # `simulate` (0.3, 0.4) the study gave 106.22 mm^3 at 0.5490 m; the same slope
 # moved L0 by -0.48 / 437 m to 0.5479 m.  Spring force k_s (1.0 - x3 - L0): 90-170 N over
-# the stroke x3 = 0.127..0.279 m; mean joint force ~140 N (digest: ~130 N).
+# the stroke x3 = 0.127..0.279 m; mean joint force ~140 N (thesis Fig. 7-2: 0-200 N,
+# a mean of about 130 N).
 
 # Gravity: the rig's orientation is not stated.  We keep the project default,
 # gravity -y in the mechanism plane (thesis Ch. 2 convention; the slider's

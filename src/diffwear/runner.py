@@ -31,6 +31,7 @@ import numpy as np
 from . import plots
 from .config import Study
 from .config.study import Simulation
+from .contact import centred_state, contact_history
 from .dynamics import (
     along_trajectory,
     check_assembly,
@@ -38,12 +39,10 @@ from .dynamics import (
     reaction_wrench,
     simulate,
 )
-from .contact import centred_state, contact_history
 from .dynamics.simulate import Trajectory
 from .errors import InputError
 from .io import OutputDir
 from .mechanism import Mechanism
-
 
 _consistent_state = eqx.filter_jit(functools.partial(consistent_state, check=False))
 

@@ -1,7 +1,8 @@
 """Calibration against measured wear data.
 
 `load_dataset` reads a dataset folder (``dataset.toml`` plus CSV files, format
-in the README, "Measured data and calibration") into a `Dataset` in SI units; `write_dataset` writes one.
+in the README, "Measured data and calibration") into a `Dataset` in SI units;
+`write_dataset` writes one.
 """
 
 from .dataset import (

@@ -1,4 +1,4 @@
-"""Candidate effects the base wear model lacks (issue #8, the effect library).
+"""Candidate effects the base wear model lacks (the effect library).
 
 Each effect is an optional model component with one strength ``s``; at
 ``s = 0`` the model is *exactly* the base model (the same floating-point

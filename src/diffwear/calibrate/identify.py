@@ -33,7 +33,7 @@ import numpy as np
 
 from .dataset import Dataset
 from .effects import EFFECTS, NAMES
-from .fit import Fitter, FitResult, ModelSettings, Problem
+from .fit import FitResult, Fitter, ModelSettings, Problem
 
 LR_CRITICAL = 10.83    # chi-square(1) at p = 0.001
 STRENGTH_SIGMAS = 3.0  # |s| / std(s) of an adopted effect

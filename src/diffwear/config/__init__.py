@@ -7,14 +7,15 @@ the key path and what is allowed.  New element types register in
 """
 
 from . import schema, units
-from .elements import FORCE_TYPES, JOINT_TYPES, ElementType, FieldError
 from .clearance import CLEARANCE
+from .elements import FORCE_TYPES, JOINT_TYPES, ElementType, FieldError
 
 JOINT_TYPES["clearance"] = CLEARANCE
 from .loader import load, load_dict, loads
 from .study import ContactOutput, ReactionOutput, Simulation, Study
 
 __all__ = [
-    "schema", "units", "FORCE_TYPES", "JOINT_TYPES", "ElementType", "FieldError", "load", "load_dict", "loads",
+    "schema", "units", "FORCE_TYPES", "JOINT_TYPES", "ElementType", "FieldError", "load",
+    "load_dict", "loads",
     "ContactOutput", "ReactionOutput", "Simulation", "Study",
 ]

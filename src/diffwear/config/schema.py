@@ -438,6 +438,6 @@ def read_array_of_tables(ctx: Context, key: str, raw, *, required: bool) -> list
 
 __all__ = [
     "REQUIRED", "NAME_PATTERN", "Context", "Field", "Text", "BodyRef", "Quantity", "Vector",
-    "Direction", "Number", "Integer", "Table", "Tagged", "read_table", "read_array_of_tables", "check_table",
-    "check_unknown", "toml_type", "show", "suggest",
+    "Direction", "Number", "Integer", "Table", "Tagged", "read_table", "read_array_of_tables",
+    "check_table", "check_unknown", "toml_type", "show", "suggest",
 ]

@@ -20,7 +20,8 @@ from .materials import PTFE, STEEL, Material
 from .profile import BushingProfile
 
 __all__ = [
-    "ClearanceJoint", "ContactHistory", "centred_state", "contact_history", "with_clearance", "CoulombFriction", "ContactResult", "PinKinematics",
+    "ClearanceJoint", "ContactHistory", "centred_state", "contact_history", "with_clearance",
+    "CoulombFriction", "ContactResult", "PinKinematics",
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
     "LankaraniNikravesh", "PTFE", "STEEL", "Material", "BushingProfile",
 ]

@@ -25,7 +25,8 @@ class BushingProfile(eqx.Module):
         c = jnp.asarray(clearance, dtype=float)
         if c.ndim != 1 or c.shape[0] < 8:
             raise InputError(
-                f"bushing profile needs a 1-D angular grid of at least 8 points, got shape {c.shape}"
+                "bushing profile needs a 1-D angular grid of at least 8 points, "
+                f"got shape {c.shape}"
             )
         check_positive("bushing clearance c(theta) [m]", c, allow_zero=True)
         self.clearance = c

@@ -29,7 +29,7 @@ from ..mechanism import Mechanism
 class Baumgarte(eqx.Module):
     """Baumgarte stabilisation gains alpha [1/s] and beta [1/s].
 
-    Default alpha = beta = 250 1/s: thesis Chapters 2-3 (digest section 1).
+    Default alpha = beta = 250 1/s: thesis Chapters 2-3 (values of 0, 5 and 100 shown in Fig. 2-8).
     alpha = beta = 0 gives the unstabilised index-1 DAE (drift grows).
     """
 

@@ -8,9 +8,9 @@
   pin offset or a given joint force, differentiable by implicit differentiation.
 """
 
-from .contact import ContactSolution, RingContact
 from .condense import inner_compliance, inner_stiffness, pressure_load_matrix, tributary_lengths
+from .contact import ContactSolution, RingContact
 from .mesh import RingMesh, ring_mesh
 
-__all__ = ["ContactSolution", "RingContact", "RingMesh", "ring_mesh", "inner_compliance", "inner_stiffness",
-           "pressure_load_matrix", "tributary_lengths"]
+__all__ = ["ContactSolution", "RingContact", "RingMesh", "ring_mesh", "inner_compliance",
+           "inner_stiffness", "pressure_load_matrix", "tributary_lengths"]

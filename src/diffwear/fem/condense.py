@@ -39,8 +39,14 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .element import GAUSS3_POINTS, GAUSS3_WEIGHTS, element_stiffness, lagrange2, plane_strain_matrix
 from .elasticity import element_dofs
+from .element import (
+    GAUSS3_POINTS,
+    GAUSS3_WEIGHTS,
+    element_stiffness,
+    lagrange2,
+    plane_strain_matrix,
+)
 from .mesh import RingMesh
 
 

@@ -110,7 +110,9 @@ class RingContact(eqx.Module):
         check_positive("ring contact: Young's modulus E [Pa]", youngs_modulus)
         nu = concrete(poisson_ratio)
         if nu is not None and not (-1.0 < float(nu) < 0.5):
-            raise InputError(f"ring contact: Poisson ratio nu must lie in (-1, 0.5), got {float(nu)!r}")
+            raise InputError(
+                f"ring contact: Poisson ratio nu must lie in (-1, 0.5), got {float(nu)!r}"
+            )
         check_positive("ring contact: radial clearance a - R_pin [m]", clearance, allow_zero=True)
         check_positive("ring contact: bushing axial length L [m]", length)
         c, a = concrete(clearance), concrete(mesh.inner_radius)
@@ -215,7 +217,8 @@ class RingContact(eqx.Module):
         unit = force / mag
         gap0 = jnp.max(self.boundary_radius) - self.pin_radius
         # Scale: the clearance plus the wall's deflection under F spread on ~n/4 nodes.
-        ell = gap0 + mag / self.length * jnp.mean(jnp.diag(self.compliance)) * 4.0 / self.theta.shape[0]
+        ell = gap0 + (mag / self.length * jnp.mean(jnp.diag(self.compliance)) * 4.0
+                      / self.theta.shape[0])
         ell = jax.lax.stop_gradient(ell)
         l_g, f_s = self._scales(ell)
         u = self.directions

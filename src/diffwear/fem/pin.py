@@ -124,4 +124,6 @@ def solid_disc_compliance(n: int, radius, youngs_modulus, poisson_ratio):
         return r * (1 + nu) * (1 - 2 * nu) / e
     if n < 2:
         raise InputError(f"solid disc compliance: mode n must be 0 or >= 2, got {n!r}")
-    return r * (1 + nu) / (2 * e) * (n / (n - 1) + (n + 2 - n * n - 4 * nu * (n + 1)) / (n + 1) ** 2)
+    return r * (1 + nu) / (2 * e) * (
+        n / (n - 1) + (n + 2 - n * n - 4 * nu * (n + 1)) / (n + 1) ** 2
+    )

@@ -10,6 +10,7 @@ derivatives are returned next to the forces.
 from __future__ import annotations
 
 import abc
+
 import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float

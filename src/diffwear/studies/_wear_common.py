@@ -9,15 +9,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..contact import centred_state, contact_history
-from ..dynamics import consistent_state
-from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..choices import WEAR_CONTACTS as CONTACTS
 from ..choices import WEAR_MODELS
+from ..contact import centred_state, contact_history
+from ..dynamics import consistent_state
 from ..errors import InputError
-from ..wear import worn_mechanism, wear_cycle, worn_volume
-from ..wear.evolution import (ChunkedEvolution, Evolver, load_checkpoint,
-                              save_checkpoint)
+from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
+from ..wear import wear_cycle, worn_mechanism, worn_volume
+from ..wear.evolution import ChunkedEvolution, Evolver, load_checkpoint, save_checkpoint
 from ..wear.fem_route import FemEvolver, default_model
 
 JOINT = "crank_rod"

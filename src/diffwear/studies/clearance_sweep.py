@@ -92,7 +92,8 @@ def run(out: OutputDir, *, cycles: int = CYCLES, laws=CONTACT_LAWS, clearances=C
                 "t_s": t, "theta_rad": theta, "in_contact": contact.astype(float),
                 "offset_x_m": hist.offset[:, 0], "offset_y_m": hist.offset[:, 1]})
             curves[law][f"{c * 1e3:g} mm"] = fm[keep]
-            loci[tag] = (theta[keep & contact], np.hypot(*np.asarray(hist.offset[keep & contact]).T))
+            loci[tag] = (theta[keep & contact],
+                         np.hypot(*np.asarray(hist.offset[keep & contact]).T))
             rel = np.sqrt(np.mean((fm[keep] - f_ideal[keep]) ** 2) / np.mean(f_ideal[keep] ** 2))
             cw = np.cos(theta[keep & contact])
             cases.append({

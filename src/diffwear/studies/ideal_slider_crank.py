@@ -26,7 +26,8 @@ from ..io import OutputDir
 from ..presets import TABLE_2_1, slider_crank
 
 NAME = "ideal-slider-crank"
-DESCRIPTION = "Ch. 2: ideal slider-crank (Table 2-1), 2 s at pi rad/s: kinematics, dynamics, reactions"
+DESCRIPTION = ("Ch. 2: ideal slider-crank (Table 2-1), 2 s at pi rad/s: kinematics, dynamics, "
+               "reactions")
 
 DURATION = 2.0  # s
 N_SAVE = 801
@@ -86,11 +87,12 @@ def run(out: OutputDir, *, duration: float = DURATION, log=print) -> dict:
     out.csv("constraint_violation.csv", {"t_s": t, "max_abs_phi_m": viol, **sweep})
 
     figs = {
-        "fig2_5_crank_com_kinematic.png": plots.stacked(out.file("fig2_5_crank_com_kinematic.png"), t, [
-            ("position [m]", {"x": qk[:, 0], "y": qk[:, 1]}),
-            ("velocity [m/s]", {"vx": qdk[:, 0], "vy": qdk[:, 1]}),
-            ("acceleration [m/s²]", {"ax": qddk[:, 0], "ay": qddk[:, 1]}),
-        ], xlabel="time [s]", title="Kinematic analysis: crank COM (cf. thesis Fig. 2-5)"),
+        "fig2_5_crank_com_kinematic.png": plots.stacked(
+            out.file("fig2_5_crank_com_kinematic.png"), t, [
+                ("position [m]", {"x": qk[:, 0], "y": qk[:, 1]}),
+                ("velocity [m/s]", {"vx": qdk[:, 0], "vy": qdk[:, 1]}),
+                ("acceleration [m/s²]", {"ax": qddk[:, 0], "ay": qddk[:, 1]}),
+            ], xlabel="time [s]", title="Kinematic analysis: crank COM (cf. thesis Fig. 2-5)"),
         "fig2_6_slider_kinematic.png": plots.stacked(out.file("fig2_6_slider_kinematic.png"), t, [
             ("position [m]", {"x": qk[:, 6]}), ("velocity [m/s]", {"vx": qdk[:, 6]}),
             ("acceleration [m/s²]", {"ax": qddk[:, 6]}),

@@ -34,8 +34,8 @@ from ..wear.pin_pivot import (
     PinPivot,
     PinPivotSetup,
     linear_extrapolation,
-    steady_line,
     run_wear,
+    steady_line,
 )
 
 NAME = "pin-pivot"
@@ -52,7 +52,7 @@ EXTRAPOLATION = 250
 
 TARGET_SWEEPS = THESIS_TEST_CYCLES * SWEEPS_PER_TEST_CYCLE  # 816,000
 
-THESIS = {  # Tables 4-1, 4-3 and the Ch. 4 summary (digest section 4)
+THESIS = {  # Tables 4-1, 4-3 and the Ch. 4 summary
     "simulated, k 1.0e-5 (Table 4-3)": 1.867,
     "simulated, k 1.2e-5 (Ch. 4 summary)": 2.028,
     "measured (Table 4-1)": 2.00,
@@ -264,11 +264,13 @@ def _report(s, setup, cycles, direct_sweeps, rows, scaling) -> str:
         f"| pin radius R | {r_mm:g} mm (D = {2 * r_mm:g} mm) | our choice: the thesis gives the "
         "dimensions only in Fig. 4-1; a lab-scale pin (see *Size* below) |",
         f"| radial clearance c | {1e6 * setup.clearance:g} um | our choice: a close running fit "
-        "of a 10 mm pin; matters only at the start (wear exceeds it within a few thousand sweeps) |",
+        "of a 10 mm pin; matters only at the start (wear exceeds it within a few thousand "
+        "sweeps) |",
         f"| pivot outer radius (held) | {mm * setup.pivot_outer_radius:g} mm | our choice (3 R) |",
         f"| contact length L | {mm * setup.length:g} mm | cancels at fixed projected pressure |",
-        f"| pin held at a bore of | {setup.bore_fraction:g} R | model choice (`diffwear.fem.pin`) |",
-        "| load | fixed to the pivot, along angle 0; the pin turns | our reading (issue 5); the "
+        f"| pin held at a bore of | {setup.bore_fraction:g} R | model choice "
+        "(`diffwear.fem.pin`) |",
+        "| load | fixed to the pivot, along angle 0; the pin turns | our reading of Fig. 4-1; the "
         "other frame is a sensitivity row |",
         f"| steps per sweep | {setup.steps_per_sweep} | Table 4-2 |",
         f"| FE mesh | {setup.n_theta} nodes around; {setup.n_r_pivot} Q9 layers (pivot), "
@@ -296,7 +298,8 @@ def _report(s, setup, cycles, direct_sweeps, rows, scaling) -> str:
         f"| max pivot wear, same | {s['max_pivot_mm_at_408000_test_cycles']:.3f} mm | - |",
         f"| max pin wear, k = 1.2e-5, same | {k_high} | 2.028 mm |",
         f"| max pin / pivot wear at 408,000 *sweeps* (the other count) | "
-        f"{s['max_pin_mm_at_408000_sweeps']:.3f} / {s['max_pivot_mm_at_408000_sweeps']:.3f} mm | - |",
+        f"{s['max_pin_mm_at_408000_sweeps']:.3f} / "
+        f"{s['max_pivot_mm_at_408000_sweeps']:.3f} mm | - |",
         f"| direct simulation of {direct_sweeps:,.0f} sweeps: max pin (line from the "
         f"{cycles:,}-sweep run) / pivot | {s['max_pin_mm_direct']:.4f} "
         f"({s['max_pin_mm_direct_by_linear_extrapolation']:.4f}) / "
@@ -364,13 +367,14 @@ def _report(s, setup, cycles, direct_sweeps, rows, scaling) -> str:
         "## Not modelled\n",
         "Friction (the thesis states none for this test); the thesis's adaptive extrapolation "
         "(a constant A, checked above); remeshing of the worn bodies (the compliance is the "
-        "unworn one).  The load is read as 60 MPa on the projected area D L (issue 5); the "
+        "unworn one).  The load is read as 60 MPa on the projected area D L (our reading "
+        "of Table 4-1); the "
         "thesis's 'cross-sectional pressure' could also mean another area, which would "
         "change F and the depth in proportion.\n",
         "## Files\n",
         "- `profiles.csv`: pin and pivot wear profiles [mm] after the simulated sweeps and the "
-        "direct run of twice as many, each in its own body's frame (angle from the load direction at "
-        "mid-stroke); contact pressure at mid-stroke at the end.",
+        "direct run of twice as many, each in its own body's frame (angle from the load "
+        "direction at mid-stroke); contact pressure at mid-stroke at the end.",
         "- `history.csv`: max pin / pivot wear and peak pressure after each computed sweep.",
         "- `sensitivity.csv`: the sensitivity table.",
         "- `wear_profiles.png`, `wear_history.png` (cf. Fig. 4-9).\n",

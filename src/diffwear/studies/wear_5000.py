@@ -27,7 +27,7 @@ DESCRIPTION = "Ch. 5/6: Table 2-1 slider-crank, EFM crank-rod joint wear over 5,
 N_THETA = 180
 TARGET_DYNAMIC = 50  # constant A = cycles / 50 (A = 100 for 5,000 cycles)
 
-THESIS = {  # Table 6-4 (digest section 4)
+THESIS = {  # Table 6-4
     "FEM (Table 6-4)": {"max_wear_depth_mm": 0.34, "wear_volume_mm3": 231.42, "time_min": 162},
     "EFM (Table 6-4)": {"max_wear_depth_mm": 0.29, "wear_volume_mm3": 241.76, "time_min": 92},
 }

@@ -58,7 +58,8 @@ def batched_fn(model_fn: Callable, devices: Sequence) -> Callable:
     devices, the columns are split over them with shard_map."""
     batched = jax.vmap(model_fn)
     if len(devices) > 1:
-        from jax.sharding import Mesh, PartitionSpec as P
+        from jax.sharding import Mesh
+        from jax.sharding import PartitionSpec as P
 
         mesh = Mesh(np.asarray(devices), (AXIS,))
         batched = _shard_map()(batched, mesh=mesh, in_specs=P(AXIS), out_specs=P(AXIS))

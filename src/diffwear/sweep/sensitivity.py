@@ -159,8 +159,9 @@ def tornado(path, sens: Sensitivity, output: str, *, rel_change: float = 0.1,
             title: str | None = None) -> Path:
     """Tornado plot: the linearised change of ``output`` [%] for each parameter
     moved by +-``rel_change`` (bars sorted by size; = +-elasticity x change)."""
-    from .. import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
+
+    from .. import plots  # noqa: F401  (Agg backend)
 
     e = {p: sens.elasticity(output, p) for p in sens.wrt}
     order = sorted(e, key=lambda p: abs(e[p]) if math.isfinite(e[p]) else -1)
@@ -288,8 +289,9 @@ def histogram(path, prop: Propagation, output: str, *, bins: int = 20, xlabel: s
               title: str | None = None) -> Path:
     """Histogram of the sampled ``output`` (or "life_cycles") with the
     linearised normal estimate and the design-point value."""
-    from .. import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
+
+    from .. import plots  # noqa: F401  (Agg backend)
 
     x = prop.life["samples"] if output == "life_cycles" else prop.result[output]
     s = prop.stats[output]
@@ -305,7 +307,8 @@ def histogram(path, prop: Propagation, output: str, *, bins: int = 20, xlabel: s
     ax.set_xlabel(xlabel or output)
     ax.set_ylabel("density")
     ax.legend(fontsize=8)
-    ax.set_title(title or f"{output}: {prop.name} {prop.distribution}, +-{100 * prop.scatter:.0f} %",
+    ax.set_title(title or (f"{output}: {prop.name} {prop.distribution}, "
+                           f"+-{100 * prop.scatter:.0f} %"),
                  fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -156,8 +156,9 @@ def _netcdf(spec: SweepSpec, res: SweepResult, out: OutputDir) -> str:
 
 
 def _figures(spec: SweepSpec, res: SweepResult, out: OutputDir) -> list[str]:
-    from .. import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
+
+    from .. import plots  # noqa: F401  (Agg backend)
 
     names = [k for k in res.outputs if k not in SKIP_PLOTS]
     files = []
@@ -198,8 +199,9 @@ def _geometric(v) -> bool:
 def heatmap(path, x, y, z, *, xlabel: str, ylabel: str, title: str, annotate: bool = True):
     """Heatmap of z[i, j] at (x[j], y[i]) (cells centred on the values; log axes
     for geometric grids); values written in the cells up to 10 x 10."""
-    from .. import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
+
+    from .. import plots  # noqa: F401  (Agg backend)
 
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
     mesh = ax.pcolormesh(x, y, z, shading="nearest", cmap="viridis")

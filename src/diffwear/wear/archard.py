@@ -1,4 +1,4 @@
-"""Archard's wear law, dh/ds = k p (thesis Eq. 4-1; digest section 3)."""
+"""Archard's wear law, dh/ds = k p (thesis Eq. 4-1)."""
 
 from __future__ import annotations
 

@@ -63,7 +63,6 @@ from ..mechanism import Mechanism
 from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle
 from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_PIERCED, STATUS_SOLVER
 
-
 # Adaptive-A constants (thesis Eq. 4-20 gives none; it started at A ~ 3900 and
 # settled near 6000 for 100,000 cycles, i.e. A ~ 4-6 % of the run).  Ours: start
 # at 1 % of the run, grow by 1 % of the run per smooth cycle, shrink by 2 % of

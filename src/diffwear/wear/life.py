@@ -82,8 +82,8 @@ then behaves as follows against central differences of the same model:
   cycles/m; 4 % -> 15 % of the row), while central differences at relative
   steps 1e-2, 3e-3, 1e-3 stayed within 2.51-2.56e6.  Holding a finished
   joint at its crossing profile (max depth = limit) instead of the slot's
-  end sent the cyc2 tangents to ~5e9 (differences: ~9e6).  Both measured in
-  session 6 and not kept.
+  end sent the cyc2 tangents to ~5e9 (differences: ~9e6).  Both measured and
+  not kept.
 * Treating `wear_operator` A as a preconditioner (`lax.stop_gradient` on A)
   does not help and is wrong at coarse steps: with few slots the W-method's
   result depends on A at first order (1 % error instead of 0.02 % in the
@@ -211,7 +211,8 @@ def dynamic_cycles_to_limit(
     "euler" (module notes); ``operator_samples`` states per cycle and
     ``operator_width`` [m] contact band of `wear_operator`.  ``slots``: scan
     slots (default 3 x steps + 4: the implicit gain per slot is below
-    limit / steps, and the slowest joint carries on once the fastest is done).  ``warmup_cycles`` dynamic cycles run first with their wear
+    limit / steps, and the slowest joint carries on once the fastest is done).
+    ``warmup_cycles`` dynamic cycles run first with their wear
     discarded (the pin's start-up transient).  Pure and jit-able; a solver
     failure or a joint that never reaches the limit is reported in ``status``.
     """

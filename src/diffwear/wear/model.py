@@ -15,13 +15,11 @@ a solver:
 from __future__ import annotations
 
 import abc
-
 from typing import ClassVar
 
+import diffrax
 import equinox as eqx
 from jaxtyping import Array, Float
-
-import diffrax
 
 from ..errors import InputError
 from ..mechanism import Mechanism

@@ -37,9 +37,9 @@ bodies are round, so their compliance is the same in every rotation and the
 rotating body's compliance needs no rotation (exactly so for a rotation by an
 even number of nodes, which maps the Q9 mesh onto itself; an odd number swaps
 corner and mid-side nodes, whose compliances differ by the discretisation
-error: the study's n_theta = 120 row, where the steps are 2 nodes, measures it).  Wear changes them only through the
-geometry (order h / wall); the study measures the answer's sensitivity to the
-compliance (x 0.5, x 2).
+error: the study's n_theta = 120 row, where the steps are 2 nodes, measures it).
+Wear changes them only through the geometry (order h / wall); the study
+measures the answer's sensitivity to the compliance (x 0.5, x 2).
 
 Wear.  Step i of a sweep puts the turning body at its step angle, solves the
 contact for F and adds, on each body's nodes, dh = k A p ds with
@@ -50,7 +50,7 @@ mapped back onto its own nodes by the same periodic interpolation (exact when
 the step is a whole number of nodes: 6 deg = 1 node at n = 60).  Worn volume
 per unit depth: L sum_j h_j w_j on each body, equal for the two bodies (same k,
 same f, same ds) and equal to k A sum_steps (L sum_j f_j) ds: the Archard
-bookkeeping with the total normal load (digest section 3), tested.
+bookkeeping with the total normal load (thesis Eq. 4-1 with the pressure integrated), tested.
 
 Cycles.  A *sweep* is one stroke between the extremes (the thesis's simulated
 cycle, -30 -> 30); a *test cycle* is two sweeps (-30 -> 30 -> -30).  Sweeps
@@ -87,7 +87,7 @@ from ..fem.pin import pin_compliance, pin_mesh
 
 MM3_PER_NM = 1e-9  # 1 mm^3/(N m) = 1e-9 1/Pa
 
-# ---- the thesis's test and simulation (Tables 4-1, 4-2; digest section 4) ----
+# ---- the thesis's test and simulation (Tables 4-1, 4-2) ----
 THESIS_PRESSURE = 60e6  # Pa, "load (cross-sectional pressure)", Tables 4-1 and 4-2
 THESIS_AMPLITUDE_DEG = 30.0  # deg, oscillation amplitude, Tables 4-1 and 4-2
 THESIS_K = 1.0e-5 * MM3_PER_NM  # 1/Pa, Table 4-2 (pin-on-disk value of Kim et al. [50])
@@ -110,7 +110,8 @@ class PinPivotSetup:
     report for the justification and the scaling of the answer with them)."""
 
     pin_radius: float = 5.0e-3  # R [m]: a 10 mm pin (our choice)
-    clearance: float = 10e-6  # c = a - R [m]: radial, a close running fit of a 10 mm pin (our choice)
+    # c = a - R [m]: radial, a close running fit of a 10 mm pin (our choice)
+    clearance: float = 10e-6
     pivot_outer_radius: float = 15e-3  # b [m]: held outer surface of the pivot, 3 R (our choice)
     length: float = 10e-3  # L [m]: contact length (cancels at fixed projected pressure)
     bore_fraction: float = 0.05  # r0 / R: the pin's held bore (`diffwear.fem.pin`)
@@ -298,7 +299,8 @@ class PinPivotWear(eqx.Module):
 
     def volume(self, model: PinPivot, body: str) -> Float[Array, ""]:
         """Worn volume [m^3] of ``body``: L sum_j h_j w_j."""
-        h, w = (self.h_pin, model.pin_tributary) if body == "pin" else (self.h_pivot, model.pivot_tributary)
+        h, w = ((self.h_pin, model.pin_tributary) if body == "pin"
+                else (self.h_pivot, model.pivot_tributary))
         return model.contact.length * jnp.sum(h * w)
 
 
@@ -334,7 +336,8 @@ def run_wear(model: PinPivot, sweeps: float, extrapolation: float = 1.0) -> PinP
     m = computed_sweeps(sweeps, extrapolation)
     scale = float(sweeps) / m
     (h_pv, h_pn, work, ok, res, _), mx_pv, mx_pn, peak = wear_history(model, m, jnp.asarray(scale))
-    finite = bool(np.all(np.isfinite(np.asarray(h_pv)))) and bool(np.all(np.isfinite(np.asarray(h_pn))))
+    finite = (bool(np.all(np.isfinite(np.asarray(h_pv))))
+              and bool(np.all(np.isfinite(np.asarray(h_pn)))))
     ok = bool(ok) and finite
     if not ok:
         radius = float(model.slide_radius)
@@ -352,7 +355,8 @@ def run_wear(model: PinPivot, sweeps: float, extrapolation: float = 1.0) -> PinP
                         extrapolation=scale)
 
 
-def linear_extrapolation(sweeps, depth, target: float, fit_from: float = 0.5) -> tuple[float, float]:
+def linear_extrapolation(sweeps, depth, target: float,
+                         fit_from: float = 0.5) -> tuple[float, float]:
     """The thesis's last step (Ch. 4, Fig. 4-9): the depth history is
     ~linear once the wear is steady, so fit a line to the part after
     ``fit_from`` x the last simulated sweep count and read it at ``target``.

@@ -232,8 +232,7 @@ def test_write_dataset_refuses_to_overwrite(tmp_path):
 
 
 def test_documented_example_loads(tmp_path):
-    readme = (ROOT / "README.md").read_text()
-    doc = readme.split("### The dataset format")[1].split("\n## ")[0]
+    doc = (ROOT / "docs" / "reference" / "dataset-format.md").read_text()
     manifest = re.search(r"```toml\n(.*?)```", doc, re.S).group(1)
     csvs = dict(re.findall(r"`([\w.-]+\.csv)`:\n\n```csv\n(.*?)```", doc, re.S))
     assert len(csvs) >= 3

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import jax.numpy as jnp
 
-from ..wear.archard import ArchardWear
+from ..contact.archard import ArchardWear
 
 # Run-in length: PTFE transfer films form over the first ~10^2-10^3 cycles
 # (Blanchet & Kennedy, Wear 153 (1992) 229); 500 cycles sits in that range and

@@ -33,6 +33,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..quasistatic import QuasiStatic
+from ..sweep.models import ClearanceForce, RigWear
 from .schema import (
     Context,
     Field,
@@ -111,13 +113,9 @@ class ModelSpec:
 
 
 def _rig(**kw):
-    from ..sweep.models import RigWear
-
     if "cycles" in kw:
         kw["cycles"] = float(kw["cycles"])
     if kw.get("wear_model") == "quasi-static":
-        from ..quasistatic import QuasiStatic
-
         kw["wear_model"] = QuasiStatic()
     else:
         kw.pop("wear_model", None)
@@ -125,8 +123,6 @@ def _rig(**kw):
 
 
 def _clearance(**kw):
-    from ..sweep.models import ClearanceForce
-
     return ClearanceForce(**kw)
 
 

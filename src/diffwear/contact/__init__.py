@@ -1,5 +1,6 @@
-"""Imperfect revolute joints: clearance, contact laws, friction, bushing profiles."""
+"""Imperfect revolute joints: clearance, contact laws, friction, wear law, bushing profiles."""
 
+from .archard import ArchardWear
 from .clearance_joint import (
     ClearanceJoint,
     ContactHistory,
@@ -21,7 +22,7 @@ from .profile import BushingProfile
 
 __all__ = [
     "ClearanceJoint", "ContactHistory", "centred_state", "contact_history", "with_clearance",
-    "CoulombFriction", "ContactResult", "PinKinematics",
+    "CoulombFriction", "ArchardWear", "ContactResult", "PinKinematics",
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
     "LankaraniNikravesh", "PTFE", "STEEL", "Material", "BushingProfile",
 ]

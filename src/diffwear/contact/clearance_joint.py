@@ -22,8 +22,8 @@ from ..errors import InputError
 from ..mechanism import AbstractForceElement, Frames, Mechanism, RevoluteJoint
 from ..mechanism.constraints import _vec2
 from ..mechanism.geometry import perp, rotation, safe_angle, safe_norm
-from ..wear.archard import SLIP_RATE_WIDTH, ArchardWear
 from . import smoothing
+from .archard import SLIP_RATE_WIDTH, ArchardWear
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
 from .laws import AbstractContactLaw, ElasticFoundation

@@ -49,12 +49,12 @@ from jax import lax
 from jaxtyping import Array, Bool, Float
 
 from ..contact import smoothing
+from ..contact.archard import SLIP_RATE_WIDTH, ArchardWear
 from ..contact.clearance_joint import ClearanceJoint
 from ..contact.friction import CoulombFriction
 from ..contact.laws import ElasticFoundation, _interp_periodic
 from ..errors import InputError
 from ..mechanism.geometry import grid_angles, safe_angle, safe_norm
-from ..wear.archard import SLIP_RATE_WIDTH, ArchardWear
 from .loads import JointLoads
 
 # Newton tolerance on the offset in units of the starting guess (|e| ~ c + the

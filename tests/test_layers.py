@@ -1,0 +1,94 @@
+"""The package's import graph: acyclic at module level (every import counted,
+those inside functions too, so no cycle hides behind a lazy import) and no
+module-level ``__getattr__`` import tricks."""
+
+import ast
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "diffwear"
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(SRC.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _imports(path: Path, name: str) -> set[str]:
+    package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            if target.startswith("diffwear"):
+                # "from .pkg import mod" imports the submodule when it is one
+                for alias in node.names:
+                    sub = f"{target}.{alias.name}"
+                    found.add(sub if sub in MODULES else target)
+        elif isinstance(node, ast.Import):
+            found.update(a.name for a in node.names if a.name.startswith("diffwear"))
+    return {m for m in found if m in MODULES and m != name}
+
+
+MODULES = {_module_name(p): p for p in SRC.rglob("*.py")}
+
+
+def _graph() -> dict[str, set[str]]:
+    graph = {}
+    for name, path in MODULES.items():
+        deps = set()
+        for d in _imports(path, name):
+            # importing a module runs its packages' __init__ files first
+            parts = d.split(".")
+            deps.update(".".join(parts[:i]) for i in range(2, len(parts) + 1))
+        graph[name] = {d for d in deps if d in MODULES and d != name
+                       and not name.startswith(d + ".")}
+    return graph
+
+
+def test_module_imports_are_acyclic():
+    graph = _graph()
+    state: dict[str, int] = {}
+    stack: list[str] = []
+    cycles = []
+
+    def visit(node):
+        state[node] = 1
+        stack.append(node)
+        for dep in sorted(graph[node]):
+            if state.get(dep) == 1:
+                cycles.append(stack[stack.index(dep):] + [dep])
+            elif dep not in state:
+                visit(dep)
+        stack.pop()
+        state[node] = 2
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node)
+    assert not cycles, "\n".join(" -> ".join(c) for c in cycles)
+
+
+def test_no_module_getattr_import_tricks():
+    tricks = [name for name, path in MODULES.items()
+              if any(isinstance(n, ast.FunctionDef) and n.name == "__getattr__"
+                     for n in ast.parse(path.read_text()).body)]
+    assert not tricks, tricks
+
+
+def test_the_core_does_not_import_the_command_line_layer():
+    """mechanism, dynamics, contact, fem, wear and quasistatic never import the
+    studies, drivers, plots or the CLI."""
+    core = ("mechanism", "dynamics", "contact", "fem", "wear", "quasistatic")
+    upper = ("diffwear.cli", "diffwear.studies", "diffwear.plots", "diffwear.runner",
+             "diffwear.design", "diffwear.calibrate", "diffwear.sweep")
+    graph = _graph()
+    bad = [(m, d) for m, deps in graph.items() for d in deps
+           if m.split(".")[1:2] and m.split(".")[1] in core and d.startswith(upper)]
+    assert not bad, bad

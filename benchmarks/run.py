@@ -939,6 +939,9 @@ def metadata(quick: bool) -> dict:
 
 def run_cases(names: Sequence[str] | None = None, *, quick: bool = False, log=print) -> dict:
     """Run the named cases (default: all) -> {"meta": ..., "cases": {name: metrics}}."""
+    import jax
+
+    jax.config.update("jax_enable_x64", True)  # diffwear computes in float64
     names = list(CASES) if not names else list(names)
     unknown = [n for n in names if n not in CASES]
     if unknown:

@@ -30,6 +30,10 @@ import argparse
 import time
 from pathlib import Path
 
+import jax
+
+jax.config.update("jax_enable_x64", True)  # diffwear computes in float64
+
 from diffwear.io import OutputDir
 from diffwear.sweep import sensitivity as sens_mod
 from diffwear.sweep.models import RigWear

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import jax
 
+jax.config.update("jax_enable_x64", True)  # diffwear computes in float64
+
 from diffwear.studies import _wear_common as common
 from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, _setup, with_wear_joint
 from diffwear.wear import evolve, worn_volume

@@ -3,7 +3,7 @@ import pytest
 
 jax.config.update("jax_enable_x64", True)
 
-import diffwear  # noqa: E402,F401  (also enables x64)
+import diffwear  # noqa: E402,F401
 
 
 def pytest_addoption(parser):

@@ -92,3 +92,25 @@ def test_the_core_does_not_import_the_command_line_layer():
     bad = [(m, d) for m, deps in graph.items() for d in deps
            if m.split(".")[1:2] and m.split(".")[1] in core and d.startswith(upper)]
     assert not bad, bad
+
+
+def test_import_leaves_float64_to_the_caller_and_models_say_so():
+    """``import diffwear`` does not switch JAX's process-wide float64 flag; a
+    simulation without it raises InputError naming the fix (a fresh
+    interpreter: this test process has float64 on)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import jax, diffwear\n"
+        "assert not jax.config.jax_enable_x64\n"
+        "from diffwear.presets import TABLE_2_1, slider_crank\n"
+        "mech, q = slider_crank(TABLE_2_1)\n"
+        "try:\n"
+        "    diffwear.simulate(mech, diffwear.consistent_state(mech, q), 0.1)\n"
+        "except diffwear.InputError as err:\n"
+        "    assert 'jax_enable_x64' in str(err), err\n"
+        "    print('refused')\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={**__import__("os").environ, "PYTHONPATH": str(SRC.parent)})
+    assert out.returncode == 0 and "refused" in out.stdout, out.stderr[-2000:]

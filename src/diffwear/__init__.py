@@ -1,23 +1,71 @@
 """diffwear: differentiable planar multibody dynamics with clearance and wear.
 
-Importing diffwear enables float64 in JAX (``jax_enable_x64``): contact
-penetrations of micrometres on metre-scale positions are meaningless in float32.
+diffwear computes in float64 (contact penetrations of micrometres on
+metre-scale positions are lost in float32) but does not switch JAX's
+process-wide flag on import: call ``jax.config.update("jax_enable_x64", True)``
+first (the ``diffwear`` command does); every simulation entry point raises an
+`InputError` that says so otherwise.
+
+The names most users need, by task::
+
+    mechanism   Mechanism, Body, RevoluteJoint, TranslationalJoint, Driver, Gravity,
+                LinearSpring, presets (the thesis mechanisms)
+    dynamics    simulate, consistent_state
+    contact     ClearanceJoint, with_clearance, contact_history, LankaraniNikravesh,
+                KelvinVoigt, ElasticFoundation, CoulombFriction, ArchardWear
+    wear        evolve, cycles_to_limit, Dynamic, QuasiStatic, worn_volume
+    design      TwoJointLife
+    sweeps      sweep, sensitivity, finite_differences
+    data        load_dataset, calibrate
+    checks      gradcheck, GradCheck
+    errors      DiffwearError, InputError, SolverError
 """
 
-import jax as _jax
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _version
 
-_jax.config.update("jax_enable_x64", True)
-
-from . import dynamics, mechanism, presets  # noqa: E402
-from .errors import DiffwearError, InputError, SolverError  # noqa: E402
-from .gradcheck import GradCheck, gradcheck  # noqa: E402
+from . import presets
+from .calibrate import load_dataset
+from .calibrate.identify import calibrate
+from .contact import (
+    ArchardWear,
+    ClearanceJoint,
+    CoulombFriction,
+    ElasticFoundation,
+    KelvinVoigt,
+    LankaraniNikravesh,
+    contact_history,
+    with_clearance,
+)
+from .design import TwoJointLife
+from .dynamics import consistent_state, simulate
+from .errors import DiffwearError, InputError, SolverError
+from .gradcheck import GradCheck, gradcheck
+from .mechanism import (
+    Body,
+    Driver,
+    Gravity,
+    LinearSpring,
+    Mechanism,
+    RevoluteJoint,
+    TranslationalJoint,
+)
+from .quasistatic import QuasiStatic
+from .sweep import sweep
+from .sweep.sensitivity import finite_differences, sensitivity
+from .wear import Dynamic, cycles_to_limit, evolve, worn_volume
 
 try:  # the one version string is pyproject.toml's
-    from importlib.metadata import version as _version
-
     __version__ = _version("diffwear")
-except Exception:  # pragma: no cover - running from a source tree without metadata
+except PackageNotFoundError:  # pragma: no cover - a source tree without metadata
     __version__ = "0+unknown"
 
-__all__ = ["dynamics", "mechanism", "presets", "DiffwearError", "InputError", "SolverError",
-           "GradCheck", "gradcheck"]
+__all__ = [
+    "presets", "Mechanism", "Body", "RevoluteJoint", "TranslationalJoint", "Driver",
+    "Gravity", "LinearSpring", "simulate", "consistent_state", "ClearanceJoint",
+    "with_clearance", "contact_history", "LankaraniNikravesh", "KelvinVoigt",
+    "ElasticFoundation", "CoulombFriction", "ArchardWear", "evolve", "cycles_to_limit",
+    "Dynamic", "QuasiStatic", "worn_volume", "TwoJointLife", "sweep", "sensitivity",
+    "finite_differences", "load_dataset", "calibrate", "gradcheck", "GradCheck",
+    "DiffwearError", "InputError", "SolverError",
+]

@@ -77,3 +77,17 @@ def check_int_option(option: str, value: Any, low: int, high: int | None = None)
             or (high is not None and value > high):
         allowed = f">= {low:,}" if high is None else f"in [{low:,}, {high:,}]"
         raise InputError(f"{option} must be an integer {allowed}, got {value!r}")
+
+
+def require_float64(what: str) -> None:
+    """Raise `InputError` unless JAX computes in float64 (``jax_enable_x64``).
+
+    Contact penetrations of micrometres on metre-scale positions, and wear
+    depths of nanometres per cycle, are lost in float32; diffwear does not
+    switch the process-wide flag on import (that is the user's or the
+    command line's choice), so every simulation entry point checks it."""
+    if not jax.config.jax_enable_x64:
+        raise InputError(
+            f"{what}: diffwear computes in float64; call "
+            "jax.config.update('jax_enable_x64', True) before building a model "
+            "(the diffwear command does this itself)")

@@ -307,6 +307,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    import jax
+
+    jax.config.update("jax_enable_x64", True)  # the library leaves this to its caller
     try:
         return args.func(args)
     except DiffwearError as err:

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from .._checks import require_float64
 from ..errors import SolverError
 from ..mechanism import Mechanism
 from .equations import Baumgarte, vector_field
@@ -105,6 +106,7 @@ def simulate(
     Tsit5, a PID controller with rtol = atol = 1e-8 on the whole state, and
     recursive-checkpoint reverse-mode adjoints.
     """
+    require_float64("simulate")
     baumgarte = Baumgarte() if baumgarte is None else baumgarte
     solver = diffrax.Tsit5() if solver is None else solver
     if stepsize_controller is None:

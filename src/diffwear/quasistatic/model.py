@@ -31,6 +31,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from .._checks import require_float64
 from ..mechanism import GROUND, Mechanism
 from ..wear.life import LifeResult
 from ..wear.model import AbstractWearModel
@@ -130,6 +131,7 @@ class QuasiStatic(AbstractWearModel):
     def _each(self, mech, joints, y0, period, **target):
         """Per joint: (ProfileSolution, (unworn, worn) contact margins); and
         the loads' success."""
+        require_float64("QuasiStatic")
         loads = self.loads(mech, joints, y0, period)
         models = self.joints(mech, joints)
         masses = self.masses(mech, joints)

@@ -19,7 +19,7 @@ ready-made `models` (importable) are the easy case.  Every worker compiles the
 model once per task shape (each block has the same size except the last).
 
 float64: the task function lives in this module, so unpickling it on a worker
-imports ``diffwear``, which enables ``jax_enable_x64``; the task sets it again
+imports ``diffwear``, which leaves float64 to its caller; the task sets it
 before it traces anything, and the result columns are checked to be float64.
 """
 
@@ -40,7 +40,7 @@ def _run_block(model_fn, cols: dict, chunk_size, start: int):
     """One task, on a worker: the local engine over a block of points."""
     import jax
 
-    jax.config.update("jax_enable_x64", True)  # also done by importing diffwear
+    jax.config.update("jax_enable_x64", True)  # diffwear computes in float64
     from .runner import evaluate
 
     out, info = evaluate(model_fn, cols, chunk_size=chunk_size)

@@ -10,6 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._checks import require_float64
 from ..errors import InputError
 from .grid import full_grid, validate
 from .result import SweepResult, build_result
@@ -95,6 +96,7 @@ def sweep(model_fn: Callable[[dict], dict], base_params: Mapping, grid: Mapping,
     bit-identical; the reduced rig wear differs by 7e-7 relative; a clearance
     cycle's sampled impact peak force by 1 % (its RMS force by 3e-4).
     """
+    require_float64("sweep")
     known = getattr(model_fn, "param_names", None)
     base, axes = validate(base_params, grid, None if known is None else tuple(known))
     cols, shape = full_grid(base, axes)

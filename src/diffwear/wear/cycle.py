@@ -15,6 +15,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
+from .._checks import require_float64
 from ..contact.clearance_joint import ClearanceJoint
 from ..dynamics import simulate
 from ..errors import InputError
@@ -89,6 +90,7 @@ def wear_cycle_joints(
 ) -> JointsCycleResult:
     """One cycle [t0, t0 + period] from ``y`` with the wear states of every
     joint in ``joints`` reset: the wear of several joints in one integration."""
+    require_float64("wear_cycle_joints")
     elements = [clearance_element(mech, j)[1] for j in joints]
     y0 = y
     for j in joints:
@@ -134,6 +136,7 @@ def wear_cycle(
     (for contact loci and joint-force plots).  Pure and jit-able; failure is
     reported in ``ok`` (False on an integrator failure or a non-finite state).
     """
+    require_float64("wear_cycle")
     r = wear_cycle_joints(mech, (joint,), y, t0, period, rtol=rtol, atol=atol, n_save=n_save,
                           adjoint=adjoint, max_steps=max_steps)
     return CycleResult(y_end=r.y_end, depth_increment=r.depth_increment[0],

@@ -57,6 +57,7 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array, Float
 
+from .._checks import require_float64
 from ..choices import WEAR_METHODS
 from ..errors import InputError, SolverError
 from ..mechanism import Mechanism
@@ -187,6 +188,7 @@ def evolve(
     ignored.  ``slots`` scan slots are run (default: all of the method's).  See
     `evolve_in_chunks` for a checkpointing driver.
     """
+    require_float64("evolve")
     ev = Evolver(mech, joint, cycles, period=period, method=method,
                  extrapolation=extrapolation, max_dynamic=max_dynamic, rtol=rtol, atol=atol,
                  wall_thickness=wall_thickness, warmup_cycles=warmup_cycles, adaptive=adaptive,

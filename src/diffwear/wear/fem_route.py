@@ -74,7 +74,7 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array, Float
 
-from .._checks import check_int_option, check_positive, check_range, concrete
+from .._checks import check_int_option, check_positive, check_range, concrete, require_float64
 from ..errors import InputError
 from ..fem import RingContact, ring_mesh
 from ..fem.condense import inner_compliance, tributary_lengths
@@ -364,6 +364,7 @@ def evolve_fem(mech: Mechanism, joint: str, y0, cycles, *, period, fem: FemWearM
                extrapolation=1.0, **kw) -> EvolutionResult:
     """`evolve` (method "constant") with the FE wear pressure; ``kw`` as `evolve`
     (wall_thickness, warmup_cycles, cycle tolerances, ...)."""
+    require_float64("evolve_fem")
     ev = FemEvolver(mech, joint, cycles, fem=fem, period=period, extrapolation=extrapolation,
                     **kw)
     state, hist = ev.run(ev.init(y0), ev.n_slots)

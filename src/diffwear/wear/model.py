@@ -21,6 +21,7 @@ import diffrax
 import equinox as eqx
 from jaxtyping import Array, Float
 
+from .._checks import require_float64
 from ..errors import InputError
 from ..mechanism import Mechanism
 from .cycle import CYCLE_ATOL, CYCLE_RTOL
@@ -87,6 +88,7 @@ def cycles_to_limit(mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, "
     `diffwear.wear.life`).  Pure and jit-able; failures are reported in the
     result's ``status`` (`diffwear.wear.status`).
     """
+    require_float64("cycles_to_limit")
     if model is None:
         return dynamic_cycles_to_limit(mech, joints, y0, period=period, limit=limit,
                                        **dynamic_options)

@@ -78,7 +78,7 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array, Bool, Float
 
-from .._checks import check_int_option, check_range
+from .._checks import check_int_option, check_range, require_float64
 from ..errors import InputError, SolverError
 from ..fem.condense import tributary_lengths
 from ..fem.contact import TOL, RingContact
@@ -331,6 +331,7 @@ def run_wear(model: PinPivot, sweeps: float, extrapolation: float = 1.0) -> PinP
     """Wear after ``sweeps`` real sweeps (one sweep = one stroke, half a test
     cycle), each computed sweep standing for A ~ ``extrapolation`` sweeps.
     `SolverError` if any contact solve failed."""
+    require_float64("run_wear")
     _check_number("sweeps", "number of sweeps", sweeps, 0.0, 1e12, low_open=True)
     _check_number("extrapolation", "extrapolation factor A", extrapolation, 1.0, float(sweeps))
     m = computed_sweeps(sweeps, extrapolation)

@@ -173,5 +173,21 @@ def test_every_command_has_help(command, capsys):
     assert e.value.code == 0
     text = capsys.readouterr().out
     assert "usage: diffwear" in text
+    assert "Exit codes: 0 success, 2 bad input, 3 " in " ".join(text.split())
     if command:
         assert "--out" in text and "--quiet" in text
+
+
+def test_version(capsys):
+    from importlib.metadata import version
+
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0
+    assert capsys.readouterr().out.strip() == f"diffwear {version('diffwear')}"
+
+
+def test_design_with_an_output_folder_but_no_problem_is_refused(tmp_path, capsys):
+    out = tmp_path / "d"
+    assert main(["design", "--out", str(out)]) == 2
+    assert "name the problem" in capsys.readouterr().err and not out.exists()

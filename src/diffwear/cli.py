@@ -125,6 +125,9 @@ def _design(args: argparse.Namespace) -> int:
     from .io import OutputDir
 
     if args.list or args.name is None:
+        if args.out is not None and not args.list:
+            raise InputError(f"design: name the problem to solve (available: {study.NAME}); "
+                             f"nothing was written to {args.out}")
         print(f"{study.NAME}  {study.DESCRIPTION}")
         return 0
     if args.name != study.NAME:
@@ -176,7 +179,24 @@ def _calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+EXIT_CODES = "Exit codes: 0 success, 2 bad input, 3 solver failure."
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("diffwear")
+    except PackageNotFoundError:  # a source tree without metadata
+        return "unknown"
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        # every command's --help ends with the exit codes
+        kwargs.setdefault("epilog", EXIT_CODES)
+        super().__init__(*args, **kwargs)
+
     def error(self, message):  # argparse exits with 2 already; keep its message
         self.print_usage(sys.stderr)
         self.exit(2, f"{self.prog}: error: {message}\n")
@@ -192,7 +212,8 @@ def _output_options(p: argparse.ArgumentParser, *, required: bool) -> None:
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="diffwear", description="Planar mechanisms with clearance and wear in "
                      "their revolute joints: thesis studies, mechanism files and sweeps.",
-                     epilog="Exit codes: 0 success, 2 bad input, 3 solver failure.")
+                     epilog=EXIT_CODES)
+    parser.add_argument("--version", action="version", version=f"diffwear {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("study", help="run a named thesis study (see --list)")

@@ -191,3 +191,16 @@ def test_design_with_an_output_folder_but_no_problem_is_refused(tmp_path, capsys
     out = tmp_path / "d"
     assert main(["design", "--out", str(out)]) == 2
     assert "name the problem" in capsys.readouterr().err and not out.exists()
+
+
+def test_calibrate_refuses_too_few_dynamic_cycles_in_the_users_words(tmp_path, capsys):
+    """The model's limit is reported with the option's name, not a class name."""
+    from pathlib import Path
+
+    data = Path(__file__).resolve().parents[1] / "design_studies" / "calibration" / \
+        "synthetic_run_in"
+    out = tmp_path / "c"
+    assert main(["calibrate", str(data), "--dynamic-cycles", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--dynamic-cycles 8 or more" in err and "RigHistory" not in err
+    assert not out.exists()

@@ -173,6 +173,7 @@ def _calibrate(args: argparse.Namespace) -> int:
         check_int_option("--dynamic-cycles", args.dynamic_cycles, 1, 2000)
     check_int_option("--n-theta", args.n_theta, 12, 720)
     settings = ModelSettings(dynamic_cycles=args.dynamic_cycles, n_theta=args.n_theta)
+    settings.model(data.max_cycles)  # the model's own limits, before --out is touched
     out = OutputDir(args.out, overwrite=args.overwrite)
     log = (lambda *a, **k: None) if args.quiet else print
     run(data, out, settings=settings, top=args.top, log=log)

@@ -105,16 +105,18 @@ class RigHistory(eqx.Module):
 
     def __check_init__(self):
         if not (math.isfinite(self.cycles) and self.cycles > 0):
-            raise InputError(f"RigHistory: cycles must be finite and > 0, got {self.cycles}")
+            raise InputError(f"calibration model: the campaign's cycles must be finite and "
+                             f"> 0, got {self.cycles}")
         if int(self.dynamic_cycles) < 1:
-            raise InputError(f"RigHistory: dynamic_cycles must be >= 1, got "
-                             f"{self.dynamic_cycles}")
+            raise InputError(f"calibration model: dynamic cycles (--dynamic-cycles) must be "
+                             f">= 1, got {self.dynamic_cycles}")
         if self.extrapolation > MAX_EXTRAPOLATION:
             need = math.ceil(self.cycles / MAX_EXTRAPOLATION)
             raise InputError(
-                f"RigHistory: {self.cycles:g} cycles in {self.dynamic_cycles} dynamic cycles "
-                f"is A = {self.extrapolation:g} > {MAX_EXTRAPOLATION:g} (explicit wear "
-                f"extrapolation unstable); use dynamic_cycles >= {need}")
+                f"calibration model: {self.cycles:,.0f} cycles in {self.dynamic_cycles} dynamic "
+                f"cycles (--dynamic-cycles) is an extrapolation factor A = "
+                f"{self.extrapolation:,.0f} > {MAX_EXTRAPOLATION:g}, where the explicit wear "
+                f"extrapolation is unstable; use --dynamic-cycles {need} or more")
 
     @property
     def extrapolation(self) -> float:

@@ -20,10 +20,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..io import OutputDir  # noqa: E402
-from .dataset import Dataset  # noqa: E402
+from .dataset import PARAMETERS, Dataset  # noqa: E402
 from .effects import EFFECTS  # noqa: E402
 from .fit import ModelSettings  # noqa: E402
 from .identify import GOF_SIGMAS, LR_CRITICAL, STRENGTH_SIGMAS, Calibration, calibrate  # noqa: E402
+
+# SI units of the fitted parameters in the report (the dataset's own units are
+# converted on loading: k in mm^3/(N m) is 1e-9 1/Pa)
+REPORT_UNITS = {"wear coefficient": "1/Pa = m^3/(N m)", "length": "m", None: "-"}
 
 DESCRIPTION = "calibrate the rig model on measured wear data and identify a missing effect"
 UNIT = {"profile": (1e6, "um", "bushing angle [rad]"), "max_depth": (1e3, "mm", "cycles"),
@@ -183,7 +187,9 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> str:
               f"{_fmt(summary['fit_rmse_after'])} |"]
     final = c.chosen if ident != "none" else c.base
     for n in d.fit_names:
-        lines.append(f"| {n} | {_fmt(c.base.params[n])} +- {_fmt(c.base.params_std[n], 2)} | "
+        unit = REPORT_UNITS[PARAMETERS[n]]
+        lines.append(f"| {n} [{unit}] | {_fmt(c.base.params[n])} +- "
+                     f"{_fmt(c.base.params_std[n], 2)} | "
                      f"{_fmt(final.params[n])} +- {_fmt(final.params_std[n], 2)} |")
     lines += ["", "## Candidates", "",
               "Score test at zero strength from the base fit (module "

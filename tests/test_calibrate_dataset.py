@@ -203,10 +203,11 @@ def test_write_dataset_from_arrays(tmp_path):
         write_dataset(tmp_path / "odd", name="gen", parameters=params, series=[odd])
     assert not (tmp_path / "odd").exists()
     # bad values are caught by loading a temporary copy: the target is never created
-    bad = Series("bad", "profile", "bad.csv", 1000, [0.0, 1.0], [0.0, -1e-6], 1e-6)
+    bad = Series("bad", "profile", "bad.csv", 1000, [0.0, 1.0], [0.0, -1e-5], 1e-6)
     with pytest.raises(InputError) as err:
         write_dataset(tmp_path / "bad", name="gen", parameters=params, series=[bad])
-    assert "would not load back" in str(err.value) and "'-0.001' is negative" in str(err.value)
+    assert "would not load back" in str(err.value)
+    assert "'-0.01' is 10.0 uncertainties below zero" in str(err.value)
     assert str(tmp_path / "bad" / "bad.csv") in str(err.value)
     assert not (tmp_path / "bad").exists()
 
@@ -407,8 +408,10 @@ BAD = {
                          [P, "line 2", "'1e999' is out of the float64 range"]),
     "wrong cell count": (csv(P, "theta_deg,depth_um\n0,0\n90,1,2\n"),
                          [P, "line 3", "3 cells", "names 2 columns"]),
-    "negative depth": (csv(P, "theta_deg,depth_um\n0,0\n90,1\n180,-3\n"),
-                       [P, "line 4", "column 'depth_um'", "'-3' is negative", "depth_um >= 0"]),
+    "depth far below zero": (csv(P, "theta_deg,depth_um\n0,0\n90,1\n180,-9\n"),
+                             [P, "line 4", "column 'depth_um'",
+                              "'-9' is 4.5 uncertainties below zero",
+                              "depth_um >= -4 x the series' uncertainty"]),
     "angles not increasing": (csv(P, "theta_deg,depth_um\n0,0\n90,1\n90,2\n"),
                               [P, "line 4", "'90' is not greater than the value on line 3",
                                "strictly increasing theta_deg"]),
@@ -423,7 +426,7 @@ BAD = {
     "negative cycles cell": (csv("max_depth.csv", "cycles,max_depth_um\n-5,0\n"),
                              ["max_depth.csv", "line 2", "'-5' is negative"]),
     "negative mass": (csv("mass.csv", "cycles,mass_g\n0,-0.1\n"),
-                      ["mass.csv", "column 'mass_g'", "'-0.1' is negative"]),
+                      ["mass.csv", "column 'mass_g'", "'-0.1' is 200.0 uncertainties below"]),
     "CSV not UTF-8": (csv(P, b"theta_deg,depth_um\n0,\xff\n"),
                       [P, "line 2", "not UTF-8", "CSV files are UTF-8"]),
 }
@@ -521,3 +524,12 @@ def test_property_garbage_csv_is_an_input_error(good_folder, garbage):
         s = d.series[0]
         assert np.all(np.diff(s.x) > 0) and np.all((s.x >= 0) & (s.x < 2 * math.pi))
         assert np.all(s.y >= 0)
+
+
+def test_small_negative_depths_are_noise_and_kept_as_measured(tmp_path):
+    """A profilometer reads noise around zero in the unworn arc: depths down to
+    4 uncertainties below zero load unchanged (clipping would bias the fit)."""
+    csvs = {**CSVS, P: "theta_deg,depth_um\n0,-7.9\n90,1\n180,-2\n270,12\n"}  # sigma 2 um
+    d = load_dataset(make(tmp_path / "noisy", MANIFEST, csvs))
+    s = next(s for s in d.series if s.file.name == P)
+    np.testing.assert_allclose(s.y, np.array([-7.9, 1.0, -2.0, 12.0]) * 1e-6, rtol=1e-12)

@@ -10,7 +10,7 @@ CSV), the key path or the CSV line and column, the bad value and what is
 allowed, in the style of the mechanism files (`diffwear.config.loader`):
 
     data/dataset.toml: series[1].uncertainty: unit 'um' is a length unit, not volume; ...
-    data/profile_02000.csv: line 7, column 'depth_um': '-3' is negative; allowed: ...
+    data/profile_02000.csv: line 7, column 'depth_um': '-40' is 8.0 uncertainties below zero; ...
 
 Loading only reads: a failed load leaves the folder as it was.
 """
@@ -182,7 +182,7 @@ class Kind(NamedTuple):
     y: tuple[str, ...]       # one of these gives y
     quantity: str            # dimension of y and of the uncertainty
     cycles_key: bool         # True: `cycles` in the manifest; False: a cycles column
-    y_nonnegative: bool
+    y_nonnegative: bool      # physically >= 0: only noise may take it below (NOISE_SIGMAS)
     write: tuple[str, str]   # columns write_dataset uses
     write_unit: str          # unit of the y column written (and of the uncertainty)
 
@@ -459,6 +459,8 @@ def _series(ctx: Context, folder: Path, k: int, table: dict, density: float | No
             y = y / density
         if sigma_dim == "mass":
             sigma = sigma / density
+    if spec.y_nonnegative:
+        _check_noise_floor(str(folder / rel), csv, y, sigma)
 
     cycles = v.get("cycles")
     if v["role"] is not None:
@@ -498,6 +500,15 @@ class _Csv(NamedTuple):
     y_column: str
     x: np.ndarray
     y: np.ndarray
+    lines: tuple[int, ...]   # the file's line of each point
+    cells: tuple[str, ...]   # the y cell as written
+
+
+# A depth, volume or mass is >= 0, but its measurement is not: a profilometer
+# reads noise around zero in the unworn arc.  Values down to this many
+# uncertainties below zero are kept as measured (clipping them would bias the
+# fit); a value further below is a mistake in the data (P < 3e-5 for noise).
+NOISE_SIGMAS = 4.0
 
 
 def _csv_error(file: str, line: int, column: str | None, what: str, allowed: str) -> InputError:
@@ -612,9 +623,20 @@ def _read_csv(path: Path, kind: str) -> _Csv:
         elif x[r] < 0.0:
             raise _csv_error(file, number, x_col, f"{cells[ix]!r} is negative",
                              f"{x_col} >= 0")
-        if spec.y_nonnegative and y[r] < 0.0:
-            raise _csv_error(file, number, y_col, f"{cells[iy]!r} is negative", f"{y_col} >= 0")
-    return _Csv(x_col, y_col, x, y)
+    return _Csv(x_col, y_col, x, y, tuple(n for n, _ in rows),
+                tuple(cells[iy] for _, cells in rows))
+
+
+def _check_noise_floor(file: str, csv: _Csv, y, sigma) -> None:
+    """A quantity that is >= 0 may read below zero by noise only: at most
+    `NOISE_SIGMAS` uncertainties."""
+    floor = -NOISE_SIGMAS * float(sigma)
+    for r in np.flatnonzero(np.asarray(y) < floor):
+        raise _csv_error(file, csv.lines[r], csv.y_column,
+                         f"{csv.cells[r]!r} is {-float(y[r]) / float(sigma):.1f} uncertainties "
+                         "below zero (negative values are accepted as measurement noise down "
+                         f"to {NOISE_SIGMAS:g} uncertainties)",
+                         f"{csv.y_column} >= -{NOISE_SIGMAS:g} x the series' uncertainty")
 
 
 # ----------------------------------------------------------------------------- writing

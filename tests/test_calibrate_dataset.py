@@ -533,3 +533,30 @@ def test_small_negative_depths_are_noise_and_kept_as_measured(tmp_path):
     d = load_dataset(make(tmp_path / "noisy", MANIFEST, csvs))
     s = next(s for s in d.series if s.file.name == P)
     np.testing.assert_allclose(s.y, np.array([-7.9, 1.0, -2.0, 12.0]) * 1e-6, rtol=1e-12)
+
+
+def test_declared_angle_convention_maps_profiles_into_the_model_frame(tmp_path):
+    """[rig] bushing_angle_zero / bushing_angle_sense: a profile measured from
+    another zero, or clockwise, is loaded in the model's bushing frame (counter-
+    clockwise from the rod axis); the default is the model's own convention."""
+    csvs = {**CSVS, P: "theta_deg,depth_um\n0,10\n90,20\n180,30\n270,40\n"}
+    plain = load_dataset(make(tmp_path / "plain", MANIFEST, csvs))
+    turned = MANIFEST.replace('preset = "rig"', 'preset = "rig"\nbushing_angle_zero = "90 deg"\n'
+                              'bushing_angle_sense = "clockwise"')
+    assert turned != MANIFEST
+    d = load_dataset(make(tmp_path / "turned", turned, csvs))
+
+    def profile(ds):
+        s = next(s for s in ds.series if s.file.name == P)
+        return np.degrees(s.x), s.y * 1e6
+
+    x, y = profile(plain)
+    np.testing.assert_allclose(x, [0, 90, 180, 270], atol=1e-9)
+    np.testing.assert_allclose(y, [10, 20, 30, 40])
+    # data 0 -> model 90, data 90 (clockwise) -> model 0, data 180 -> 270, data 270 -> 180
+    x, y = profile(d)
+    np.testing.assert_allclose(x, [0, 90, 180, 270], atol=1e-9)
+    np.testing.assert_allclose(y, [20, 10, 40, 30])
+    bad = MANIFEST.replace('preset = "rig"', 'preset = "rig"\nbushing_angle_sense = "cw"')
+    with pytest.raises(InputError, match="bushing_angle_sense"):
+        load_dataset(make(tmp_path / "bad", bad, csvs))

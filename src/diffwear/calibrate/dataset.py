@@ -17,6 +17,7 @@ Loading only reads: a failed load leaves the folder as it was.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import tempfile
@@ -49,6 +50,7 @@ from ..errors import InputError
 MANIFEST = "dataset.toml"
 SECTIONS = ("dataset", "rig", "parameters", "calibration", "series")
 PRESETS = ("rig",)  # the thesis Ch. 7 rig (`diffwear.presets.rig_slider_crank`)
+ANGLE_SENSES = ("counter-clockwise", "clockwise")  # of the profile files' bushing angle
 ROLES = ("fit", "holdout")
 BASES = ("mass", "profile")
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_.-]+")
@@ -269,6 +271,12 @@ DATASET_FIELDS = {"name": Text(), "description": Text(default="")}
 RIG_FIELDS = {
     "preset": Text(choices=PRESETS),
     "bushing_density": Quantity(dimension="density", default=None, low=0.0, low_open=True),
+    # the bushing angle of the profile files: where their 0 lies in the model's
+    # bushing frame (counter-clockwise from the rod axis, crank -> slider end)
+    # and which way they count
+    "bushing_angle_zero": Quantity(dimension="angle", default=0.0, low=-2 * math.pi,
+                                   high=2 * math.pi),
+    "bushing_angle_sense": Text(default=ANGLE_SENSES[0], choices=ANGLE_SENSES),
 }
 CALIBRATION_FIELDS = {"holdout_from_cycles": Number(default=None, low=0.0)}
 
@@ -339,6 +347,8 @@ def _build(folder: Path, ctx: Context, data: Mapping) -> Dataset:
     raw_series = read_array_of_tables(ctx, "series", data.get("series"), required=True)
     for k, table in enumerate(raw_series):
         s = _series(ctx, folder, k, table, rig["bushing_density"], holdout_from)
+        if s.kind == "profile":
+            s = _to_model_frame(s, rig["bushing_angle_zero"], rig["bushing_angle_sense"])
         if s.name in names:
             raise ctx.error(f"series[{k}].name",
                             f"{s.name!r} is already the name of series[{names[s.name]}]",
@@ -361,6 +371,20 @@ def _build(folder: Path, ctx: Context, data: Mapping) -> Dataset:
         preset=rig["preset"], parameters=parameters, series=tuple(series),
         bushing_density=rig["bushing_density"], holdout_from_cycles=holdout_from, notes=notes,
     )
+
+
+def _to_model_frame(s: "Series", zero: float, sense: str) -> "Series":
+    """A profile measured with its own angle convention, in the model's bushing
+    frame: theta = zero + theta_data (counter-clockwise) or zero - theta_data
+    (clockwise), wrapped to [0, 2 pi) and sorted."""
+    if zero == 0.0 and sense == ANGLE_SENSES[0]:
+        return s
+    sign = 1.0 if sense == ANGLE_SENSES[0] else -1.0
+    theta = np.mod(zero + sign * np.asarray(s.x), 2 * math.pi)
+    theta = np.where(theta >= 2 * math.pi, 0.0, theta)  # mod can round up to 2 pi
+    order = np.argsort(theta, kind="stable")
+    return dataclasses.replace(s, x=theta[order], y=np.asarray(s.y)[order],
+                               holdout=np.asarray(s.holdout)[order])
 
 
 def _parameters(ctx: Context, raw) -> dict[str, Parameter]:

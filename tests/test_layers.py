@@ -114,3 +114,17 @@ def test_import_leaves_float64_to_the_caller_and_models_say_so():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env={**__import__("os").environ, "PYTHONPATH": str(SRC.parent)})
     assert out.returncode == 0 and "refused" in out.stdout, out.stderr[-2000:]
+
+
+def test_public_names_do_not_hide_subpackages():
+    """``import diffwear.x.y`` resolves through attributes: a top-level function
+    named like a subpackage (``sweep``, ``calibrate``) would hide it."""
+    import importlib
+    import types
+
+    import diffwear
+
+    for name in diffwear.__all__:
+        if (SRC / name).is_dir() or (SRC / f"{name}.py").is_file():
+            assert isinstance(getattr(diffwear, name), types.ModuleType), name
+            assert getattr(diffwear, name) is importlib.import_module(f"diffwear.{name}")

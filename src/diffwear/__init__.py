@@ -15,8 +15,11 @@ The names most users need, by task::
                 KelvinVoigt, ElasticFoundation, CoulombFriction, ArchardWear
     wear        evolve, cycles_to_limit, Dynamic, QuasiStatic, worn_volume
     design      TwoJointLife
-    sweeps      sweep, sensitivity, finite_differences
-    data        load_dataset, calibrate
+    sweeps      sweep.sweep, sensitivity, finite_differences
+    data        load_dataset, calibrate.calibrate
+
+(``sweep`` and ``calibrate`` are the subpackages: a function of the same name
+at the top would hide them.)
     checks      gradcheck, GradCheck
     errors      DiffwearError, InputError, SolverError
 """
@@ -24,9 +27,8 @@ The names most users need, by task::
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _version
 
-from . import presets
+from . import calibrate, presets, sweep
 from .calibrate import load_dataset
-from .calibrate.identify import calibrate
 from .contact import (
     ArchardWear,
     ClearanceJoint,
@@ -40,7 +42,7 @@ from .contact import (
 from .design import TwoJointLife
 from .dynamics import consistent_state, simulate
 from .errors import DiffwearError, InputError, SolverError
-from .gradcheck import GradCheck, gradcheck
+from .gradient_check import GradCheck, gradcheck
 from .mechanism import (
     Body,
     Driver,
@@ -51,7 +53,6 @@ from .mechanism import (
     TranslationalJoint,
 )
 from .quasistatic import QuasiStatic
-from .sweep import sweep
 from .sweep.sensitivity import finite_differences, sensitivity
 from .wear import Dynamic, cycles_to_limit, evolve, worn_volume
 

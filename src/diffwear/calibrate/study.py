@@ -23,6 +23,7 @@ from ..io import OutputDir  # noqa: E402
 from .dataset import PARAMETERS, Dataset  # noqa: E402
 from .effects import EFFECTS  # noqa: E402
 from .fit import ModelSettings  # noqa: E402
+from .frame_check import frame_check  # noqa: E402
 from .identify import GOF_SIGMAS, LR_CRITICAL, STRENGTH_SIGMAS, Calibration, calibrate  # noqa: E402
 
 # SI units of the fitted parameters in the report (the dataset's own units are
@@ -165,6 +166,8 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> str:
              "series' stated 1-sigma noise.", ""]
     for note in d.notes:
         lines += [f"> {note}", ""]
+    for w in summary.get("frame_warnings", []):
+        lines += [f"> **Warning:** {w['message']}.", ""]
     if c.base.n_fit <= len(d.fit_names) + 2:
         lines += [f"**What these data can support:** {c.base.n_fit} numbers for "
                   f"{len(d.fit_names)} fitted parameters leave {c.base.dof} degree(s) of "
@@ -220,12 +223,35 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> str:
     return "\n".join(lines)
 
 
+def frame_warnings(c: Calibration) -> list[dict]:
+    """Profiles that fit the base model much better in another angle frame
+    (`frame_check`), with the manifest keys that would declare it."""
+    found = []
+    for k, s in enumerate(c.dataset.series):
+        if s.kind != "profile":
+            continue
+        f = frame_check(s.x, s.y, s.sigma, c.base.prediction[c.problem.series_of_point == k])
+        if f is None:
+            continue
+        f["series"] = s.name
+        f["message"] = (
+            f"profile {s.name!r} fits the base model much better {f['transform']} (chi2 "
+            f"{f['chi2']:.0f} against {f['chi2_as_given']:.0f} as given): if it was measured "
+            f"in that frame, declare it in [rig]: bushing_angle_zero = \"{f['zero_deg']:g} deg\", "
+            f"bushing_angle_sense = \"{f['sense']}\"")
+        found.append(f)
+    return found
+
+
 def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSettings(),
         top: int = 3, log=print) -> dict:
     """The loop on a loaded dataset (`load_dataset`: bad input is found before
     ``out`` exists), writing the outputs listed in the module notes."""
     c = calibrate(data, settings, top=top, log=log)
     summary = c.summary()
+    summary["frame_warnings"] = frame_warnings(c)
+    for w in summary["frame_warnings"]:
+        log(f"warning: {w['message']}")
     files = _plots(out, c)
     p = c.problem
     final = c.chosen if summary["effect_identified"] != "none" else c.base

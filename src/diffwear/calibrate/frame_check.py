@@ -1,0 +1,69 @@
+"""Is a measured profile in the model's angle frame?
+
+The most common bookkeeping slip with bore profiles is the angle convention:
+measured clockwise instead of counter-clockwise, or from another zero.  A
+profile in the wrong frame fits badly however the parameters move, and the
+loop would look for an effect that is not there.  `frame_check` compares the
+base fit's prediction with the data read in every other frame (rotated by a
+multiple of `STEP_DEG`, and mirrored and rotated) and reports the frame that
+fits much better: chi-square lower by the factor `FACTOR` and by at least
+`MIN_DROP` (so noise alone does not trigger it), with the manifest keys that
+declare that frame (`diffwear.calibrate.dataset`, ``[rig]``
+``bushing_angle_zero`` / ``bushing_angle_sense``).  A warning: the user
+decides, the fit is not changed.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+STEP_DEG = 5.0
+FACTOR = 2.0
+MIN_DROP = 25.0
+
+
+def _periodic(theta, y):
+    """Linear periodic interpolant of (theta, y) on [0, 2 pi)."""
+    t = np.concatenate([theta - 2 * math.pi, theta, theta + 2 * math.pi])
+    v = np.concatenate([y, y, y])
+    return lambda a: np.interp(np.mod(a, 2 * math.pi), t, v)
+
+
+def frame_check(theta, y, sigma, prediction) -> dict | None:
+    """The frame in which the profile (``theta`` [rad], depth ``y``, noise
+    ``sigma``) fits ``prediction`` (the model at ``theta``) much better than
+    as given, or None.  Returns {"chi2_as_given", "chi2", "zero_deg",
+    "sense", "transform"}: the data's own zero lies at ``zero_deg`` of the
+    model frame and counts in ``sense``."""
+    theta, y = np.asarray(theta, float), np.asarray(y, float)
+    prediction = np.asarray(prediction, float)
+    if theta.size < 8:
+        return None
+    data_at = _periodic(theta, y)
+
+    def chi2(angles):
+        return float(np.sum(((data_at(angles) - prediction) / sigma) ** 2))
+
+    given = float(np.sum(((y - prediction) / sigma) ** 2))
+    found = []
+    for z in np.arange(0.0, 360.0, STEP_DEG):
+        zr = math.radians(z)
+        for sense, angles in (("counter-clockwise", theta - zr), ("clockwise", zr - theta)):
+            if sense == "counter-clockwise" and z == 0.0:
+                continue  # as given
+            found.append((chi2(angles), z, sense))
+    lowest = min(c for c, _, _ in found)
+    # a groove symmetric about its centre fits mirrored as well as rotated:
+    # among the frames that fit as well (within noise), name the simplest slip
+    # (a rotation, then a mirror about the zero, then both; the smallest angle)
+    near = [f for f in found if f[0] <= lowest + max(1.0, 0.01 * lowest)]
+    c, z, sense = min(near, key=lambda f: (f[2] != "counter-clockwise", f[1] != 0.0,
+                                           min(f[1], 360.0 - f[1])))
+    if not (c * FACTOR < given and given - c > MIN_DROP):
+        return None
+    what = ("mirrored" if sense == "clockwise" else "rotated") + (
+        f", zero at {z:g} deg" if z or sense == "counter-clockwise" else "")
+    return {"chi2_as_given": given, "chi2": c, "zero_deg": float(z), "sense": sense,
+            "transform": what}

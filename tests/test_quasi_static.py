@@ -268,6 +268,10 @@ def test_wear_study_on_the_quasi_static_model(tmp_path):
     for name in ("report.md", "wear_profile.png", "wear_history.png",
                  "contact_locus_and_force.png", "joint_force_last_cycle.csv"):
         assert (out / name).stat().st_size > 0
+    # 500 cycles are not the thesis's 5,000: its values are not put beside them
+    report = (out / "report.md").read_text()
+    assert s["thesis"] == {} and "5,000 cycles and this run has 500" in s["thesis_not_compared"]
+    assert "not compared" in report and "Table 6-4" not in report.split("\n| quantity")[1]
 
 
 @pytest.mark.parametrize("extra, word", [(["--method", "adaptive"], "--method"),

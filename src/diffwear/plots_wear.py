@@ -46,7 +46,8 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
     axes[1].set_xlabel("cycles")
     for ax in axes:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        if ax.get_legend_handles_labels()[0]:  # thesis markers only when compared
+            ax.legend(fontsize=8)
     axes[0].set_title(f"{name}: wear vs cycles (markers: {markers})")
     fig.tight_layout()
     fig.savefig(out.file("wear_history.png"), dpi=120)

@@ -21,6 +21,7 @@ from ..presets import PTFE_DENSITY, WearJointDesign
 from ..quasistatic import QuasiStatic
 from ..wear import worn_volume
 from ..wear.status import STATUS_OK, STATUS_TEXT
+from ._report import comparison_table
 
 JOINT = "crank_rod"
 
@@ -118,14 +119,7 @@ def run(out, *, name, mech, design: WearJointDesign, y0, cycles, period, thesis:
         f"# {name}\n", description + "\n",
         "Model: quasi-static joint (the pin at the equilibrium of the EFM springs under the "
         "ideal mechanism's joint load; wear integrated in the cycle count).\n",
-        "| quantity | diffwear (quasi-static) | " + " | ".join(thesis) + " |",
-        "|---" * (2 + len(thesis)) + "|",
-        f"| max wear depth [mm] | {summary['max_wear_depth_mm']:.4f} | "
-        + " | ".join(f"{v.get('max_wear_depth_mm', '')}" for v in thesis.values()) + " |",
-        f"| wear volume [mm^3] | {volume:.2f} | "
-        + " | ".join(f"{v.get('wear_volume_mm3', '')}" for v in thesis.values()) + " |",
-        f"| worn mass [g] | {summary['worn_mass_g']:.4f} | "
-        + " | ".join(f"{v.get('worn_mass_g', '')}" for v in thesis.values()) + " |", "",
+        *comparison_table("diffwear (quasi-static)", summary, thesis), "",
         f"- cycles: {summary['cycles']:.0f} in {summary['wear_steps']} steps of the wear ODE; "
         f"status: {STATUS_TEXT[status]}",
         f"- peak wear at theta = {summary['max_wear_angle_rad']:.3f} rad (bushing frame, from "

@@ -18,6 +18,7 @@ from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..wear import wear_cycle, worn_mechanism, worn_volume
 from ..wear.evolution import ChunkedEvolution, Evolver, load_checkpoint, save_checkpoint
 from ..wear.fem_route import FemEvolver, default_model
+from ._report import comparison_table
 
 JOINT = "crank_rod"
 N_SAVE = 401
@@ -143,7 +144,7 @@ def check_contact(contact) -> str:
 def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, period, method,
                    extrapolation, target_dynamic, n_theta, thesis: dict, description: str, log,
                    resume=False, progress=False, extra_summary=None, extra_report=(),
-                   contact="efm", fem=None, model="dynamic") -> dict:
+                   contact="efm", fem=None, model="dynamic", thesis_cycles=None) -> dict:
     """The body of a wear study: ``design``'s wear joint swapped into ``mech0``
     (differentiable in k, clearance, depth, diameter), the evolution over
     ``cycles`` (constant A = cycles / ``target_dynamic`` unless ``extrapolation``
@@ -152,8 +153,18 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
 
     ``contact="fem"``: the wear pressure from the FE ring (`wear.fem_route`;
     ``fem`` a `FemWearModel`, default `default_model(design)`); the EFM route is
-    run first (one jit, not checkpointed) so that the report compares both."""
+    run first (one jit, not checkpointed) so that the report compares both.
+
+    ``thesis_cycles``: the cycle count the ``thesis`` values are for; a run of
+    another length is not compared with them (report, plots and summary say
+    so instead)."""
     check_contact(contact)
+    if thesis_cycles is not None and thesis and int(cycles) != int(thesis_cycles):
+        why = (f"the thesis's values are for {int(thesis_cycles):,} cycles and this run has "
+               f"{int(cycles):,}: not compared")
+        extra_report = [*extra_report, f"- {why}"]
+        extra_summary = {**(extra_summary or {}), "thesis_not_compared": why}
+        thesis = {}
     if model not in WEAR_MODELS:
         raise InputError(f"--model must be one of {', '.join(WEAR_MODELS)}, got {model!r}")
     if model == "quasi-static":
@@ -319,14 +330,7 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
     summary["files"] = sorted(set(out.files)) + ["report.md", "summary.json"]
     rows = [
         f"# {name}\n", description + "\n",
-        f"| quantity | {label} | " + " | ".join(thesis) + " |",
-        "|---" * (2 + len(thesis)) + "|",
-        f"| max wear depth [mm] | {summary['max_wear_depth_mm']:.4f} | "
-        + " | ".join(f"{v.get('max_wear_depth_mm', '')}" for v in thesis.values()) + " |",
-        f"| wear volume [mm^3] | {summary['wear_volume_mm3']:.2f} | "
-        + " | ".join(f"{v.get('wear_volume_mm3', '')}" for v in thesis.values()) + " |",
-        f"| worn mass [g] | {summary['worn_mass_g']:.4f} | "
-        + " | ".join(f"{v.get('worn_mass_g', '')}" for v in thesis.values()) + " |",
+        *comparison_table(label, summary, thesis),
         "",
         f"- cycles: {summary['cycles']:.0f}; dynamic cycles simulated: "
         f"{summary['dynamic_cycles_simulated']} (method {method}, A/A0 {extrapolation}; "

@@ -96,7 +96,7 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
         out, name=NAME, mech0=mech0, design=RIG_JOINT, y0=y0, cycles=cycles, period=PERIOD,
         method=method, extrapolation=extrapolation, target_dynamic=TARGET_DYNAMIC,
         n_theta=N_THETA, thesis=THESIS, log=log, resume=resume, progress=progress,
-        contact=contact, model=model,
+        contact=contact, model=model, thesis_cycles=RIG_CYCLES,
         description=(
             "Rig of thesis Ch. 7: Table 7-1 read as half-lengths (crank 38.1 mm, rod 101.6 mm "
             "COM distances), gravity -y in the plane, slider spring 525.4 N/m pulling the "

@@ -31,10 +31,6 @@ def _cli_reference() -> str:
     return "\n".join(parts)
 
 
-def _pct(a: float) -> str:
-    return f"{100 * a:+.2f} %"
-
-
 def _quasi_static_table() -> str:
     cases = json.loads((RECORDS / "quasi_static.json").read_text())["cases"]
     rig = cases["rig-21400 quasi-static"]
@@ -74,23 +70,12 @@ def _quasi_static_table() -> str:
 
 def _agreement_table() -> str:
     data = json.loads((RECORDS / "agreement.json").read_text())
-    rows = ["| problem | quantity | dynamic | quasi-static | difference |",
-            "|---|---|---:|---:|---:|"]
-    for name, r in data["wear_studies"].items():
-        for key, label in (("max_wear_depth_mm", "max depth [mm]"),
-                           ("wear_volume_mm3", "volume [mm^3]")):
-            d, q = r["dynamic"][key], r["quasi_static"][key]
-            rows.append(f"| {name} | {label} | {d:.4g} | {q:.4g} | {_pct(q / d - 1)} |")
-        rows.append(f"| {name} | profile: largest difference / peak | | | "
-                    f"{100 * r['profile_max_diff_of_peak']:.2f} % |")
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from agreement import markdown  # the script that wrote the record renders it
+
     ch8 = data["ch8"]
     coarse, fine = ch8["steps"]
-    for name, r in ch8["designs"].items():
-        for j in (0, 1):
-            d, q = r["dynamic_extrapolated"][j], r["quasi_static"][j]
-            rows.append(f"| Ch. 8, {name} | life, joint {j + 1} [cycles] | {d:,.0f} | {q:,.0f} | "
-                        f"{_pct(q / d - 1)} |")
-    text = "\n".join(rows)
+    text = markdown(data)
     text += (f"\n\nCh. 8 dynamic lives: extrapolated from {coarse} and {fine} wear steps "
              f"(Richardson, first order: 2 L{fine} - L{coarse}); the quasi-static lives at "
              f"the default settings ({ch8['quasi_static_settings']['steps']} steps, "

@@ -21,7 +21,7 @@ from ..presets import PTFE_DENSITY, WearJointDesign
 from ..quasistatic import QuasiStatic
 from ..wear import worn_volume
 from ..wear.status import STATUS_OK, STATUS_TEXT
-from ._report import comparison_table
+from ._report import comparison_table, peak_line, write_report
 
 JOINT = "crank_rod"
 
@@ -122,17 +122,14 @@ def run(out, *, name, mech, design: WearJointDesign, y0, cycles, period, thesis:
         *comparison_table("diffwear (quasi-static)", summary, thesis), "",
         f"- cycles: {summary['cycles']:.0f} in {summary['wear_steps']} steps of the wear ODE; "
         f"status: {STATUS_TEXT[status]}",
-        f"- peak wear at theta = {summary['max_wear_angle_rad']:.3f} rad (bushing frame, from "
-        "the rod axis crank->slider)",
+        peak_line(summary),
         f"- contact margin (load / load needed to hold the pin on the wall): unworn "
         f"{margin:.3g}, final profile {margin_worn:.3g}",
         f"- mean |joint force| {summary['mean_joint_force_first_cycle_N']:.1f} N, mean total "
         f"normal load (unworn) {summary['mean_normal_load_first_cycle_N']:.1f} N",
         f"- wall time {wall_time:.2f} s, compile time {compile_time:.1f} s",
         *warnings, *extra_report, ""]
-    rows += [f"![{f}]({f})\n" for f in figs]
-    out.text("report.md", "\n".join(rows))
-    out.json("summary.json", summary)
+    write_report(out, rows, figs, summary)
     log(f"[{name}] quasi-static: max depth {summary['max_wear_depth_mm']:.4f} mm, volume "
         f"{volume:.2f} mm^3, {wall_time:.2f} s (+{compile_time:.1f} s compile)")
     for w in warnings:

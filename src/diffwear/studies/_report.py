@@ -15,3 +15,16 @@ def comparison_table(label: str, summary: dict, thesis: dict) -> list[str]:
     return [row("quantity", label, *thesis), "|---" * (2 + len(thesis)) + "|",
             *(row(text, format(summary[key], fmt), *(v.get(key, "") for v in thesis.values()))
               for text, key, fmt in quantities)]
+
+
+def peak_line(summary: dict) -> str:
+    """Where the profile is deepest, in the bushing frame."""
+    return (f"- peak wear at theta = {summary['max_wear_angle_rad']:.3f} rad (bushing frame, "
+            "from the rod axis crank->slider)")
+
+
+def write_report(out, rows: list[str], figs, summary: dict) -> None:
+    """report.md (``rows``, then each figure) and summary.json into ``out``."""
+    out.text("report.md", "\n".join([*rows, *(f"![{f}]({f})\n" for f in figs)]))
+    out.json("summary.json", summary)
+

@@ -18,7 +18,7 @@ from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..wear import wear_cycle, worn_mechanism, worn_volume
 from ..wear.evolution import ChunkedEvolution, Evolver, load_checkpoint, save_checkpoint
 from ..wear.fem_route import FemEvolver, default_model
-from ._report import comparison_table
+from ._report import comparison_table, peak_line, write_report
 
 JOINT = "crank_rod"
 N_SAVE = 401
@@ -336,16 +336,13 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
         f"{summary['dynamic_cycles_simulated']} (method {method}, A/A0 {extrapolation}; "
         "incl. 1 warm-up cycle whose wear is discarded)",
         f"- Archard check: k x sum(N ds) = {summary['archard_k_times_load_sliding_mm3']:.3f} mm^3",
-        f"- peak wear at theta = {summary['max_wear_angle_rad']:.3f} rad (bushing frame, "
-        "from the rod axis crank->slider)",
+        peak_line(summary),
         f"- mean |joint force| first cycle {summary['mean_joint_force_first_cycle_N']:.1f} N, "
         f"mean total normal load {summary['mean_normal_load_first_cycle_N']:.1f} N",
         f"- wall time {wall_time:.1f} s, compile time {compile_time:.1f} s",
         *extra_report, "",
     ]
-    rows += [f"![{f}]({f})\n" for f in figs]
-    out.text("report.md", "\n".join(rows))
-    out.json("summary.json", summary)
+    write_report(out, rows, figs, summary)
     log(f"[{name}] max depth {summary['max_wear_depth_mm']:.4f} mm, volume "
         f"{summary['wear_volume_mm3']:.2f} mm^3, {summary['dynamic_cycles_simulated']} dynamic "
         f"cycles, {wall_time:.1f} s (+{compile_time:.1f} s compile)")

@@ -24,6 +24,7 @@ from ..dynamics import (
 )
 from ..io import OutputDir
 from ..presets import TABLE_2_1, slider_crank
+from ._report import write_report
 
 NAME = "ideal-slider-crank"
 DESCRIPTION = ("Ch. 2: ideal slider-crank (Table 2-1), 2 s at pi rad/s: kinematics, dynamics, "
@@ -139,9 +140,7 @@ def run(out: OutputDir, *, duration: float = DURATION, log=print) -> dict:
         f"| run time (after compile) | {wall:.3f} s |",
         f"| compile time | {compile_time:.2f} s |\n",
     ]
-    report += [f"![{name}]({name})\n" for name in figs]
-    out.text("report.md", "\n".join(report))
-    out.json("summary.json", summary)
+    write_report(out, report, figs, summary)
     log(f"[{NAME}] max joint force {summary['max_joint_force_N']:.1f} N; "
         f"report: {out.path / 'report.md'}")
     return summary

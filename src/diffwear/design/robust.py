@@ -69,13 +69,19 @@ def percentile_of(cycles, *, reliability: float = RELIABILITY, scatter: float = 
     (binomial: ranks n q +- 1.96 sqrt(n q (1 - q)))."""
     rng = np.random.default_rng(seed)
     kappa = np.exp(rng.normal(0.0, log_sigma(scatter), (int(n), 2)))
-    life = np.sort(np.min(np.asarray(cycles)[None, :] / kappa, axis=1))
-    q = 1.0 - reliability
+    life = np.min(np.asarray(cycles)[None, :] / kappa, axis=1)
+    return {**_quantile(life, 1.0 - reliability), "samples": int(n),
+            "reliability": reliability, "scatter": scatter}
+
+
+def _quantile(values, q: float) -> dict:
+    """The q-quantile of ``values`` and its 95 % interval from the order
+    statistics (binomial: ranks n q +- 1.96 sqrt(n q (1 - q)))."""
+    v = np.sort(np.asarray(values))
+    n = v.size
     half = Z95 * math.sqrt(n * q * (1 - q))
     lo, hi = int(max(0, math.floor(n * q - half))), int(min(n - 1, math.ceil(n * q + half)))
-    return {"percentile": float(np.quantile(life, q)), "interval": [float(life[lo]),
-                                                                     float(life[hi])],
-            "samples": int(n), "reliability": reliability, "scatter": scatter}
+    return {"percentile": float(np.quantile(v, q)), "interval": [float(v[lo]), float(v[hi])]}
 
 
 def robust_least_material(model: TwoJointLife, target_cycles: float, *,
@@ -159,10 +165,5 @@ def monte_carlo_check(model: TwoJointLife, x, *, n: int = 1000, reliability: flo
     f = jax.jit(jax.vmap(lambda s: model.evaluate(xj, s).cycles))
     lives = np.concatenate([np.asarray(f(jnp.asarray(kappa[i:i + chunk])))
                             for i in range(0, int(n), chunk)])
-    weakest = np.sort(lives.min(axis=1))
-    q = 1.0 - reliability
-    half = Z95 * math.sqrt(n * q * (1 - q))
-    lo, hi = int(max(0, math.floor(n * q - half))), int(min(n - 1, math.ceil(n * q + half)))
-    return {"percentile": float(np.quantile(weakest, q)),
-            "interval": [float(weakest[lo]), float(weakest[hi])], "samples": int(n),
+    return {**_quantile(lives.min(axis=1), 1.0 - reliability), "samples": int(n),
             "lives_times_k": (lives * kappa).tolist()[:4]}

@@ -307,13 +307,14 @@ RIG_SPRING_FREE_LENGTH = 0.5479  # m, calibrated (see above)
 
 
 def rig_slider_crank(p: SliderCrankParameters = TABLE_7_1, *, free_length=None,
-                     gravity: bool = True, extra_forces=()):
+                     spring_stiffness=None, gravity: bool = True, extra_forces=()):
     """The Ch. 7 rig as an ideal slider-crank with the slider spring
     (clearance joint: add it with ``with_wear_joint(mech, RIG_JOINT)``);
     ``extra_forces``: further force elements (e.g. a `GuideFriction`)."""
     from .mechanism import LinearSpring
 
     l0 = RIG_SPRING_FREE_LENGTH if free_length is None else free_length
+    ks = RIG_SPRING_STIFFNESS if spring_stiffness is None else spring_stiffness
     spring = LinearSpring("slider_spring", "ground", (RIG_SPRING_ANCHOR_X, 0.0), "slider",
-                          (0.0, 0.0), RIG_SPRING_STIFFNESS, l0)
+                          (0.0, 0.0), ks, l0)
     return slider_crank(p, gravity=gravity, extra_forces=(spring, *extra_forces))

@@ -46,6 +46,7 @@ from ..config.schema import (
     toml_type,
 )
 from ..errors import InputError
+from .parameters import RIG_PARAMETERS
 
 MANIFEST = "dataset.toml"
 SECTIONS = ("dataset", "rig", "parameters", "calibration", "series")
@@ -57,16 +58,11 @@ NAME_PATTERN = re.compile(r"[A-Za-z0-9_.-]+")
 NAME_RULE = "letters, digits, '_', '.' or '-' (at least one)"
 FOLDER_RULE = f"a dataset folder holding {MANIFEST} and its CSV files"
 
-# parameter name -> dimension (None: a plain number)
-PARAMETERS: dict[str, str | None] = {
-    "k": "wear coefficient",
-    "clearance": "length",
-    "depth": "length",
-    "diameter": "length",
-    "free_length": "length",
-    "mu": None,
-}
-PARAMETER_RULE = ("k (wear coefficient), clearance, depth, diameter, free_length (lengths), "
+# parameter name -> dimension (None: a plain number); the table: `parameters`
+PARAMETERS: dict[str, str | None] = {n: p.dimension for n, p in RIG_PARAMETERS.items()}
+PARAMETER_RULE = ("k (wear coefficient); clearance, depth, diameter, wall, free_length, "
+                  "crank_length, rod_length (lengths); spring_stiffness (N/m); crank_mass, "
+                  "rod_mass, slider_mass (masses); crank_inertia, rod_inertia (kg m^2); "
                   "mu (plain number in [0, 1])")
 
 
@@ -79,12 +75,15 @@ def _frozen_array(values, dtype) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Parameter:
-    """A known rig parameter (SI value) and whether calibration fits it."""
+    """A rig parameter: its SI value (None: the preset's), whether calibration
+    fits it, and whether it may be named as a suspect when no wear effect
+    explains the data (mechanism parameters only; default yes)."""
 
     name: str
-    value: float
+    value: float | None
     std: float | None = None  # 1-sigma prior width, SI
     fit: bool = False
+    suspect: bool = True
 
 
 @dataclass(frozen=True, eq=False)
@@ -258,13 +257,13 @@ class VolumeOrMass(Field):
 
 
 def _parameter_fields(dimension: str | None) -> dict[str, Field]:
+    flags = {"fit": Flag(default=False), "suspect": Flag(default=True)}
     if dimension is None:
-        return {"value": Number(low=0.0, high=1.0),
-                "std": Number(default=None, low=0.0, low_open=True),
-                "fit": Flag(default=False)}
-    return {"value": Quantity(dimension=dimension, low=0.0, low_open=True),
+        return {"value": Number(default=None, low=0.0, high=1.0),
+                "std": Number(default=None, low=0.0, low_open=True), **flags}
+    return {"value": Quantity(dimension=dimension, default=None, low=0.0, low_open=True),
             "std": Quantity(dimension=dimension, default=None, low=0.0, low_open=True),
-            "fit": Flag(default=False)}
+            **flags}
 
 
 DATASET_FIELDS = {"name": Text(), "description": Text(default="")}
@@ -405,7 +404,10 @@ def _parameters(ctx: Context, raw) -> dict[str, Parameter]:
         path = f"parameters.{name}"
         entry = _table(ctx, path, table[name], f"{name} = {{ value = ..., std = ..., fit = ... }}")
         v = read_table(ctx, path, entry, _parameter_fields(dimension))
-        out[name] = Parameter(name, v["value"], v["std"], v["fit"])
+        if v["fit"] and v["value"] is None:
+            raise ctx.error(f"{path}.value", "missing: a fitted parameter needs its starting "
+                            "value", f"{name} = {{ value = ..., std = ..., fit = true }}")
+        out[name] = Parameter(name, v["value"], v["std"], v["fit"], v["suspect"])
     if not any(p.fit for p in out.values()):
         given = ", ".join(out) or "(none)"
         raise ctx.error("parameters", f"no parameter has fit = true (given: {given})",
@@ -738,11 +740,13 @@ def _manifest_text(name, description, preset, parameters, series, bushing_densit
         dimension = PARAMETERS[key]
         text = (lambda v: _num(v)) if dimension is None else \
             (lambda v, d=dimension: _quantity_text(v, d))
-        items = [f"value = {text(p.value)}"]
+        items = [] if p.value is None else [f"value = {text(p.value)}"]
         if p.std is not None:
             items.append(f"std = {text(p.std)}")
         if p.fit:
             items.append("fit = true")
+        if not p.suspect:
+            items.append("suspect = false")
         lines.append(f"{key} = {{ {', '.join(items)} }}")
     if holdout_from_cycles is not None:
         lines += ["", "[calibration]", f"holdout_from_cycles = {_num(holdout_from_cycles)}"]

@@ -1,19 +1,26 @@
-"""The calibration's forward model: the Ch. 7 rig's wear history with the
-candidate effects, as one pure JAX function of the parameters.
+"""The calibration's forward models: the Ch. 7 rig's wear history with the
+candidate effects, as pure JAX functions of the parameters.
 
-`RigHistory` runs a warm-up cycle (wear discarded, the pin's start-up
-transient) and then ``dynamic_cycles`` dynamic cycles with a constant
-extrapolation factor A = cycles / dynamic_cycles (thesis Eq. 4-18), like
-`wear.evolve` ("constant"), but it keeps what measurements need: the wear
-profile h and the creep profile delta after every dynamic cycle (at real
-cycles N_j = j A) and the joint-force trace of every dynamic cycle.  A must
-stay below ~1/lambda (lambda = k k_f s ~ 1e-3 per cycle on the rig, see
-`wear.life`): `MAX_EXTRAPOLATION` is enforced.
+Both models return a `History`: the wear profile h and the creep profile
+delta at increasing cycle counts, and joint-force traces.  `Observation` maps
+it onto one measured series (profile at N, volume or maximum depth against N,
+force against crank angle at N): profiles are linear in N between snapshots
+and periodic-linear in angle between grid nodes.
 
-`Observation` maps that history onto one measured series (profile at N,
-volume or maximum depth against N, force against crank angle at N):
-profiles are linear in N between snapshots (exactly what the explicit update
-makes them) and periodic-linear in angle between grid nodes.
+* `RigHistory` (dynamic): a warm-up cycle (wear discarded, the pin's start-up
+  transient), then ``dynamic_cycles`` dynamic cycles with a constant
+  extrapolation factor A = cycles / dynamic_cycles (thesis Eq. 4-18), like
+  `wear.evolve` ("constant"), keeping the profiles after every dynamic cycle
+  (at N_j = j A) and each cycle's joint-force trace.  A must stay below
+  ~1/lambda (lambda = k k_f s ~ 1e-3 per cycle on the rig, see `wear.life`):
+  `MAX_EXTRAPOLATION` is enforced.
+* `quasi_static.QuasiStaticRigHistory`: the quasi-static joint (milliseconds
+  per step, exact derivatives), the model the calibration runs on by default.
+
+`RigParameters` names what a dataset may fit or hold: the joint (wear
+coefficient, clearance, bushing depth, pin diameter, friction, wall), the
+spring (free length, rate) and the linkage (lengths, masses, inertias); the
+last two groups are the "mechanism suspects" of `identify`.
 """
 
 from __future__ import annotations
@@ -35,6 +42,7 @@ from ..mechanism import STANDARD_GRAVITY, GuideFriction
 from ..presets import (
     RIG_JOINT,
     RIG_SPRING_FREE_LENGTH,
+    RIG_SPRING_STIFFNESS,
     TABLE_7_1,
     SliderCrankParameters,
     WearJointDesign,
@@ -43,10 +51,10 @@ from ..presets import (
 )
 from ..wear import smooth_max, wear_cycle, worn_mechanism, worn_volume
 from ..wear.cycle import clearance_element
-from .effects import GUIDE_SLIP_WIDTH, INDEX, ModifiedArchardWear, run_in_factor
+from .effects import GUIDE_SLIP_WIDTH, EffectValues, rate_factor, wear_law
+from .parameters import NAMES
 
 JOINT = "crank_rod"
-BASE_NAMES = ("k", "clearance", "depth", "diameter", "mu", "free_length")
 # Explicit extrapolation is stable for A lambda < ~1 (wear.life notes; lambda ~
 # 1e-3 per cycle on the rig).  Measured on the rig over 4,000 cycles (n_theta
 # 90): max depth 0.1089 / 0.0848 / 0.0896 mm and volume 19.18 / 18.95 / 18.90
@@ -60,39 +68,79 @@ MAX_EXTRAPOLATION = 250.0
 PENETRATION_WIDTH = 1e-6  # m
 MAX_DEPTH_TEMPERATURE = 1e-7  # m, smooth max of the profile (as sweep.RigWear)
 
+BASE_NAMES = NAMES  # every rig parameter (`parameters.RIG_PARAMETERS`)
+
 
 def rig_defaults() -> dict[str, float]:
-    """The thesis rig: Table 7-2 joint, calibrated spring free length."""
-    d = RIG_JOINT
+    """The thesis rig: Table 7-1 linkage (its lengths are joint-to-centre
+    half-lengths, `presets.TABLE_7_1`), Table 7-2 joint, Table 7-3 spring rate,
+    calibrated spring free length."""
+    d, p = RIG_JOINT, TABLE_7_1
     return {"k": float(d.k), "clearance": float(d.clearance), "depth": float(d.depth),
-            "diameter": float(d.diameter), "mu": float(d.mu),
-            "free_length": float(RIG_SPRING_FREE_LENGTH)}
+            "diameter": float(d.diameter), "mu": float(d.mu), "wall": float(d.wall),
+            "free_length": float(RIG_SPRING_FREE_LENGTH),
+            "spring_stiffness": float(RIG_SPRING_STIFFNESS),
+            "crank_length": 2 * float(p.l1), "rod_length": 2 * float(p.l2),
+            "crank_mass": float(p.m1), "rod_mass": float(p.m2), "slider_mass": float(p.m3),
+            "crank_inertia": float(p.inertia1), "rod_inertia": float(p.inertia2)}
+
+
+def rig_mechanism(base: dict, effects: EffectValues, *, n_theta: int,
+                  penetration_width: float | None = PENETRATION_WIDTH,
+                  p: SliderCrankParameters = TABLE_7_1):
+    """The rig with its wearing crank-rod joint for parameters ``base`` (SI,
+    `parameters.RIG_PARAMETERS`) and the effects' wear law and guide friction: (the
+    mechanism, its state at t = 0 with the pin centred)."""
+    params = SliderCrankParameters(
+        l1=base["crank_length"] / 2, l2=base["rod_length"] / 2, m1=base["crank_mass"],
+        inertia1=base["crank_inertia"], m2=base["rod_mass"], inertia2=base["rod_inertia"],
+        m3=base["slider_mass"], inertia3=p.inertia3, omega=p.omega)
+    friction = GuideFriction("guide_friction", "slider", effects["guide_friction"],
+                             base["slider_mass"] * STANDARD_GRAVITY, slip_width=GUIDE_SLIP_WIDTH)
+    mech0, q_guess = rig_slider_crank(params, free_length=base["free_length"],
+                                      spring_stiffness=base["spring_stiffness"],
+                                      extra_forces=(friction,))
+    design = WearJointDesign(base["k"], base["clearance"], base["depth"], base["diameter"],
+                             base["wall"], base["mu"], RIG_JOINT.restitution)
+    mech = with_wear_joint(mech0, design, n_theta=n_theta, penetration_width=penetration_width)
+    index, _ = clearance_element(mech, JOINT)
+    mech = eqx.tree_at(lambda m: m.forces[index].wear, mech, wear_law(base["k"], effects))
+    y0 = centred_state(mech0, consistent_state(mech0, q_guess, check=False), mech)
+    return mech, y0
 
 
 class History(eqx.Module):
-    """Snapshots at real cycles ``cycles`` = (0, A, 2A, ..., D A): wear ``wear``
-    and creep ``creep`` profiles [m] (D + 1, n); ``force`` [N]: |joint force|
-    over dynamic cycle j (starting at N = j A), (D, force_samples), at crank
-    angles ``crank_angle`` [rad] (increasing, spanning 2 pi); ``theta``:
-    profile grid; ``ok``: every cycle integrated."""
+    """Snapshots at real cycles ``cycles`` (K,), increasing from 0: wear
+    ``wear`` and creep ``creep`` profiles [m] (K, n); ``force`` [N]: |joint
+    force| traces (F, S), trace f starting at cycle ``force_cycles[f]``, at
+    crank angles ``force_angle`` [rad] (S, increasing in [0, 2 pi));
+    ``theta``: profile grid; ``ok``: every cycle model succeeded."""
 
     cycles: jnp.ndarray
     wear: jnp.ndarray
     creep: jnp.ndarray
     force: jnp.ndarray
-    crank_angle: jnp.ndarray
+    force_cycles: jnp.ndarray
+    force_angle: jnp.ndarray
     theta: jnp.ndarray
     bushing_radius: jnp.ndarray
     bushing_depth: jnp.ndarray
     ok: jnp.ndarray
 
 
+def sorted_trace(angle, force):
+    """(angles wrapped to [0, 2 pi) and sorted, the forces in the same order)."""
+    wrapped = jnp.mod(angle, 2 * jnp.pi)
+    order = jnp.argsort(wrapped)
+    return wrapped[order], force[..., order]
+
+
 class RigHistory(eqx.Module):
-    """Wear history of the Ch. 7 rig's crank-rod PTFE bushing with the
+    """Dynamic wear history of the Ch. 7 rig's crank-rod PTFE bushing with the
     candidate effects of `calibrate.effects` (see the module notes).
 
-    Call with ``base`` (a dict of the `BASE_NAMES` in SI) and ``strengths``
-    (one per effect, `effects.NAMES` order; zeros: the base model)."""
+    Call with ``base`` (a dict of the `BASE_NAMES` in SI) and ``effects``
+    (`EffectValues`; zero strengths: the base model)."""
 
     cycles: float = eqx.field(static=True)
     dynamic_cycles: int = eqx.field(static=True, default=8)
@@ -102,6 +150,8 @@ class RigHistory(eqx.Module):
     cycle_atol: float = eqx.field(static=True, default=1e-6)
     penetration_width: float | None = eqx.field(static=True, default=PENETRATION_WIDTH)
     p: SliderCrankParameters = TABLE_7_1
+
+    name = "dynamic"
 
     def __check_init__(self):
         if not (math.isfinite(self.cycles) and self.cycles > 0):
@@ -126,26 +176,16 @@ class RigHistory(eqx.Module):
     def period(self) -> float:
         return 2 * math.pi / float(self.p.omega)
 
-    def mechanism(self, base: dict, strengths):
-        friction = GuideFriction("guide_friction", "slider", strengths[INDEX["guide_friction"]],
-                                 self.p.m3 * STANDARD_GRAVITY, slip_width=GUIDE_SLIP_WIDTH)
-        mech0, q_guess = rig_slider_crank(self.p, free_length=base["free_length"],
-                                          extra_forces=(friction,))
-        design = WearJointDesign(base["k"], base["clearance"], base["depth"], base["diameter"],
-                                 RIG_JOINT.wall, base["mu"], RIG_JOINT.restitution)
-        mech = with_wear_joint(mech0, design, n_theta=self.n_theta,
-                               penetration_width=self.penetration_width)
-        index, _ = clearance_element(mech, JOINT)
-        wear = ModifiedArchardWear(base["k"], strengths[INDEX["pressure_exponent"]],
-                                   strengths[INDEX["pv_wear"]])
-        mech = eqx.tree_at(lambda m: m.forces[index].wear, mech, wear)
-        # the ideal kinematics at t = 0 do not depend on the fitted parameters
-        y0 = centred_state(mech0, consistent_state(mech0, q_guess, check=False), mech)
-        return mech, y0
+    def describe(self) -> str:
+        return (f"dynamic model: {self.dynamic_cycles} dynamic cycles of A = "
+                f"{self.extrapolation:g} real cycles, {self.n_theta} profile nodes")
 
-    def __call__(self, base: dict, strengths) -> History:
-        strengths = jnp.asarray(strengths, dtype=float)
-        mech, y0 = self.mechanism(base, strengths)
+    def mechanism(self, base: dict, effects: EffectValues):
+        return rig_mechanism(base, effects, n_theta=self.n_theta,
+                             penetration_width=self.penetration_width, p=self.p)
+
+    def __call__(self, base: dict, effects: EffectValues) -> History:
+        mech, y0 = self.mechanism(base, effects)
         el = mech.element(JOINT)
         period, a = self.period, self.extrapolation
         # forward-mode adjoint: the calibration differentiates with jacfwd
@@ -153,16 +193,18 @@ class RigHistory(eqx.Module):
         kw = dict(rtol=self.cycle_rtol, atol=self.cycle_atol, adjoint=diffrax.ForwardMode())
         warm = wear_cycle(mech, JOINT, y0, 0.0, period, **kw)
         n = self.n_theta
+        creep = effects["creep"]
 
         def step(c, j):
             h, delta, y, t, ok = c
             worn = worn_mechanism(mech, JOINT, h + delta)
             r = wear_cycle(worn, JOINT, y, t, period, n_save=self.force_samples, **kw)
-            dh = a * run_in_factor(strengths[INDEX["run_in"]], j * a, a) * r.depth_increment
+            volume = worn_volume(h, el.bushing_radius, el.law.depth)
+            dh = a * rate_factor(effects, h, volume, j * a, a) * r.depth_increment
             force = contact_history(worn, JOINT, r.ys).force_magnitude
             ok = ok & r.ok
             h = jnp.where(ok, h + dh, h)
-            delta = jnp.where(ok, delta + strengths[INDEX["creep"]] * dh, delta)
+            delta = jnp.where(ok, delta + creep * dh, delta)
             return (h, delta, r.y_end, t + period, ok), (h, delta, force)
 
         zeros = jnp.zeros(n)
@@ -170,21 +212,28 @@ class RigHistory(eqx.Module):
         (_, _, _, _, ok), (hs, ds, forces) = lax.scan(
             step, init, jnp.arange(self.dynamic_cycles, dtype=float))
         crank0 = mech.frames(mech.split(y0)[0]).pose("crank")[2]
-        angle = crank0 + jnp.linspace(0.0, 2 * jnp.pi, self.force_samples)
+        # The samples span [a0, a0 + 2 pi]; drop the first: the cycle starts on
+        # the profile just deepened by A cycles' wear, so the pin is
+        # momentarily off the wall (force 0 for ~1 ms).  The end sample, a
+        # full turn later, stands for the angle a0.
+        angle = crank0 + jnp.linspace(0.0, 2 * jnp.pi, self.force_samples)[1:]
+        angle, forces = sorted_trace(angle, forces[:, 1:])
         return History(
             cycles=a * jnp.arange(self.dynamic_cycles + 1, dtype=float),
             wear=jnp.concatenate([zeros[None], hs]), creep=jnp.concatenate([zeros[None], ds]),
-            force=forces, crank_angle=angle, theta=el.profile.theta,
+            force=forces, force_cycles=a * jnp.arange(self.dynamic_cycles, dtype=float),
+            force_angle=angle, theta=el.profile.theta,
             bushing_radius=el.bushing_radius, bushing_depth=el.law.depth, ok=ok)
 
 
 # ------------------------------------------------------------------ observation
-def _interpolate(snapshots, n, extrapolation):
-    """Snapshots (D + 1, ...) at N = j A, linearly interpolated at N = ``n``."""
-    last = snapshots.shape[0] - 1
-    w = jnp.clip(n / extrapolation, 0.0, float(last))
-    j = jnp.clip(jnp.floor(w), 0, last - 1).astype(int)
-    frac = w - j
+def _interpolate(snapshots, n, cycles):
+    """Snapshots (K, ...) at real cycles ``cycles`` (K,), linearly interpolated
+    at N = ``n`` (held constant beyond the last)."""
+    last = cycles.shape[0] - 1
+    j = jnp.clip(jnp.searchsorted(cycles, n, side="right") - 1, 0, last - 1)
+    span = cycles[j + 1] - cycles[j]
+    frac = jnp.clip((n - cycles[j]) / jnp.where(span > 0, span, 1.0), 0.0, 1.0)
     return (1.0 - frac) * snapshots[j] + frac * snapshots[j + 1]
 
 
@@ -200,40 +249,28 @@ class Observation:
     ``kind``: "profile" (depth at bushing angles ``x`` after ``cycles``),
     "volume" (worn volume at cycle counts ``x``; ``basis`` "mass": wear only,
     "profile": wear + creep), "max_depth" (at cycle counts ``x``), "force"
-    (|joint force| at crank angles ``x`` during the dynamic cycle that starts
-    nearest ``cycles``).  ``extrapolation``/``dynamic_cycles``: the model's.
-    A plain (hashable by identity) object: it is closed over, not traced."""
+    (|joint force| at crank angles ``x`` during the model's force trace that
+    starts nearest ``cycles``).  A plain (hashable by identity) object: it is
+    closed over, not traced."""
 
     kind: str
     x: np.ndarray
-    extrapolation: float
-    dynamic_cycles: int
     cycles: float = 0.0
     basis: str = "mass"
 
-    @property
-    def force_cycle(self) -> int:
-        """The dynamic cycle whose force trace stands for the measurement."""
-        return min(max(int(round(self.cycles / self.extrapolation)), 0), self.dynamic_cycles - 1)
-
     def __call__(self, h: History):
         x = jnp.asarray(self.x)
-        a = self.extrapolation
         total = h.wear + h.creep
         if self.kind == "profile":
-            return periodic_interp(x, h.theta, _interpolate(total, self.cycles, a))
+            return periodic_interp(x, h.theta, _interpolate(total, self.cycles, h.cycles))
         if self.kind == "max_depth":
-            return jax.vmap(lambda n: smooth_max(_interpolate(total, n, a),
+            return jax.vmap(lambda n: smooth_max(_interpolate(total, n, h.cycles),
                                                  MAX_DEPTH_TEMPERATURE))(x)
         if self.kind == "volume":
             seen = h.wear if self.basis == "mass" else total
-            prof = jax.vmap(lambda n: _interpolate(seen, n, a))(x)
+            prof = jax.vmap(lambda n: _interpolate(seen, n, h.cycles))(x)
             return worn_volume(prof, h.bushing_radius, h.bushing_depth)
         if self.kind == "force":
-            trace = h.force[self.force_cycle]
-            # The samples span [a0, a0 + 2 pi]; drop the first: the cycle starts
-            # on the profile just deepened by A cycles' wear, so the pin is
-            # momentarily off the wall (force 0 for ~1 ms).  The end sample, a
-            # full turn later, stands for the angle a0.
-            return periodic_interp(x, jnp.mod(h.crank_angle[1:], 2 * jnp.pi), trace[1:])
+            trace = h.force[jnp.argmin(jnp.abs(h.force_cycles - self.cycles))]
+            return periodic_interp(x, h.force_angle, trace)
         raise InputError(f"unknown series kind {self.kind!r}")

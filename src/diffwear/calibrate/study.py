@@ -24,11 +24,19 @@ from .dataset import PARAMETERS, Dataset  # noqa: E402
 from .effects import EFFECTS  # noqa: E402
 from .fit import ModelSettings  # noqa: E402
 from .frame_check import frame_check  # noqa: E402
-from .identify import GOF_SIGMAS, LR_CRITICAL, STRENGTH_SIGMAS, Calibration, calibrate  # noqa: E402
+from .identify import (  # noqa: E402
+    GOF_SIGMAS,
+    LR_CRITICAL,
+    STRENGTH_SIGMAS,
+    Calibration,
+    calibrate,
+)
+from .residual_words import describe_residuals  # noqa: E402
 
 # SI units of the fitted parameters in the report (the dataset's own units are
 # converted on loading: k in mm^3/(N m) is 1e-9 1/Pa)
-REPORT_UNITS = {"wear coefficient": "1/Pa = m^3/(N m)", "length": "m", None: "-"}
+REPORT_UNITS = {"wear coefficient": "1/Pa = m^3/(N m)", "length": "m", None: "-",
+                "mass": "kg", "inertia": "kg m^2", "stiffness": "N/m"}
 
 DESCRIPTION = "calibrate the rig model on measured wear data and identify a missing effect"
 UNIT = {"profile": (1e6, "um", "bushing angle [rad]"), "max_depth": (1e3, "mm", "cycles"),
@@ -50,6 +58,14 @@ def residual_structure(c: Calibration) -> dict:
         out["profile_rms_by_30deg_sector"] = [
             float(np.sqrt(np.mean(rp[idx == b] ** 2))) if np.any(idx == b) else None
             for b in range(12)]
+        if theta.size >= 16:
+            # theta-harmonic content of the profile residual (orders 1..8, least
+            # squares on cos/sin; the mean of each series taken out)
+            orders = np.arange(1, 9)
+            basis = np.column_stack([f(o * theta) for o in orders for f in (np.cos, np.sin)])
+            coef, *_ = np.linalg.lstsq(basis, rp - rp.mean(), rcond=None)
+            amp = np.hypot(coef[0::2], coef[1::2])
+            out["profile_residual_harmonics"] = {int(o): float(a) for o, a in zip(orders, amp)}
     cyc = np.concatenate([s.cycle_counts for s in c.dataset.series])
     for kind in ("profile", "volume", "max_depth", "force"):
         m = np.isin(which, [k for k, kd in enumerate(kinds) if kd == kind])
@@ -141,7 +157,7 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
     files.append("residual_structure.png")
     fig, ax = plt.subplots(figsize=(6.4, 3.2))
     ax.barh([s.effect for s in c.scores][::-1], [s.statistic for s in c.scores][::-1])
-    ax.axvline(LR_CRITICAL, color="r", ls="--", lw=1, label="p = 0.001")
+    ax.axvline(LR_CRITICAL[1], color="r", ls="--", lw=1, label="p = 0.001 (a strength)")
     ax.set(xscale="symlog", xlabel="score statistic (chi-square(1) under 'no effect')")
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -160,10 +176,8 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> str:
     lines = [f"# Calibration: {d.name}", "", d.description or "", "",
              f"Dataset `{d.path}`: {len(d.series)} series, "
              f"{c.base.n_fit} fit points, {c.base.n_holdout} held-out points; fitted: "
-             f"{', '.join(d.fit_names)}.  Model: {summary['model']['dynamic_cycles']} dynamic "
-             f"cycles of A = {summary['model']['extrapolation']:g} real cycles, "
-             f"{summary['model']['n_theta']} profile nodes.  Residuals are in units of each "
-             "series' stated 1-sigma noise.", ""]
+             f"{', '.join(d.fit_names)}.  Model: {summary['model_settings']['description']}.  "
+             "Residuals are in units of each series' stated 1-sigma noise.", ""]
     for note in d.notes:
         lines += [f"> {note}", ""]
     for w in summary.get("frame_warnings", []):
@@ -179,10 +193,14 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> str:
               f"- effect identified: **{ident}**"
               + (f", strength {_fmt(summary['effect_strength'])} +- "
                  f"{_fmt(summary['effect_strength_std'], 2)} (1 sigma)" if ident != "none"
-                 else ""),
+                 else "")
+              + (f", {_shape_text(ident, summary)}" if summary.get("effect_shape") else ""),
               f"- residual unexplained: {'**yes**' if summary['residual_unexplained'] else 'no'}"
               f" (chi2 {c.gof['chi2']:.1f} on {c.gof['dof']} dof; noise allows "
               f"{c.gof['limit']:.1f})", ""]
+    if summary.get("suspect"):
+        lines += [f"- mechanism suspect: **{summary['suspect']}**"
+                  + _suspect_verdict(summary["suspects"][0]), ""]
     lines += ["| | base model | final model |", "|---|---|---|",
               f"| held-out RMSE [sigma] | {_fmt(summary['heldout_rmse_before'])} | "
               f"{_fmt(summary['heldout_rmse_after'])} |",
@@ -196,28 +214,58 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> str:
                      f"{_fmt(final.params[n])} +- {_fmt(final.params_std[n], 2)} |")
     lines += ["", "## Candidates", "",
               "Score test at zero strength from the base fit (module "
-              "`diffwear.calibrate.identify`); the best few refitted.  A candidate qualifies "
-              f"with a likelihood-ratio drop > {LR_CRITICAL}, |s| >= {STRENGTH_SIGMAS} sigma on "
-              "the allowed side and a lower held-out chi2; the penalised criterion (BIC) "
-              "chooses among them, and the result must leave noise-sized residuals "
-              f"(chi2 <= dof + {GOF_SIGMAS} sqrt(2 dof)).", "",
-              "| effect | score | p | refit strength | held-out RMSE | qualifies |",
-              "|---|---|---|---|---|---|"]
+              "`diffwear.calibrate.identify`; an effect with a shape is scored over its "
+              "prior and its p-value corrected for that); the best few refitted with their "
+              "shape.  A candidate qualifies with a likelihood-ratio drop above the "
+              f"chi-square critical value at p = 0.001 ({LR_CRITICAL[1]} for a strength, "
+              f"{LR_CRITICAL[2]} with a shape), |s| >= {STRENGTH_SIGMAS} sigma on "
+              "the allowed side and a lower held-out chi2; the penalised criterion (BIC: "
+              "ln n per fitted number) chooses among them, and the result must leave "
+              f"noise-sized residuals (chi2 <= dof + {GOF_SIGMAS} sqrt(2 dof)).", "",
+              "| effect | score | p | refit strength | refit shape | held-out RMSE | qualifies |",
+              "|---|---|---|---|---|---|---|"]
     for cand in summary["candidates"]:
         refit = ("" if "refit_strength" not in cand else
                  f"{_fmt(cand['refit_strength'])} +- {_fmt(cand['refit_strength_std'], 2)}")
+        shape = _fmt(cand.get("refit_shape"), 3) if cand.get("refit_shape") else ""
         ho = _fmt(cand.get("refit_heldout_rmse")) if "refit_strength" in cand else ""
         q = ("yes" if cand.get("qualifies") else "no") if "refit_strength" in cand else ""
         lines.append(f"| {cand['name']} | {_fmt(cand['score'])} | {_fmt(cand['p_value'], 2)} | "
-                     f"{refit} | {ho} | {q} |")
-    lines += ["", "Library: " + "; ".join(f"`{e.name}`: {e.description}" for e in EFFECTS), "",
-              "## Residual structure (base fit)", ""]
+                     f"{refit} | {shape} | {ho} | {q} |")
+    lines += ["", "Library: " + "; ".join(
+        f"`{e.name}`: {e.description}" + (f" ({e.source})" if e.source else "")
+        for e in EFFECTS), ""]
+    if summary["suspects"]:
+        lines += ["## Mechanism suspects", "",
+                  "No wear effect explains the data, so the rig parameters the dataset neither "
+                  "fits nor excludes (`suspect = false`) were scored the same way (derivative "
+                  "in the logarithm of the parameter); the best was refitted.", "",
+                  "| parameter | score | p | stated | first-step factor |", "|---|---|---|---|---|"]
+        for sp in summary["suspects"][:6]:
+            lines.append(f"| {sp['name']} | {_fmt(sp['score'])} | {_fmt(sp['p_value'], 2)} | "
+                         f"{_fmt(sp['value'])} | {_fmt(sp['factor'], 3)} |")
+        lines.append("")
+    check = summary.get("model_check")
+    if check:
+        lines += ["## Check on the dynamic model", "",
+                  f"The final fit evaluated, not refitted, on the {check['description']}:", "",
+                  "| | fitted model | dynamic model |", "|---|---|---|",
+                  f"| chi2, {check['n_fit']} fit points | {_fmt(check['chi2_fit_model'])} | "
+                  f"{_fmt(check['chi2_fit'])} |",
+                  f"| chi2, {check['n_holdout']} held-out points | "
+                  f"{_fmt(check['chi2_holdout_model'])} | {_fmt(check['chi2_holdout'])} |", ""]
+    lines += ["## Residual structure (base fit)", ""]
+    lines += [f"- {w}" for w in summary["residual_words"]] + [""]
     for key, value in residual_structure(c).items():
         if isinstance(value, dict):
             value = ", ".join(f"{k}: {_fmt(v, 3)}" for k, v in value.items())
         elif isinstance(value, list):
             value = ", ".join(_fmt(v, 3) for v in value)
         lines.append(f"- {key.replace('_', ' ')}: {value}")
+    lines += ["", "## Error per series", "",
+              "| series | RMS before [sigma] | RMS after [sigma] |", "|---|---|---|"]
+    for name, (before, after) in summary["series_rms"].items():
+        lines.append(f"| {name} | {_fmt(before, 3)} | {_fmt(after, 3)} |")
     lines += ["", "## Plots", ""] + [f"![{f}]({f})" for f in files]
     lines += ["", f"Wall time {c.wall_time_s:.0f} s.", ""]
     return "\n".join(lines)
@@ -243,12 +291,40 @@ def frame_warnings(c: Calibration) -> list[dict]:
     return found
 
 
+def _shape_text(effect: str, summary: dict) -> str:
+    shape = next(e.shape for e in EFFECTS if e.name == effect)
+    lo, hi = summary["effect_shape_interval"] or (math.nan, math.nan)
+    return (f"{shape.name.replace('_', ' ')} {_fmt(summary['effect_shape'], 3)} {shape.unit} "
+            f"(1 sigma: {_fmt(lo, 3)}..{_fmt(hi, 3)})")
+
+
+def _suspect_verdict(s: dict) -> str:
+    if "explains" not in s:
+        return ""
+    return (f"; refitted, {s['name']} = {_fmt(s['refit_value'])} +- {_fmt(s['refit_std'], 2)} "
+            + ("explains the data (residuals at the noise)" if s["explains"] else
+               f"leaves chi2 {s['refit_chi2_fit']:.1f}: part of the residual only"))
+
+
+def series_rms(c: Calibration, final) -> dict:
+    """RMS residual per series [sigma] before (base) and after (final model)."""
+    out = {}
+    for k, s in enumerate(c.dataset.series):
+        m = c.problem.series_of_point == k
+        out[s.name] = (float(np.sqrt(np.mean(c.base.residual[m] ** 2))),
+                       float(np.sqrt(np.mean(final.residual[m] ** 2))))
+    return out
+
+
 def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSettings(),
-        top: int = 3, log=print) -> dict:
+        top: int = 3, check: bool = True, log=print) -> dict:
     """The loop on a loaded dataset (`load_dataset`: bad input is found before
     ``out`` exists), writing the outputs listed in the module notes."""
-    c = calibrate(data, settings, top=top, log=log)
+    c = calibrate(data, settings, top=top, check=check, log=log)
     summary = c.summary()
+    final_fit = c.chosen if summary["effect_identified"] != "none" else c.base
+    summary["series_rms"] = series_rms(c, final_fit)
+    summary["residual_words"] = describe_residuals(c, residual_structure(c))
     summary["frame_warnings"] = frame_warnings(c)
     for w in summary["frame_warnings"]:
         log(f"warning: {w['message']}")

@@ -1,10 +1,11 @@
 """Synthetic measured datasets: the model plus one effect plus noise.
 
-`synthesize` runs `RigHistory` with a chosen effect strength, samples it the
-way a rig campaign would (`Plan`: worn profiles at a few cycle counts, the
-bushing weighed regularly, the joint force recorded at the start and near the
-end), adds Gaussian noise of the stated 1-sigma and writes a dataset folder in
-the documented format.  The effect is recorded only by the caller (the
+`synthesize` runs a forward model (by default the dynamic `RigHistory`, the
+reference) with chosen effects, samples it the way a rig campaign would
+(`Plan`: worn profiles at a few cycle counts, the bushing weighed regularly,
+the joint force recorded at the start and near the end; `CAMPAIGN_21400`:
+the thesis's own Ch. 7 test), adds Gaussian noise of the stated 1-sigma and
+writes a dataset folder in the documented format.  The effect is recorded only by the caller (the
 generator script ``design_studies/calibration/make_datasets.py``), never in
 the dataset: calibration has to find it.  ``distort`` adds an effect from
 outside the library to the measured profiles (e.g. an oval bore).
@@ -21,9 +22,12 @@ import numpy as np
 
 from ..presets import PTFE_DENSITY
 from .dataset import Dataset, Parameter, Series, write_dataset
-from .effects import INDEX, NAMES
+from .effects import EffectValues
 from .fit import ModelSettings
 from .model import Observation, rig_defaults
+
+# the parameters a dataset states even at the thesis rig's values
+LEGACY_STATED = ("k", "clearance", "depth", "diameter", "mu", "free_length")
 
 
 @dataclass(frozen=True)
@@ -43,32 +47,43 @@ class Plan:
     fit: tuple = ("k", "free_length")
     # stated prior spread of the fitted parameters (sets the optimiser's scale)
     prior_rel_std: float = 0.3
+    # profiles clipped at zero depth (as a user who refuses negative readings
+    # would); False: the raw readings, noise around zero included
+    clip_negative: bool = True
 
 
-def synthesize(folder, *, name: str, effect: str | None = None, strength: float = 0.0,
-               seed: int = 0, plan: Plan = Plan(), settings: ModelSettings = ModelSettings(),
+# The thesis's own test (Ch. 7): 21,400 cycles, the bore measured at four
+# inspections (360 points, a 6 um form tracer), the bushing weighed at the
+# same inspections, the joint force over the first cycle; the last inspection
+# held out.
+CAMPAIGN_21400 = Plan(
+    cycles=21400.0, profile_cycles=(5350.0, 10700.0, 16050.0, 21400.0), profile_angles=360,
+    profile_sigma=6.0e-6, volume_cycles=(5350.0, 10700.0, 16050.0, 21400.0),
+    force_cycles=(0.0,), holdout_from_cycles=21400.0, clip_negative=False)
+
+
+def synthesize(folder, *, name: str, effects: EffectValues | None = None, seed: int = 0,
+               plan: Plan = Plan(), settings: ModelSettings = ModelSettings(model="dynamic"),
                truth: dict | None = None, distort=None, description: str = "",
-               overwrite: bool = False) -> Dataset:
-    """Write a synthetic dataset to ``folder`` (see module notes).  ``truth``:
-    rig parameters (SI) that differ from the thesis rig; the dataset states the
-    thesis values for the fitted ones (the calibration must move them).
+               stated: dict | None = None, overwrite: bool = False) -> Dataset:
+    """Write a synthetic dataset to ``folder`` (see module notes).  ``effects``:
+    the effects in the data (default none).  ``truth``: rig parameters (SI)
+    that differ from the thesis rig; the dataset states the thesis values
+    (or ``stated``) for them, the calibration must move the fitted ones (a
+    parameter not fitted is the model error a suspect should name).
     ``distort(theta, cycles) -> extra depth [m]``: an outside-library effect
     added to every measured profile."""
     rng = np.random.default_rng(seed)
-    model = settings.model(plan.cycles)
-    base = rig_defaults()
-    true = {**base, **(truth or {})}
-    strengths = np.zeros(len(NAMES))
-    if effect is not None:
-        strengths[INDEX[effect]] = strength
-    history = jax.jit(model)({k: jnp.asarray(v) for k, v in true.items()},
-                             jnp.asarray(strengths))
+    model = settings.build(plan.cycles, (*plan.profile_cycles, *plan.volume_cycles))
+    base = {**rig_defaults(), **(stated or {})}
+    true = {**rig_defaults(), **(truth or {})}
+    effects = EffectValues.zero() if effects is None else effects
+    history = jax.jit(model)({k: jnp.asarray(v) for k, v in true.items()}, effects)
     if not bool(history.ok):
         raise RuntimeError("synthesize: the model failed")
-    a, d = model.extrapolation, model.dynamic_cycles
 
     def observe(kind, x, cycles=0.0, basis="mass"):
-        return np.asarray(Observation(kind, np.asarray(x, float), a, d, cycles=cycles,
+        return np.asarray(Observation(kind, np.asarray(x, float), cycles=cycles,
                                       basis=basis)(history))
 
     def held(counts):
@@ -80,7 +95,9 @@ def synthesize(folder, *, name: str, effect: str | None = None, strength: float 
         depth = observe("profile", theta, n)
         if distort is not None:
             depth = depth + distort(theta, n)
-        depth = np.maximum(depth + rng.normal(0.0, plan.profile_sigma, theta.shape), 0.0)
+        depth = depth + rng.normal(0.0, plan.profile_sigma, theta.shape)
+        if plan.clip_negative:
+            depth = np.maximum(depth, 0.0)
         series.append(Series(f"profile_{int(n):05d}", "profile",
                              Path(f"profile_{int(n):05d}.csv"), n, theta, depth,
                              plan.profile_sigma, holdout=np.full(theta.shape, held(n))))
@@ -99,8 +116,8 @@ def synthesize(folder, *, name: str, effect: str | None = None, strength: float 
     for key, value in base.items():
         if key in plan.fit:
             params[key] = Parameter(key, value, plan.prior_rel_std * value, True)
-        else:
-            params[key] = Parameter(key, true[key], None, False)
+        elif key in (stated or {}) or key in LEGACY_STATED:
+            params[key] = Parameter(key, value if key in (stated or {}) else true[key])
     return write_dataset(folder, name=name, description=description, preset="rig",
                          parameters=params, series=series, bushing_density=PTFE_DENSITY,
                          holdout_from_cycles=plan.holdout_from_cycles, overwrite=overwrite)

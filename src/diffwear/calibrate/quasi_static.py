@@ -1,0 +1,132 @@
+"""The calibration's quasi-static forward model (`QuasiStaticRigHistory`).
+
+The rig's crank-rod joint in the quasi-static reduction (`diffwear.quasistatic`):
+the ideal mechanism's joint loads over one cycle (with the guide friction of
+the effects), the pin at the equilibrium of the EFM springs, the profile
+integrated in the cycle count by the linearly implicit Euler step with the
+exact wear response A (`diffwear.wear.profile_ode` explains the step):
+
+    (I + dN (1 + s_c) diag(g) A) dh = dN g w((1 + s_c) h),
+
+w the wear per cycle at the clearance profile c0 + h + delta (delta = s_c h,
+the creep), g the effects' rate factor (`effects.rate_factor`, held over the
+step, its run-in part averaged exactly over it).  The step ends on every
+cycle count a measurement needs (``checkpoints``) and is otherwise spaced
+quadratically, N_j = N (j / steps)^2: short steps where the early effects
+(run-in, film) act, long ones where the wear rate is steady.  The joint-force
+trace is the ideal mechanism's load, which wear does not change in this
+model: one trace stands for every cycle count.
+
+Every number is traced, so the whole history (and a fit's Jacobian, by
+forward-mode autodiff through the implicit-function derivative of the pin's
+equilibrium) is one compiled program.
+"""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+
+from ..errors import InputError
+from ..mechanism.geometry import safe_norm
+from ..presets import TABLE_7_1, SliderCrankParameters
+from ..quasistatic.joint import QuasiStaticJoint
+from ..quasistatic.loads import cycle_loads
+from ..wear import worn_volume
+from .effects import EffectValues, rate_factor
+from .model import JOINT, PENETRATION_WIDTH, History, rig_mechanism, sorted_trace
+
+# 40 quadratic steps: the rig's 21,400-cycle depth and volume within 0.1 % of
+# 160 steps, with run-in (N_r = 50..5,000 cycles) and film effects switched on
+# (tests/test_calibrate_quasi_static.py).
+DEFAULT_STEPS = 40
+# Load samples per cycle: the wear quadrature (the quasi-static model's 180)
+DEFAULT_SAMPLES = 180
+
+
+def cycle_grid(cycles: float, steps: int, checkpoints=()) -> np.ndarray:
+    """0 = N_0 < N_1 < ... = ``cycles``: quadratic spacing and every checkpoint
+    (cycle counts below ``cycles``; nodes closer than 1e-9 N merged)."""
+    base = cycles * (np.arange(steps + 1) / steps) ** 2
+    extra = [float(c) for c in checkpoints if 0.0 < float(c) < cycles]
+    grid = np.unique(np.concatenate([base, extra]))
+    keep = np.concatenate([[True], np.diff(grid) > 1e-9 * cycles])
+    return grid[keep]
+
+
+class QuasiStaticRigHistory(eqx.Module):
+    """Quasi-static wear history of the Ch. 7 rig (module notes); called like
+    `model.RigHistory` with ``base`` (SI) and `EffectValues`."""
+
+    cycles: float = eqx.field(static=True)
+    checkpoints: tuple = eqx.field(static=True, default=())
+    steps: int = eqx.field(static=True, default=DEFAULT_STEPS)
+    n_theta: int = eqx.field(static=True, default=90)
+    samples: int = eqx.field(static=True, default=DEFAULT_SAMPLES)
+    penetration_width: float | None = eqx.field(static=True, default=PENETRATION_WIDTH)
+    p: SliderCrankParameters = TABLE_7_1
+
+    name = "quasi-static"
+
+    def __check_init__(self):
+        if not (math.isfinite(self.cycles) and self.cycles > 0):
+            raise InputError(f"calibration model: the campaign's cycles must be finite and "
+                             f"> 0, got {self.cycles}")
+        if int(self.steps) < 1:
+            raise InputError(f"calibration model: steps must be >= 1, got {self.steps}")
+
+    @property
+    def period(self) -> float:
+        return 2 * math.pi / float(self.p.omega)
+
+    @property
+    def grid(self) -> np.ndarray:
+        return cycle_grid(self.cycles, self.steps, self.checkpoints)
+
+    def describe(self) -> str:
+        return (f"quasi-static model: {len(self.grid) - 1} steps in the cycle count, "
+                f"{self.n_theta} profile nodes, {self.samples} load samples per cycle")
+
+    def mechanism(self, base: dict, effects: EffectValues):
+        return rig_mechanism(base, effects, n_theta=self.n_theta,
+                             penetration_width=self.penetration_width, p=self.p)
+
+    def __call__(self, base: dict, effects: EffectValues) -> History:
+        mech, y0 = self.mechanism(base, effects)
+        el = mech.element(JOINT)
+        joint = QuasiStaticJoint.from_joint(el)
+        loads = cycle_loads(mech, (JOINT,), y0, self.period, samples=self.samples)
+        lo = loads.joints[0]
+        n = self.n_theta
+        eye = jnp.eye(n)
+        grow = 1.0 + effects["creep"]
+        grid = jnp.asarray(self.grid)
+
+        def step(c, span):
+            h, guess, ok = c
+            n0, dn = span
+            dw, _, eq = joint.cycle_wear(grow * h, lo, guess)
+            a = joint.wear_response(grow * h, lo, eq)
+            volume = worn_volume(h, el.bushing_radius, el.law.depth)
+            g = rate_factor(effects, h, volume, n0, dn)
+            dh = jnp.linalg.solve(eye + dn * grow * g[:, None] * a, dn * g * dw)
+            ok = ok & eq.ok & jnp.all(jnp.isfinite(dh))
+            h = jnp.where(ok, h + dh, h)
+            return (h, eq.offset, ok), h
+
+        zeros = jnp.zeros(n)
+        init = (zeros, jnp.full_like(lo.force, jnp.nan), loads.ok)
+        (_, _, ok), hs = lax.scan(step, init, (grid[:-1], jnp.diff(grid)))
+        wear = jnp.concatenate([zeros[None], hs])
+        crank0 = mech.frames(mech.split(y0)[0]).pose("crank")[2]
+        angle = crank0 + 2 * jnp.pi * jnp.arange(self.samples) / self.samples
+        angle, force = sorted_trace(angle, safe_norm(lo.force)[None])
+        return History(
+            cycles=grid, wear=wear, creep=(grow - 1.0) * wear, force=force,
+            force_cycles=jnp.zeros(1), force_angle=angle, theta=el.profile.theta,
+            bushing_radius=el.bushing_radius, bushing_depth=el.law.depth, ok=ok)
+

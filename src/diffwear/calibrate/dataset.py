@@ -138,6 +138,8 @@ class Dataset:
     series: tuple[Series, ...]
     bushing_density: float | None = None     # kg/m^3
     holdout_from_cycles: float | None = None
+    mechanism: Path | None = None            # a mechanism file instead of the preset
+    joint: str | None = None                 # its wearing joint (None: the only one)
     notes: tuple[str, ...] = field(default=())  # non-fatal remarks, e.g. "no holdout data"
 
     @property
@@ -256,11 +258,17 @@ class VolumeOrMass(Field):
         return self._quantity(dimension).read(ctx, path, key, spelling, raw), dimension
 
 
-def _parameter_fields(dimension: str | None) -> dict[str, Field]:
+def _parameter_fields(dimension: str | None, signed: bool = False) -> dict[str, Field]:
+    """A parameter's keys; ``signed``: a mechanism-file number (a point may be
+    negative; a plain number is not limited to [0, 1])."""
     flags = {"fit": Flag(default=False), "suspect": Flag(default=True)}
     if dimension is None:
-        return {"value": Number(default=None, low=0.0, high=1.0),
-                "std": Number(default=None, low=0.0, low_open=True), **flags}
+        value = Number(default=None) if signed else Number(default=None, low=0.0, high=1.0)
+        return {"value": value, "std": Number(default=None, low=0.0, low_open=True), **flags}
+    if signed:
+        return {"value": Quantity(dimension=dimension, default=None),
+                "std": Quantity(dimension=dimension, default=None, low=0.0, low_open=True),
+                **flags}
     return {"value": Quantity(dimension=dimension, default=None, low=0.0, low_open=True),
             "std": Quantity(dimension=dimension, default=None, low=0.0, low_open=True),
             **flags}
@@ -268,7 +276,10 @@ def _parameter_fields(dimension: str | None) -> dict[str, Field]:
 
 DATASET_FIELDS = {"name": Text(), "description": Text(default="")}
 RIG_FIELDS = {
-    "preset": Text(choices=PRESETS),
+    "preset": Text(default=None, choices=PRESETS),
+    # or a mechanism file (path relative to the dataset folder) and its wearing joint
+    "mechanism": Text(default=None),
+    "joint": Text(default=None),
     "bushing_density": Quantity(dimension="density", default=None, low=0.0, low_open=True),
     # the bushing angle of the profile files: where their 0 lies in the model's
     # bushing frame (counter-clockwise from the rod axis, crank -> slider end)
@@ -339,7 +350,8 @@ def _build(folder: Path, ctx: Context, data: Mapping) -> Dataset:
     rig = _section(ctx, data, "rig", RIG_FIELDS, required=True, example='preset = "rig"')
     calibration = _section(ctx, data, "calibration", CALIBRATION_FIELDS, required=False,
                            example="holdout_from_cycles = 3000")
-    parameters = _parameters(ctx, data.get("parameters"))
+    mechanism = _mechanism(ctx, folder, rig)
+    parameters = _parameters(ctx, data.get("parameters"), mechanism)
     holdout_from = calibration["holdout_from_cycles"]
     series: list[Series] = []
     names: dict[str, int] = {}
@@ -368,6 +380,7 @@ def _build(folder: Path, ctx: Context, data: Mapping) -> Dataset:
     return Dataset(
         name=head["name"], description=head["description"], path=folder,
         preset=rig["preset"], parameters=parameters, series=tuple(series),
+        mechanism=None if mechanism is None else mechanism[0], joint=rig["joint"],
         bushing_density=rig["bushing_density"], holdout_from_cycles=holdout_from, notes=notes,
     )
 
@@ -386,32 +399,71 @@ def _to_model_frame(s: "Series", zero: float, sense: str) -> "Series":
                                holdout=np.asarray(s.holdout)[order])
 
 
-def _parameters(ctx: Context, raw) -> dict[str, Parameter]:
+def _mechanism(ctx: Context, folder: Path, rig: dict):
+    """(path, parsed TOML) of ``[rig] mechanism``, or None for the preset."""
+    if (rig["preset"] is None) == (rig["mechanism"] is None):
+        given = "both" if rig["preset"] is not None else "neither"
+        raise ctx.error("rig", f"{given} of preset and mechanism given",
+                        'exactly one: preset = "rig" or mechanism = "<file>.toml" (a mechanism '
+                        "file, relative to the dataset folder)")
+    if rig["mechanism"] is None:
+        if rig["joint"] is not None:
+            raise ctx.error("rig.joint", "joint is for a mechanism file",
+                            "the preset rig's wearing joint is fixed (crank_rod)")
+        return None
+    path = Path(rig["mechanism"])
+    path = path if path.is_absolute() else folder / path
+    if not path.is_file():
+        raise ctx.error("rig.mechanism", f"{rig['mechanism']!r}: no such file (looked for "
+                        f"{path})", "a mechanism file, relative to the dataset folder")
+    from ..config import load
+
+    study = load(path)  # a bad mechanism file reports itself, by name
+    return path, tomllib.loads(path.read_text(encoding="utf-8")), study
+
+
+def _parameters(ctx: Context, raw, mechanism=None) -> dict[str, Parameter]:
     example = 'k = { value = "5.05e-4 mm^3/(N m)", fit = true }'
+    if mechanism is not None:
+        example = '"joints.crank_rod.wear.coefficient" = { fit = true, std = "1e-4 mm^3/(N m)" }'
     if raw is None:
         raise ctx.error("parameters", "missing section", f"[parameters] with e.g. {example}")
     table = _table(ctx, "parameters", raw, f"[parameters] with <name> = {{ value, std, fit }}, "
                    f"e.g. {example}")
-    for name in table:
-        if name not in PARAMETERS:
-            raise ctx.error(f"parameters.{name}",
-                            f"unknown parameter {name!r}{suggest(name, list(PARAMETERS))}",
-                            PARAMETER_RULE)
+    if mechanism is None:
+        for name in table:
+            if name not in PARAMETERS:
+                raise ctx.error(f"parameters.{name}",
+                                f"unknown parameter {name!r}{suggest(name, list(PARAMETERS))}",
+                                PARAMETER_RULE)
+        dims = {n: d for n, d in PARAMETERS.items() if n in table}  # canonical order
+    else:
+        from .mechanism_file import file_value
+
+        path, doc, _ = mechanism
+        dims = {}
+        for name in table:
+            try:
+                dims[name] = file_value(doc, name, str(path))[1]
+            except InputError as err:
+                raise ctx.error(f"parameters.{name}", str(err),
+                                "a number of the mechanism file by its path, e.g. "
+                                "\"bodies.rod.mass\"") from None
     out = {}
-    for name, dimension in PARAMETERS.items():  # canonical order
-        if name not in table:
-            continue
+    for name, dimension in dims.items():
         path = f"parameters.{name}"
         entry = _table(ctx, path, table[name], f"{name} = {{ value = ..., std = ..., fit = ... }}")
-        v = read_table(ctx, path, entry, _parameter_fields(dimension))
-        if v["fit"] and v["value"] is None:
+        fields = _parameter_fields(dimension, signed=mechanism is not None)
+        v = read_table(ctx, path, entry, fields)
+        if v["fit"] and v["value"] is None and mechanism is None:
             raise ctx.error(f"{path}.value", "missing: a fitted parameter needs its starting "
                             "value", f"{name} = {{ value = ..., std = ..., fit = true }}")
         out[name] = Parameter(name, v["value"], v["std"], v["fit"], v["suspect"])
     if not any(p.fit for p in out.values()):
         given = ", ".join(out) or "(none)"
+        rule = PARAMETER_RULE if mechanism is None else "numbers of the mechanism file by path"
         raise ctx.error("parameters", f"no parameter has fit = true (given: {given})",
-                        f"fit = true on at least one parameter to calibrate: {PARAMETER_RULE}")
+                        f"fit = true on at least one parameter to calibrate: {rule}")
     return out
 
 

@@ -43,6 +43,10 @@ from .model import BASE_NAMES, MAX_EXTRAPOLATION, Observation, RigHistory, rig_d
 from .quasi_static import DEFAULT_STEPS, QuasiStaticRigHistory
 
 DEFAULT_LOG_SCALE = 0.1  # tau of a fitted parameter without a stated std
+# A shape is kept within this many prior spreads of its default (a factor
+# 1e4 either way for a decade prior): beyond, an effect has no shape left to
+# give (a film formed at once is a change of k)
+SHAPE_PRIOR_SIGMAS = 4.0
 MODELS = ("quasi-static", "dynamic")
 
 
@@ -102,11 +106,32 @@ class Problem:
     tau: np.ndarray
     suspects: tuple = ()
 
+    names: tuple = BASE_NAMES
+
     @classmethod
     def from_dataset(cls, data: Dataset, settings: ModelSettings = ModelSettings()):
+        if data.mechanism is not None:
+            return cls._from_mechanism_file(data, settings)
         if data.preset != "rig":
             raise InputError(f"{data.path}: preset {data.preset!r}: only 'rig' is modelled")
         model = settings.build(data.max_cycles, _checkpoints(data))
+        return cls._assemble(data, model, rig_defaults(), BASE_NAMES)
+
+    @classmethod
+    def _from_mechanism_file(cls, data: Dataset, settings: ModelSettings):
+        from .mechanism_file import file_model
+
+        if settings.model != "quasi-static":
+            raise InputError(f"{data.path}: a mechanism-file dataset is calibrated on the "
+                             "quasi-static model; allowed: --model quasi-static")
+        names = tuple(data.parameters)
+        model = file_model(data.mechanism, names, data.joint, cycles=float(data.max_cycles),
+                           checkpoints=tuple(sorted(set(_checkpoints(data)))),
+                           steps=settings.steps)
+        return cls._assemble(data, model, dict(model.parameters.value0), names)
+
+    @classmethod
+    def _assemble(cls, data: Dataset, model, defaults: dict, names: tuple):
         obs, ys, sig, hold, which = [], [], [], [], []
         for k, s in enumerate(data.series):
             obs.append(Observation(s.kind, np.asarray(s.x), cycles=float(s.cycles or 0.0),
@@ -115,20 +140,20 @@ class Problem:
             sig.append(np.full(s.y.shape, s.sigma))
             hold.append(s.holdout)
             which.append(np.full(s.y.shape, k))
-        base0 = rig_defaults()
+        base0 = dict(defaults)
         tau = []
         for name, p in data.parameters.items():
             if p.value is not None:
                 base0[name] = p.value
         for name in data.fit_names:
             p = data.parameters[name]
-            tau.append(p.std / p.value if p.std else DEFAULT_LOG_SCALE)
-        suspects = tuple(n for n in BASE_NAMES if n not in data.fit_names
+            tau.append(abs(p.std / base0[name]) if p.std else DEFAULT_LOG_SCALE)
+        suspects = tuple(n for n in names if n not in data.fit_names
                          and (n not in data.parameters or data.parameters[n].suspect))
         return cls(model, tuple(obs), np.concatenate(ys), np.concatenate(sig),
                    np.concatenate(hold), np.concatenate(which), tuple(data.fit_names),
                    {k: jnp.asarray(v, dtype=float) for k, v in base0.items()},
-                   np.asarray(tau, dtype=float), suspects)
+                   np.asarray(tau, dtype=float), suspects, names)
 
     def with_model(self, model) -> "Problem":
         return dataclasses.replace(self, model=model)
@@ -144,7 +169,7 @@ class Problem:
         for i, name in enumerate(self.fit_names):
             out[name] = self.base0[name] * jnp.exp(self.tau[i] * x[i])
         if log_multipliers is not None:
-            out = {n: out[n] * jnp.exp(log_multipliers[i]) for i, n in enumerate(BASE_NAMES)}
+            out = {n: out[n] * jnp.exp(log_multipliers[i]) for i, n in enumerate(self.names)}
         return out
 
     def predict(self, x, effects: EffectValues, log_multipliers=None):
@@ -241,9 +266,10 @@ class Fitter:
         nb, ne = problem.n_base, len(NAMES)
         # every unknown the loop differentiates by, packed: v = (fitted x,
         # strengths, ln shapes, ln multipliers of every rig parameter)
+        nu = len(problem.names)
         self._slices = (slice(0, nb), slice(nb, nb + ne), slice(nb + ne, nb + 2 * ne),
-                        slice(nb + 2 * ne, nb + 2 * ne + len(BASE_NAMES)))
-        self.n_packed = nb + 2 * ne + len(BASE_NAMES)
+                        slice(nb + 2 * ne, nb + 2 * ne + nu))
+        self.n_packed = nb + 2 * ne + nu
         # directional derivatives per call: the fit's own unknowns (x, strength,
         # shape); the score tests' columns come in batches of this size, so
         # one compiled program serves the fits, the score tests and the
@@ -307,10 +333,13 @@ class Fitter:
         prior[0, nb + 1] = float(onehot @ HAS_SHAPE)
         return r_all, np.vstack([jac[~self.problem.holdout], prior])
 
-    def _levenberg_marquardt(self, z, evaluate, rows, free, what):
+    def _levenberg_marquardt(self, z, evaluate, rows, free, what, bounds=None):
         """(z, steps, fit-row Jacobian, all residuals) at the accepted minimum.
         ``evaluate(z) -> (all residuals, fit-row Jacobian)``; ``rows(r_all, z)``:
-        the objective's rows."""
+        the objective's rows; ``bounds``: (lower, upper) arrays of z (a step
+        is cut back to the box)."""
+        lower, upper = (np.full(z.shape, -np.inf), np.full(z.shape, np.inf)) \
+            if bounds is None else bounds
         r_all, jac = evaluate(z)
         r = rows(r_all, z)
         if not np.all(np.isfinite(r)):
@@ -324,6 +353,7 @@ class Fitter:
             while True:
                 dz = np.zeros_like(z)
                 dz[free] = np.linalg.solve(a + lam * np.diag(d), -g)
+                dz = np.clip(z + dz, lower, upper) - z
                 r_all_new, jac_new = evaluate(z + dz)
                 r_new = rows(r_all_new, z + dz)
                 chi2_new = float(r_new @ r_new) if np.all(np.isfinite(r_new)) else math.inf
@@ -348,14 +378,15 @@ class Fitter:
         v = self._pack(x, log_shape=log_shape)
         return self._directional(v, self._unit(1, range(len(NAMES))))[1]
 
-    def parameter_jacobian(self, x, u=None, names=BASE_NAMES):
+    def parameter_jacobian(self, x, u=None, names=None):
         """(dr/dx of the fitted unknowns, dr/d ln p of the rig parameters
         ``names``, r) at ln multipliers ``u`` (default none) of every rig
         parameter."""
         nb = self.problem.n_base
+        names = self.problem.names if names is None else names
         v = self._pack(x, u=u)
         t = np.vstack([self._unit(0, range(nb)),
-                       self._unit(3, [BASE_NAMES.index(n) for n in names])])
+                       self._unit(3, [self.problem.names.index(n) for n in names])])
         r, jac = self._directional(v, t)
         return jac[:, :nb], jac[:, nb:], r
 
@@ -363,11 +394,11 @@ class Fitter:
         """The base model refitted with rig parameter ``name`` (not one the
         dataset fits) free as well, on a log scale: its value in ``params``."""
         p = self.problem
-        nb, i = p.n_base, BASE_NAMES.index(name)
+        nb, i = p.n_base, p.names.index(name)
         fit_rows = ~p.holdout
 
         def evaluate(z):
-            u = np.zeros(len(BASE_NAMES))
+            u = np.zeros(len(p.names))
             u[i] = z[nb]
             jx, ju, r = self.parameter_jacobian(z[:nb], u, names=(name,))
             return r, np.column_stack([jx, ju])[fit_rows]
@@ -415,8 +446,14 @@ class Fitter:
             return np.concatenate([r_all[fit_rows], [z[-1] if shaped else 0.0]])
 
         t0 = time.perf_counter()
+        lower = np.full(nb + 2, -np.inf)
+        upper = np.full(nb + 2, np.inf)
+        if k is not None:
+            lower[nb] = EFFECTS[k].lower / scale
+            lower[nb + 1], upper[nb + 1] = -SHAPE_PRIOR_SIGMAS, SHAPE_PRIOR_SIGMAS
+        z0 = np.clip(z0, lower, upper)
         z, steps, jz, r = self._levenberg_marquardt(
-            z0, lambda z: self._evaluate(z, onehot), rows, free, what)
+            z0, lambda z: self._evaluate(z, onehot), rows, free, what, (lower, upper))
         wall = time.perf_counter() - t0
         x = z[:nb]
         if not np.all(np.isfinite(r)):  # a held-out point the model could not reach

@@ -28,9 +28,11 @@ and, when no wear effect explains the data, the mechanism parameter that does.
    is reported, not adopted).
 5. Mechanism suspects: when no effect is identified, every rig parameter the
    dataset neither fits nor excludes (``suspect = false``) is scored the same
-   way (its column: the derivative in ln of the parameter), and the best is
-   refitted to say how far it would have to move and whether that explains
-   the data ("the force trace asks for a 2x longer crank").
+   way (its column: the derivative in ln of the parameter).  When the residual
+   is unexplained and the best score passes p = 0.001 corrected for the number
+   of suspects, that parameter is refitted to say how far it would have to
+   move and whether that explains the data ("the force trace asks for a 2x
+   longer crank").
 """
 
 from __future__ import annotations
@@ -96,10 +98,11 @@ class Suspect:
         f = self.factor
         words = {"length": ("longer", "shorter"), "mass": ("heavier", "lighter"),
                  "stiffness": ("stiffer", "softer"), "inertia": ("larger", "smaller")}
-        dim = RIG_PARAMETERS[self.name].dimension
-        up, down = words.get(dim, ("larger", "smaller"))
+        known = RIG_PARAMETERS.get(self.name)
+        up, down = words.get(known.dimension if known else None, ("larger", "smaller"))
         how = (f"a {f:.2g}x {up}" if f >= 1 else f"a {1 / f:.2g}x {down}")
-        return (f"{what} asks for {how} {RIG_PARAMETERS[self.name].description} "
+        label = known.description if known else self.name
+        return (f"{what} asks for {how} {label} "
                 f"({self.name}: {self.value0:.4g} -> {self.value0 * f:.4g} SI)")
 
 
@@ -148,7 +151,8 @@ class Calibration:
                            for s in self.scores],
             "goodness_of_fit": self.gof,
             "suspects": [_suspect(s) for s in self.suspects],
-            "suspect": self.suspects[0].sentence() if self.suspects else None,
+            "suspect": (self.suspects[0].sentence()
+                        if self.suspects and self.suspects[0].refit is not None else None),
             "model_check": self.check,
             "model_settings": {"description": m.describe(), "n_theta": m.n_theta},
             "wall_time_s": self.wall_time_s,
@@ -186,6 +190,15 @@ def _suspect(s: Suspect) -> dict:
 def _chi2_sf(x: float) -> float:
     """P(chi-square(1) > x) = erfc(sqrt(x / 2))."""
     return math.erfc(math.sqrt(max(x, 0.0) / 2.0))
+
+
+def _chi2_isf(p: float) -> float:
+    """x with P(chi-square(1) > x) = p (bisection on `_chi2_sf`)."""
+    lo, hi = 0.0, 200.0
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _chi2_sf(mid) > p else (lo, mid)
+    return 0.5 * (lo + hi)
 
 
 def _score(name, j, jb, r, lower, kinds) -> Score:
@@ -328,7 +341,9 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     if identified == "none" and problem.suspects and not too_few:
         ranked = score_suspects(fitter, base, kinds)
         suspects = [Suspect(s.effect, float(problem.base0[s.effect]), s) for s in ranked]
-        if ranked and ranked[0].statistic > LR_CRITICAL[1]:
+        # named only when something is left to explain, at p = 0.001 over all suspects
+        critical = _chi2_isf(0.001 / len(ranked))
+        if unexplained and ranked and ranked[0].statistic > critical:
             lead = suspects[0]
             try:
                 lead.refit = fitter.fit_suspect(lead.name, x0, lead.score.first_step)
@@ -338,7 +353,7 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     final = chosen if identified != "none" else base
     result = Calibration(data, problem, base, scores, refits, qualifying, chosen, identified,
                          unexplained, gof, 0.0, suspects, notes={"failed_refits": failed})
-    if check and problem.model.name != "dynamic":
+    if check and problem.model.name != "dynamic" and data.mechanism is None:
         result.check = model_check(data, problem, final, settings)
         c = result.check
         log(f"check on the {c['model']} model: chi2 {c['chi2_fit']} on the fit points "

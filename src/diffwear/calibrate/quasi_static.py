@@ -91,17 +91,25 @@ class QuasiStaticRigHistory(eqx.Module):
         return (f"quasi-static model: {len(self.grid) - 1} steps in the cycle count, "
                 f"{self.n_theta} profile nodes, {self.samples} load samples per cycle")
 
+    @property
+    def joint(self) -> str:
+        return JOINT
+
     def mechanism(self, base: dict, effects: EffectValues):
         return rig_mechanism(base, effects, n_theta=self.n_theta,
                              penetration_width=self.penetration_width, p=self.p)
 
+    def crank_angle(self, mech, y0):
+        """The crank's angle at t = 0 (the force trace's angle origin)."""
+        return mech.frames(mech.split(y0)[0]).pose("crank")[2]
+
     def __call__(self, base: dict, effects: EffectValues) -> History:
         mech, y0 = self.mechanism(base, effects)
-        el = mech.element(JOINT)
+        el = mech.element(self.joint)
         joint = QuasiStaticJoint.from_joint(el)
-        loads = cycle_loads(mech, (JOINT,), y0, self.period, samples=self.samples)
+        loads = cycle_loads(mech, (self.joint,), y0, self.period, samples=self.samples)
         lo = loads.joints[0]
-        n = self.n_theta
+        n = joint.n
         eye = jnp.eye(n)
         grow = 1.0 + effects["creep"]
         grid = jnp.asarray(self.grid)
@@ -122,8 +130,7 @@ class QuasiStaticRigHistory(eqx.Module):
         init = (zeros, jnp.full_like(lo.force, jnp.nan), loads.ok)
         (_, _, ok), hs = lax.scan(step, init, (grid[:-1], jnp.diff(grid)))
         wear = jnp.concatenate([zeros[None], hs])
-        crank0 = mech.frames(mech.split(y0)[0]).pose("crank")[2]
-        angle = crank0 + 2 * jnp.pi * jnp.arange(self.samples) / self.samples
+        angle = self.crank_angle(mech, y0) + 2 * jnp.pi * jnp.arange(self.samples) / self.samples
         angle, force = sorted_trace(angle, safe_norm(lo.force)[None])
         return History(
             cycles=grid, wear=wear, creep=(grow - 1.0) * wear, force=force,

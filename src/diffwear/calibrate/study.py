@@ -239,7 +239,9 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> str:
         lines += ["## Mechanism suspects", "",
                   "No wear effect explains the data, so the rig parameters the dataset neither "
                   "fits nor excludes (`suspect = false`) were scored the same way (derivative "
-                  "in the logarithm of the parameter); the best was refitted.", "",
+                  "in the logarithm of the parameter); when the residual is unexplained the "
+                  "best is refitted and named, if its score passes p = 0.001 corrected for the "
+                  "number of suspects.", "",
                   "| parameter | score | p | stated | first-step factor |", "|---|---|---|---|---|"]
         for sp in summary["suspects"][:6]:
             lines.append(f"| {sp['name']} | {_fmt(sp['score'])} | {_fmt(sp['p_value'], 2)} | "

@@ -1,0 +1,241 @@
+"""Calibrating a user's mechanism file: its numbers as parameters.
+
+A dataset may name a mechanism file (``[rig] mechanism = "linkage.toml"``)
+instead of the preset rig.  Any number in that file is a parameter, named by
+its path: ``"<section>.<element name>.<key>"`` with nested keys and vector
+components, e.g. ``"bodies.rod.mass"``, ``"forces.slider_spring.free_length"``,
+``"joints.crank_rod.wear.coefficient"``, ``"joints.crank_rod.pin_point[0]"``.
+
+How a file number reaches the model (traced, so it differentiates): the file
+is loaded three times, as written and with the number moved by +-1e-6 of
+itself; the leaves of the mechanism (and of the assembly guess) that move
+give the number's exact linear map onto the model, p = p0 + (v - v0) dp/dv.
+A number whose leaves do not move linearly (the two one-sided differences
+disagree: e.g. a layer thickness that sets a stiffness E / L) is refused with
+the reason; calibrate the quantity it sets instead.
+
+The wearing joint is the file's clearance joint with a wear law (``[rig]
+joint`` names it when there are several); its period is the first driver's
+2 pi / |omega|.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import re
+import tomllib
+from pathlib import Path
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..config import load_dict, units
+from ..contact import centred_state
+from ..contact.clearance_joint import ClearanceJoint
+from ..dynamics import consistent_state
+from ..errors import InputError
+from ..mechanism.constraints import Driver
+from ..quasistatic.loads import ideal_parent
+from .effects import EffectValues, wear_law
+from .quasi_static import QuasiStaticRigHistory
+
+_STEP = 1e-6        # relative move of a number to find its map onto the model
+_LINEAR_TOL = 1e-5  # the two one-sided maps must agree to this (relative)
+_PATH = re.compile(r"(?P<key>[^.\[\]]+)(?:\[(?P<index>\d+)\])?")
+
+
+def _locate(doc: dict, path: str, file: str):
+    """(container, key) of the number at ``path`` in the parsed file."""
+    parts = path.split(".")
+    if len(parts) < 3 or parts[0] not in ("bodies", "joints", "forces"):
+        raise InputError(f"{file}: parameter {path!r}: a path '<bodies|joints|forces>.<element "
+                         "name>.<key>', e.g. 'bodies.rod.mass' or 'joints.crank_rod.pin_point[0]'")
+    section, name = parts[0], parts[1]
+    items = [t for t in doc.get(section, []) if isinstance(t, dict) and t.get("name") == name]
+    if not items:
+        names = [t.get("name") for t in doc.get(section, []) if isinstance(t, dict)]
+        raise InputError(f"{file}: parameter {path!r}: no [[{section}]] named {name!r}; "
+                         f"allowed: {', '.join(map(str, names)) or '(none)'}")
+    node, key = items[0], None
+    for k, part in enumerate(parts[2:]):
+        m = _PATH.fullmatch(part)
+        if m is None or not isinstance(node, dict) or m["key"] not in node:
+            have = ", ".join(node) if isinstance(node, dict) else "(not a table)"
+            raise InputError(f"{file}: parameter {path!r}: no key {part!r}; allowed: {have}")
+        if k < len(parts) - 3:
+            node = node[m["key"]]
+            if m["index"] is not None:
+                node = node[int(m["index"])]
+            continue
+        if m["index"] is not None:
+            node, key = node[m["key"]], int(m["index"])
+        else:
+            key = m["key"]
+    value = node[key] if isinstance(node, (dict, list)) else None
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise InputError(f"{file}: parameter {path!r} is not a number (got {value!r})")
+    return node, key
+
+
+def file_value(doc: dict, path: str, file: str) -> tuple[float, str | None]:
+    """(SI value, dimension or None for a plain number) of the number at ``path``."""
+    node, key = _locate(doc, path, file)
+    raw = node[key]
+    if isinstance(raw, str):
+        m = units._QUANTITY.fullmatch(raw)
+        dim = units._dimension_of(units.normalise_unit(m["unit"])) if m else None
+        if dim is None:
+            raise InputError(f"{file}: parameter {path!r}: {raw!r} is not a number with a "
+                             "known unit")
+        return units.parse_quantity(raw, dim), dim
+    return float(raw), None
+
+
+def _moved(doc: dict, path: str, file: str, factor: float) -> dict:
+    out = copy.deepcopy(doc)
+    node, key = _locate(out, path, file)
+    raw = node[key]
+    if isinstance(raw, str):
+        m = units._QUANTITY.fullmatch(raw)
+        node[key] = f"{float(m['num']) * factor!r} {m['unit']}"
+    else:
+        node[key] = float(raw) * factor
+    return out
+
+
+def _leaves(study):
+    return jax.tree.leaves((study.mechanism, study.q_guess))
+
+
+class FileParameterMap(eqx.Module):
+    """The exact linear maps of a file's numbers onto the model's leaves
+    (module notes): ``value0[name]`` (SI) and, per name, the moving leaves'
+    indices and derivatives."""
+
+    names: tuple = eqx.field(static=True)
+    value0: dict
+    moves: dict
+
+    @classmethod
+    def build(cls, doc: dict, names, file: str, study) -> "FileParameterMap":
+        base = _leaves(study)
+        value0, moves = {}, {}
+        for name in names:
+            v0, _ = file_value(doc, name, file)
+            if v0 == 0.0:
+                raise InputError(f"{file}: parameter {name!r} is 0 in the file: a parameter is "
+                                 "fitted on a log scale and must be non-zero")
+            up = _leaves(load_dict(_moved(doc, name, file, 1 + _STEP), file=file))
+            down = _leaves(load_dict(_moved(doc, name, file, 1 - _STEP), file=file))
+            found = []
+            for i, (a, b, c) in enumerate(zip(base, up, down)):
+                a, b, c = (np.asarray(x, dtype=float) for x in (a, b, c))
+                if a.shape != b.shape or np.array_equal(a, b) and np.array_equal(a, c):
+                    continue
+                plus, minus = (b - a) / (_STEP * v0), (a - c) / (_STEP * v0)
+                size = max(np.max(np.abs(plus)), 1e-300)
+                if np.max(np.abs(plus - minus)) > _LINEAR_TOL * size:
+                    raise InputError(
+                        f"{file}: parameter {name!r} enters the model non-linearly (e.g. a "
+                        "layer thickness that sets a stiffness E / L); allowed: a number the "
+                        "model is linear in (a mass, inertia, length, point, spring rate, "
+                        "free length, wear coefficient, friction coefficient)")
+                found.append((i, jnp.asarray(0.5 * (plus + minus))))
+            if not found:
+                raise InputError(f"{file}: parameter {name!r} does not change the model")
+            value0[name] = v0
+            moves[name] = tuple(found)
+        return cls(tuple(names), value0, moves)
+
+    def apply(self, study, values: dict):
+        """(mechanism, assembly guess) at ``values`` (SI, any subset of names)."""
+        leaves = list(_leaves(study))
+        for name in self.names:
+            if name not in values:
+                continue
+            delta = values[name] - self.value0[name]
+            for i, slope in self.moves[name]:
+                leaves[i] = jnp.asarray(leaves[i], dtype=float) + delta * slope
+        treedef = jax.tree.structure((study.mechanism, study.q_guess))
+        return jax.tree.unflatten(treedef, leaves)
+
+
+def wearing_joint(study, joint: str | None, file: str) -> str:
+    """The clearance joint with a wear law (``joint`` if given)."""
+    found = [f.name for f in study.mechanism.forces
+             if isinstance(f, ClearanceJoint) and f.wear is not None]
+    if joint is not None:
+        if joint not in found:
+            raise InputError(f"{file}: joint {joint!r} is not a clearance joint with a wear law; "
+                             f"allowed: {', '.join(found) or '(none in the file)'}")
+        return joint
+    if len(found) != 1:
+        raise InputError(f"{file}: {len(found)} clearance joints with a wear law "
+                         f"({', '.join(found) or 'none'}); allowed: exactly one, or name it "
+                         "in [rig] joint = \"...\"")
+    return found[0]
+
+
+def driver(study, file: str) -> Driver:
+    drivers = [c for c in study.mechanism.constraints if isinstance(c, Driver)]
+    if not drivers or float(drivers[0].omega) == 0.0:
+        raise InputError(f"{file}: a wear campaign needs a driver with a non-zero speed (the "
+                         "crank cycle); allowed: a [[joints]] type = \"driver\" entry")
+    return drivers[0]
+
+
+def load_file(path: Path):
+    """(parsed TOML, `Study`) of a mechanism file."""
+    from ..config import load
+
+    study = load(path)
+    return tomllib.loads(Path(path).read_text(encoding="utf-8")), study
+
+
+class QuasiStaticFileHistory(QuasiStaticRigHistory):
+    """`QuasiStaticRigHistory` on a mechanism file's wearing joint: ``base``
+    holds the file parameters by path (`FileParameterMap`); the effects' wear
+    law replaces the joint's (guide friction does not apply)."""
+
+    study: object = None
+    parameters: FileParameterMap | None = None
+    joint_name: str = eqx.field(static=True, default="")
+    file_period: float = eqx.field(static=True, default=1.0)
+
+    @property
+    def period(self) -> float:
+        return self.file_period
+
+    @property
+    def joint(self) -> str:
+        return self.joint_name
+
+    def describe(self) -> str:
+        return (super().describe() + f"; mechanism file {self.study.file}, joint "
+                f"{self.joint_name!r}")
+
+    def mechanism(self, base: dict, effects: EffectValues):
+        mech, q_guess = self.parameters.apply(self.study, base)
+        index = next(i for i, f in enumerate(mech.forces) if f.name == self.joint_name)
+        k = mech.forces[index].wear.coefficient
+        mech = eqx.tree_at(lambda m: m.forces[index].wear, mech, wear_law(k, effects))
+        ideal = ideal_parent(mech)
+        y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
+        return mech, y0
+
+    def crank_angle(self, mech, y0):
+        d = driver(self.study, self.study.file)
+        return mech.frames(mech.split(y0)[0]).pose(d.body)[2]
+
+
+def file_model(path: Path, names, joint: str | None, **settings) -> QuasiStaticFileHistory:
+    doc, study = load_file(path)
+    file = str(path)
+    name = wearing_joint(study, joint, file)
+    d = driver(study, file)
+    params = FileParameterMap.build(doc, names, file, study)
+    return QuasiStaticFileHistory(study=study, parameters=params, joint_name=name,
+                                  file_period=2 * math.pi / abs(float(d.omega)), **settings)

@@ -93,7 +93,7 @@ def test_hand_written_dataset_in_si(tmp_path):
     assert (d.name, d.description, d.preset) == ("synthetic-run-in", "test data", "rig")
     assert d.bushing_density == 2250.0
     assert d.holdout_from_cycles == 3000.0
-    assert list(d.parameters) == ["k", "clearance", "free_length", "mu"]
+    assert list(d.parameters) == ["k", "clearance", "mu", "free_length"]  # canonical order
     assert d.parameters["k"] == Parameter("k", 5.05e-13, 2.0e-13, True)
     assert d.parameters["clearance"] == Parameter("clearance", 33e-6, 5e-6, False)
     assert d.parameters["free_length"].value == 0.2
@@ -304,8 +304,8 @@ BAD = {
     "parameter not a table": (toml('clearance = { value = "33 um", std = "5 um" }',
                                    'clearance = "33 um"'),
                               ["parameters.clearance", "expected a table", "'33 um'"]),
-    "missing value": (toml('clearance = { value = "33 um", std', 'clearance = { std'),
-                      ["parameters.clearance.value", "missing key", "length unit"]),
+    "missing value": (toml('k = { value = "5.05e-4 mm^3/(N m)", std', 'k = { std'),
+                      ["parameters.k.value", "missing", "fit = true"]),
     "unknown parameter key": (toml('std = "5 um"', 'sd = "5 um"'),
                               ["parameters.clearance.sd", "did you mean 'std'"]),
     "wrong dimension": (toml('"33 um"', '"33 kg"'),

@@ -7,12 +7,13 @@ components, e.g. ``"bodies.rod.mass"``, ``"forces.slider_spring.free_length"``,
 ``"joints.crank_rod.wear.coefficient"``, ``"joints.crank_rod.pin_point[0]"``.
 
 How a file number reaches the model (traced, so it differentiates): the file
-is loaded three times, as written and with the number moved by +-1e-6 of
-itself; the leaves of the mechanism (and of the assembly guess) that move
-give the number's exact linear map onto the model, p = p0 + (v - v0) dp/dv.
-A number whose leaves do not move linearly (the two one-sided differences
-disagree: e.g. a layer thickness that sets a stiffness E / L) is refused with
-the reason; calibrate the quantity it sets instead.
+is loaded three times, as written and with the number moved by +-1e-3 of
+itself; each leaf of the mechanism (and of the assembly guess) that moves
+gets the map its three values fit exactly: affine, p = p0 + (v - v0) dp/dv
+(masses, points, spring rates, clearances), or a power law, p = p0 (v /
+v0)^a (a layer thickness setting a stiffness E / L: a = -1; a mass setting a
+damping time: a = 1/2).  A number whose leaves follow neither is refused with
+the reason.
 
 The wearing joint is the file's clearance joint with a wear law (``[rig]
 joint`` names it when there are several); its period is the first driver's
@@ -42,8 +43,8 @@ from ..quasistatic.loads import ideal_parent
 from .effects import EffectValues, wear_law
 from .quasi_static import QuasiStaticRigHistory
 
-_STEP = 1e-6        # relative move of a number to find its map onto the model
-_LINEAR_TOL = 1e-5  # the two one-sided maps must agree to this (relative)
+_STEP = 1e-3        # relative move of a number to find its map onto the model
+_LINEAR_TOL = 1e-7  # the two one-sided maps must agree to this (a 1/L leaf: 2e-3)
 _PATH = re.compile(r"(?P<key>[^.\[\]]+)(?:\[(?P<index>\d+)\])?")
 
 
@@ -110,6 +111,24 @@ def _leaves(study):
     return jax.tree.leaves((study.mechanism, study.q_guess))
 
 
+def _leaf_map(a, b, c, v0, name, file):
+    """("affine", dp/dv) or ("power", exponent) of a leaf at a, b, c (the
+    number at v0, v0 (1 + h), v0 (1 - h)); refused if neither fits."""
+    plus, minus = (b - a) / (_STEP * v0), (a - c) / (_STEP * v0)
+    size = max(float(np.max(np.abs(plus))), 1e-300)
+    if np.max(np.abs(plus - minus)) <= _LINEAR_TOL * size:
+        return "affine", 0.5 * (plus + minus)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        up = np.log(b / a) / math.log1p(_STEP)
+        down = np.log(c / a) / math.log1p(-_STEP)
+    if np.all(np.isfinite(up)) and np.allclose(up, down, rtol=0.0, atol=1e-6):
+        return "power", 0.5 * (up + down)
+    raise InputError(
+        f"{file}: parameter {name!r} enters the model neither linearly nor as a power law; "
+        "allowed: a number the model depends on like a mass, length, point, stiffness, "
+        "layer thickness (E / L), spring rate or wear coefficient")
+
+
 class FileParameterMap(eqx.Module):
     """The exact linear maps of a file's numbers onto the model's leaves
     (module notes): ``value0[name]`` (SI) and, per name, the moving leaves'
@@ -135,19 +154,11 @@ class FileParameterMap(eqx.Module):
                 a, b, c = (np.asarray(x, dtype=float) for x in (a, b, c))
                 if a.shape != b.shape or np.array_equal(a, b) and np.array_equal(a, c):
                     continue
-                plus, minus = (b - a) / (_STEP * v0), (a - c) / (_STEP * v0)
-                size = max(np.max(np.abs(plus)), 1e-300)
-                if np.max(np.abs(plus - minus)) > _LINEAR_TOL * size:
-                    raise InputError(
-                        f"{file}: parameter {name!r} enters the model non-linearly (e.g. a "
-                        "layer thickness that sets a stiffness E / L); allowed: a number the "
-                        "model is linear in (a mass, inertia, length, point, spring rate, "
-                        "free length, wear coefficient, friction coefficient)")
-                found.append((i, jnp.asarray(0.5 * (plus + minus))))
+                found.append((i, *_leaf_map(a, b, c, v0, name, file)))
             if not found:
                 raise InputError(f"{file}: parameter {name!r} does not change the model")
             value0[name] = v0
-            moves[name] = tuple(found)
+            moves[name] = tuple((i, kind, jnp.asarray(coef)) for i, kind, coef in found)
         return cls(tuple(names), value0, moves)
 
     def apply(self, study, values: dict):
@@ -156,9 +167,13 @@ class FileParameterMap(eqx.Module):
         for name in self.names:
             if name not in values:
                 continue
-            delta = values[name] - self.value0[name]
-            for i, slope in self.moves[name]:
-                leaves[i] = jnp.asarray(leaves[i], dtype=float) + delta * slope
+            v, v0 = values[name], self.value0[name]
+            for i, kind, coef in self.moves[name]:
+                leaf = jnp.asarray(leaves[i], dtype=float)
+                if kind == "affine":
+                    leaves[i] = leaf + (v - v0) * coef
+                else:  # power law: leaf0 (v / v0)^a
+                    leaves[i] = leaf * jnp.exp(coef * jnp.log(v / v0))
         treedef = jax.tree.structure((study.mechanism, study.q_guess))
         return jax.tree.unflatten(treedef, leaves)
 

@@ -67,8 +67,9 @@ def _quasi_static_table() -> str:
         cal = json.loads(calibration.read_text())["cases"]["calibration loop"]
         rows.append(f"| `diffwear calibrate`, 21,400-cycle campaign ({cal['dataset']}), whole "
                     f"loop incl. compiles and the dynamic check | {cal['run_s']:.0f} s "
-                    f"(check {cal['dynamic_check_s']:.0f} s, beside the refits) | `--model dynamic`: "
-                    "every fit step a forward-mode pass through 86 dynamic cycles | "
+                    f"(check {cal['dynamic_check_s']:.0f} s, beside the refits) | "
+                    "`--model dynamic`: every fit step a forward-mode pass through 86 dynamic "
+                    "cycles | "
                     "<= 120 s |")
     error = sweep.get("sweep_settings_max_rel_error_32_designs",
                       sweep["sweep_settings_rel_error"])

@@ -335,7 +335,8 @@ def test_shipped_campaigns(name, tmp_path):
             lo, hi = s["effect_shape_interval"]
             half = math.log(hi / lo) / 2  # 1 sigma in ln
             assert abs(math.log(s["effect_shape"] / true_shape)) <= 2 * half
-        assert s["heldout_rmse_before"] >= 3 * s["heldout_rmse_after"]
+        # the final model predicts the held-out data at the noise
+        assert s["heldout_rmse_after"] < min(s["heldout_rmse_before"], 1.5)
     check = s["model_check"]
     assert check["ok"] and check["chi2_fit"] > 0
 

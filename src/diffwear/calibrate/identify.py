@@ -102,7 +102,10 @@ class Suspect:
                  "stiffness": ("stiffer", "softer"), "inertia": ("larger", "smaller")}
         known = RIG_PARAMETERS.get(self.name)
         up, down = words.get(known.dimension if known else None, ("larger", "smaller"))
-        how = (f"a {f:.2g}x {up}" if f >= 1 else f"a {1 / f:.2g}x {down}")
+        if abs(f - 1.0) < 0.2:
+            how = f"a {100 * abs(f - 1.0):.2g} % {up if f >= 1 else down}"
+        else:
+            how = f"a {f:.2g}x {up}" if f >= 1 else f"a {1 / f:.2g}x {down}"
         label = known.description if known else self.name
         return (f"{what} asks for {how} {label} "
                 f"({self.name}: {self.value0:.4g} -> {self.value0 * f:.4g} SI)")

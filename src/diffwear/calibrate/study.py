@@ -115,10 +115,12 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
         ax.errorbar(s.x, s.y * scale, yerr=s.sigma * scale, fmt=".", ms=3, color="k",
                     label="data", alpha=0.7)
         order = np.argsort(s.x)
-        ax.plot(s.x[order], c.base.prediction[m][order] * scale, "-", label="base fit")
+        few = s.x.size < 3  # a line through one or two points shows nothing: markers
+        ax.plot(s.x[order], c.base.prediction[m][order] * scale, "s" if few else "-",
+                mfc="none", label="base fit")
         if c.chosen is not c.base:
-            ax.plot(s.x[order], c.chosen.prediction[m][order] * scale, "--",
-                    label=f"with {c.chosen.effect}")
+            ax.plot(s.x[order], c.chosen.prediction[m][order] * scale, "D" if few else "--",
+                    mfc="none", label=f"with {c.chosen.effect}")
         if s.holdout.any():
             ax.plot(s.x[s.holdout], s.y[s.holdout] * scale, "o", mfc="none", color="r",
                     ms=6, label="held out")
@@ -143,7 +145,11 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
     axes[1].set(xlabel="cycles", ylabel="base residual [sigma]", title="residual vs cycles")
     for ax in axes[:2]:
         ax.axhline(0, color="0.5", lw=0.8)
-        ax.legend(fontsize=6)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=6)
+    if not any(s.kind == "profile" for s in c.dataset.series):
+        axes[0].text(0.5, 0.5, "no profile measured", ha="center", va="center",
+                     transform=axes[0].transAxes, color="0.4")
     h = residual_structure(c).get("force_residual_harmonics")
     if h:
         axes[2].bar(list(h), list(h.values()))

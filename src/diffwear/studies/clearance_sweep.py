@@ -19,7 +19,13 @@ from .. import plots
 from ..contact import contact_history
 from ..dynamics import along_trajectory, consistent_state, reaction_wrench, simulate
 from ..io import OutputDir
-from ..presets import CLEARANCES_CH3, CONTACT_LAWS, clearance_slider_crank, slider_crank
+from ..presets import (
+    CLEARANCES_CH3,
+    CONTACT_LAWS,
+    THESIS_CRANK_SPEED,
+    clearance_slider_crank,
+    slider_crank,
+)
 
 NAME = "clearance-sweep"
 DESCRIPTION = "Ch. 3/6: crank-rod clearance joint, LN / KV / EFM x 4 clearances vs the ideal joint"
@@ -78,8 +84,13 @@ def run(out: OutputDir, *, cycles: int = CYCLES, laws=CONTACT_LAWS, clearances=C
     f_ideal, crank = ideal_force(ts)
     out.csv("force_ideal.csv", {"t_s": t, "crank_angle_rad": crank, "force_N": f_ideal})
     cases, curves, loci = [], {}, {}
+    # the force figures show the last crank cycle against the crank angle in
+    # degrees (not the cumulative angle of all cycles)
+    last = t >= t[-1] - 2 * np.pi / float(THESIS_CRANK_SPEED) - 1e-12
+    angle_deg = np.degrees(np.mod(crank[last], 2 * np.pi))
+    order = np.argsort(angle_deg)
     for law in laws:
-        curves[law] = {"ideal": f_ideal[keep]}
+        curves[law] = {}
         for c in clearances:
             tag = f"{law}_{c * 1e3:g}"
             log(f"[{NAME}] {law.upper()} clearance {c * 1e3:g} mm ...")
@@ -91,9 +102,10 @@ def run(out: OutputDir, *, cycles: int = CYCLES, laws=CONTACT_LAWS, clearances=C
             out.csv(f"locus_{tag}.csv", {
                 "t_s": t, "theta_rad": theta, "in_contact": contact.astype(float),
                 "offset_x_m": hist.offset[:, 0], "offset_y_m": hist.offset[:, 1]})
-            curves[law][f"{c * 1e3:g} mm"] = fm[keep]
-            loci[tag] = (theta[keep & contact],
-                         np.hypot(*np.asarray(hist.offset[keep & contact]).T))
+            curves[law][c] = fm[last][order]
+            # radius in units of the clearance: every panel on one scale
+            loci[f"{law.upper()}, c = {c * 1e3:g} mm"] = (
+                theta[keep & contact], np.hypot(*np.asarray(hist.offset[keep & contact]).T) / c)
             rel = np.sqrt(np.mean((fm[keep] - f_ideal[keep]) ** 2) / np.mean(f_ideal[keep] ** 2))
             cw = np.cos(theta[keep & contact])
             cases.append({
@@ -112,12 +124,18 @@ def run(out: OutputDir, *, cycles: int = CYCLES, laws=CONTACT_LAWS, clearances=C
     for law in laws:
         name = f"fig3_7_force_{law}.png"
         figs.append(name)
-        plots.stacked(out.file(name), crank[keep], [("joint force [N]", curves[law])],
-                      xlabel="crank angle [rad]",
-                      title=f"{law.upper()} clearance joint vs ideal (cf. Figs. 3-7, 6-8)")
+        # largest clearance first (drawn under the others), the ideal joint last (on top)
+        panel = {f"c = {c * 1e3:g} mm": curves[law][c] for c in sorted(curves[law])[::-1]}
+        panel["ideal joint"] = f_ideal[last][order]
+        plots.stacked(out.file(name), angle_deg[order], [("joint force [N]", panel)],
+                      xlabel="crank angle [deg] (last cycle)", legend_outside=True,
+                      title=f"{law.upper()} clearance joint against the ideal joint "
+                            "(cf. Figs. 3-7, 6-8)")
     figs.append("fig5_4_contact_locus.png")
     plots.polar_loci(out.file("fig5_4_contact_locus.png"), loci,
-                     title="Contact locus on the bushing (rod frame; cf. Figs. 5-4, 6-7)")
+                     title="Contact locus on the bushing (rod frame; cf. Figs. 5-4, 6-7)",
+                     radius_label="|e| / clearance", radius_scale=1.0,
+                     rmax=max(float(np.max(r, initial=0.0)) for _, r in loci.values()) or None)
     summary = {"study": NAME, "cycles": cycles, "transient_s": TRANSIENT, "rtol": RTOL,
                "atol": ATOL, "ideal_peak_force_N": float(f_ideal[keep].max()), "cases": cases}
     rows = ["| law | c [mm] | peak [N] | rel. RMS vs ideal | contact | steps/cycle | s/cycle |",

@@ -98,9 +98,10 @@ def interrupted_dir(tmp_path_factory):
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(common, "save_checkpoint", save_then_interrupt)
-        with pytest.raises(KeyboardInterrupt):
-            main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"])
+        # Ctrl-C: exit 130 (set in the fixture's own check below)
+        assert main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"]) == 130
     assert not (out / "summary.json").exists()
+    assert not (out / ".diffwear-lock").exists()
     with np.load(out / "checkpoint.npz") as z:
         assert float(z["state.n"]) == 1.0
     return out
@@ -126,6 +127,78 @@ def test_resume_finishes_an_interrupted_wear_study(interrupted_dir, tmp_path):
     assert len(rows) == 1 + 1 + 3  # header, cycle 0, three cycles (one before the cut)
     # a finished run is not resumed again
     assert main(["study", WEAR, "--cycles", "3", "--resume", str(out), "--quiet"]) == 2
+
+
+def test_resume_reads_its_options_from_the_checkpoint(interrupted_dir, tmp_path):
+    out = _copy(interrupted_dir, tmp_path / "run")
+    assert main(["study", WEAR, "--resume", str(out), "--quiet"]) == 0  # no --cycles
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["cycles"] == 3.0 and summary["resumed_from_cycles"] == 1.0
+
+
+def test_plain_rerun_on_an_interrupted_folder_refuses(interrupted_dir, tmp_path, capsys):
+    out = _copy(interrupted_dir, tmp_path / "run")
+    before = (out / "checkpoint.npz").read_bytes()
+    assert main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "interrupted run" in err and f"--resume {out}" in err and "--overwrite" in err
+    assert (out / "checkpoint.npz").read_bytes() == before
+
+
+def test_ctrl_c_says_where_the_checkpoint_is(tmp_path, capsys):
+    from diffwear.studies import _wear_common as common
+
+    out = tmp_path / "run"
+    real = common.save_checkpoint
+
+    def save_then_interrupt(*args, **kwargs):
+        real(*args, **kwargs)
+        raise KeyboardInterrupt
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(common, "save_checkpoint", save_then_interrupt)
+        assert main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "Traceback" not in err[0]
+    assert f"diffwear study {WEAR} --resume {out}" in err[0]
+    assert str(out / "checkpoint.npz") in err[0]
+
+
+def test_ctrl_c_before_any_result_leaves_no_empty_folder(tmp_path, capsys, monkeypatch):
+    from diffwear.studies import STUDIES
+
+    def interrupt(out, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(STUDIES[STUDY], "run", interrupt)
+    out = tmp_path / "never"
+    assert main(["study", STUDY, "--out", str(out), "--quiet"]) == 130
+    assert "no results were written" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_out_folder_that_cannot_be_created_is_refused_before_computing(tmp_path, capsys):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    assert main(["study", STUDY, "--out", str(blocker / "sub"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "cannot create the folder" in err and "Traceback" not in err
+
+
+def test_a_second_run_on_a_locked_folder_is_refused(tmp_path, capsys):
+    out = tmp_path / "busy"
+    out.mkdir()
+    (out / ".diffwear-lock").write_text("1\n")  # process 1 is alive
+    assert main(["study", STUDY, "--out", str(out), "--quiet"]) == 2
+    assert "another diffwear run (process 1)" in capsys.readouterr().err
+    # a lock left by a process that no longer runs is taken over
+    (out / ".diffwear-lock").write_text("999999999\n")
+    from diffwear.io import OutputDir, release_all
+
+    OutputDir(out)
+    assert (out / ".diffwear-lock").read_text().strip() != "999999999"
+    release_all()
+    assert not (out / ".diffwear-lock").exists()
 
 
 def test_resume_with_other_options_exits_2_naming_the_key(interrupted_dir, tmp_path, capsys):

@@ -10,6 +10,7 @@ import argparse
 import inspect
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from ._checks import check_int_option
 from .choices import WEAR_CONTACTS, WEAR_METHODS, WEAR_MODELS
@@ -40,6 +41,8 @@ def _study(args: argparse.Namespace) -> int:
     if args.out is None:
         raise InputError("study: --out DIR is required")
     kwargs = {}
+    if args.resume is not None:
+        _options_from_checkpoint(args)
     if args.cycles is not None:
         check_int_option("--cycles", args.cycles, 1, MAX_CYCLES)
     accepted = inspect.signature(STUDIES[args.name].run).parameters
@@ -58,10 +61,46 @@ def _study(args: argparse.Namespace) -> int:
         kwargs["resume"] = True
     if "progress" in accepted:
         kwargs["progress"] = not args.quiet
-    out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
+    out = OutputDir(args.out, overwrite=args.overwrite,  # after every input check
+                    resume=args.resume is not None)
     log = (lambda *a, **k: None) if args.quiet else print
     STUDIES[args.name].run(out, log=log, **kwargs)
     return 0
+
+
+# options a wear study's checkpoint records (meta key -> argument), read back
+# by --resume so that the user need not repeat them
+_RESUMED_OPTIONS = {"cycles": "cycles", "method": "method", "contact": "contact"}
+
+
+def _options_from_checkpoint(args: argparse.Namespace) -> None:
+    """Fill the options the user left out from the checkpoint's record (an
+    option given explicitly is kept: the study then checks it matches)."""
+    from .io import CHECKPOINT
+    from .wear.evolution import load_checkpoint
+
+    path = Path(args.resume) / CHECKPOINT
+    if not path.is_file():
+        return  # reported below, with the other --resume checks
+    _, meta = load_checkpoint(path)
+    for key, option in _RESUMED_OPTIONS.items():
+        if getattr(args, option, None) is None and key in meta:
+            value = meta[key]
+            setattr(args, option, int(value) if key == "cycles" else value)
+
+
+def _interrupted(args: argparse.Namespace, folders) -> str:
+    """One line for Ctrl-C: where the checkpoint is and how to resume."""
+    from .io import CHECKPOINT
+
+    for out in folders:
+        if (out.path / CHECKPOINT).is_file() and not (out.path / "summary.json").exists():
+            name = getattr(args, "name", None)
+            command = (f"diffwear study {name} --resume {out.path}" if name else
+                       f"--resume {out.path}")
+            return (f"diffwear: interrupted; the checkpoint {out.path / CHECKPOINT} holds the "
+                    f"run so far: resume with `{command}`")
+    return "diffwear: interrupted; no results were written"
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -343,11 +382,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     import jax
 
     jax.config.update("jax_enable_x64", True)  # the library leaves this to its caller
+    from .io import _OPEN, release_all
+
     try:
         return args.func(args)
     except DiffwearError as err:
         print(f"diffwear: error: {err}", file=sys.stderr)
         return err.exit_code
+    except KeyboardInterrupt:
+        print(_interrupted(args, tuple(_OPEN)), file=sys.stderr)
+        return 130
+    finally:
+        release_all()
 
 
 if __name__ == "__main__":

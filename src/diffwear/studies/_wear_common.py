@@ -14,6 +14,7 @@ from ..choices import WEAR_MODELS
 from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state
 from ..errors import InputError
+from ..io import CHECKPOINT as OUT_CHECKPOINT
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..wear import wear_cycle, worn_mechanism, worn_volume
 from ..wear.evolution import ChunkedEvolution, Evolver, load_checkpoint, save_checkpoint
@@ -47,7 +48,7 @@ def initial_state(mech0, q_guess, mech):
     return centred_state(mech0, consistent_state(mech0, q_guess), mech)
 
 
-CHECKPOINT = "checkpoint.npz"
+CHECKPOINT = OUT_CHECKPOINT  # the name `io.OutputDir` knows
 CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
 # checkpoint keys added later, with the value that checkpoints written before meant
 META_DEFAULTS = {"contact": "efm"}

@@ -277,3 +277,36 @@ def test_calibrate_refuses_too_few_dynamic_cycles_in_the_users_words(tmp_path, c
     err = capsys.readouterr().err
     assert "--dynamic-cycles 8 or more" in err and "RigHistory" not in err
     assert not out.exists()
+
+
+def test_sigint_to_a_real_run_then_resume(tmp_path):
+    """A real process, a real SIGINT after its first checkpoint: exit 130 and one
+    line naming the resume command, which then finishes the run."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "run"
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen([sys.executable, "-m", "diffwear.cli", "study", WEAR, "--cycles",
+                             "40", "--method", "constant", "--out", str(out), "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.monotonic() + 300
+    while not (out / "checkpoint.npz").exists() and proc.poll() is None:
+        assert time.monotonic() < deadline, "no checkpoint within 300 s"
+        time.sleep(0.2)
+    if proc.poll() is not None:
+        pytest.skip("the run finished before it could be interrupted")
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    if proc.returncode == 0:
+        pytest.skip("the run finished before the signal arrived")
+    assert proc.returncode == 130, err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and f"diffwear study {WEAR} --resume {out}" in lines[0], err
+    assert not (out / ".diffwear-lock").exists()
+    assert main(["study", WEAR, "--resume", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["cycles"] == 40.0 and summary["resumed_from_cycles"] > 0

@@ -6,6 +6,7 @@ compile-bound: about 30 s of CPU whatever the simulated duration).
 
 import csv
 import json
+from pathlib import Path
 
 import pytest
 
@@ -310,3 +311,48 @@ def test_sigint_to_a_real_run_then_resume(tmp_path):
     assert main(["study", WEAR, "--resume", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["cycles"] == 40.0 and summary["resumed_from_cycles"] > 0
+
+
+def _rig_file(tmp_path, *edits):
+    text = (Path(__file__).resolve().parents[1] / "design_studies" / "rig.toml").read_text()
+    for old, new in edits:
+        assert old in text, old
+        text = text.replace(old, new)
+    path = tmp_path / "rig_edit.toml"
+    path.write_text(text)
+    return path
+
+
+def test_run_refuses_a_speed_beyond_the_step_budget_up_front(tmp_path, capsys):
+    path = _rig_file(tmp_path, ('omega = "30 rpm"', 'omega = "1e9 rpm"'))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "driver 'driver' turns 3.33e+07 revolutions" in err and "max_steps" in err
+    assert not out.exists()
+
+
+def test_run_warns_when_a_clearance_joint_never_makes_contact(tmp_path, capsys):
+    path = _rig_file(tmp_path, ('bushing_radius = "9.533 mm"', 'bushing_radius = "1009.5 mm"'),
+                     ('duration = "2 s"', 'duration = "0.05 s"'))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: clearance joint 'crank_rod' never made contact" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["contacts"]["crank_rod"]["fraction_in_contact"] == 0.0
+    assert any("never made contact" in w for w in summary["warnings"])
+    assert "## Warnings" in (out / "report.md").read_text()
+
+
+def test_penetration_through_the_bushing_is_fatal():
+    from types import SimpleNamespace
+
+    from diffwear.runner import contact_warnings
+
+    joint = SimpleNamespace(name="j", pin_radius=0.0095)
+    ok = contact_warnings(joint, {"fraction_in_contact": 0.9, "max_penetration_m": 2e-6})
+    assert ok == []
+    (msg, fatal), = contact_warnings(joint, {"fraction_in_contact": 0.9,
+                                              "max_penetration_m": 0.040})
+    assert fatal and "40 mm" in msg and "421% of the pin radius" in msg

@@ -20,6 +20,7 @@ one failed: `initial_state` (assembly; `InputError`), `integrate`
 from __future__ import annotations
 
 import functools
+import sys
 import time
 from collections.abc import Callable
 from typing import NamedTuple
@@ -40,7 +41,7 @@ from .dynamics import (
     simulate,
 )
 from .dynamics.simulate import Trajectory
-from .errors import InputError
+from .errors import InputError, SolverError
 from .io import OutputDir
 from .mechanism import Mechanism
 
@@ -156,6 +157,7 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
             "file": name,
         }
     contacts = {}
+    warnings = []
     for o in study.contacts:
         h = r.contacts[o.joint]
         name = f"contact_{o.joint}.csv"
@@ -167,6 +169,7 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
             "fraction_in_contact": float(np.mean(h[:, 3] > 0)),
             "file": name,
         }
+        warnings += contact_warnings(mech.element(o.joint), contacts[o.joint])
 
     panels = [(f"{c} [{u}]", {b: r.q[:, 3 * i + k] for i, b in enumerate(mech.body_names)})
               for k, (c, u) in enumerate((("x", "m"), ("y", "m"), ("φ", "rad")))]
@@ -199,10 +202,63 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
         "simulate_time_s": simulate_time,
         "wall_time_s": wall,
         "files": sorted(set(out.files)) + ["report.md", "summary.json"],
+        "warnings": [w for w, _ in warnings],
     }
     out.text("report.md", _report(study, summary, [f.name for f in figures]))
     out.json("summary.json", summary)
+    fatal = [w for w, is_fatal in warnings if is_fatal]
+    if fatal:  # the outputs are written; the run is reported as failed
+        raise SolverError(f"{study.file}: {fatal[0]} (results written to {out.path})")
     return summary
+
+
+# A penalty contact holds for elastic penetrations of microns: one of 10 % of
+# the pin radius means the pin is through the bushing (e.g. a rod shorter than
+# the crank forcing an assembly the clearance cannot take).
+MAX_PENETRATION_OF_PIN_RADIUS = 0.1
+
+
+def contact_warnings(joint, contact: dict) -> list[tuple[str, bool]]:
+    """(message, fatal) for results outside the clearance joint model's
+    validity: no contact at all (a warning), or a penetration beyond
+    `MAX_PENETRATION_OF_PIN_RADIUS` of the pin radius (fatal)."""
+    out = []
+    if contact["fraction_in_contact"] == 0.0:
+        out.append((f"clearance joint {joint.name!r} never made contact: the pin moved freely "
+                    "inside the bushing for the whole run (a clearance larger than the "
+                    "motion?)", False))
+    radius = float(joint.pin_radius)
+    if contact["max_penetration_m"] > MAX_PENETRATION_OF_PIN_RADIUS * radius:
+        out.append((f"clearance joint {joint.name!r}: penetration "
+                    f"{contact['max_penetration_m'] * 1e3:.3g} mm is "
+                    f"{contact['max_penetration_m'] / radius:.0%} of the pin radius "
+                    f"{radius * 1e3:g} mm: the pin is through the bushing and the contact model "
+                    "does not hold (geometry that cannot assemble with this clearance, e.g. a "
+                    "rod shorter than the crank?)", True))
+    return out
+
+
+# Integrator steps per crank revolution, a lower bound: the ideal slider-crank
+# takes 2,276 steps per revolution at the default tolerances (performance docs).
+MIN_STEPS_PER_REVOLUTION = 500
+
+
+def check_step_budget(study: Study) -> None:
+    """Refuse up front a run whose drivers turn more revolutions than the step
+    budget (``max_steps``) can take at `MIN_STEPS_PER_REVOLUTION`."""
+    sim = study.simulation
+    for c in study.mechanism.constraints:
+        omega = getattr(c, "omega", None)
+        if omega is None:
+            continue
+        turns = sim.duration * abs(float(omega)) / (2 * np.pi)
+        need = turns * MIN_STEPS_PER_REVOLUTION
+        if need > sim.max_steps:
+            raise InputError(
+                f"{study.file}: driver {c.name!r} turns {turns:.3g} revolutions in "
+                f"{sim.duration:g} s: at least {need:.2g} integrator steps, beyond the budget "
+                f"max_steps = {sim.max_steps:,}; allowed: a speed or duration within it, "
+                "or a larger [simulation] max_steps")
 
 
 def _report(study: Study, s: dict, figures: list[str]) -> str:
@@ -249,6 +305,8 @@ def _report(study: Study, s: dict, figures: list[str]) -> str:
                   f"{100 * c['fraction_in_contact']:.1f} % | [{c['file']}]({c['file']}) |"
                   for j, c in s["contacts"].items()]
         lines.append("")
+    if s.get("warnings"):
+        lines += ["## Warnings\n"] + [f"- **{w}**" for w in s["warnings"]] + [""]
     lines += [
         "## Files\n",
         "- [summary.json](summary.json): the numbers above",
@@ -264,6 +322,7 @@ def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str 
         log: Callable[..., None] = print) -> dict:
     """Assemble, integrate, write.  Bad input fails before ``out_dir`` is touched."""
     started = time.perf_counter()
+    check_step_budget(study)
     y0 = initial_state(study)
     out = OutputDir(out_dir, overwrite=overwrite)
     log(f"[{study.file}] integrating {study.simulation.duration:g} s (first run compiles) ...")
@@ -273,6 +332,8 @@ def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str 
     results = postprocess(study, traj)
     summary = write(study, results, out, steps=int(traj.num_steps), simulate_time=simulate_time,
                     input_text=input_text, started=started)
+    for w in summary["warnings"]:
+        print(f"diffwear: warning: {w}", file=sys.stderr)
     log(f"[{study.file}] max constraint violation {summary['max_constraint_violation']:.2e}; "
         f"report: {out.path / 'report.md'}")
     return summary

@@ -356,3 +356,44 @@ def test_penetration_through_the_bushing_is_fatal():
     (msg, fatal), = contact_warnings(joint, {"fraction_in_contact": 0.9,
                                               "max_penetration_m": 0.040})
     assert fatal and "40 mm" in msg and "421% of the pin radius" in msg
+
+
+def test_four_bar_mechanism_file_wears_from_the_cli_and_from_python(tmp_path):
+    """A four-bar file with a worn coupler-rocker joint: the wear study and the
+    life to a depth limit from the CLI; from Python, the evolution run to the
+    reported life ends at the limit depth (a second computation of it), and
+    the worn volume agrees with Archard's law summed over the loads."""
+    import numpy as np
+
+    from diffwear import mechanism_wear
+    from diffwear.config import load
+    from diffwear.quasistatic import QuasiStatic
+    from diffwear.runner import initial_state
+
+    path = Path(__file__).resolve().parents[1] / "design_studies" / "four_bar_wear.toml"
+    out = tmp_path / "fb"
+    assert main(["run", str(path), "--out", str(out), "--cycles", "50000", "--limit", "0.05",
+                 "--quiet"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    j = s["joints"]["coupler_rocker"]
+    assert j["cycles"] == 50000 and j["status"] == 0 and s["warnings"] == []
+    assert 0.0 < j["max_wear_depth_mm"] < 0.05 < j["limit_mm"] + 1e-12
+    for f in ("wear_profile_coupler_rocker.csv", "wear_history_coupler_rocker.csv", "wear.png"):
+        assert (out / f).is_file()
+    assert "## Wear (quasi-static model)" in (out / "report.md").read_text()
+    life = j["cycles_to_limit"]
+    assert life > 50000
+
+    study = load(path)
+    y0 = initial_state(study)
+    at_life = mechanism_wear.evolve_file(study, y0, cycles=life)["coupler_rocker"]
+    assert float(np.max(at_life["depth"])) == pytest.approx(0.05e-3, rel=0.01)
+    # Archard: volume = k x sum over the cycle of (normal load x sliding distance) x cycles
+    el = study.mechanism.element("coupler_rocker")
+    model = QuasiStatic()
+    loads = model.loads(study.mechanism, ("coupler_rocker",), y0,
+                        mechanism_wear.drive_period(study)).joints[0]
+    joint = model.joints(study.mechanism, ("coupler_rocker",))[0]
+    _, load_sliding, _ = joint.cycle_wear(np.zeros(joint.n), loads)
+    archard = float(el.wear.coefficient) * float(load_sliding) * 50000
+    assert j["wear_volume_mm3"] * 1e-9 == pytest.approx(archard, rel=0.02)

@@ -112,8 +112,18 @@ def _run(args: argparse.Namespace) -> int:
 
     study = load(args.file)  # every input check happens before --out is touched
     text = decode(Path(args.file).read_bytes(), args.file)
+    if args.cycles is not None:
+        check_int_option("--cycles", args.cycles, 1, MAX_CYCLES)
+    limit = None
+    if args.limit is not None:
+        if args.cycles is None:
+            raise InputError("--limit MM needs --cycles N (the wear study it ends)")
+        if not (0.0 < args.limit < 1e3):
+            raise InputError(f"--limit {args.limit:g}: a wear depth in mm; allowed: (0, 1000)")
+        limit = args.limit * 1e-3
     log = (lambda *a, **k: None) if args.quiet else print
-    runner.run(study, args.out, overwrite=args.overwrite, input_text=text, log=log)
+    runner.run(study, args.out, overwrite=args.overwrite, input_text=text, log=log,
+               cycles=args.cycles, limit=limit)
     return 0
 
 
@@ -323,9 +333,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_life)
 
-    p = sub.add_parser("run", help="simulate a mechanism file (TOML; see README 'Mechanism files')")
+    p = sub.add_parser("run", help="simulate a mechanism file (TOML; see README 'Mechanism files')",
+                       description="Simulate a mechanism file; with --cycles also the wear of "
+                       "every clearance joint that has a wear law (quasi-static model), with "
+                       "--limit the cycles until its wear reaches that depth.",
+                       epilog=EXIT_CODES)
     p.add_argument("file", help="mechanism file, e.g. design_studies/ideal_slider_crank.toml")
     _output_options(p, required=True)
+    p.add_argument("--cycles", type=int, default=None,
+                   help="wear every clearance joint with a wear law over N cycles (revolutions "
+                        "of the first driver)")
+    p.add_argument("--limit", type=float, default=None, metavar="MM",
+                   help="with --cycles: also the cycles until each joint's wear reaches MM mm")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_run)
 

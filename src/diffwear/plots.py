@@ -78,3 +78,24 @@ def polar_loci(path: Path, loci: Mapping[str, tuple[np.ndarray, np.ndarray]], *,
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def wear_panels(path: Path, profiles: Mapping[str, tuple[np.ndarray, np.ndarray]],
+                histories: Mapping[str, tuple[np.ndarray, np.ndarray]], *, title: str) -> Path:
+    """Per joint: the worn profile against the bushing angle [deg] and the peak
+    depth against cycles, both in mm, legends off the data."""
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 3.6))
+    for name, (theta, depth) in profiles.items():
+        a.plot(np.degrees(theta), depth * 1e3, label=name)
+    for name, (cycles, peak) in histories.items():
+        b.plot(cycles, peak * 1e3, ".-", ms=3, label=name)
+    a.set(xlabel="bushing angle [deg]", ylabel="wear depth [mm]", xlim=(0, 360))
+    b.set(xlabel="cycles", ylabel="max wear depth [mm]")
+    for ax in (a, b):
+        ax.grid(alpha=0.3)
+    b.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.suptitle(textwrap.fill(title, 100), fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -20,6 +20,7 @@ one failed: `initial_state` (assembly; `InputError`), `integrate`
 from __future__ import annotations
 
 import functools
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -137,7 +138,8 @@ def _trajectory_columns(mech: Mechanism, r: Results) -> dict:
 
 
 def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time: float,
-          input_text: str | None = None, started: float | None = None) -> dict:
+          input_text: str | None = None, started: float | None = None,
+          wear: dict | None = None) -> dict:
     """Write every output file; returns the summary (also ``summary.json``)."""
     mech, sim = study.mechanism, study.simulation
     if input_text is not None:
@@ -202,8 +204,11 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
         "simulate_time_s": simulate_time,
         "wall_time_s": wall,
         "files": sorted(set(out.files)) + ["report.md", "summary.json"],
-        "warnings": [w for w, _ in warnings],
+        "warnings": [w for w, _ in warnings] + (wear["warnings"] if wear else []),
     }
+    if wear is not None:
+        summary["joints"] = wear["joints"]
+        figures.append(out.path / wear["figure"])
     out.text("report.md", _report(study, summary, [f.name for f in figures]))
     out.json("summary.json", summary)
     fatal = [w for w, is_fatal in warnings if is_fatal]
@@ -305,6 +310,24 @@ def _report(study: Study, s: dict, figures: list[str]) -> str:
                   f"{100 * c['fraction_in_contact']:.1f} % | [{c['file']}]({c['file']}) |"
                   for j, c in s["contacts"].items()]
         lines.append("")
+    if s.get("joints"):
+        lines += [
+            "## Wear (quasi-static model)\n",
+            "Every clearance joint with a wear law, over the cycles given (one cycle: one "
+            "revolution of the first driver).\n",
+            "| joint | cycles | max depth [mm] | volume [mm^3] | cycles to limit | files |",
+            "|---|---|---|---|---|---|",
+        ]
+        for j, w in s["joints"].items():
+            to_limit = (f"{w['cycles_to_limit']:,.0f} (to {w['limit_mm']:g} mm)"
+                        if w.get("cycles_to_limit") is not None and
+                        math.isfinite(w["cycles_to_limit"]) else
+                        (f"not within the run's settings (to {w['limit_mm']:g} mm)"
+                         if "limit_mm" in w else "-"))
+            lines.append(f"| {j} | {w['cycles']:,.0f} | {w['max_wear_depth_mm']:.4g} | "
+                         f"{w['wear_volume_mm3']:.4g} | {to_limit} | "
+                         f"[profile](wear_profile_{j}.csv), [history](wear_history_{j}.csv) |")
+        lines.append("")
     if s.get("warnings"):
         lines += ["## Warnings\n"] + [f"- **{w}**" for w in s["warnings"]] + [""]
     lines += [
@@ -319,10 +342,18 @@ def _report(study: Study, s: dict, figures: list[str]) -> str:
 
 
 def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str | None = None,
+        cycles: float | None = None, limit: float | None = None,
         log: Callable[..., None] = print) -> dict:
-    """Assemble, integrate, write.  Bad input fails before ``out_dir`` is touched."""
+    """Assemble, integrate, write; with ``cycles`` also the wear of every
+    clearance joint with a wear law (`mechanism_wear`), and with ``limit`` [m]
+    the cycles to that depth.  Bad input fails before ``out_dir`` is touched."""
+    from . import mechanism_wear
+
     started = time.perf_counter()
     check_step_budget(study)
+    if cycles is not None:
+        mechanism_wear.wearing_joints(study)
+        mechanism_wear.drive_period(study)
     y0 = initial_state(study)
     out = OutputDir(out_dir, overwrite=overwrite)
     log(f"[{study.file}] integrating {study.simulation.duration:g} s (first run compiles) ...")
@@ -330,8 +361,13 @@ def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str 
     traj = jax.block_until_ready(integrate(study, y0))
     simulate_time = time.perf_counter() - t0
     results = postprocess(study, traj)
+    wear = None
+    if cycles is not None:
+        log(f"[{study.file}] wear over {cycles:,.0f} cycles (quasi-static model) ...")
+        evolved = mechanism_wear.evolve_file(study, y0, cycles=cycles, limit=limit)
+        wear = mechanism_wear.write_wear(study, out, evolved, cycles=cycles, limit=limit)
     summary = write(study, results, out, steps=int(traj.num_steps), simulate_time=simulate_time,
-                    input_text=input_text, started=started)
+                    input_text=input_text, started=started, wear=wear)
     for w in summary["warnings"]:
         print(f"diffwear: warning: {w}", file=sys.stderr)
     log(f"[{study.file}] max constraint violation {summary['max_constraint_violation']:.2e}; "

@@ -90,7 +90,10 @@ class QuasiStatic(AbstractWearModel):
     their converged values, the Ch. 7 rig's depth within 1e-6); ``warmup_cycles``:
     settling cycles of a mechanism that is not fully driven; ``load_rtol``:
     tolerance of the ideal mechanism's solve; ``contact_mass`` [kg]: mass for
-    the contact check (default `joint_mass`).
+    the contact check (default `joint_mass`); ``max_steps``: scan slots of the
+    wear ODE (default ``steps + 3``, counted tight for vmapped design sweeps; a
+    groove whose peak grows slower than the step rule expects needs more: a
+    single run can afford ``4 steps + 8``).
     """
 
     name: ClassVar[str] = "quasi-static"
@@ -101,6 +104,7 @@ class QuasiStatic(AbstractWearModel):
     load_rtol: float = eqx.field(static=True, default=1e-8)
     contact_mass: Float[Array, ""] | None = None
     fixed_loads: CycleLoads | None = None
+    max_steps: int | None = eqx.field(static=True, default=None)
 
     def with_loads(self, loads: CycleLoads) -> "QuasiStatic":
         """This model with the joint loads given (`loads`): for studies whose
@@ -140,7 +144,7 @@ class QuasiStatic(AbstractWearModel):
         # steps + 1 for a run of fixed length (the first step is the longest).
         # Under vmap every slot runs, so they are counted tight; a life that
         # needs more is reported (status 3), not cut.
-        slots = self.steps + 3
+        slots = self.steps + 3 if self.max_steps is None else int(self.max_steps)
 
         def one(j: QuasiStaticJoint, lo: JointLoads, mass):
             def evaluate(h, offsets):

@@ -90,9 +90,10 @@ def test_quick_benchmark_subprocess_ci_cases(tmp_path):
     # (presets: k_s (1.0 - x3 - L0) with x3 = 0.127..0.279 m)
     assert 90.0 < peer["mean_joint_force_N"] < 170.0
 
-    cal = cases["calibration loop"]  # the shipped run-in campaign, k and free length
-    assert cal["dataset"] == "synthetic-run-in" and cal["parameters"] == 2
-    assert cal["points"] == 440
+    cal = cases["calibration loop"]  # the shipped 21,400-cycle campaign, k and free length
+    assert cal["dataset"] == "campaign-slow-run-in" and cal["parameters"] == 2
+    # 4 x 360 profile points, 4 weighings, 72 force samples
+    assert cal["points"] == 4 * 360 + 4 + 72
     for key in ("forward_s", "run_s", "ratio_gradient_to_forward"):
         assert math.isfinite(cal[key]) and cal[key] > 0.0, key
 

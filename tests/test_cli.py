@@ -82,15 +82,11 @@ def test_bad_option_exits_2(capsys):
 WEAR = "wear-5000"
 
 
-@pytest.fixture(scope="module")
-def interrupted_dir(tmp_path_factory):
-    """A 3-cycle wear-5000 run (A = 1, 1 slot per chunk) interrupted (Ctrl-C)
-    right after its first checkpoint was saved."""
-    import numpy as np
-
+def _run_interrupted(out) -> int:
+    """A 3-cycle wear-5000 run into ``out`` with Ctrl-C pressed right after its
+    first checkpoint was saved; its exit code."""
     from diffwear.studies import _wear_common as common
 
-    out = tmp_path_factory.mktemp("wear") / "run"
     real = common.save_checkpoint
 
     def save_then_interrupt(*args, **kwargs):
@@ -99,8 +95,17 @@ def interrupted_dir(tmp_path_factory):
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(common, "save_checkpoint", save_then_interrupt)
-        # Ctrl-C: exit 130 (set in the fixture's own check below)
-        assert main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"]) == 130
+        return main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"])
+
+
+@pytest.fixture(scope="module")
+def interrupted_dir(tmp_path_factory):
+    """A 3-cycle wear-5000 run (A = 1, 1 slot per chunk) interrupted (Ctrl-C)
+    right after its first checkpoint was saved."""
+    import numpy as np
+
+    out = tmp_path_factory.mktemp("wear") / "run"
+    assert _run_interrupted(out) == 130  # Ctrl-C: exit 130
     assert not (out / "summary.json").exists()
     assert not (out / ".diffwear-lock").exists()
     with np.load(out / "checkpoint.npz") as z:
@@ -147,18 +152,8 @@ def test_plain_rerun_on_an_interrupted_folder_refuses(interrupted_dir, tmp_path,
 
 
 def test_ctrl_c_says_where_the_checkpoint_is(tmp_path, capsys):
-    from diffwear.studies import _wear_common as common
-
     out = tmp_path / "run"
-    real = common.save_checkpoint
-
-    def save_then_interrupt(*args, **kwargs):
-        real(*args, **kwargs)
-        raise KeyboardInterrupt
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(common, "save_checkpoint", save_then_interrupt)
-        assert main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"]) == 130
+    assert _run_interrupted(out) == 130
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "Traceback" not in err[0]
     assert f"diffwear study {WEAR} --resume {out}" in err[0]

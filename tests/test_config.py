@@ -370,7 +370,9 @@ def test_cli_never_overwrites_without_flag(cli_run):
 
 def test_cli_solver_failure_exit_code_3(tmp_path, capsys):
     src = tmp_path / "m.toml"
-    src.write_text(short_text().replace("max_steps = 2_000_000", "max_steps = 3"))
+    # 200 steps pass the up-front budget (0.25 revolutions x 500 per revolution)
+    # but not the solver (~570 steps for a quarter revolution)
+    src.write_text(short_text().replace("max_steps = 2_000_000", "max_steps = 200"))
     assert cli.main(["run", str(src), "--out", str(tmp_path / "out"), "--quiet"]) == 3
     assert "m.toml" in capsys.readouterr().err
 

@@ -132,6 +132,8 @@ class OutputDir:
     def json(self, name: str, payload: Mapping) -> Path:
         target = self.file(name)
         target.write_text(json.dumps(_jsonable(payload), indent=2, sort_keys=False) + "\n")
+        if name == "summary.json":  # the run is finished: the folder is free again
+            self.release()
         return target
 
     def text(self, name: str, body: str) -> Path:

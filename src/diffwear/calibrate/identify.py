@@ -95,8 +95,9 @@ class Suspect:
     def sentence(self) -> str:
         """"the force trace asks for a 2x longer crank length (...)"."""
         kind = max(self.score.by_kind, key=self.score.by_kind.get, default="data")
-        what = {"force": "the force trace", "profile": "the wear profiles",
-                "volume": "the worn volume", "max_depth": "the maximum depth"}.get(kind, kind)
+        what = {"force": "the force trace asks", "profile": "the wear profiles ask",
+                "volume": "the worn volume asks", "max_depth": "the maximum depth asks"
+                }.get(kind, f"the {kind} data ask")
         f = self.factor
         words = {"length": ("longer", "shorter"), "mass": ("heavier", "lighter"),
                  "stiffness": ("stiffer", "softer"), "inertia": ("larger", "smaller")}
@@ -107,7 +108,7 @@ class Suspect:
         else:
             how = f"a {f:.2g}x {up}" if f >= 1 else f"a {1 / f:.2g}x {down}"
         label = known.description if known else self.name
-        return (f"{what} asks for {how} {label} "
+        return (f"{what} for {how} {label} "
                 f"({self.name}: {self.value0:.4g} -> {self.value0 * f:.4g} SI)")
 
 

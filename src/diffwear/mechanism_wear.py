@@ -34,19 +34,24 @@ def wearing_joints(study: Study) -> tuple[str, ...]:
     names = tuple(f.name for f in study.mechanism.forces
                   if isinstance(f, ClearanceJoint) and f.wear is not None)
     if not names:
-        raise InputError(f"{study.file}: --cycles: the mechanism has no clearance joint with a "
-                         "wear law; allowed: a [[joints]] type = \"clearance\" entry with "
+        raise InputError(f"{study.file}: the mechanism has no clearance joint with a wear law "
+                         "to wear; allowed: a [[joints]] type = \"clearance\" entry with "
                          "wear = { coefficient = ... }")
     return names
 
 
-def drive_period(study: Study) -> float:
-    """2 pi / |omega| of the first driver: the period of one cycle [s]."""
+def drive(study: Study) -> Driver:
+    """The first driver with a non-zero speed: its revolution is the cycle."""
     for c in study.mechanism.constraints:
         if isinstance(c, Driver) and float(c.omega) != 0.0:
-            return 2 * math.pi / abs(float(c.omega))
-    raise InputError(f"{study.file}: --cycles: a wear study needs a driver with a non-zero "
-                     "speed (the crank cycle); allowed: a [[joints]] type = \"driver\" entry")
+            return c
+    raise InputError(f"{study.file}: a wear study needs a driver with a non-zero speed (the "
+                     "crank cycle); allowed: a [[joints]] type = \"driver\" entry")
+
+
+def drive_period(study: Study) -> float:
+    """2 pi / |omega| of `drive`: the period of one cycle [s]."""
+    return 2 * math.pi / abs(float(drive(study).omega))
 
 
 def evolve_file(study: Study, y0, *, cycles: float, limit: float | None = None,

@@ -187,11 +187,6 @@ LOG_STD = np.array([e.shape.log_std if e.shape else 0.0 for e in EFFECTS])
 HAS_SHAPE = np.array(SHAPED, dtype=float)
 
 
-def effect_values(onehot, z_strength, z_shape) -> EffectValues:
-    """`EffectValues` of the effect selected by ``onehot`` from its optimiser units."""
-    return EffectValues(onehot * SCALES * z_strength, onehot * LOG_STD * z_shape)
-
-
 @dataclass
 class FitResult:
     """One fit: ``effect`` (None: the base model), parameter values (SI) and

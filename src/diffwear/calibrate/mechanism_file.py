@@ -16,8 +16,8 @@ damping time: a = 1/2).  A number whose leaves follow neither is refused with
 the reason.
 
 The wearing joint is the file's clearance joint with a wear law (``[rig]
-joint`` names it when there are several); its period is the first driver's
-2 pi / |omega|.
+joint`` names it when there are several); its cycle is that of
+`diffwear.mechanism_wear.drive`.
 """
 
 from __future__ import annotations
@@ -35,10 +35,9 @@ import numpy as np
 
 from ..config import load_dict, units
 from ..contact import centred_state
-from ..contact.clearance_joint import ClearanceJoint
 from ..dynamics import consistent_state
 from ..errors import InputError
-from ..mechanism.constraints import Driver
+from ..mechanism_wear import drive, drive_period, wearing_joints
 from ..quasistatic.loads import ideal_parent
 from .effects import EffectValues, wear_law
 from .quasi_static import QuasiStaticRigHistory
@@ -180,26 +179,17 @@ class FileParameterMap(eqx.Module):
 
 def wearing_joint(study, joint: str | None, file: str) -> str:
     """The clearance joint with a wear law (``joint`` if given)."""
-    found = [f.name for f in study.mechanism.forces
-             if isinstance(f, ClearanceJoint) and f.wear is not None]
+    found = wearing_joints(study)
     if joint is not None:
         if joint not in found:
             raise InputError(f"{file}: joint {joint!r} is not a clearance joint with a wear law; "
-                             f"allowed: {', '.join(found) or '(none in the file)'}")
+                             f"allowed: {', '.join(found)}")
         return joint
     if len(found) != 1:
         raise InputError(f"{file}: {len(found)} clearance joints with a wear law "
-                         f"({', '.join(found) or 'none'}); allowed: exactly one, or name it "
+                         f"({', '.join(found)}); allowed: exactly one, or name it "
                          "in [rig] joint = \"...\"")
     return found[0]
-
-
-def driver(study, file: str) -> Driver:
-    drivers = [c for c in study.mechanism.constraints if isinstance(c, Driver)]
-    if not drivers or float(drivers[0].omega) == 0.0:
-        raise InputError(f"{file}: a wear campaign needs a driver with a non-zero speed (the "
-                         "crank cycle); allowed: a [[joints]] type = \"driver\" entry")
-    return drivers[0]
 
 
 def load_file(path: Path):
@@ -242,7 +232,7 @@ class QuasiStaticFileHistory(QuasiStaticRigHistory):
         return mech, y0
 
     def crank_angle(self, mech, y0):
-        d = driver(self.study, self.study.file)
+        d = drive(self.study)
         return mech.frames(mech.split(y0)[0]).pose(d.body)[2]
 
 
@@ -250,7 +240,6 @@ def file_model(path: Path, names, joint: str | None, **settings) -> QuasiStaticF
     doc, study = load_file(path)
     file = str(path)
     name = wearing_joint(study, joint, file)
-    d = driver(study, file)
     params = FileParameterMap.build(doc, names, file, study)
     return QuasiStaticFileHistory(study=study, parameters=params, joint_name=name,
-                                  file_period=2 * math.pi / abs(float(d.omega)), **settings)
+                                  file_period=drive_period(study), **settings)

@@ -109,6 +109,13 @@ def rig_mechanism(base: dict, effects: EffectValues, *, n_theta: int,
     return mech, y0
 
 
+def check_campaign_cycles(cycles: float) -> None:
+    """`InputError` unless the campaign's cycle count is finite and > 0."""
+    if not (math.isfinite(cycles) and cycles > 0):
+        raise InputError(f"calibration model: the campaign's cycles must be finite and > 0, "
+                         f"got {cycles}")
+
+
 class History(eqx.Module):
     """Snapshots at real cycles ``cycles`` (K,), increasing from 0: wear
     ``wear`` and creep ``creep`` profiles [m] (K, n); ``force`` [N]: |joint
@@ -154,9 +161,7 @@ class RigHistory(eqx.Module):
     name = "dynamic"
 
     def __check_init__(self):
-        if not (math.isfinite(self.cycles) and self.cycles > 0):
-            raise InputError(f"calibration model: the campaign's cycles must be finite and "
-                             f"> 0, got {self.cycles}")
+        check_campaign_cycles(self.cycles)
         if int(self.dynamic_cycles) < 1:
             raise InputError(f"calibration model: dynamic cycles (--dynamic-cycles) must be "
                              f">= 1, got {self.dynamic_cycles}")

@@ -38,7 +38,14 @@ from ..quasistatic.joint import QuasiStaticJoint
 from ..quasistatic.loads import cycle_loads
 from ..wear import worn_volume
 from .effects import EffectValues, rate_factor
-from .model import JOINT, PENETRATION_WIDTH, History, rig_mechanism, sorted_trace
+from .model import (
+    JOINT,
+    PENETRATION_WIDTH,
+    History,
+    check_campaign_cycles,
+    rig_mechanism,
+    sorted_trace,
+)
 
 # 40 quadratic steps: the rig's 21,400-cycle depth and volume within 0.1 % of
 # 160 steps, with run-in (N_r = 50..5,000 cycles) and film effects switched on
@@ -73,9 +80,7 @@ class QuasiStaticRigHistory(eqx.Module):
     name = "quasi-static"
 
     def __check_init__(self):
-        if not (math.isfinite(self.cycles) and self.cycles > 0):
-            raise InputError(f"calibration model: the campaign's cycles must be finite and "
-                             f"> 0, got {self.cycles}")
+        check_campaign_cycles(self.cycles)
         if int(self.steps) < 1:
             raise InputError(f"calibration model: steps must be >= 1, got {self.steps}")
 

@@ -392,3 +392,25 @@ def test_four_bar_mechanism_file_wears_from_the_cli_and_from_python(tmp_path):
     _, load_sliding, _ = joint.cycle_wear(np.zeros(joint.n), loads)
     archard = float(el.wear.coefficient) * float(load_sliding) * 50000
     assert j["wear_volume_mm3"] * 1e-9 == pytest.approx(archard, rel=0.02)
+
+
+@pytest.mark.parametrize("model", ["dynamic", "quasi-static"])
+def test_a_run_stopped_at_the_wall_reports_what_it_reached(tmp_path, capsys, model):
+    """Asked for 1e8 cycles, the wear-5000 joint wears through its wall long
+    before: stdout, report and summary give the same cycles (fewer than asked)
+    and a depth at the wall, not the overshoot of the last step."""
+    out = tmp_path / "w"
+    assert main(["study", "wear-5000", "--cycles", "100000000", "--model", model,
+                 "--out", str(out), "--quiet"]) == 3
+    err = capsys.readouterr().err
+    assert "reached the bushing wall" in err
+    summary = json.loads((out / "summary.json").read_text())
+    cycles, depth = summary["cycles"], summary["max_wear_depth_mm"]
+    assert summary["cycles_requested"] == 1e8 and 1e5 < cycles < 3e5
+    # bushing outer radius 33.31 mm, pin 20 mm, clearance 0.005 mm: the wall
+    # is at most 13.31 mm deep, and the stop lands on it
+    assert 13.2 < depth <= 13.31
+    report = (out / "report.md").read_text()
+    assert f"| max wear depth [mm] | {depth:.4f} |" in report
+    assert f"cycles: {cycles:.0f}" in report
+    assert f"after {cycles:.0f} cycles (max depth {depth:.4f} mm" in err

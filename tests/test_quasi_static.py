@@ -21,7 +21,7 @@ from diffwear.quasistatic.joint import pin_offset
 from diffwear.studies import rig_21400
 from diffwear.wear import ArchardWear, peak_depth, worn_volume
 from diffwear.wear.profile_ode import integrate_profile
-from diffwear.wear.status import STATUS_CONTACT_LOSS, STATUS_OK
+from diffwear.wear.status import STATUS_CONTACT_LOSS, STATUS_OK, STATUS_PIERCED
 
 # The dynamic route's results these are checked against (diffwear's own EFM
 # dynamic model; README "Rig" and "Bushing design"): rig-21400 (constant
@@ -138,6 +138,37 @@ def test_constant_wear_rate_gives_the_closed_form_life_and_profile():
     run = integrate_profile(evaluate, jnp.zeros(n), steps=5, cycles=12_345.0)
     np.testing.assert_allclose(np.asarray(run.depth), 12_345.0 * np.asarray(b), rtol=1e-12)
     np.testing.assert_allclose(float(run.cycles), 12_345.0, rtol=1e-14)
+
+
+def test_a_run_through_the_wall_stops_at_the_wall():
+    """w = b constant: the wall is reached at wall / peak(b) cycles exactly,
+    however long the requested run; the profile there is that many cycles of
+    b (not the overshoot of a long step); with a response A the stop lands on
+    the wall depth and the same cycles as a life to it."""
+    n = 60
+    theta = 2 * np.pi * np.arange(n) / n
+    b = jnp.asarray(3e-8 * (1.2 + np.cos(theta - 0.7)))
+
+    def evaluate(h):
+        return b, jnp.asarray(True), jnp.zeros((n, n))
+
+    wall = 5e-3
+    run = integrate_profile(evaluate, jnp.zeros(n), steps=5, cycles=1e12, wall=wall)
+    assert int(run.status) == STATUS_PIERCED
+    reached = wall / float(peak_depth(b))
+    np.testing.assert_allclose(float(run.cycles), reached, rtol=1e-10)
+    np.testing.assert_allclose(np.asarray(run.depth), reached * np.asarray(b), rtol=1e-9)
+
+    a = 2e-6 * jnp.eye(n) + 1e-7
+
+    def responding(h):
+        return b - a @ h, jnp.asarray(True), a
+
+    run = integrate_profile(responding, jnp.zeros(n), steps=40, cycles=1e12, wall=wall)
+    life = integrate_profile(responding, jnp.zeros(n), steps=40, limit=wall)
+    assert int(run.status) == STATUS_PIERCED
+    np.testing.assert_allclose(float(peak_depth(run.depth)), wall, rtol=1e-9)
+    np.testing.assert_allclose(float(run.cycles), float(life.life), rtol=1e-3)
 
 
 def test_linear_wear_ode_converges_to_its_exact_solution():

@@ -137,7 +137,8 @@ def test_bad_evolution_options(problem):
 
 def test_wear_through_wall_stops_with_message(problem, short_run):
     """A wall thinner than the wear of a few cycles: the run stops, names the cycle
-    and the depth, and keeps the profile reached before the piercing step."""
+    and the depth, and keeps the profile at the wall: the piercing step is cut
+    to the fraction of it that reaches the wall (its cycles likewise)."""
     mech_of, p, y0 = problem
     full = short_run(p, y0, jnp.inf)
     wall = 0.5 * float(jnp.max(full.depth))  # pierced half-way through the run
@@ -146,9 +147,17 @@ def test_wear_through_wall_stops_with_message(problem, short_run):
         res.check("test")
     kept = err.value.result
     assert 0 < float(kept.cycles) < 6
-    assert 0 < float(jnp.max(kept.depth)) < wall
-    assert float(kept.fail_depth) >= wall
-    assert math.isclose(float(kept.fail_cycles), float(kept.cycles) + 2)
+    assert math.isclose(float(jnp.max(kept.depth)), wall, rel_tol=1e-12)
+    assert float(kept.fail_depth) == float(jnp.max(kept.depth))
+    assert float(kept.fail_cycles) == float(kept.cycles)
+    # the wear of a constant-A step is linear in its length: the cut step's
+    # cycles and depth are in proportion
+    steps = np.asarray(kept.history["cycles"])[np.asarray(kept.history["valid"])]
+    depths = np.asarray(kept.history["max_depth"])[np.asarray(kept.history["valid"])]
+    before_n, before_h = (steps[-2], depths[-2]) if len(steps) > 1 else (0.0, 0.0)
+    full_step = np.asarray(full.history["max_depth"])[len(steps) - 1]
+    fraction = (float(kept.cycles) - before_n) / 2.0
+    assert math.isclose(before_h + fraction * (full_step - before_h), wall, rel_tol=1e-9)
 
 
 def test_running_out_of_slots_is_an_error_not_a_short_answer(problem):

@@ -45,7 +45,10 @@ class QuasiStaticEvolution(eqx.Module):
     """Wear of each joint after ``cycles`` real cycles (quasi-static model).
 
     depth: final wear profiles [m], one per joint (tuple)
-    cycles: real cycles represented
+    cycles: real cycles reached: the requested count, or fewer when a joint
+        wore through its wall (or its model failed) first
+    joint_cycles: per joint, the cycles its profile represents (a joint
+        stopped at its wall holds the cycles at which it reached it)
     status: `diffwear.wear.status` code (worst over the joints)
     joint_status: per joint
     contact_margin: per joint, the smallest `QuasiStaticJoint.contact_margin`
@@ -56,6 +59,7 @@ class QuasiStaticEvolution(eqx.Module):
 
     depth: tuple
     cycles: Float[Array, ""]
+    joint_cycles: Float[Array, " J"]
     status: Array
     joint_status: Array
     contact_margin: Float[Array, " J"]
@@ -204,9 +208,10 @@ class QuasiStatic(AbstractWearModel):
         per_joint, ok = self._each(mech, joints, y0, period, cycles=cycles, wall=wall)
         joint_status, status = self._status(per_joint, ok)
         sols = [s for s, _ in per_joint]
+        joint_cycles = jnp.stack([s.cycles for s in sols])
         return QuasiStaticEvolution(
-            depth=tuple(s.depth for s in sols), cycles=jnp.asarray(cycles, dtype=float),
-            status=status, joint_status=joint_status,
+            depth=tuple(s.depth for s in sols), cycles=jnp.min(joint_cycles),
+            joint_cycles=joint_cycles, status=status, joint_status=joint_status,
             contact_margin=jnp.stack([m[0] for _, m in per_joint]),
             contact_margin_worn=jnp.stack([m[1] for _, m in per_joint]),
             history=tuple(s.history for s in sols))

@@ -137,6 +137,7 @@ def run(out, *, name, mech, design: WearJointDesign, y0, cycles, period, thesis:
     if status != STATUS_OK:
         from ..errors import SolverError
 
-        raise SolverError(f"{name}: {STATUS_TEXT[status]} (quasi-static model; results so far "
-                          f"written to {out.path})")
+        raise SolverError(f"{name}: {STATUS_TEXT[status]} after {summary['cycles']:.0f} cycles "
+                          f"(max depth {summary['max_wear_depth_mm']:.4f} mm; quasi-static "
+                          f"model); stopped, results so far written to {out.path}")
     return summary

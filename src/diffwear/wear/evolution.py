@@ -253,19 +253,28 @@ class Evolver:
                           y, t, self.period, n_save=n_save, **self.cycle_kw)
 
     def finish(self, c, h_new, y_new, t_new, dn, dls, ok):
-        """Accept a step unless it failed or pierced the wall (then stop, keep old h)."""
-        pierced = jnp.max(h_new) >= self.wall
-        bad = (~ok) | pierced
+        """Accept a step unless it failed (then stop, keep the old state).  A
+        step that wears through the wall is cut to the fraction of it at which
+        the first node reaches the wall (the step is linear in its length), and
+        the evolution stops there: it reports the cycles and depth at the wall."""
+        dh = h_new - c["h"]
+        # double where: no infinite wall in the division (its gradient is NaN)
+        room = jnp.where(jnp.isfinite(self.wall), self.wall - c["h"], 0.0)
+        pierced = ok & (jnp.max(h_new) >= self.wall)
+        rising = dh > 0.0
+        fraction = jnp.clip(jnp.min(jnp.where(rising, room / jnp.where(rising, dh, 1.0),
+                                              jnp.inf)), 0.0, 1.0)
+        f = jnp.where(pierced, fraction, 1.0)
         status = jnp.where(~ok, STATUS_SOLVER, jnp.where(pierced, STATUS_PIERCED, STATUS_OK))
         out = dict(c)
-        out["h"] = jnp.where(bad, c["h"], h_new)
-        out["y"] = jnp.where(bad, c["y"], y_new)
-        out["t"] = jnp.where(bad, c["t"], t_new)
-        out["n"] = jnp.where(bad, c["n"], c["n"] + dn)
-        out["ls"] = jnp.where(bad, c["ls"], c["ls"] + dls)
+        out["h"] = jnp.where(ok, c["h"] + f * dh, c["h"])
+        out["y"] = jnp.where(ok, y_new, c["y"])
+        out["t"] = jnp.where(ok, t_new, c["t"])
+        out["n"] = jnp.where(ok, c["n"] + f * dn, c["n"])
+        out["ls"] = jnp.where(ok, c["ls"] + f * dls, c["ls"])
         out["status"] = status
-        out["fail_n"] = jnp.where(bad, c["n"] + dn, 0.0)
-        out["fail_h"] = jnp.where(bad, jnp.max(h_new), 0.0)
+        out["fail_n"] = jnp.where(~ok, c["n"] + dn, jnp.where(pierced, out["n"], 0.0))
+        out["fail_h"] = jnp.where(~ok, jnp.max(h_new), jnp.where(pierced, jnp.max(out["h"]), 0.0))
         return out
 
     def record(self, c, a, valid):

@@ -22,7 +22,8 @@ Steps are chosen in depth, not in cycles: dN = dm / peak(w(h)), so that no
 node gains more than about dm per step however fast the joint wears (the
 cycle count to a limit varies by orders of magnitude across a design space).
 ``dm`` = limit / steps for a life, and peak(w(h0)) N_total / steps for a run
-of N_total cycles (whose last step is cut to land on N_total).  The step rule
+of N_total cycles (whose last step is cut to land on N_total; a run that
+would wear through its wall is stepped as a life to the wall).  The step rule
 is a smooth function of the state, so the whole discrete solution is smooth in
 every parameter.
 
@@ -49,6 +50,7 @@ from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_PIERCED, STATUS_SOLVER
 # joint does not wear: it sets no step, and a life is never reached.
 NO_WEAR_RATE = 1e-18
 _HERMITE_NEWTON = 8
+_WALL_NEWTON = 6
 
 
 class ProfileHistory(eqx.Module):
@@ -95,6 +97,26 @@ def _hermite_root(m0, m1, s0, s1, dn, target):
     return lax.fori_loop(0, _HERMITE_NEWTON, newton, tau0)
 
 
+def _wall_step(c, dn, m, s, wall, eye):
+    """The step from state ``c`` cut back to where the peak depth meets
+    ``wall`` (the step of ``dn`` cycles reached ``m`` >= wall): Newton on the
+    step length of the same linearly implicit step, from the Hermite crossing.
+    A run stopped at its wall reports the cycles and profile there, not a
+    depth beyond it."""
+
+    def step(length):
+        return c["h"] + jnp.linalg.solve(eye + length * c["a"], length * c["w"])
+
+    def newton(_, length):
+        f, df = jax.jvp(lambda x: peak_depth(step(x)), (length,), (jnp.ones_like(length),))
+        ok = df > 0.0
+        return jnp.clip(length - jnp.where(ok, f - wall, 0.0) / jnp.where(ok, df, 1.0), 0.0, dn)
+
+    start = _hermite_root(c["m"], m, c["s"], s, dn, wall) * dn
+    length = lax.fori_loop(0, _WALL_NEWTON, newton, start)
+    return length, step(length)
+
+
 def integrate_profile(
     evaluate: Callable,
     h0: Float[Array, " n"],
@@ -118,7 +140,7 @@ def integrate_profile(
     answer, only its cost).  ``steps``: the accuracy
     knob (module notes); ``max_steps`` scan slots
     (default 4 steps + 8).  ``wall`` [m]: stop when the peak depth reaches it
-    (status 1).  Pure, jit-able and differentiable (forward and reverse mode).
+    (status 1; ``cycles`` and ``depth`` are then those at the wall).  Pure, jit-able and differentiable (forward and reverse mode).
     """
     if (cycles is None) == (limit is None):
         raise ValueError("give exactly one of cycles= and limit=")
@@ -142,7 +164,8 @@ def integrate_profile(
         end = jnp.asarray(max_cycles, dtype=float)
     else:
         end = jnp.asarray(cycles, dtype=float)
-        dm = peak_depth(w0) * end / steps
+        # a run that would wear through its wall is stepped as a life to it
+        dm = jnp.minimum(peak_depth(w0) * end, wall) / steps
         target = jnp.asarray(jnp.inf)
 
     init = dict(h=h0, w=w0, a=a0, memory=memory0, n=jnp.zeros(()), m=m0, s=s0,
@@ -172,6 +195,12 @@ def integrate_profile(
         tau = _hermite_root(c["m"], m, c["s"], s, dn, target)
         ok = ok & jnp.all(jnp.isfinite(h))
         pierced = m >= wall
+        # a step through the wall is cut back to it (`_wall_step`)
+        dn_wall, h_wall = lax.cond(
+            pierced, lambda: _wall_step(c, dn, m, s, wall, eye), lambda: (dn, h))
+        h = h_wall
+        n_new = c["n"] + dn_wall
+        m = jnp.where(pierced, peak_depth(h), m)
         status = jnp.where(~ok, STATUS_SOLVER, jnp.where(pierced, STATUS_PIERCED, STATUS_OK))
         out = dict(
             h=h, w=w, a=a, memory=memory, n=n_new, m=m, s=s,

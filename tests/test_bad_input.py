@@ -5,6 +5,7 @@ import math
 import re
 
 import jax.numpy as jnp
+import numpy as np
 import pytest
 from linkages import four_bar
 
@@ -139,3 +140,25 @@ def test_cli_and_engine_share_the_wear_choices():
     study = sub.choices["study"]
     choices = {a.dest: tuple(a.choices) for a in study._actions if a.choices}
     assert choices["contact"] == WEAR_CONTACTS and choices["method"] == WEAR_METHODS
+
+
+def _cycle(mech, q_guess):
+    from diffwear.dynamics.kinematics import check_cycle_motion
+
+    q0 = mech.split(consistent_state(mech, q_guess))[0]
+    check_cycle_motion(mech, q0, np.linspace(0.0, 1.0, 73), what="four-bar")
+
+
+def test_a_crank_that_cannot_turn_fully_is_refused_at_the_angle_it_stops():
+    """Non-Grashof (s + l = 0.3 + 0.4 > 0.35 + 0.3): the crank pin can reach
+    O4 only while |A - O4| <= b + c = 0.65, i.e. cos(phi) >= (0.09 + 0.16 -
+    0.4225) / 0.24 = -0.719, phi <= 136 deg: the first sample beyond is 140 deg."""
+    mech, q_guess = four_bar(a=0.3, b=0.35, c=0.30, d=0.40)
+    with pytest.raises(InputError, match=r"cannot move through its cycle: at t = 0\.3889 s "
+                                         r"\(the driver at 140 deg"):
+        _cycle(mech, q_guess)
+
+
+def test_a_grashof_crank_rocker_moves_through_its_cycle():
+    mech, q_guess = four_bar()
+    _cycle(mech, q_guess)

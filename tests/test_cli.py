@@ -327,6 +327,20 @@ def test_run_refuses_a_speed_beyond_the_step_budget_up_front(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_run_refuses_a_rod_shorter_than_the_crank_before_computing(tmp_path, capsys):
+    """Rod 40 mm, crank 76.2 mm: the rod's slider end leaves the slider's line
+    once 76.2 sin(phi) > 40 mm, i.e. beyond 31.7 deg; the first of the 5-deg
+    samples past it is 35 deg."""
+    path = _rig_file(tmp_path, ('bushing_point = ["-0.1016 m", "0 m"]',
+                                'bushing_point = ["-0.02 m", "0 m"]'),
+                     ('point_i = ["0.1016 m", "0 m"]', 'point_i = ["0.02 m", "0 m"]'))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "cannot move through its cycle" in err and "at 35 deg of its cycle" in err
+    assert not out.exists()
+
+
 def test_run_warns_when_a_clearance_joint_never_makes_contact(tmp_path, capsys):
     path = _rig_file(tmp_path, ('bushing_radius = "9.533 mm"', 'bushing_radius = "1009.5 mm"'),
                      ('duration = "2 s"', 'duration = "0.05 s"'))

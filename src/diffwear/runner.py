@@ -41,10 +41,13 @@ from .dynamics import (
     reaction_wrench,
     simulate,
 )
+from .dynamics.kinematics import check_cycle_motion
 from .dynamics.simulate import Trajectory
 from .errors import InputError, SolverError
 from .io import OutputDir
 from .mechanism import Mechanism
+from .mechanism.constraints import Driver
+from .quasistatic.loads import fully_driven, ideal_parent
 
 _consistent_state = eqx.filter_jit(functools.partial(consistent_state, check=False))
 
@@ -266,6 +269,28 @@ def check_step_budget(study: Study) -> None:
                 "or a larger [simulation] max_steps")
 
 
+# Samples of the cycle in the motion check (5 degrees of the driver apart).
+MOTION_SAMPLES = 73
+
+
+def check_motion(study: Study, y0) -> None:
+    """Refuse up front a linkage that cannot move through its cycle (links too
+    short to reach, a crank that cannot turn fully, a dead point): the ideal
+    mechanism (clearance joints taken as revolute joints) is closed at
+    `MOTION_SAMPLES` instants over one revolution of its first driver (or the
+    run's duration, if shorter).  Mechanisms the drivers do not fully
+    determine are not checked (their motion is not kinematic)."""
+    ideal = ideal_parent(study.mechanism)
+    drivers = [c for c in ideal.constraints if isinstance(c, Driver) and float(c.omega) != 0.0]
+    if not drivers or not fully_driven(ideal):
+        return
+    sim = study.simulation
+    span = min(sim.duration, 2 * math.pi / abs(float(drivers[0].omega)))
+    q0, _, _ = ideal.split(y0)
+    ts = np.linspace(0.0, span, MOTION_SAMPLES)
+    check_cycle_motion(ideal, q0, ts, what=str(study.file), driver=f"driver {drivers[0].name!r}")
+
+
 def _report(study: Study, s: dict, figures: list[str]) -> str:
     mech, sim = study.mechanism, study.simulation
     lines = [
@@ -355,6 +380,7 @@ def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str 
         mechanism_wear.wearing_joints(study)
         mechanism_wear.drive_period(study)
     y0 = initial_state(study)
+    check_motion(study, y0)
     out = OutputDir(out_dir, overwrite=overwrite)
     log(f"[{study.file}] integrating {study.simulation.duration:g} s (first run compiles) ...")
     t0 = time.perf_counter()

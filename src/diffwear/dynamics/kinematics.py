@@ -18,6 +18,9 @@ driven mechanism these are the unique solutions.
 
 from __future__ import annotations
 
+import functools
+
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -159,3 +162,52 @@ def kinematic_analysis(mech: Mechanism, ts, q_guess):
 
     _, (q, qd, qdd) = jax.lax.scan(step, jnp.asarray(q_guess, dtype=float), ts)
     return q, qd, qdd
+
+
+# A sample of the cycle is "closed" when every constraint holds to this [m or
+# rad] (Newton converges quadratically to ~1e-15 where a solution exists), and
+# a dead point when the constraint Jacobian's smallest singular value falls
+# below this fraction of its largest (the driver cannot carry the linkage
+# through it).
+_CLOSED = 1e-8
+_DEAD_POINT = 1e-7
+_phi = eqx.filter_jit(lambda mech, q, t: mech.phi(q, t))
+_phi_q = eqx.filter_jit(lambda mech, q, t: mech.phi_q(q, t))
+
+
+def check_cycle_motion(mech: Mechanism, q0, ts, *, what: str = "the mechanism",
+                       driver: str = "the driver") -> None:
+    """Raise `InputError` if the fully driven ``mech`` cannot move through the
+    times ``ts`` from the assembled ``q0``: a sample where its joints cannot
+    all be closed (a link too short to reach, a crank that cannot turn fully)
+    or where the constraint Jacobian is singular (a dead point).  Each sample's
+    Newton starts from the previous one; concrete values, outside ``jit``."""
+    phi = functools.partial(_phi, mech)
+    phi_q = functools.partial(_phi_q, mech)
+    q = np.asarray(q0, dtype=float)
+    ts = np.asarray(ts, dtype=float)
+    period = ts[-1] - ts[0]
+    for t in ts:
+        for _ in range(30):
+            r = np.asarray(phi(q, t))
+            if not np.all(np.isfinite(r)) or np.max(np.abs(r)) <= _CLOSED:
+                break
+            step = np.linalg.lstsq(np.asarray(phi_q(q, t)), r, rcond=None)[0]
+            q = q - step
+        r = np.asarray(phi(q, t))
+        where = (f"at t = {t:.4g} s ({driver} at {360.0 * (t - ts[0]) / period:.0f} deg "
+                 "of its cycle)")
+        worst = float(np.max(np.abs(r))) if np.all(np.isfinite(r)) else np.inf
+        if worst > _CLOSED:
+            raise InputError(
+                f"{what} cannot move through its cycle: {where} its joints cannot all be "
+                f"closed (max |Phi| = {worst:.3g}): a link too short to reach (e.g. a rod "
+                "shorter than the crank) or a crank that cannot turn fully; clearance joints "
+                "count as ideal revolute joints in this check")
+        sv = np.linalg.svd(np.asarray(phi_q(q, t)), compute_uv=False)
+        if sv[-1] < _DEAD_POINT * sv[0]:
+            raise InputError(
+                f"{what} locks: {where} the constraint Jacobian is singular (a dead point "
+                "the driver cannot carry the linkage through, e.g. links that fold onto "
+                "one line); clearance joints count as ideal revolute joints in this check")
+

@@ -408,6 +408,37 @@ def test_four_bar_mechanism_file_wears_from_the_cli_and_from_python(tmp_path):
     assert j["wear_volume_mm3"] * 1e-9 == pytest.approx(archard, rel=0.02)
 
 
+def test_a_mechanism_file_joint_worn_through_its_wall_stops_there(tmp_path, capsys):
+    """The four-bar with a 1000x wear coefficient, asked for 1e6 cycles: the
+    joint reaches its 4 mm wall (the layer thickness) first; the run stops
+    there (exit 3 after writing), and the life to 3.99 mm, computed apart, is
+    just short of the cycles reported at the wall."""
+    path = Path(__file__).resolve().parents[1] / "design_studies" / "four_bar_wear.toml"
+    text = path.read_text().replace('coefficient = "5.05e-4 mm^3/(N m)"',
+                                    'coefficient = "5.05e-1 mm^3/(N m)"')
+    edited = tmp_path / "fast_wear.toml"
+    edited.write_text(text)
+    out = tmp_path / "fb"
+    assert main(["run", str(edited), "--out", str(out), "--cycles", "1000000",
+                 "--limit", "3.99", "--quiet"]) == 3
+    err = capsys.readouterr().err
+    j = json.loads((out / "summary.json").read_text())["joints"]["coupler_rocker"]
+    # the peak between the nodes is at the wall; the deepest node just short of it
+    assert 3.99 < j["max_wear_depth_mm"] <= 4.0
+    assert f"wore through its 4 mm bushing wall after {j['cycles']:,.0f} cycles" in err
+    assert 0.99 * j["cycles"] < j["cycles_to_limit"] < j["cycles"] < 1e6
+    assert "**stopped: clearance joint 'coupler_rocker'" in (out / "report.md").read_text()
+
+
+def test_a_depth_limit_beyond_the_wall_is_refused(tmp_path, capsys):
+    path = Path(__file__).resolve().parents[1] / "design_studies" / "four_bar_wear.toml"
+    out = tmp_path / "fb"
+    assert main(["run", str(path), "--out", str(out), "--cycles", "10", "--limit", "5",
+                 "--quiet"]) == 2
+    assert "--limit 5 mm is not less than the bushing wall" in capsys.readouterr().err
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("model", ["dynamic", "quasi-static"])
 def test_a_run_stopped_at_the_wall_reports_what_it_reached(tmp_path, capsys, model):
     """Asked for 1e8 cycles, the wear-5000 joint wears through its wall long

@@ -217,3 +217,15 @@ def test_interrupted_chunked_run_resumes_to_the_same_result(problem, short_run, 
     for k, v in ref.state.items():
         np.testing.assert_allclose(np.asarray(res.state[k]), np.asarray(v), rtol=1e-12,
                                    err_msg=k)
+
+
+def test_contact_loss_over_a_large_part_of_a_cycle_warns():
+    from types import SimpleNamespace
+
+    # 30 of 100 samples out of contact (penetration <= 0) in the last cycle
+    last = SimpleNamespace(penetration=np.r_[np.full(70, 1e-6), np.full(30, -1e-5)])
+    first = SimpleNamespace(penetration=np.r_[np.full(90, 1e-6), np.full(10, -1e-5)])
+    warnings = common.contact_loss_warnings({"first": first, "last": last}, 25.0)
+    assert len(warnings) == 1
+    assert "lost contact over 30% of the last dynamic cycle" in warnings[0]
+    assert "A = 25 cycles" in warnings[0]

@@ -26,7 +26,9 @@ from .io import OutputDir
 from .mechanism.constraints import Driver
 from .quasistatic import QuasiStatic
 from .wear import worn_volume
-from .wear.status import STATUS_CONTACT_LOSS, STATUS_OK
+from .wear.status import STATUS_CONTACT_LOSS, STATUS_OK, STATUS_PIERCED
+
+FILE_WEAR_SLOTS = 2000
 
 
 def wearing_joints(study: Study) -> tuple[str, ...]:
@@ -54,17 +56,35 @@ def drive_period(study: Study) -> float:
     return 2 * math.pi / abs(float(drive(study).omega))
 
 
+def bushing_walls(study: Study, joints, limit: float | None = None) -> list[float]:
+    """Per joint, its bushing wall thickness [m] (the elastic foundation's
+    layer thickness; infinite where the file states none); `InputError` for a
+    depth ``limit`` the wall does not allow."""
+    stated = dict(study.bushing_walls)
+    walls = [stated.get(name, math.inf) for name in joints]
+    for name, wall in zip(joints, walls):
+        if limit is not None and limit >= wall:
+            raise InputError(f"{study.file}: --limit {limit * 1e3:g} mm is not less than the "
+                             f"bushing wall of clearance joint {name!r} ({wall * 1e3:g} mm): "
+                             "the joint wears through first; allowed: a limit below the wall")
+    return walls
+
+
 def evolve_file(study: Study, y0, *, cycles: float, limit: float | None = None,
                 model: QuasiStatic | None = None) -> dict:
     """Per joint: depth profile [m], grid angles, peak-depth history, volume
     [m^3], status, and (with ``limit`` [m]) the cycles to reach it."""
     require_float64("wear of a mechanism file")
-    # one mechanism, not a vmapped sweep: slots to spare for a slow-growing groove
-    model = QuasiStatic(max_steps=4 * 40 + 8) if model is None else model
+    # one mechanism, not a vmapped sweep: slots to spare for a groove whose
+    # peak grows slower than the step rule expects (slots after the end cost
+    # nothing; the four-bar example's joint needs ~12x the 40 steps to its wall)
+    model = QuasiStatic(max_steps=FILE_WEAR_SLOTS) if model is None else model
     joints = wearing_joints(study)
     period = drive_period(study)
+    walls = bushing_walls(study, joints, limit)
     mech = study.mechanism
-    res = jax.jit(lambda y: model.evolve(mech, joints, y, period=period, cycles=cycles))(y0)
+    res = jax.jit(lambda y: model.evolve(mech, joints, y, period=period, cycles=cycles,
+                                         wall_thickness=walls))(y0)
     life = None
     if limit is not None:
         life = jax.jit(lambda y: model.life(mech, joints, y, period=period, limit=limit))(y0)
@@ -80,6 +100,7 @@ def evolve_file(study: Study, y0, *, cycles: float, limit: float | None = None,
             "history_cycles": np.asarray(hist.cycles)[valid],
             "history_peak": np.asarray(hist.peak)[valid],
             "volume": float(worn_volume(depth, el.bushing_radius, el.law.depth)),
+            "cycles": float(res.joint_cycles[k]), "wall": walls[k],
             "status": status, "contact_margin": float(res.contact_margin[k]),
             "contact_margin_worn": float(res.contact_margin_worn[k]),
             "cycles_to_limit": (float(life.cycles[k]) if life is not None else None),
@@ -90,14 +111,16 @@ def evolve_file(study: Study, y0, *, cycles: float, limit: float | None = None,
 def write_wear(study: Study, out: OutputDir, wear: dict, *, cycles: float,
                limit: float | None) -> dict:
     """CSV files and a figure per joint; returns the summary's ``joints`` and
-    warnings.  A joint whose model failed raises `SolverError` after writing."""
-    joints, warnings = {}, []
+    warnings, and ``stopped``: a sentence per joint that wore through its wall
+    (the caller reports them as a failure once everything is written).  A
+    joint whose model failed raises `SolverError` after writing."""
+    joints, warnings, pierced = {}, [], []
     for name, w in wear.items():
         out.csv(f"wear_profile_{name}.csv", {"theta_rad": w["theta"], "depth_mm": w["depth"] * 1e3})
         out.csv(f"wear_history_{name}.csv", {"cycles": w["history_cycles"],
                                              "max_depth_mm": w["history_peak"] * 1e3})
         joints[name] = {"max_wear_depth_mm": float(np.max(w["depth"])) * 1e3,
-                        "wear_volume_mm3": w["volume"] * 1e9, "cycles": cycles,
+                        "wear_volume_mm3": w["volume"] * 1e9, "cycles": w["cycles"],
                         "model": QuasiStatic.name, "status": w["status"],
                         "contact_margin": w["contact_margin"]}
         if limit is not None:
@@ -107,6 +130,10 @@ def write_wear(study: Study, out: OutputDir, wear: dict, *, cycles: float,
             warnings.append(f"clearance joint {name!r}: the load cannot hold the pin on the "
                             f"bushing wall (contact margin {w['contact_margin']:.2g} < 1): the "
                             "quasi-static wear model does not hold there")
+        elif w["status"] == STATUS_PIERCED:
+            pierced.append(f"clearance joint {name!r} wore through its {w['wall'] * 1e3:g} mm "
+                           f"bushing wall after {w['cycles']:,.0f} cycles (max depth "
+                           f"{joints[name]['max_wear_depth_mm']:.4f} mm)")
         elif w["status"] != STATUS_OK:
             raise SolverError(f"{study.file}: wear of clearance joint {name!r} failed (status "
                               f"{w['status']}); outputs so far are in {out.path}")
@@ -118,4 +145,4 @@ def write_wear(study: Study, out: OutputDir, wear: dict, *, cycles: float,
                       {n: (w["history_cycles"], w["history_peak"]) for n, w in wear.items()},
                       title=f"{study.title or study.file}: wear after {cycles:,.0f} cycles "
                             "(quasi-static model)")
-    return {"joints": joints, "warnings": warnings, "figure": figure.name}
+    return {"joints": joints, "warnings": warnings, "figure": figure.name, "stopped": pierced}

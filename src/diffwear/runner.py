@@ -211,6 +211,8 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
     }
     if wear is not None:
         summary["joints"] = wear["joints"]
+        if wear["stopped"]:
+            summary["wear_stopped"] = wear["stopped"]
         figures.append(out.path / wear["figure"])
     out.text("report.md", _report(study, summary, [f.name for f in figures]))
     out.json("summary.json", summary)
@@ -353,6 +355,8 @@ def _report(study: Study, s: dict, figures: list[str]) -> str:
                          f"{w['wear_volume_mm3']:.4g} | {to_limit} | "
                          f"[profile](wear_profile_{j}.csv), [history](wear_history_{j}.csv) |")
         lines.append("")
+        lines += [f"- **stopped: {why}**" for why in s.get("wear_stopped", [])]
+        lines.append("")
     if s.get("warnings"):
         lines += ["## Warnings\n"] + [f"- **{w}**" for w in s["warnings"]] + [""]
     lines += [
@@ -377,7 +381,7 @@ def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str 
     started = time.perf_counter()
     check_step_budget(study)
     if cycles is not None:
-        mechanism_wear.wearing_joints(study)
+        mechanism_wear.bushing_walls(study, mechanism_wear.wearing_joints(study), limit)
         mechanism_wear.drive_period(study)
     y0 = initial_state(study)
     check_motion(study, y0)
@@ -398,6 +402,9 @@ def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str 
         print(f"diffwear: warning: {w}", file=sys.stderr)
     log(f"[{study.file}] max constraint violation {summary['max_constraint_violation']:.2e}; "
         f"report: {out.path / 'report.md'}")
+    if wear is not None and wear["stopped"]:
+        raise SolverError(f"{study.file}: " + "; ".join(wear["stopped"])
+                          + f"; stopped, results so far written to {out.path}")
     return summary
 
 

@@ -159,18 +159,18 @@ def load_dict(data: Mapping, file: str = "<dict>") -> Study:
     by_name = {b.name: b for b in bodies}
     joints = _elements(ctx, "joints", data.get("joints"), JOINT_TYPES, FORCE_TYPES, by_name)
     forces = _elements(ctx, "forces", data.get("forces"), FORCE_TYPES, JOINT_TYPES, by_name)
-    _unique_element_names(ctx, data, [(k, e) for k, e, _ in joints],
-                          [(k, e) for k, e, _ in forces])
+    _unique_element_names(ctx, data, [(k, e) for k, e, *_ in joints],
+                          [(k, e) for k, e, *_ in forces])
     # joints that are force elements (clearance joints) go after the [[forces]]
-    floating = [e for _, e, _ in joints if isinstance(e, AbstractForceElement)]
-    constraints = [e for _, e, _ in joints if not isinstance(e, AbstractForceElement)]
-    plain_forces = [e for _, e, _ in forces]
+    floating = [e for _, e, *_ in joints if isinstance(e, AbstractForceElement)]
+    constraints = [e for _, e, *_ in joints if not isinstance(e, AbstractForceElement)]
+    plain_forces = [e for _, e, *_ in forces]
     try:
         mechanism = Mechanism(bodies, constraints, [*plain_forces, *floating])
         assembly = None
         if floating:
             stand_in = [spec.assembly(e) if isinstance(e, AbstractForceElement) else e
-                        for _, e, spec in joints]
+                        for _, e, spec, _ in joints]
             assembly = Mechanism(bodies, stand_in, plain_forces)
     except InputError as err:  # checks above should catch everything; keep the file name
         raise InputError(f"{file}: {err}") from None
@@ -186,6 +186,10 @@ def load_dict(data: Mapping, file: str = "<dict>") -> Study:
         reactions=reactions,
         contacts=contacts,
         assembly=assembly,
+        bushing_walls=tuple((e.name, float(v["law"]["layer_thickness"]))
+                            for _, e, _, v in joints
+                            if isinstance(v.get("law"), Mapping)
+                            and v["law"].get("layer_thickness") is not None),
     )
 
 
@@ -216,7 +220,8 @@ def _bodies(ctx: Context, raw) -> list[Body]:
 
 def _elements(ctx: Context, section: str, raw, types: Mapping[str, ElementType],
               other: Mapping[str, ElementType], bodies: Mapping[str, Body]):
-    """[(index, element, its ElementType)] of ``[[joints]]`` or ``[[forces]]``."""
+    """[(index, element, its ElementType, its parsed values)] of ``[[joints]]``
+    or ``[[forces]]``."""
     out = []
     home = "forces" if section == "joints" else "joints"
     for k, table in enumerate(read_array_of_tables(ctx, section, raw, required=False)):
@@ -241,7 +246,7 @@ def _elements(ctx: Context, section: str, raw, types: Mapping[str, ElementType],
         if len(set(names)) < len(names):
             raise ctx.error(path, f"connects body {names[0]!r} to itself",
                             "two different bodies (one may be \"ground\")")
-        out.append((k, element, spec))
+        out.append((k, element, spec, values))
     return out
 
 

@@ -69,6 +69,8 @@ class Study(eqx.Module):
     ``assembly``: the mechanism with every clearance joint replaced by the ideal
     revolute at the same points; the initial state is assembled on it (pin
     centred, ideal velocities).  ``None`` when there is no clearance joint.
+    ``bushing_walls``: (joint name, wall thickness [m]) of the clearance joints
+    that state one (the elastic foundation's layer thickness).
     """
 
     file: str = eqx.field(static=True)
@@ -80,3 +82,4 @@ class Study(eqx.Module):
     reactions: tuple[ReactionOutput, ...] = eqx.field(static=True)
     contacts: tuple[ContactOutput, ...] = eqx.field(static=True, default=())
     assembly: Mechanism | None = None
+    bushing_walls: tuple[tuple[str, float], ...] = eqx.field(static=True, default=())

@@ -136,9 +136,10 @@ class QuasiStatic(AbstractWearModel):
             return tuple(m for _ in joints)
         return tuple(joint_mass(mech, j) for j in clearance_joints(mech, joints))
 
-    def _each(self, mech, joints, y0, period, **target):
+    def _each(self, mech, joints, y0, period, walls=None, **target):
         """Per joint: (ProfileSolution, (unworn, worn) contact margins); and
-        the loads' success."""
+        the loads' success.  ``walls``: per joint wall thickness [m] (none:
+        no wall)."""
         require_float64("QuasiStatic")
         loads = self.loads(mech, joints, y0, period)
         models = self.joints(mech, joints)
@@ -150,7 +151,10 @@ class QuasiStatic(AbstractWearModel):
         # needs more is reported (status 3), not cut.
         slots = self.steps + 3 if self.max_steps is None else int(self.max_steps)
 
-        def one(j: QuasiStaticJoint, lo: JointLoads, mass):
+        walls = (jnp.full(len(models), jnp.inf) if walls is None
+                 else jnp.broadcast_to(jnp.asarray(walls, dtype=float), (len(models),)))
+
+        def one(j: QuasiStaticJoint, lo: JointLoads, mass, wall):
             def evaluate(h, offsets):
                 # warm start: the pin offsets of the previous step's profile
                 dh, _, eq = j.cycle_wear(h, lo, offsets)
@@ -158,12 +162,12 @@ class QuasiStatic(AbstractWearModel):
 
             sol = integrate_profile(evaluate, jnp.zeros(j.n), steps=self.steps,
                                     max_steps=slots, memory=jnp.full_like(lo.force, jnp.nan),
-                                    **target)
+                                    wall=wall, **target)
             margins = jnp.stack([jnp.min(j.contact_margin(jnp.zeros(j.n), lo, mass)),
                                  jnp.min(j.contact_margin(sol.depth, lo, mass))])
             return sol, margins
 
-        parts = (models, loads.joints, masses)
+        parts = (models, loads.joints, masses, tuple(walls))
         if len(models) > 1 and all(_stackable(p) for p in parts):
             # one vmapped loop: XLA's CPU runtime was seen to hang (idle,
             # never returning) running two such loops side by side in one
@@ -203,9 +207,9 @@ class QuasiStatic(AbstractWearModel):
     def evolve(self, mech, joints, y0, *, period, cycles,
                wall_thickness=None) -> QuasiStaticEvolution:
         """Wear of ``joints`` after ``cycles`` real cycles from unworn bushings;
-        ``wall_thickness`` [m]: stop a joint whose peak depth reaches it."""
-        wall = jnp.inf if wall_thickness is None else jnp.asarray(wall_thickness, dtype=float)
-        per_joint, ok = self._each(mech, joints, y0, period, cycles=cycles, wall=wall)
+        ``wall_thickness`` [m] (one for all, or one per joint): stop a joint
+        whose peak depth reaches it."""
+        per_joint, ok = self._each(mech, joints, y0, period, walls=wall_thickness, cycles=cycles)
         joint_status, status = self._status(per_joint, ok)
         sols = [s for s, _ in per_joint]
         joint_cycles = jnp.stack([s.cycles for s in sols])

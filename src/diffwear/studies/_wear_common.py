@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 import time
 
 import jax
@@ -49,6 +50,10 @@ def initial_state(mech0, q_guess, mech):
 
 
 CHECKPOINT = OUT_CHECKPOINT  # the name `io.OutputDir` knows
+# Free flight over more than this fraction of a simulated cycle (impacts)
+# warns: the wear of one cycle, extrapolated over A cycles, then rests on
+# impacts that change from cycle to cycle.
+CONTACT_LOSS_WARNING = 0.25
 CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
 # checkpoint keys added later, with the value that checkpoints written before meant
 META_DEFAULTS = {"contact": "efm"}
@@ -328,6 +333,9 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
         "thesis": thesis,
         **(extra_summary or {}),
     }
+    warnings = contact_loss_warnings({"first": hist_first, "last": hist_last}, extrapolation)
+    if warnings:
+        summary["warnings"] = warnings
     summary["files"] = sorted(set(out.files)) + ["report.md", "summary.json"]
     rows = [
         f"# {name}\n", description + "\n",
@@ -341,13 +349,30 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
         f"- mean |joint force| first cycle {summary['mean_joint_force_first_cycle_N']:.1f} N, "
         f"mean total normal load {summary['mean_normal_load_first_cycle_N']:.1f} N",
         f"- wall time {wall_time:.1f} s, compile time {compile_time:.1f} s",
-        *extra_report, "",
+        *extra_report, *(f"- warning: {w}" for w in warnings), "",
     ]
     write_report(out, rows, figs, summary)
+    for w in warnings:
+        print(f"diffwear: warning: {name}: {w}", file=sys.stderr)
     log(f"[{name}] max depth {summary['max_wear_depth_mm']:.4f} mm, volume "
         f"{summary['wear_volume_mm3']:.2f} mm^3, {summary['dynamic_cycles_simulated']} dynamic "
         f"cycles, {wall_time:.1f} s (+{compile_time:.1f} s compile)")
     return summary
+
+
+def contact_loss_warnings(cycles: dict, extrapolation) -> list[str]:
+    """A warning for each simulated cycle (``{"first": history, ...}``, from
+    `contact_history`) whose pin is out of contact over more than
+    `CONTACT_LOSS_WARNING` of it."""
+    out = []
+    for tag, hist in cycles.items():
+        lost = float(np.mean(np.asarray(hist.penetration) <= 0.0))
+        if lost > CONTACT_LOSS_WARNING:
+            out.append(f"the pin lost contact over {lost:.0%} of the {tag} dynamic cycle "
+                       f"(impacts): the wear of one cycle extrapolated over A = "
+                       f"{float(extrapolation):g} cycles rests on impacts that change from "
+                       "cycle to cycle; check with --method error or a smaller A")
+    return out
 
 
 def default_constant_a(cycles, target_dynamic):

@@ -140,7 +140,8 @@ def integrate_profile(
     answer, only its cost).  ``steps``: the accuracy
     knob (module notes); ``max_steps`` scan slots
     (default 4 steps + 8).  ``wall`` [m]: stop when the peak depth reaches it
-    (status 1; ``cycles`` and ``depth`` are then those at the wall).  Pure, jit-able and differentiable (forward and reverse mode).
+    (status 1; ``cycles`` and ``depth`` are then those at the wall).  Pure,
+    jit-able and differentiable (forward and reverse mode).
     """
     if (cycles is None) == (limit is None):
         raise ValueError("give exactly one of cycles= and limit=")

@@ -126,6 +126,8 @@ CASES = [
      ["bodies[2].name", "reserved"]),
     ("bad-name", sub('name = "crank_rod"', 'name = "crank rod"'),
      ["joints[1].name", "not a valid name"]),
+    ("non-ascii-name", sub('name = "slider"', 'name = "schieber_\u00e4"'),
+     ["bodies[2].name", "ASCII"]),
     ("duplicate-element", sub('name = "driver"', 'name = "crank_rod"'),
      ["joints[4].name", "already the name of joints[1]"]),
     ("initial-missing-body", sub('slider = { x = "5.5 m",  y = "0 m", phi = "0 deg" }', ""),

@@ -38,7 +38,7 @@ REQUIRED: Any = _Required()
 NAME_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,63}")
 """Names of bodies, joints and forces: they become file and column names
 (``reaction_<joint>.csv``, ``<body>_x_m``)."""
-NAME_RULE = "a letter, then up to 63 letters, digits, '_' or '-'"
+NAME_RULE = "ASCII: a letter A-Z or a-z, then up to 63 such letters, digits, '_' or '-'"
 
 
 def toml_type(value) -> str:

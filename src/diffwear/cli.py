@@ -33,11 +33,7 @@ def _study(args: argparse.Namespace) -> int:
         return 0
     if args.name not in STUDIES:
         raise InputError(f"unknown study {args.name!r}; available: {', '.join(STUDIES)}")
-    if args.resume is not None:
-        if args.out is not None and Path(args.out).resolve() != Path(args.resume).resolve():
-            raise InputError(f"--resume {args.resume} writes its results there; --out "
-                             f"{args.out} must be the same folder or left out")
-        args.out = args.resume
+    _resume_folder(args)
     if args.out is None:
         raise InputError("study: --out DIR is required")
     kwargs = {}
@@ -68,9 +64,20 @@ def _study(args: argparse.Namespace) -> int:
     return 0
 
 
+def _resume_folder(args: argparse.Namespace) -> None:
+    """--resume DIR writes into DIR: --out is DIR or left out."""
+    if args.resume is None:
+        return
+    if args.out is not None and Path(args.out).resolve() != Path(args.resume).resolve():
+        raise InputError(f"--resume {args.resume} writes its results there; --out "
+                         f"{args.out} must be the same folder or left out")
+    args.out = args.resume
+
+
 # options a wear study's checkpoint records (meta key -> argument), read back
 # by --resume so that the user need not repeat them
-_RESUMED_OPTIONS = {"cycles": "cycles", "method": "method", "contact": "contact"}
+_RESUMED_OPTIONS = {"cycles": "cycles", "method": "method", "contact": "contact",
+                    "model": "model", "limit_mm": "limit"}
 
 
 def _options_from_checkpoint(args: argparse.Namespace) -> None:
@@ -95,8 +102,9 @@ def _interrupted(args: argparse.Namespace, folders) -> str:
 
     for out in folders:
         if (out.path / CHECKPOINT).is_file() and not (out.path / "summary.json").exists():
-            name = getattr(args, "name", None)
+            name, file = getattr(args, "name", None), getattr(args, "file", None)
             command = (f"diffwear study {name} --resume {out.path}" if name else
+                       f"diffwear run {file} --resume {out.path}" if file else
                        f"--resume {out.path}")
             return (f"diffwear: interrupted; the checkpoint {out.path / CHECKPOINT} holds the "
                     f"run so far: resume with `{command}`")
@@ -112,6 +120,14 @@ def _run(args: argparse.Namespace) -> int:
 
     study = load(args.file)  # every input check happens before --out is touched
     text = decode(Path(args.file).read_bytes(), args.file)
+    _resume_folder(args)
+    if args.out is None:
+        raise InputError("run: --out DIR is required")
+    if args.resume is not None:
+        if not (Path(args.resume) / "checkpoint.npz").is_file():
+            raise InputError(f"--resume {args.resume}: no checkpoint.npz there to resume from "
+                             "(checkpoints come from a --model dynamic wear run)")
+        _options_from_checkpoint(args)
     if args.cycles is not None:
         check_int_option("--cycles", args.cycles, 1, MAX_CYCLES)
     limit = None
@@ -123,7 +139,9 @@ def _run(args: argparse.Namespace) -> int:
         limit = args.limit * 1e-3
     log = (lambda *a, **k: None) if args.quiet else print
     runner.run(study, args.out, overwrite=args.overwrite, input_text=text, log=log,
-               cycles=args.cycles, limit=limit)
+               cycles=args.cycles, limit=limit, model=args.model or "quasi-static",
+               method=args.method or "constant", resume=args.resume is not None,
+               progress=not args.quiet)
     return 0
 
 
@@ -335,16 +353,26 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("run", help="simulate a mechanism file (TOML; see README 'Mechanism files')",
                        description="Simulate a mechanism file; with --cycles also the wear of "
-                       "every clearance joint that has a wear law (quasi-static model), with "
-                       "--limit the cycles until its wear reaches that depth.",
+                       "every clearance joint that has a wear law (quasi-static model, or "
+                       "--model dynamic), with --limit the cycles until its wear reaches that "
+                       "depth.",
                        epilog=EXIT_CODES)
     p.add_argument("file", help="mechanism file, e.g. design_studies/ideal_slider_crank.toml")
-    _output_options(p, required=True)
+    _output_options(p, required=False)
     p.add_argument("--cycles", type=int, default=None,
                    help="wear every clearance joint with a wear law over N cycles (revolutions "
                         "of the first driver)")
     p.add_argument("--limit", type=float, default=None, metavar="MM",
                    help="with --cycles: also the cycles until each joint's wear reaches MM mm")
+    p.add_argument("--model", choices=WEAR_MODELS,
+                   help="wear model (with --cycles): quasi-static (default; the pin at the "
+                        "equilibrium of the EFM springs: seconds, any number of joints) or "
+                        "dynamic (the reference; one wearing joint, checkpointed)")
+    p.add_argument("--method", choices=WEAR_METHODS,
+                   help="wear extrapolation over cycles of the dynamic model (default constant)")
+    p.add_argument("--resume", metavar="DIR",
+                   help="continue the interrupted dynamic wear run whose checkpoint.npz is in "
+                        "DIR (its cycles, method and limit are read from it)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_run)
 

@@ -31,6 +31,7 @@ import jax
 import numpy as np
 
 from . import plots
+from .choices import WEAR_METHODS, WEAR_MODELS
 from .config import Study
 from .config.study import Simulation
 from .contact import centred_state, contact_history
@@ -338,8 +339,9 @@ def _report(study: Study, s: dict, figures: list[str]) -> str:
                   for j, c in s["contacts"].items()]
         lines.append("")
     if s.get("joints"):
+        models = "/".join(sorted({w["model"] for w in s["joints"].values()}))
         lines += [
-            "## Wear (quasi-static model)\n",
+            f"## Wear ({models} model)\n",
             "Every clearance joint with a wear law, over the cycles given (one cycle: one "
             "revolution of the first driver).\n",
             "| joint | cycles | max depth [mm] | volume [mm^3] | cycles to limit | files |",
@@ -371,21 +373,30 @@ def _report(study: Study, s: dict, figures: list[str]) -> str:
 
 
 def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str | None = None,
-        cycles: float | None = None, limit: float | None = None,
+        cycles: float | None = None, limit: float | None = None, model: str = "quasi-static",
+        method: str = "constant", resume: bool = False, progress: bool = False,
         log: Callable[..., None] = print) -> dict:
     """Assemble, integrate, write; with ``cycles`` also the wear of every
-    clearance joint with a wear law (`mechanism_wear`), and with ``limit`` [m]
+    clearance joint with a wear law (`mechanism_wear`) on ``model``
+    ("quasi-static" or "dynamic", the latter with ``method`` and checkpoints
+    in ``out_dir``, which ``resume=True`` continues), and with ``limit`` [m]
     the cycles to that depth.  Bad input fails before ``out_dir`` is touched."""
     from . import mechanism_wear
 
     started = time.perf_counter()
     check_step_budget(study)
+    if cycles is None and (resume or model != "quasi-static" or method != "constant"):
+        raise InputError("--model, --method and --resume belong to a wear study: give "
+                         "--cycles N")
     if cycles is not None:
+        check_wear_options(model, method, resume)
+        if model == "dynamic":
+            mechanism_wear.dynamic_wear_joint(study)
         mechanism_wear.bushing_walls(study, mechanism_wear.wearing_joints(study), limit)
         mechanism_wear.drive_period(study)
     y0 = initial_state(study)
     check_motion(study, y0)
-    out = OutputDir(out_dir, overwrite=overwrite)
+    out = OutputDir(out_dir, overwrite=overwrite, resume=resume)
     log(f"[{study.file}] integrating {study.simulation.duration:g} s (first run compiles) ...")
     t0 = time.perf_counter()
     traj = jax.block_until_ready(integrate(study, y0))
@@ -393,8 +404,13 @@ def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str 
     results = postprocess(study, traj)
     wear = None
     if cycles is not None:
-        log(f"[{study.file}] wear over {cycles:,.0f} cycles (quasi-static model) ...")
-        evolved = mechanism_wear.evolve_file(study, y0, cycles=cycles, limit=limit)
+        log(f"[{study.file}] wear over {cycles:,.0f} cycles ({model} model) ...")
+        if model == "dynamic":
+            evolved = mechanism_wear.evolve_file_dynamic(
+                study, y0, cycles=cycles, method=method, limit=limit, out=out, resume=resume,
+                progress=progress)
+        else:
+            evolved = mechanism_wear.evolve_file(study, y0, cycles=cycles, limit=limit)
         wear = mechanism_wear.write_wear(study, out, evolved, cycles=cycles, limit=limit)
     summary = write(study, results, out, steps=int(traj.num_steps), simulate_time=simulate_time,
                     input_text=input_text, started=started, wear=wear)
@@ -406,6 +422,22 @@ def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str 
         raise SolverError(f"{study.file}: " + "; ".join(wear["stopped"])
                           + f"; stopped, results so far written to {out.path}")
     return summary
+
+
+def check_wear_options(model: str, method: str, resume: bool) -> None:
+    """`InputError` for a wear model or method that does not exist, or one the
+    quasi-static model does not take (it has no extrapolation and no
+    checkpoints: it integrates the wear in the cycle count, in seconds)."""
+    if model not in WEAR_MODELS:
+        raise InputError(f"--model {model!r}; allowed: {', '.join(WEAR_MODELS)}")
+    if method not in WEAR_METHODS:
+        raise InputError(f"--method {method!r}; allowed: {', '.join(WEAR_METHODS)}")
+    if model == "quasi-static":
+        for given, why in ((method != "constant", f"--method {method}"), (resume, "--resume")):
+            if given:
+                raise InputError(f"{why} belongs to the dynamic model (--model dynamic); the "
+                                 "quasi-static model integrates the wear in the cycle count "
+                                 "itself (seconds, no checkpoints)")
 
 
 __all__ = ["initial_state", "integrate", "postprocess", "write", "run", "Results"]

@@ -61,8 +61,9 @@ META_DEFAULTS = {"contact": "efm"}
 
 def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, max_dynamic,
                   wall, n_theta, rtol=1e-2, atol=1e-6, out=None, meta=None, resume=False,
-                  progress=False, chunks=CHUNKS, fem=None):
-    """Compile (timed) and run (timed) the whole evolution.
+                  progress=False, chunks=CHUNKS, fem=None, joint=JOINT):
+    """Compile (timed) and run (timed) the whole evolution of clearance joint
+    ``joint``.
 
     ``fem``: a `FemWearModel` for the FEM wear route (`wear.fem_route`), else
     (None) the EFM route.
@@ -79,8 +80,8 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
 
     def make(p):
         if fem is None:
-            return Evolver(mech_of_p(p), JOINT, cycles, **kw)
-        return FemEvolver(mech_of_p(p), JOINT, cycles, fem=fem, **kw)
+            return Evolver(mech_of_p(p), joint, cycles, **kw)
+        return FemEvolver(mech_of_p(p), joint, cycles, fem=fem, **kw)
 
     if out is None:
         def fn(p, y0):  # as `evolve` / `evolve_fem`, for either route

@@ -2,16 +2,16 @@
 the problem, ``diffwear run`` exits with code 2, and a results folder given as
 --out is left exactly as it was."""
 
-from pathlib import Path
 
 import jax.numpy as jnp
 import pytest
 
 from diffwear import cli, runner
+from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.config import load
 from diffwear.errors import InputError
 
-DESIGN = Path(__file__).resolve().parents[1] / "design_studies" / "ideal_slider_crank.toml"
+DESIGN = SHIPPED_MECHANISMS / "ideal_slider_crank.toml"
 TEXT = DESIGN.read_text()
 CLEARANCE = (DESIGN.parent / "clearance_slider_crank.toml").read_text()
 EFM = ('law = { type = "elastic-foundation", layer_thickness = "13.308686667365992 mm", '
@@ -152,7 +152,7 @@ CASES = [
      ["forces[1].stiffness", "'N' is a force unit, not stiffness", "N/m"]),
     ("gravity-bad-field", sub('g = ["0 m/s^2"', 'g_ms2 = ["0 m/s^2"'),
      ["forces[0].g_ms2", "unknown key", "did you mean 'g_m_per_s2'", "g_m_per_s2)"]),
-    # clearance joints (design_studies/clearance_slider_crank.toml)
+    # clearance joints (the shipped clearance_slider_crank.toml)
     ("clearance-negative", csub('clearance = "0.5 mm"', 'clearance = "-0.5 mm"'),
      ["joints[1].clearance", "out of range", ">= 0 m"]),
     ("clearance-pin-larger", csub('clearance = "0.5 mm"', 'bushing_radius = "19.5 mm"'),

@@ -34,6 +34,7 @@ from diffwear.calibrate.model import (
     rig_defaults,
 )
 from diffwear.calibrate.synthetic import Plan, synthesize
+from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
 from diffwear.mechanism import GuideFriction
 from diffwear.wear import ArchardWear
@@ -342,7 +343,7 @@ def test_shipped_campaigns(name, tmp_path):
 
 
 def test_mechanism_file_dataset_calibrates(tmp_path):
-    """A dataset pointing to the rig's mechanism file (design_studies/rig.toml)
+    """A dataset pointing to the rig's mechanism file (the shipped rig.toml)
     and fitting two of its numbers by path calibrates to the campaign's truth
     (the file's 180-node grid and the law's default contact band against the
     preset's 90 nodes and 1 um)."""
@@ -359,7 +360,7 @@ def test_mechanism_file_dataset_calibrates(tmp_path):
 name = "file-route"
 
 [rig]
-mechanism = "{(ROOT / 'design_studies' / 'rig.toml').as_posix()}"
+mechanism = "rig"
 bushing_density = "2250 kg/m^3"
 
 [parameters]
@@ -384,7 +385,7 @@ def test_mechanism_file_parameters_map_exactly_onto_the_model(tmp_path):
     from diffwear.calibrate.mechanism_file import FileParameterMap, load_file
     from diffwear.errors import InputError
 
-    doc, study = load_file(ROOT / "design_studies" / "rig.toml")
+    doc, study = load_file(SHIPPED_MECHANISMS / "rig.toml")
     m = FileParameterMap.build(doc, ["bodies.rod.mass", "joints.crank_rod.pin_point[0]"],
                                "rig.toml", study)
     mech, q = m.apply(study, {"bodies.rod.mass": 1.0, "joints.crank_rod.pin_point[0]": 0.05})

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
 
 STUDY = "ideal-slider-crank"
@@ -264,7 +265,6 @@ def test_design_with_an_output_folder_but_no_problem_is_refused(tmp_path, capsys
 
 def test_calibrate_refuses_too_few_dynamic_cycles_in_the_users_words(tmp_path, capsys):
     """The model's limit is reported with the option's name, not a class name."""
-    from pathlib import Path
 
     data = Path(__file__).resolve().parents[1] / "design_studies" / "calibration" / \
         "synthetic_run_in"
@@ -309,7 +309,7 @@ def test_sigint_to_a_real_run_then_resume(tmp_path):
 
 
 def _rig_file(tmp_path, *edits):
-    text = (Path(__file__).resolve().parents[1] / "design_studies" / "rig.toml").read_text()
+    text = (SHIPPED_MECHANISMS / "rig.toml").read_text()
     for old, new in edits:
         assert old in text, old
         text = text.replace(old, new)
@@ -379,7 +379,7 @@ def test_four_bar_mechanism_file_wears_from_the_cli_and_from_python(tmp_path):
     from diffwear.quasistatic import QuasiStatic
     from diffwear.runner import initial_state
 
-    path = Path(__file__).resolve().parents[1] / "design_studies" / "four_bar_wear.toml"
+    path = SHIPPED_MECHANISMS / "four_bar_wear.toml"
     out = tmp_path / "fb"
     assert main(["run", str(path), "--out", str(out), "--cycles", "50000", "--limit", "0.05",
                  "--quiet"]) == 0
@@ -413,7 +413,7 @@ def test_a_mechanism_file_joint_worn_through_its_wall_stops_there(tmp_path, caps
     joint reaches its 4 mm wall (the layer thickness) first; the run stops
     there (exit 3 after writing), and the life to 3.99 mm, computed apart, is
     just short of the cycles reported at the wall."""
-    path = Path(__file__).resolve().parents[1] / "design_studies" / "four_bar_wear.toml"
+    path = SHIPPED_MECHANISMS / "four_bar_wear.toml"
     text = path.read_text().replace('coefficient = "5.05e-4 mm^3/(N m)"',
                                     'coefficient = "5.05e-1 mm^3/(N m)"')
     edited = tmp_path / "fast_wear.toml"
@@ -431,7 +431,7 @@ def test_a_mechanism_file_joint_worn_through_its_wall_stops_there(tmp_path, caps
 
 
 def test_a_depth_limit_beyond_the_wall_is_refused(tmp_path, capsys):
-    path = Path(__file__).resolve().parents[1] / "design_studies" / "four_bar_wear.toml"
+    path = SHIPPED_MECHANISMS / "four_bar_wear.toml"
     out = tmp_path / "fb"
     assert main(["run", str(path), "--out", str(out), "--cycles", "10", "--limit", "5",
                  "--quiet"]) == 2
@@ -461,7 +461,7 @@ def test_a_run_stopped_at_the_wall_reports_what_it_reached(tmp_path, capsys, mod
     assert f"after {cycles:.0f} cycles (max depth {depth:.4f} mm" in err
 
 
-FOUR_BAR = Path(__file__).resolve().parents[1] / "design_studies" / "four_bar_wear.toml"
+FOUR_BAR = SHIPPED_MECHANISMS / "four_bar_wear.toml"
 
 
 def test_mechanism_file_dynamic_wear_resumes_and_agrees_with_the_quasi_static_model(

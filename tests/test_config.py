@@ -17,6 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from diffwear import cli, runner
+from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.config import FORCE_TYPES, JOINT_TYPES, ElementType, load, load_dict, loads, schema
 from diffwear.config import units as U
 from diffwear.dynamics import Baumgarte, simulate
@@ -25,7 +26,7 @@ from diffwear.mechanism import LinearSpring
 from diffwear.presets import slider_crank
 
 ROOT = Path(__file__).resolve().parents[1]
-DESIGN = ROOT / "design_studies" / "ideal_slider_crank.toml"
+DESIGN = SHIPPED_MECHANISMS / "ideal_slider_crank.toml"
 TEXT = DESIGN.read_text()
 SHORT_T = 0.5  # s
 SHORT_N = 51
@@ -382,3 +383,17 @@ def test_documented_units_table_matches_the_parser():
     rows = dict(re.findall(r"^\| ([a-z ]+) \| ([^|]+) \|$", readme, flags=re.M))
     for name, dim in U.DIMENSIONS.items():
         assert rows[name].strip() == ", ".join(dim.units), name
+
+
+def test_shipped_mechanisms_load_by_name_and_a_path_wins_over_a_name(tmp_path, monkeypatch):
+    from diffwear.config.loader import resolve, shipped_mechanisms
+
+    assert set(shipped_mechanisms()) == {"ideal_slider_crank", "clearance_slider_crank", "rig",
+                                         "four_bar_wear"}
+    assert load("rig").file == str(SHIPPED_MECHANISMS / "rig.toml")
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "rig").write_text("not a mechanism")
+    assert resolve("rig") == Path("rig")
+    with pytest.raises(InputError, match="or a shipped mechanism: clearance_slider_crank, "
+                                         "four_bar_wear, ideal_slider_crank, rig"):
+        load("rigg")

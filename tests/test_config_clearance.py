@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from diffwear import cli, runner
+from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.config import load, loads
 from diffwear.contact import (
     PTFE,
@@ -32,8 +33,8 @@ from diffwear.presets import (
 )
 
 ROOT = Path(__file__).resolve().parents[1]
-DESIGN = ROOT / "design_studies" / "clearance_slider_crank.toml"
-RIG = ROOT / "design_studies" / "rig.toml"
+DESIGN = SHIPPED_MECHANISMS / "clearance_slider_crank.toml"
+RIG = SHIPPED_MECHANISMS / "rig.toml"
 TEXT = DESIGN.read_text()
 SHORT_T = 0.3  # s
 SHORT_N = 31

@@ -1,9 +1,19 @@
 """Named choices of public options, in one module without heavy imports (the
 command line builds its parser from them before it imports JAX)."""
 
+from pathlib import Path
+
 # How a wear evolution extrapolates over cycles (`diffwear.wear.evolve`, --method).
 WEAR_METHODS = ("constant", "adaptive", "error")
 # The pressure model of the wear (--contact); the dynamics always use the EFM.
 WEAR_CONTACTS = ("efm", "fem")
 # The wear model (--model): the dynamic reference or the quasi-static joint.
 WEAR_MODELS = ("dynamic", "quasi-static")
+
+# Mechanism files shipped with the package, loadable by name (`diffwear run rig`).
+SHIPPED_MECHANISMS = Path(__file__).resolve().parent / "config" / "mechanisms"
+
+
+def shipped_mechanism_names() -> list[str]:
+    return sorted(p.stem for p in SHIPPED_MECHANISMS.glob("*.toml"))
+

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ._checks import check_int_option
-from .choices import WEAR_CONTACTS, WEAR_METHODS, WEAR_MODELS
+from .choices import WEAR_CONTACTS, WEAR_METHODS, WEAR_MODELS, shipped_mechanism_names
 from .errors import DiffwearError, InputError
 
 # Upper bound of --cycles: 1e8 crank cycles is ~6 years at 30 rpm.
@@ -119,7 +119,7 @@ def _run(args: argparse.Namespace) -> int:
     from .config.loader import decode
 
     study = load(args.file)  # every input check happens before --out is touched
-    text = decode(Path(args.file).read_bytes(), args.file)
+    text = decode(Path(study.file).read_bytes(), study.file)
     _resume_folder(args)
     if args.out is None:
         raise InputError("run: --out DIR is required")
@@ -357,7 +357,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "--model dynamic), with --limit the cycles until its wear reaches that "
                        "depth.",
                        epilog=EXIT_CODES)
-    p.add_argument("file", help="mechanism file, e.g. design_studies/ideal_slider_crank.toml")
+    p.add_argument("file", help="mechanism file, or the name of a shipped one: "
+                   + ", ".join(shipped_mechanism_names()))
     _output_options(p, required=False)
     p.add_argument("--cycles", type=int, default=None,
                    help="wear every clearance joint with a wear law over N cycles (revolutions "

@@ -411,12 +411,17 @@ def _mechanism(ctx: Context, folder: Path, rig: dict):
             raise ctx.error("rig.joint", "joint is for a mechanism file",
                             "the preset rig's wearing joint is fixed (crank_rod)")
         return None
+    from ..config.loader import load, resolve, shipped_mechanisms
+
     path = Path(rig["mechanism"])
     path = path if path.is_absolute() else folder / path
     if not path.is_file():
+        path = resolve(rig["mechanism"])  # a shipped mechanism by name
+    if not path.is_file():
         raise ctx.error("rig.mechanism", f"{rig['mechanism']!r}: no such file (looked for "
-                        f"{path})", "a mechanism file, relative to the dataset folder")
-    from ..config import load
+                        f"{folder / rig['mechanism']})", "a mechanism file, relative to the "
+                        "dataset folder, or a shipped mechanism: "
+                        + ", ".join(shipped_mechanisms()))
 
     study = load(path)  # a bad mechanism file reports itself, by name
     return path, tomllib.loads(path.read_text(encoding="utf-8")), study

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import jax.numpy as jnp
 
+from ..choices import SHIPPED_MECHANISMS, shipped_mechanism_names
 from ..errors import InputError
 from ..mechanism import GROUND, AbstractForceElement, Body, Mechanism
 from .elements import FORCE_TYPES, JOINT_TYPES, ElementType, FieldError
@@ -93,10 +94,30 @@ OUTPUT_KEYS = ("reactions", "contact")
 
 
 # ----------------------------------------------------------------------------- entry points
+def shipped_mechanisms() -> dict[str, Path]:
+    """Name -> path of each mechanism file shipped with the package (the
+    thesis's mechanisms and an example), loadable by name: ``load("rig")``,
+    ``diffwear run rig``."""
+    return {name: SHIPPED_MECHANISMS / f"{name}.toml" for name in shipped_mechanism_names()}
+
+
+def resolve(path: str | Path) -> Path:
+    """``path``, or the shipped mechanism file of that name when ``path`` is a
+    bare name (no folder, no suffix) that is not a file here."""
+    candidate = Path(path)
+    shipped = shipped_mechanisms()
+    if (not candidate.exists() and candidate.suffix == "" and candidate.name == str(path)
+            and candidate.name in shipped):
+        return shipped[candidate.name]
+    return candidate
+
+
 def load(path: str | Path) -> Study:
-    """Load a mechanism file; raise `InputError` naming the file for any problem."""
-    path = Path(path)
-    data = read_input(path, "a path to a .toml mechanism file")
+    """Load a mechanism file (a path, or the name of a shipped one:
+    `shipped_mechanisms`); raise `InputError` naming the file for any problem."""
+    path = resolve(path)
+    data = read_input(path, "a path to a .toml mechanism file, or a shipped mechanism: "
+                      + ", ".join(shipped_mechanisms()))
     return loads(data, file=str(path))
 
 

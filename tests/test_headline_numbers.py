@@ -97,6 +97,6 @@ def test_pin_pivot_row_is_recomputed(tmp_path):
     from diffwear.io import OutputDir
     from diffwear.studies import pin_pivot
 
-    pin_mm = _numbers(_cell("Ch. 4 pin-pivot"))[1]
+    pin_mm = _numbers(_cell("Ch. 4 pin-pivot"))[0]
     summary = pin_pivot.run(OutputDir(tmp_path / "pp"), sensitivity=False, log=lambda *a: None)
     assert pin_mm == round(summary["max_pin_mm_at_408000_test_cycles"], 2)

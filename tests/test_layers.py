@@ -128,3 +128,10 @@ def test_public_names_do_not_hide_subpackages():
         if (SRC / name).is_dir() or (SRC / f"{name}.py").is_file():
             assert isinstance(getattr(diffwear, name), types.ModuleType), name
             assert getattr(diffwear, name) is importlib.import_module(f"diffwear.{name}")
+
+
+def test_only_the_command_line_chooses_the_matplotlib_backend():
+    """A library import never switches the user's backend (a notebook keeps
+    its inline one); the ``diffwear`` command selects Agg itself."""
+    chooses = [name for name, path in MODULES.items() if "matplotlib.use(" in path.read_text()]
+    assert chooses == ["diffwear.cli"], chooses

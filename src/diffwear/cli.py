@@ -430,6 +430,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     import jax
 
     jax.config.update("jax_enable_x64", True)  # the library leaves this to its caller
+    import matplotlib
+
+    matplotlib.use("Agg")  # the command writes figures to files; no window
     from .io import _OPEN, release_all
 
     try:

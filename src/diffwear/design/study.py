@@ -23,6 +23,7 @@ import numpy as np
 from .._checks import check_int_option
 from ..errors import InputError
 from ..io import OutputDir
+from ..plots import design as plots_design
 from ..quasistatic import QuasiStatic
 from ..wear import Dynamic
 from .optimise import (
@@ -170,27 +171,6 @@ def _describe(model) -> str:
             f"{model.n_theta} profile nodes")
 
 
-def _plot_map(path, maps, j, answer):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(5.5, 4.2))
-    d, h = maps["d_m"] * 1e3, maps["h_m"] * 1e3
-    c = ax.contourf(d, h, maps[f"cyc{j}"].T / 1e3, levels=12, cmap="viridis")
-    fig.colorbar(c, ax=ax, label=f"cyc{j} [thousand cycles]")
-    ax.plot(answer[j - 1] * 1e3, answer[j + 1] * 1e3, "r*", ms=12, label="equal-life answer")
-    ax.plot(TABLE_8_4[j - 1] * 1e3, TABLE_8_4[j + 1] * 1e3, "wo", label="thesis Table 8-4")
-    ax.set_xlabel(f"bushing diameter d{j} [mm]")
-    ax.set_ylabel(f"bushing depth h{j} [mm]")
-    ax.set_title(f"Joint {j}: cycles to 2 mm wear")
-    ax.legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
 def _solve_problems(fast, reference, settings: dict, log) -> dict:
     """Each chosen problem on ``fast``, corrected on ``reference`` (space
     mapping) unless they are the same model.  Returns {key: DesignResult}."""
@@ -294,7 +274,7 @@ def run(out: OutputDir, *, settings: dict | None = None, log=print) -> dict:
     trend["jacobian_method"] = jacobian_method(fast)
 
     for j in (1, 2):
-        _plot_map(out.file(f"life_map_joint{j}.png"), maps, j, eq.x)
+        plots_design.life_map(out.file(f"life_map_joint{j}.png"), maps, j, eq.x, TABLE_8_4)
     with open(out.file("life_maps.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["joint", "d_mm", "h_mm", "cycles"])

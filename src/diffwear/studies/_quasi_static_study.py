@@ -44,7 +44,7 @@ def _history(model: QuasiStatic, mech, y0, period, depth) -> ContactHistory:
 def run(out, *, name, mech, design: WearJointDesign, y0, cycles, period, thesis: dict,
         description: str, log, extra_summary=None, extra_report=(),
         model: QuasiStatic | None = None) -> dict:
-    from .. import plots_wear
+    from ..plots import wear as plots_wear
 
     model = QuasiStatic() if model is None else model
     el = mech.element(JOINT)

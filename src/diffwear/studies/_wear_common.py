@@ -270,7 +270,7 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
                   compile_time, wall_time, thesis: dict, method: str, extrapolation,
                   description: str, log, extra_summary=None, extra_report=(),
                   label: str = "diffwear"):
-    from .. import plots_wear
+    from ..plots import wear as plots_wear
 
     el = mech.element(JOINT)
     n = el.profile.n

@@ -22,9 +22,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import plots_pin_pivot as plots
 from .._checks import check_int_option
 from ..io import OutputDir
+from ..plots import pin_pivot as plots
 from ..wear.pin_pivot import (
     SWEEPS_PER_TEST_CYCLE,
     THESIS_K,

@@ -161,8 +161,6 @@ def tornado(path, sens: Sensitivity, output: str, *, rel_change: float = 0.1,
     moved by +-``rel_change`` (bars sorted by size; = +-elasticity x change)."""
     import matplotlib.pyplot as plt
 
-    from .. import plots  # noqa: F401  (Agg backend)
-
     e = {p: sens.elasticity(output, p) for p in sens.wrt}
     order = sorted(e, key=lambda p: abs(e[p]) if math.isfinite(e[p]) else -1)
     fig, ax = plt.subplots(figsize=(6.4, 0.45 * len(order) + 1.4))
@@ -290,8 +288,6 @@ def histogram(path, prop: Propagation, output: str, *, bins: int = 20, xlabel: s
     """Histogram of the sampled ``output`` (or "life_cycles") with the
     linearised normal estimate and the design-point value."""
     import matplotlib.pyplot as plt
-
-    from .. import plots  # noqa: F401  (Agg backend)
 
     x = prop.life["samples"] if output == "life_cycles" else prop.result[output]
     s = prop.stats[output]

@@ -158,8 +158,6 @@ def _netcdf(spec: SweepSpec, res: SweepResult, out: OutputDir) -> str:
 def _figures(spec: SweepSpec, res: SweepResult, out: OutputDir) -> list[str]:
     import matplotlib.pyplot as plt
 
-    from .. import plots  # noqa: F401  (Agg backend)
-
     names = [k for k in res.outputs if k not in SKIP_PLOTS]
     files = []
     if len(res.grid_names) == 1:
@@ -200,8 +198,6 @@ def heatmap(path, x, y, z, *, xlabel: str, ylabel: str, title: str, annotate: bo
     """Heatmap of z[i, j] at (x[j], y[i]) (cells centred on the values; log axes
     for geometric grids); values written in the cells up to 10 x 10."""
     import matplotlib.pyplot as plt
-
-    from .. import plots  # noqa: F401  (Agg backend)
 
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
     mesh = ax.pcolormesh(x, y, z, shading="nearest", cmap="viridis")

@@ -1,4 +1,5 @@
-"""Matplotlib figures in the style of the thesis plots (Agg backend, PNG)."""
+"""Figures shared by the studies and `diffwear run`: stacked panels, contact
+loci, wear profiles (PNG)."""
 
 from __future__ import annotations
 
@@ -6,11 +7,8 @@ import textwrap
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
 
 def stacked(

@@ -83,9 +83,10 @@ def test_bad_option_exits_2(capsys):
 WEAR = "wear-5000"
 
 
-def _run_interrupted(out) -> int:
-    """A 3-cycle wear-5000 run into ``out`` with Ctrl-C pressed right after its
-    first checkpoint was saved; its exit code."""
+def _run_interrupted(out, args=("study", WEAR, "--cycles", "3")) -> int:
+    """``diffwear ARGS --out OUT --quiet`` (default: a 3-cycle wear-5000 run)
+    with Ctrl-C pressed right after its first checkpoint was saved; its exit
+    code."""
     from diffwear.studies import _wear_common as common
 
     real = common.save_checkpoint
@@ -96,7 +97,7 @@ def _run_interrupted(out) -> int:
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(common, "save_checkpoint", save_then_interrupt)
-        return main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"])
+        return main([*args, "--out", str(out), "--quiet"])
 
 
 @pytest.fixture(scope="module")
@@ -471,19 +472,9 @@ def test_mechanism_file_dynamic_wear_resumes_and_agrees_with_the_quasi_static_mo
     (cycles and model read from the checkpoint), agrees with the quasi-static
     model over the same 20,000 cycles: depth and volume within 1 % (the two
     models' agreement on the Ch. 7 rig is 0.1 %)."""
-    from diffwear.studies import _wear_common as common
-
     out = tmp_path / "dyn"
-    real = common.save_checkpoint
-
-    def save_then_interrupt(*args, **kwargs):
-        real(*args, **kwargs)
-        raise KeyboardInterrupt
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(common, "save_checkpoint", save_then_interrupt)
-        assert main(["run", str(FOUR_BAR), "--cycles", "20000", "--model", "dynamic",
-                     "--out", str(out), "--quiet"]) == 130
+    assert _run_interrupted(out, ("run", str(FOUR_BAR), "--cycles", "20000",
+                                  "--model", "dynamic")) == 130
     assert f"diffwear run {FOUR_BAR} --resume {out}" in capsys.readouterr().err
     assert main(["run", str(FOUR_BAR), "--resume", str(out), "--quiet"]) == 0
     dyn = json.loads((out / "summary.json").read_text())["joints"]["coupler_rocker"]

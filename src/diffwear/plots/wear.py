@@ -55,7 +55,8 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
     for hist, label in ((first, "first cycle"), (last, "last cycle")):
         off = np.asarray(hist.offset) * 1e3
         axes[0].plot(off[:, 0], off[:, 1], lw=1, label=label)
-        axes[1].plot(crank, np.asarray(hist.force_magnitude), lw=1, label=f"|F| {label}")
+        axes[1].plot(np.degrees(crank), np.asarray(hist.force_magnitude), lw=1,
+                     label=f"|F| {label}")
     t = np.linspace(0, 2 * np.pi, 200)
     axes[0].plot(clearance_mm * np.cos(t), clearance_mm * np.sin(t), "k:", lw=0.8,
                  label="initial clearance")
@@ -63,7 +64,7 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
     axes[0].set_xlabel("pin offset x (rod frame) [mm]")
     axes[0].set_ylabel("y [mm]")
     axes[0].set_title("pin centre locus in the bushing")
-    axes[1].set_xlabel("crank angle [rad]")
+    axes[1].set_xlabel("crank angle [deg]")
     axes[1].set_ylabel("joint force [N]")
     axes[1].set_title("crank-rod joint force")
     for ax in axes:

@@ -537,19 +537,17 @@ def scipy_peer(repeats: int) -> dict:
     return out
 
 
-EXUDYN_PYTHON_DEFAULT = Path("/work/venv-exudyn/bin/python")
 EXUDYN_STEP = 1e-3  # s, generalized-alpha fixed step of the headline comparison
 EXUDYN_STEPS_FULL = (2e-3, 1e-3, 5e-4)  # full mode: the agreement against the step
 EXUDYN_SAMPLE = 0.01  # s, compared every 4th of diffwear's 801 times: a multiple of each step
 
 
 def exudyn_python() -> str | None:
-    """The interpreter with ``exudyn`` (env ``DIFFWEAR_EXUDYN_PYTHON``, else the
-    project's default venv), or None when it is missing or cannot import exudyn."""
-    exe = os.environ.get("DIFFWEAR_EXUDYN_PYTHON") or (
-        str(EXUDYN_PYTHON_DEFAULT) if EXUDYN_PYTHON_DEFAULT.exists() else None)
-    if not exe:
-        return None
+    """The interpreter that runs the Exudyn peer: this one, where the
+    project's ``bench`` extra installed exudyn (``pip install -e ".[bench]"``),
+    or the one named by ``DIFFWEAR_EXUDYN_PYTHON``; None when it cannot import
+    exudyn."""
+    exe = os.environ.get("DIFFWEAR_EXUDYN_PYTHON") or sys.executable
     try:
         probe = subprocess.run([exe, "-c", "import exudyn"], capture_output=True, timeout=60)
     except (OSError, subprocess.SubprocessError):
@@ -561,7 +559,7 @@ def exudyn_peer(repeats: int) -> dict:
     """diffwear's ideal slider-crank (Table 2-1, 2 s, the `ideal slider-crank`
     case's settings) against `peers/exudyn_slider_crank.py`, the same mechanism
     in Exudyn (implicit generalized-alpha, index 3, fixed step ``EXUDYN_STEP``),
-    run as a subprocess with the ``DIFFWEAR_EXUDYN_PYTHON`` interpreter.  Compared
+    run as a subprocess with `exudyn_python`.  Compared
     at 201 common times (every ``EXUDYN_SAMPLE``, on Exudyn's step grid, so
     nothing is interpolated): slider x (max |dx| / stroke), crank-rod
     reaction |F| and driver torque (max difference / peak).  Times: diffwear's
@@ -571,7 +569,7 @@ def exudyn_peer(repeats: int) -> dict:
     exe = exudyn_python()
     if exe is None:
         return {"available": False,
-                "note": "not available (no exudyn interpreter: set DIFFWEAR_EXUDYN_PYTHON)"}
+                "note": "not available (exudyn is not installed: pip install -e \".[bench]\")"}
     import jax
     import jax.numpy as jnp
     import numpy as np

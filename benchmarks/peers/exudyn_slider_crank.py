@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """An Exudyn peer: the thesis Table 2-1 ideal slider-crank in Exudyn 1.13.
 
-Run it with an interpreter that has ``exudyn`` (not diffwear's venv; it imports
+Run it where the project's ``bench`` extra installed exudyn (it imports
 nothing from diffwear):
 
-    /work/venv-exudyn/bin/python benchmarks/peers/exudyn_slider_crank.py [--step 5e-4]
+    pip install -e ".[bench]"
+    python benchmarks/peers/exudyn_slider_crank.py [--step 5e-4]
 
 It prints one JSON object on stdout.  `benchmarks/run.py` (case
 ``exudyn-peer``) runs it as a subprocess and compares it with diffwear.

@@ -22,10 +22,11 @@ import atexit
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import InputError
 
@@ -121,7 +122,7 @@ class OutputDir:
         self.files.append(name)
         return self.path / name
 
-    def csv(self, name: str, columns: Mapping[str, Sequence[float]], fmt: str = "%.10g") -> Path:
+    def csv(self, name: str, columns: Mapping[str, ArrayLike], fmt: str = "%.10g") -> Path:
         """Write a CSV with the given header -> column mapping (equal lengths)."""
         header = ",".join(columns)
         data = np.column_stack([np.asarray(c, dtype=float) for c in columns.values()])

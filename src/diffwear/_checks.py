@@ -86,7 +86,7 @@ def require_float64(what: str) -> None:
     depths of nanometres per cycle, are lost in float32; diffwear does not
     switch the process-wide flag on import (that is the user's or the
     command line's choice), so every simulation entry point checks it."""
-    if not jax.config.jax_enable_x64:
+    if not jax.config.read("jax_enable_x64"):
         raise InputError(
             f"{what}: diffwear computes in float64; call "
             "jax.config.update('jax_enable_x64', True) before building a model "

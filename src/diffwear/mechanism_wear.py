@@ -121,7 +121,7 @@ def evolve_file(study: Study, y0, *, cycles: float, limit: float | None = None,
 DYNAMIC_CYCLES = 50
 
 
-def dynamic_wear_joint(study: Study) -> tuple[str]:
+def dynamic_wear_joint(study: Study) -> tuple[str, ...]:
     """The one wearing joint the dynamic model evolves; `InputError` if the
     file has more."""
     joints = wearing_joints(study)

@@ -141,6 +141,7 @@ def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *,
     from .contact import (
         PTFE,
         STEEL,
+        AbstractContactLaw,
         CoulombFriction,
         KelvinVoigt,
         LankaraniNikravesh,
@@ -154,6 +155,7 @@ def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *,
     bushing_material = PTFE if bushing_material is None else bushing_material
     pin_radius = jnp.asarray(pin_radius, dtype=float)
     bore = pin_radius + jnp.asarray(clearance, dtype=float)
+    contact: AbstractContactLaw
     if law in ("ln", "kv"):
         contact = LankaraniNikravesh.from_materials(pin_material, bushing_material, pin_radius,
                                                     bore, restitution)

@@ -164,18 +164,18 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
         }
     contacts = {}
     warnings = []
-    for o in study.contacts:
-        h = r.contacts[o.joint]
-        name = f"contact_{o.joint}.csv"
+    for co in study.contacts:
+        h = r.contacts[co.joint]
+        name = f"contact_{co.joint}.csv"
         out.csv(name, {"t_s": r.ts, "force_N": h[:, 0], "normal_load_N": h[:, 1],
                        "theta_rad": h[:, 2], "penetration_m": h[:, 3]})
-        contacts[o.joint] = {
+        contacts[co.joint] = {
             "max_force_N": float(np.max(h[:, 0])),
             "max_penetration_m": float(np.max(h[:, 3])),
             "fraction_in_contact": float(np.mean(h[:, 3] > 0)),
             "file": name,
         }
-        warnings += contact_warnings(mech.element(o.joint), contacts[o.joint])
+        warnings += contact_warnings(mech.element(co.joint), contacts[co.joint])
 
     panels = [(f"{c} [{u}]", {b: r.q[:, 3 * i + k] for i, b in enumerate(mech.body_names)})
               for k, (c, u) in enumerate((("x", "m"), ("y", "m"), ("φ", "rad")))]

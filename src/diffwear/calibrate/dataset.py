@@ -104,7 +104,7 @@ class Series:
     x: np.ndarray
     y: np.ndarray
     sigma: float
-    holdout: np.ndarray = None  # type: ignore[assignment]  (default: nothing held out)
+    holdout: np.ndarray = None  # type: ignore[assignment]  # None: nothing held out
     basis: str | None = None    # volume series: "mass" | "profile"
 
     def __post_init__(self):
@@ -651,7 +651,7 @@ def _cell(file: str, line: int, column: str, text: str) -> float:
     try:
         if not math.isfinite(value):
             raise InputError("")
-        si = value if dimension is None else units.to_si(value, unit, dimension)
+        si = value if dimension is None or unit is None else units.to_si(value, unit, dimension)
     except InputError:
         raise _csv_error(file, line, column, f"{text!r} is out of the float64 range",
                          allowed) from None
@@ -795,8 +795,8 @@ def _manifest_text(name, description, preset, parameters, series, bushing_densit
             raise InputError(f"write_dataset: parameters[{key!r}]: unknown name or name "
                              f"mismatch ({p.name!r}); allowed: {PARAMETER_RULE}")
         dimension = PARAMETERS[key]
-        text = (lambda v: _num(v)) if dimension is None else \
-            (lambda v, d=dimension: _quantity_text(v, d))
+        def text(v, d: str | None = dimension) -> str:
+            return _num(v) if d is None else _quantity_text(v, d)
         items = [] if p.value is None else [f"value = {text(p.value)}"]
         if p.std is not None:
             items.append(f"std = {text(p.std)}")
@@ -835,7 +835,7 @@ def _csv_text(s: Series) -> str:
 
 
 def _check_series_to_write(series: Sequence[Series], holdout_from: float | None):
-    files = {}
+    files: dict[str, str] = {}
     for k, s in enumerate(series):
         where = f"write_dataset: series[{k}] ({s.name!r})"
         if s.kind not in KINDS:

@@ -144,12 +144,13 @@ class EffectValues(eqx.Module):
     def of(cls, **strengths) -> "EffectValues":
         """``EffectValues.of(run_in=2.0)``; a shape as ``<shape name>=value`` (SI)."""
         s, g = [0.0] * len(NAMES), [0.0] * len(NAMES)
-        shapes = {e.shape.name: i for i, e in enumerate(EFFECTS) if e.shape}
+        shapes = {e.shape.name: (i, e.shape) for i, e in enumerate(EFFECTS) if e.shape}
         for key, value in strengths.items():
             if key in INDEX:
                 s[INDEX[key]] = value
             elif key in shapes:
-                g[shapes[key]] = math.log(value / EFFECTS[shapes[key]].shape.default)
+                i, shape = shapes[key]
+                g[i] = math.log(value / shape.default)
             else:
                 raise KeyError(f"unknown effect or shape {key!r}; effects: {NAMES}")
         return cls(jnp.asarray(s, dtype=float), jnp.asarray(g, dtype=float))
@@ -160,7 +161,10 @@ class EffectValues(eqx.Module):
     def shape(self, name: str):
         """The shape of effect ``name`` in SI."""
         i = INDEX[name]
-        return EFFECTS[i].shape.default * jnp.exp(self.log_shape[i])
+        shape = EFFECTS[i].shape
+        if shape is None:
+            raise KeyError(f"effect {name!r} has no shape parameter")
+        return shape.default * jnp.exp(self.log_shape[i])
 
 
 class ModifiedArchardWear(ArchardWear):

@@ -82,7 +82,7 @@ class ModelSettings:
 
 def _checkpoints(data: Dataset) -> list[float]:
     """Cycle counts at which a profile, volume or depth is measured."""
-    out = []
+    out: list[float] = []
     for s in data.series:
         if s.kind != "force":
             out.extend(float(c) for c in np.unique(s.cycle_counts))
@@ -95,7 +95,7 @@ class Problem:
     closed over by the jitted functions (hashable by identity).  ``suspects``:
     parameters not fitted that `identify` may score (log-scale columns)."""
 
-    model: object
+    model: RigHistory | QuasiStaticRigHistory
     observations: tuple
     y: np.ndarray
     sigma: np.ndarray
@@ -125,10 +125,11 @@ class Problem:
             raise InputError(f"{data.path}: a mechanism-file dataset is calibrated on the "
                              "quasi-static model; allowed: --model quasi-static")
         names = tuple(data.parameters)
+        assert data.mechanism is not None  # this route is taken for a mechanism file only
         model = file_model(data.mechanism, names, data.joint, cycles=float(data.max_cycles),
                            checkpoints=tuple(sorted(set(_checkpoints(data)))),
                            steps=settings.steps)
-        return cls._assemble(data, model, dict(model.parameters.value0), names)
+        return cls._assemble(data, model, dict(model.file_parameters.value0), names)
 
     @classmethod
     def _assemble(cls, data: Dataset, model, defaults: dict, names: tuple):
@@ -216,8 +217,9 @@ class FitResult:
         if self.effect is None:
             return EffectValues.zero()
         values = {self.effect: self.strength}
-        if self.shape is not None:
-            values[EFFECTS[NAMES.index(self.effect)].shape.name] = self.shape
+        shape = EFFECTS[NAMES.index(self.effect)].shape
+        if self.shape is not None and shape is not None:
+            values[shape.name] = self.shape
         return EffectValues.of(**values)
 
     @property
@@ -471,8 +473,9 @@ class Fitter:
                       for i, n in enumerate(p.fit_names)}
         pred = r * p.sigma + p.y
         shape = interval = None
-        if shaped:
-            default = EFFECTS[k].shape.default
+        effect_shape = EFFECTS[k].shape if k is not None else None
+        if shaped and effect_shape is not None:
+            default = effect_shape.default
             ln = z[nb + 1] * log_std
             shape = float(default * math.exp(ln))
             half = std_z[nb + 1] * log_std

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import jax
@@ -94,7 +94,8 @@ class Suspect:
 
     def sentence(self) -> str:
         """"the force trace asks for a 2x longer crank length (...)"."""
-        kind = max(self.score.by_kind, key=self.score.by_kind.get, default="data")
+        by_kind = self.score.by_kind
+        kind = max(by_kind, key=lambda k: by_kind[k], default="data")
         what = {"force": "the force trace asks", "profile": "the wear profiles ask",
                 "volume": "the worn volume asks", "max_depth": "the maximum depth asks"
                 }.get(kind, f"the {kind} data ask")
@@ -102,7 +103,7 @@ class Suspect:
         words = {"length": ("longer", "shorter"), "mass": ("heavier", "lighter"),
                  "stiffness": ("stiffer", "softer"), "inertia": ("larger", "smaller")}
         known = RIG_PARAMETERS.get(self.name)
-        up, down = words.get(known.dimension if known else None, ("larger", "smaller"))
+        up, down = words.get((known.dimension if known else None) or "", ("larger", "smaller"))
         if abs(f - 1.0) < 0.2:
             how = f"a {100 * abs(f - 1.0):.2g} % {up if f >= 1 else down}"
         else:
@@ -172,9 +173,9 @@ def _candidate(s: Score, refit: FitResult | None, qualifies: bool,
            "first_step": s.first_step}
     if failure:
         out["refit_failed"] = failure
-    if SHAPED[NAMES.index(s.effect)]:
-        e = EFFECTS[NAMES.index(s.effect)].shape
-        out["scored_shape"] = e.default * math.exp(s.log_shape)
+    shape = EFFECTS[NAMES.index(s.effect)].shape
+    if shape is not None:
+        out["scored_shape"] = shape.default * math.exp(s.log_shape)
     if refit is not None:
         out.update(refit_strength=refit.strength, refit_strength_std=refit.strength_std,
                    refit_shape=refit.shape, refit_chi2_fit=refit.chi2_fit,
@@ -308,7 +309,7 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     problem = Problem.from_dataset(data, settings)
     fitter = Fitter(problem)
     check = check and problem.model.name != "dynamic" and data.mechanism is None
-    pool = ThreadPoolExecutor(max_workers=1) if check else None
+    pool = ThreadPoolExecutor(max_workers=1)  # its thread starts on the first submit
     prepared = pool.submit(compile_check, data, problem, settings) if check else None
     speculated: dict = {}
     kinds = np.array([data.series[k].kind for k in problem.series_of_point])
@@ -345,11 +346,14 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
         f.notes.update(likelihood_ratio=lr, z=z, criterion=_criterion(f))
         if ok:
             qualifying.append(s.effect)
-            if check and not speculated:
+            if prepared is not None and not speculated:
                 # the first qualifying refit is usually the one chosen: its
                 # dynamic check runs beside the remaining refits
-                speculated[s.effect] = (f, pool.submit(
-                    lambda f=f: model_check(problem, f, prepared.result())))
+                # (the compiled check is awaited in the pool's thread, not here)
+                def check_refit(f: FitResult = f, compiled: Future = prepared) -> dict:
+                    return model_check(problem, f, compiled.result())
+
+                speculated[s.effect] = (f, pool.submit(check_refit))
         shape = "" if f.shape is None else f", shape {f.shape:.3g}"
         log(f"refit + {s.effect}: strength {f.strength:.4g} +- {f.strength_std:.2g}{shape}, "
             f"chi2 {f.chi2_fit:.1f}, held-out RMSE {f.rmse_holdout:.3g} sigma"
@@ -378,13 +382,13 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     final = chosen if identified != "none" else base
     result = Calibration(data, problem, base, scores, refits, qualifying, chosen, identified,
                          unexplained, gof, 0.0, suspects, notes={"failed_refits": failed})
-    if check:
+    if prepared is not None:
         ahead = speculated.get(final.effect)
         result.check = (ahead[1].result() if ahead is not None and ahead[0] is final
                         else model_check(problem, final, prepared.result()))
-        pool.shutdown()
         c = result.check
         log(f"check on the {c['model']} model: chi2 {c['chi2_fit']} on the fit points "
             f"(fitted model {final.chi2_fit:.1f}), held out {c['chi2_holdout']}")
+    pool.shutdown()
     result.wall_time_s = time.perf_counter() - t0
     return result

@@ -33,7 +33,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..config import load_dict, units
+from ..config import Study, load_dict, units
 from ..contact import centred_state
 from ..dynamics import consistent_state
 from ..errors import InputError
@@ -59,7 +59,8 @@ def _locate(doc: dict, path: str, file: str):
         names = [t.get("name") for t in doc.get(section, []) if isinstance(t, dict)]
         raise InputError(f"{file}: parameter {path!r}: no [[{section}]] named {name!r}; "
                          f"allowed: {', '.join(map(str, names)) or '(none)'}")
-    node, key = items[0], None
+    node = items[0]
+    key: str | int | None = None
     for k, part in enumerate(parts[2:]):
         m = _PATH.fullmatch(part)
         if m is None or not isinstance(node, dict) or m["key"] not in node:
@@ -100,6 +101,7 @@ def _moved(doc: dict, path: str, file: str, factor: float) -> dict:
     raw = node[key]
     if isinstance(raw, str):
         m = units._QUANTITY.fullmatch(raw)
+        assert m is not None  # the file loaded, so each of its quantities parses
         node[key] = f"{float(m['num']) * factor!r} {m['unit']}"
     else:
         node[key] = float(raw) * factor
@@ -218,12 +220,22 @@ class QuasiStaticFileHistory(QuasiStaticRigHistory):
     def joint(self) -> str:
         return self.joint_name
 
+    @property
+    def file_study(self) -> Study:
+        assert isinstance(self.study, Study)  # set by `file_model`
+        return self.study
+
+    @property
+    def file_parameters(self) -> FileParameterMap:
+        assert self.parameters is not None  # set by `file_model`
+        return self.parameters
+
     def describe(self) -> str:
-        return (super().describe() + f"; mechanism file {self.study.file}, joint "
+        return (super().describe() + f"; mechanism file {self.file_study.file}, joint "
                 f"{self.joint_name!r}")
 
     def mechanism(self, base: dict, effects: EffectValues):
-        mech, q_guess = self.parameters.apply(self.study, base)
+        mech, q_guess = self.file_parameters.apply(self.file_study, base)
         index = next(i for i, f in enumerate(mech.forces) if f.name == self.joint_name)
         k = mech.forces[index].wear.coefficient
         mech = eqx.tree_at(lambda m: m.forces[index].wear, mech, wear_law(k, effects))

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import diffrax
 import equinox as eqx
@@ -195,7 +196,8 @@ class RigHistory(eqx.Module):
         period, a = self.period, self.extrapolation
         # forward-mode adjoint: the calibration differentiates with jacfwd
         # (few parameters, many residuals)
-        kw = dict(rtol=self.cycle_rtol, atol=self.cycle_atol, adjoint=diffrax.ForwardMode())
+        kw: dict[str, Any] = dict(rtol=self.cycle_rtol, atol=self.cycle_atol,
+                                  adjoint=diffrax.ForwardMode())
         warm = wear_cycle(mech, JOINT, y0, 0.0, period, **kw)
         n = self.n_theta
         creep = effects["creep"]

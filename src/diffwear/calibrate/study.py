@@ -12,6 +12,7 @@ angle, against cycle count, and the force residual's harmonic spectrum),
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np  # noqa: E402
@@ -43,7 +44,7 @@ UNIT = {"profile": (1e6, "um", "bushing angle [rad]"), "max_depth": (1e3, "mm", 
 def residual_structure(c: Calibration) -> dict:
     """Where the base fit's residual sits (numbers for the report)."""
     p, r = c.problem, c.base.residual
-    out = {}
+    out: dict[str, Any] = {}
     kinds = [s.kind for s in c.dataset.series]
     which = p.series_of_point
     prof = np.isin(which, [k for k, kd in enumerate(kinds) if kd == "profile"])
@@ -298,6 +299,7 @@ def frame_warnings(c: Calibration) -> list[dict]:
 
 def _shape_text(effect: str, summary: dict) -> str:
     shape = next(e.shape for e in EFFECTS if e.name == effect)
+    assert shape is not None  # called for effects with a fitted shape only
     lo, hi = summary["effect_shape_interval"] or (math.nan, math.nan)
     return (f"{shape.name.replace('_', ' ')} {_fmt(summary['effect_shape'], 3)} {shape.unit} "
             f"(1 sigma: {_fmt(lo, 3)}..{_fmt(hi, 3)})")

@@ -223,7 +223,8 @@ def _optional_text(ctx, data, key) -> str:
 
 
 def _bodies(ctx: Context, raw) -> list[Body]:
-    out, seen = [], {}
+    out: list[Body] = []
+    seen: dict[str, int] = {}
     for k, table in enumerate(read_array_of_tables(ctx, "bodies", raw, required=True)):
         v = read_table(ctx, f"bodies[{k}]", table, BODY_FIELDS)
         name = v["name"]
@@ -327,7 +328,7 @@ def _contacts(ctx: Context, table, mechanism: Mechanism) -> tuple[ContactOutput,
     if not isinstance(entries, list):
         raise ctx.error("outputs.contact", f"expected an array, got {toml_type(entries)} "
                         f"{show(entries)}", f"an array of clearance joint names: {allowed}")
-    out = []
+    out: list[ContactOutput] = []
     for k, name in enumerate(entries):
         path = f"outputs.contact[{k}]"
         if not isinstance(name, str):

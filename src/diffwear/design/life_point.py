@@ -37,12 +37,12 @@ def model_for(name: str, *, n_theta: int = 90) -> TwoJointLife:
 def design_from_mm(values) -> np.ndarray:
     """(d1, d2, h1, h2) in mm -> m, checked against the Table 8-3 box (the
     error names the option)."""
-    x = []
+    metres = []
     for name, v in zip(VARIABLES, values):
         if v is None:
             raise InputError(f"--{name} is required (mm)")
-        x.append(float(v) * 1e-3)
-    x = np.asarray(x)
+        metres.append(float(v) * 1e-3)
+    x = np.asarray(metres)
     check_design(x, what="design (--d1 --d2 --h1 --h2)")
     return x
 

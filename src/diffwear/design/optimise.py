@@ -114,8 +114,8 @@ def levenberg_marquardt(rtol: float, atol: float) -> optx.LevenbergMarquardt:
     the region shrunk) only below optimistix's 0.01, since optimistix ties
     rejection and shrinking to one cutoff and a noisy model should keep a
     step that gained a little."""
-    solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
-    search = optx.ClassicalTrustRegion(high_cutoff=0.75)
+    solver: optx.LevenbergMarquardt = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
+    search: optx.ClassicalTrustRegion = optx.ClassicalTrustRegion(high_cutoff=0.75)
     return eqx.tree_at(lambda s: s.search, solver, search)
 
 
@@ -278,7 +278,7 @@ def _design_residual(u, args):
     return r
 
 
-def _solve(model: TwoJointLife, problem: str, residual, x_fixed, free, *, rtol, atol,
+def _solve(model: TwoJointLife | ShiftedLife, problem: str, residual, x_fixed, free, *, rtol, atol,
            max_steps) -> DesignResult:
     """Levenberg-Marquardt on residual(x, cycles) over the ``free`` variables."""
     x_fixed = np.asarray(x_fixed, dtype=float)
@@ -295,7 +295,8 @@ def _solve(model: TwoJointLife, problem: str, residual, x_fixed, free, *, rtol, 
     jacobians: list[int] = []
     shift = jnp.zeros(2)
     if isinstance(model, ShiftedLife):
-        model, shift = model.model, jnp.asarray(model.shift, dtype=float)
+        shift = jnp.asarray(model.shift, dtype=float)
+        model = model.model
     life = _differentiable(model, on_jacobian=lambda _: jacobians.append(1))
     args = (life, residual, base, jnp.asarray(free), shift)
 
@@ -304,8 +305,8 @@ def _solve(model: TwoJointLife, problem: str, residual, x_fixed, free, *, rtol, 
     # (seen on the closed-form test model: u -> -2886).
     solver = levenberg_marquardt(rtol, atol)
     t0 = time.perf_counter()
-    sol = optx.least_squares(_design_residual, solver, u0, args=args, max_steps=max_steps,
-                             throw=False)
+    sol: optx.Solution = optx.least_squares(_design_residual, solver, u0, args=args,
+                                            max_steps=max_steps, throw=False)
     u = jax.block_until_ready(sol.value)
     history = list(_HISTORY)
     x = np.where(free, np.asarray(from_free(u, jnp.asarray(LOWER), jnp.asarray(UPPER))), x_fixed)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import time
 from concurrent.futures import ThreadPoolExecutor
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -52,10 +53,10 @@ PROBLEMS = ("equal-life", "longest-common-life", "least-material", "robust")
 MODELS = ("quasi-static", "dynamic")
 # steps: the quasi-static model's wear steps to the limit; dynamic_steps: the
 # dynamic model's (the reference of the correction, or the model itself).
-FULL = dict(model="quasi-static", steps=40, dynamic_steps=10, map_points=4, n_theta=90,
-            problems=("equal-life",))
-QUICK = dict(model="quasi-static", steps=10, dynamic_steps=3, map_points=2, n_theta=90,
-             problems=("equal-life",))
+FULL: dict[str, Any] = dict(model="quasi-static", steps=40, dynamic_steps=10, map_points=4,
+                            n_theta=90, problems=("equal-life",))
+QUICK: dict[str, Any] = dict(model="quasi-static", steps=10, dynamic_steps=3, map_points=2,
+                             n_theta=90, problems=("equal-life",))
 # Load samples per cycle of the quasi-static model here: 90 puts the lives
 # within 1e-4 of 180 samples' on this mechanism (measured at the equal-life
 # design) at half the cost.
@@ -73,7 +74,7 @@ def settings(*, quick: bool = False, problems: str | None = None, model: str | N
     each checked against `LIMITS`; ``problems``: comma-separated names from
     `PROBLEMS` or "all" (equal life is always solved: the maps are drawn
     around it); ``model``: one of `MODELS`.  `InputError` names the option."""
-    chosen = dict(QUICK if quick else FULL)
+    chosen: dict[str, Any] = dict(QUICK if quick else FULL)
     if problems is not None:
         names = tuple(n.strip() for n in problems.split(",") if n.strip())
         if names == ("all",):
@@ -150,8 +151,8 @@ def map_trend(maps: dict) -> dict:
     bushing, least over the diameters), ``diameter_relative_change`` (life at
     the largest minus the smallest diameter, over their mean, the extreme over
     the depths), and whether every grid line is monotone."""
-    out = {"rises_with_depth": [], "falls_with_diameter": [], "depth_life_ratio": [],
-           "diameter_relative_change": []}
+    out: dict[str, Any] = {"rises_with_depth": [], "falls_with_diameter": [],
+                           "depth_life_ratio": [], "diameter_relative_change": []}
     for j in (1, 2):
         c = maps[f"cyc{j}"]  # [d, h]
         out["rises_with_depth"].append(bool(np.all(np.diff(c, axis=1) > 0)))

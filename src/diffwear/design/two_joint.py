@@ -178,6 +178,7 @@ class TwoJointLife(eqx.Module):
 def _loads(model: TwoJointLife, x):
     ideal, q_guess, mech = model.mechanism(x)
     y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
+    assert isinstance(model.wear_model, QuasiStatic)  # loads are the quasi-static model's
     return model.wear_model.loads(mech, JOINTS, y0, model.period)
 
 

@@ -59,7 +59,7 @@ def assemble(mech: Mechanism, q_guess, t=0.0, *, tol=1e-12, max_steps=64):
         return jnp.concatenate([(mdiag / scale) * (q - q_guess) + jac.T @ mu, mech.phi(q, t)])
 
     z0 = jnp.concatenate([q_guess, jnp.zeros(m, dtype=q_guess.dtype)])
-    sol = optx.root_find(
+    sol: optx.Solution = optx.root_find(
         kkt, optx.Newton(rtol=tol, atol=tol), z0, max_steps=max_steps, throw=False
     )
     q = sol.value[: mech.n_coords]

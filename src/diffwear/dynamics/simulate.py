@@ -12,6 +12,8 @@ penalty contacts of this project this beat implicit Kvaerno5 by a wide margin
 
 from __future__ import annotations
 
+from typing import Any, cast
+
 import diffrax
 import equinox as eqx
 import jax
@@ -67,7 +69,7 @@ class Trajectory(eqx.Module):
             where += f"; integration ended at t = {float(self.t_final):.6g} s"
         if not ok:
             try:
-                msg = str(diffrax.RESULTS[self.result])
+                msg = str(cast(Any, diffrax.RESULTS)[self.result])
             except (KeyError, TypeError):  # older diffrax: no message lookup
                 msg = str(self.result)
             reason = f"integrator stopped: {msg.rstrip('.')}."

@@ -34,6 +34,8 @@ Cholesky factorisations ran up to 100x slower (0.9 s and 3.1 s).
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -50,7 +52,20 @@ from .element import (
 from .mesh import RingMesh
 
 
-def _layer_stiffness(mesh: RingMesh, youngs_modulus, poisson_ratio) -> Float[Array, "n_r m m"]:
+class AnnularMesh(Protocol):
+    """What the condensation reads of a mesh: a `RingMesh` (the bushing) or
+    a `diffwear.fem.pin.PinMesh` (the pin), surface at ring 0."""
+
+    nodes: Float[Array, "n_nodes 2"]
+    elements: Array
+    n_theta: int
+    n_r: int
+
+    @property
+    def theta(self) -> Float[Array, " n_theta"]: ...
+
+
+def _layer_stiffness(mesh: AnnularMesh, youngs_modulus, poisson_ratio) -> Float[Array, "n_r m m"]:
     """Stiffness of each element layer on its own 3 node rings (6 n_theta dofs)."""
     n, per_layer = mesh.n_theta, mesh.n_theta // 2
     d = plane_strain_matrix(youngs_modulus, poisson_ratio)
@@ -73,7 +88,7 @@ def _schur(k: Float[Array, "m m"], keep: int) -> Float[Array, "keep keep"]:
     return 0.5 * (s + s.T)
 
 
-def inner_stiffness(mesh: RingMesh, youngs_modulus, poisson_ratio) -> Float[Array, "m m"]:
+def inner_stiffness(mesh: AnnularMesh, youngs_modulus, poisson_ratio) -> Float[Array, "m m"]:
     """S: condensed stiffness of the inner-surface dofs (2 n_theta), outer ring fixed."""
     ring = 2 * mesh.n_theta  # dofs per node ring
     layers = _layer_stiffness(mesh, youngs_modulus, poisson_ratio)
@@ -85,10 +100,11 @@ def inner_stiffness(mesh: RingMesh, youngs_modulus, poisson_ratio) -> Float[Arra
         else:
             lk = lk.at[2 * ring:, 2 * ring:].add(s)
         s = _schur(lk, ring)
+    assert s is not None  # a mesh has at least one layer (n_r >= 1, checked when built)
     return s
 
 
-def radial_directions(mesh: RingMesh) -> Float[Array, "m n"]:
+def radial_directions(mesh: AnnularMesh) -> Float[Array, "m n"]:
     """N (2 n_theta, n_theta): column j is the radial unit vector of inner node j."""
     n = mesh.n_theta
     th = mesh.theta
@@ -96,7 +112,7 @@ def radial_directions(mesh: RingMesh) -> Float[Array, "m n"]:
     return jnp.zeros((2 * n, n)).at[2 * j, j].set(jnp.cos(th)).at[2 * j + 1, j].set(jnp.sin(th))
 
 
-def inner_compliance(mesh: RingMesh, youngs_modulus, poisson_ratio) -> Float[Array, "n n"]:
+def inner_compliance(mesh: AnnularMesh, youngs_modulus, poisson_ratio) -> Float[Array, "n n"]:
     """C [m per N/m]: u_r(inner nodes) = C f_r (radial nodal forces, outward positive)."""
     s = inner_stiffness(mesh, youngs_modulus, poisson_ratio)
     nr = radial_directions(mesh)

@@ -173,10 +173,10 @@ class RingContact(eqx.Module):
         tolerance on the dimensionless max |Phi|."""
         e = jnp.asarray(offset, dtype=float)
         _check_vector("pin offset e [m]", e)
-        ev = concrete(e)
-        if ev is not None and np.hypot(*ev) >= float(concrete(self.pin_radius)):
+        ev, radius = concrete(e), concrete(self.pin_radius)
+        if ev is not None and radius is not None and np.hypot(*ev) >= float(radius):
             raise InputError(f"ring contact: pin offset |e| = {np.hypot(*ev)!r} m must be "
-                             f"below the pin radius {float(concrete(self.pin_radius))!r} m")
+                             f"below the pin radius {float(radius)!r} m")
         return self._checked(_solve_offset(self, e, tol))
 
     def _solve_offset(self, e, tol):

@@ -95,7 +95,9 @@ class Mechanism(eqx.Module):
         return _block(self.forces, name, lambda f: f.n_aux, "force element")
 
     def element(self, name: str):
-        for e in (*self.constraints, *self.forces):
+        elements: tuple[AbstractConstraint | AbstractForceElement, ...] = (
+            *self.constraints, *self.forces)
+        for e in elements:
             if e.name == name:
                 return e
         raise InputError(f"no joint or force element named {name!r}")

@@ -6,15 +6,18 @@ from __future__ import annotations
 import textwrap
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import cast
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.projections.polar import PolarAxes
+from numpy.typing import ArrayLike
 
 
 def stacked(
     path: Path,
     x: np.ndarray,
-    panels: Sequence[tuple[str, Mapping[str, np.ndarray]]],
+    panels: Sequence[tuple[str, Mapping[str, ArrayLike]]],
     *,
     xlabel: str,
     title: str,
@@ -68,7 +71,7 @@ def polar_loci(path: Path, loci: Mapping[str, tuple[np.ndarray, np.ndarray]], *,
         ax = fig.add_subplot(rows, cols, k + 1, projection="polar")
         ax.scatter(theta, radius * radius_scale, s=2)
         if rmax is not None:
-            ax.set_rmax(rmax)
+            cast(PolarAxes, ax).set_rmax(rmax)
         ax.set_title(label, fontsize=8)
         ax.tick_params(labelsize=6)
     fig.suptitle(textwrap.fill(title + f"  (radius: {radius_label})", 90), fontsize=9)

@@ -24,7 +24,7 @@ there still agree with the dynamic model (docs: the agreement table).
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import equinox as eqx
 import jax
@@ -77,7 +77,7 @@ def joint_mass(mech: Mechanism, joint) -> Float[Array, ""]:
 
 
 def _stackable(trees) -> bool:
-    first = jax.tree.structure(trees[0])
+    first: Any = jax.tree.structure(trees[0])
     shapes = [jnp.shape(x) for x in jax.tree.leaves(trees[0])]
     return all(jax.tree.structure(t) == first
                and [jnp.shape(x) for x in jax.tree.leaves(t)] == shapes for t in trees[1:])

@@ -83,7 +83,9 @@ def run(out: OutputDir, *, cycles: int = CYCLES, laws=CONTACT_LAWS, clearances=C
     keep = t >= min(TRANSIENT, t[-1] / 2)
     f_ideal, crank = ideal_force(ts)
     out.csv("force_ideal.csv", {"t_s": t, "crank_angle_rad": crank, "force_N": f_ideal})
-    cases, curves, loci = [], {}, {}
+    cases: list = []
+    curves: dict[str, dict[float, np.ndarray]] = {}
+    loci: dict = {}
     # the force figures show the last crank cycle against the crank angle in
     # degrees (not the cumulative angle of all cycles)
     last = t >= t[-1] - 2 * np.pi / float(THESIS_CRANK_SPEED) - 1e-12

@@ -46,7 +46,7 @@ def _run_block(model_fn, cols: dict, chunk_size, start: int):
     out, info = evaluate(model_fn, cols, chunk_size=chunk_size)
     info = {k: v for k, v in info.items() if k not in ("order", "chunk_s")}
     info["start"] = start
-    info["x64"] = bool(jax.config.jax_enable_x64)
+    info["x64"] = bool(jax.config.read("jax_enable_x64"))
     try:
         from distributed import get_worker
 

@@ -17,6 +17,7 @@ import jax.numpy as jnp
 
 from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state, simulate
+from ..errors import InputError
 from ..mechanism.geometry import safe_norm
 from ..presets import (
     BUSHING_DEPTH_CH5,
@@ -35,6 +36,7 @@ from ..presets import (
     rig_slider_crank,
     with_wear_joint,
 )
+from ..quasistatic import QuasiStatic
 from ..wear import (
     AbstractWearModel,
     Dynamic,
@@ -123,6 +125,7 @@ class RigWear(eqx.Module):
         worn = worn_mechanism(mech, JOINT, res.depth)
         cyc = wear_cycle(worn, JOINT, res.y, res.t, self.period, n_save=self.force_samples,
                          rtol=self.cycle_rtol, atol=self.cycle_atol)
+        assert cyc.ys is not None  # saved: n_save is given
         force = contact_history(worn, JOINT, cyc.ys).force_magnitude
         return {
             "max_depth_mm": smooth_max(res.depth, self.temperature) * 1e3,
@@ -133,6 +136,9 @@ class RigWear(eqx.Module):
 
     def _quasi_static(self, mech, y0, design, el) -> dict:
         model = self.wear_model
+        if not isinstance(model, QuasiStatic):
+            raise InputError(f"rig-wear: wear model {type(model).__name__}; allowed: Dynamic() "
+                             "or QuasiStatic()")
         res = model.evolve(mech, (JOINT,), y0, period=self.period, cycles=self.cycles,
                            wall_thickness=design.wall)
         loads = model.loads(mech, (JOINT,), y0, self.period).joints[0]

@@ -50,7 +50,7 @@ class SweepResult:
         if name not in self.grid_names:
             raise KeyError(f"{name!r} is not a swept parameter; swept: {list(self.grid_names)}")
         i = self.grid_names.index(name)
-        index = [0] * len(self.grid_shape)
+        index: list[int | slice] = [0] * len(self.grid_shape)
         index[i] = slice(None)
         return self.grid(name)[tuple(index)]
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -54,7 +55,7 @@ def _output_names(model_fn, names) -> list[str]:
     return list(out)
 
 
-def batched_fn(model_fn: Callable, devices: Sequence) -> Callable:
+def batched_fn(model_fn: Callable, devices: Sequence) -> Any:
     """jit(vmap(model_fn)) over a dict of equal-length columns; with several
     devices, the columns are split over them with shard_map."""
     batched = jax.vmap(model_fn)

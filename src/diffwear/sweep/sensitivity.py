@@ -132,7 +132,7 @@ def sensitivity(model_fn: Callable[[dict], dict], params: Mapping, *,
     params, wrt, f, x0 = _split(model_fn, params, wrt, outputs)
     jac_fn = jax.jacrev if mode == "reverse" else jax.jacfwd
     y, jac = jax.jit(lambda x: (f(x), jac_fn(f)(x)))(x0)
-    return Sensitivity(params, {k: float(v) for k, v in y.items()},
+    return Sensitivity(dict(params), {k: float(v) for k, v in y.items()},
                        {o: {p: float(jac[o][p]) for p in wrt} for o in y},
                        method=f"{mode}-mode AD")
 
@@ -145,14 +145,15 @@ def finite_differences(model_fn: Callable[[dict], dict], params: Mapping, *,
     params, wrt, f, x0 = _split(model_fn, params, wrt, outputs)
     fj = jax.jit(f)
     y = {k: float(v) for k, v in fj(x0).items()}
-    grad = {o: {} for o in y}
+    grad: dict[str, dict[str, float]] = {o: {} for o in y}
     for p in wrt:
         h = rel_step * (abs(params[p]) or 1.0)
         up = fj({**x0, p: x0[p] + h})
         dn = fj({**x0, p: x0[p] - h})
         for o in y:
             grad[o][p] = (float(up[o]) - float(dn[o])) / (2 * h)
-    return Sensitivity(params, y, grad, method=f"central differences (step {rel_step:g} p)")
+    return Sensitivity(dict(params), y, grad,
+                       method=f"central differences (step {rel_step:g} p)")
 
 
 def tornado(path, sens: Sensitivity, output: str, *, rel_change: float = 0.1,
@@ -289,7 +290,13 @@ def histogram(path, prop: Propagation, output: str, *, bins: int = 20, xlabel: s
     linearised normal estimate and the design-point value."""
     import matplotlib.pyplot as plt
 
-    x = prop.life["samples"] if output == "life_cycles" else prop.result[output]
+    if output == "life_cycles":
+        if prop.life is None:
+            raise InputError("histogram of 'life_cycles': this propagation computed no life "
+                             "(give propagate_scatter(..., life=(output, limit, cycles)))")
+        x = prop.life["samples"]
+    else:
+        x = prop.result[output]
     s = prop.stats[output]
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     ax.hist(x, bins=bins, density=True, alpha=0.6, label=f"{len(x)} samples")

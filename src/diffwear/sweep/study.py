@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 
 import numpy as np
 
@@ -89,13 +90,14 @@ def write(spec: SweepSpec, res: SweepResult, out: OutputDir, *, input_text=None,
     cols = {column_name(spec, k): v for k, v in res.inputs.items()}
     cols |= res.outputs
     out.csv("results.csv", cols, fmt="%.17g")
-    np.savez(out.file("results.npz"), grid_shape=np.asarray(res.grid_shape),
-             **{f"axis_{k}": res.axis(k) for k in res.grid_names}, **cols)
+    arrays: dict[str, Any] = {"grid_shape": np.asarray(res.grid_shape),
+                              **{f"axis_{k}": res.axis(k) for k in res.grid_names}, **cols}
+    np.savez(out.file("results.npz"), **arrays)
     netcdf = _netcdf(spec, res, out)
 
     figures = _figures(spec, res, out)
     bad = failed_points(res)
-    outputs = {}
+    outputs: dict[str, dict[str, Any]] = {}
     for k, col in res.outputs.items():
         ok = np.isfinite(col)
         if not ok.any():

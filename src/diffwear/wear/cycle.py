@@ -16,7 +16,9 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
 from .._checks import require_float64
+from ..contact.archard import ArchardWear
 from ..contact.clearance_joint import ClearanceJoint
+from ..contact.laws import ElasticFoundation
 from ..dynamics import simulate
 from ..errors import InputError
 from ..mechanism import Mechanism
@@ -51,6 +53,15 @@ def clearance_element(mech: Mechanism, joint: str) -> tuple[int, ClearanceJoint]
                 raise InputError(f"clearance joint {joint!r} has no wear law (wear=ArchardWear(k))")
             return i, f
     raise InputError(f"no clearance joint named {joint!r}; have {[f.name for f in mech.forces]}")
+
+
+def wear_parts(el: ClearanceJoint) -> tuple[ElasticFoundation, ArchardWear]:
+    """The elastic-foundation law and the Archard wear of a wearing joint
+    (the wear routes read the foundation's bushing depth and stiffness)."""
+    if not isinstance(el.law, ElasticFoundation) or el.wear is None:
+        raise InputError(f"clearance joint {el.name!r}: its wear needs the elastic-foundation "
+                         f"law and a wear law, got {type(el.law).__name__} and {el.wear!r}")
+    return el.law, el.wear
 
 
 def reset_wear(mech: Mechanism, joint: str, y: Float[Array, " s"]) -> Float[Array, " s"]:

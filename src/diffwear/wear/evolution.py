@@ -48,7 +48,7 @@ import math
 import os
 import time
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple, cast
 
 import equinox as eqx
 import jax
@@ -61,7 +61,7 @@ from .._checks import require_float64
 from ..choices import WEAR_METHODS
 from ..errors import InputError, SolverError
 from ..mechanism import Mechanism
-from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle
+from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle, wear_parts
 from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_PIERCED, STATUS_SOLVER
 
 # Adaptive-A constants (thesis Eq. 4-20 gives none; it started at A ~ 3900 and
@@ -242,7 +242,8 @@ class Evolver:
                 raise InputError(f"adaptive criterion must be 'increment_change' or "
                                  f"'pressure_jump', got {self.opts['criterion']!r}")
         self.c_base = el.profile.clearance
-        self.radius, self.bdepth, self.k = el.bushing_radius, el.law.depth, el.wear.coefficient
+        law, wear = wear_parts(el)
+        self.radius, self.bdepth, self.k = el.bushing_radius, law.depth, wear.coefficient
         self.wall = (jnp.inf if wall_thickness is None
                      else jnp.asarray(wall_thickness, dtype=float))
         self.cycles_arr = jnp.asarray(cycles, dtype=float)
@@ -455,8 +456,9 @@ class ChunkedEvolution:
         ev = make(p)  # input checks, static slot count
         self.n_slots, self.chunk_slots = ev.n_slots, int(chunk_slots)
         self.cycles = float(ev.cycles_arr)
-        self._init = jax.jit(lambda p, y0: make(p).init(y0))
-        self._chunk = jax.jit(lambda p, c: make(p).run(c, self.chunk_slots))
+        # jitted, then replaced by their compiled forms in `compile`
+        self._init: Any = jax.jit(lambda p, y0: make(p).init(y0))
+        self._chunk: Any = jax.jit(lambda p, c: make(p).run(c, self.chunk_slots))
         self._idle = jax.jit(lambda p, c: make(p).idle_record(c))
         self._result = jax.jit(lambda p, c, h: make(p).result(c, h))
         self._p, self._y0 = p, y0
@@ -515,7 +517,7 @@ def save_checkpoint(path, ckpt: Checkpoint, meta: dict) -> None:
     arrays["meta"] = np.asarray(json.dumps(meta))
     tmp = path.with_name(path.name + ".tmp")
     with open(tmp, "wb") as f:
-        np.savez(f, **arrays)
+        np.savez(f, **cast(dict[str, Any], arrays))
         f.flush()
         os.fsync(f.fileno())
     os.replace(tmp, path)

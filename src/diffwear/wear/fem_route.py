@@ -81,7 +81,7 @@ from ..fem.condense import inner_compliance, tributary_lengths
 from ..fem.contact import TOL
 from ..mechanism import Mechanism
 from ..mechanism.geometry import grid_angles, safe_norm
-from .cycle import CycleResult, clearance_element, wear_cycle
+from .cycle import CycleResult, clearance_element, wear_cycle, wear_parts
 from .evolution import EvolutionResult, Evolver, _with_profile
 
 FORCE_MODES = ("resultant", "normal")
@@ -330,9 +330,10 @@ class FemEvolver(Evolver):
         mech = _with_profile(self.mech, self.index, self.c_base + c["h"])
         r = wear_cycle(mech, self.joint, c["y"], c["t"], self.period,
                        n_save=fem.n_samples + 1, **self.cycle_kw)
+        assert r.ys is not None  # saved: n_save is given
         samples = joint_samples(mech, self.joint, r.ys, fem.force)
         contact = ring_contact(cmat, self.w0, el.bushing_radius, el.pin_radius, c["h"],
-                               el.law.depth)
+                               wear_parts(el)[0].depth)
         inc = fem_increment(contact, samples, r.ts, self.k)
         step, ls, fallback = implicit_step(contact, samples, r.ts, inc, self.k, a_i,
                                            fem.jacobian_samples)

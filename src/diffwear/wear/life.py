@@ -96,6 +96,8 @@ averages over the roughness).
 
 from __future__ import annotations
 
+from typing import Any
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -104,7 +106,7 @@ from jaxtyping import Array, Float
 
 from ..errors import InputError
 from ..mechanism import Mechanism
-from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle_joints
+from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle_joints, wear_parts
 from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_SOLVER
 
 SCHEMES = ("implicit", "euler")
@@ -173,7 +175,8 @@ def wear_operator(mech: Mechanism, joint: str, ys: Float[Array, "T s"], period,
 
     responses, rates = jax.vmap(sample)(ys)
     w = period * jnp.ones(ys.shape[0]).at[0].set(0.5).at[-1].set(0.5) / (ys.shape[0] - 1)
-    return el.wear.coefficient * el.law.stiffness * jnp.einsum("t,tij->ij", w * rates, responses)
+    law, wear = wear_parts(el)
+    return wear.coefficient * law.stiffness * jnp.einsum("t,tij->ij", w * rates, responses)
 
 
 def _cycles_to_gain(h, dh, target):
@@ -288,6 +291,7 @@ def dynamic_cycles_to_limit(
                    step=dn, valid=go)
         return c2, rec
 
+    final: dict[str, Any]
     final, hist = lax.scan(step, state, None, length=n_slots)
     short = (final["status"] == STATUS_OK) & ~jnp.all(final["done"])
     return LifeResult(

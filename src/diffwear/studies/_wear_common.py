@@ -282,8 +282,13 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
     cyc = jax.jit(lambda m, y, t: wear_cycle(m, JOINT, y, t, period, n_save=N_SAVE))
     warm = cyc(mech, y0, 0.0)
     first = cyc(mech, warm.y_end, period)
+    # the last cycle runs on the final profile after one settling cycle: the
+    # evolution's end state belongs to the profile before its last wear step,
+    # and on the deeper final profile the pin would first drop into the
+    # groove (an impact the gradually worn joint never sees)
     mech_last = worn_mechanism(mech, JOINT, res.depth)
-    last = cyc(mech_last, res.y, res.t)
+    settle = cyc(mech_last, res.y, res.t)
+    last = cyc(mech_last, settle.y_end, res.t + period)
     hist_first = contact_history(mech, JOINT, first.ys)
     hist_last = contact_history(mech_last, JOINT, last.ys)
     tt = np.asarray(first.ts) - float(first.ts[0])

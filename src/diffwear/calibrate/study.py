@@ -14,10 +14,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import matplotlib.pyplot as plt
 import numpy as np  # noqa: E402
 
 from ..io import OutputDir  # noqa: E402
+from ..plots import calibration as plots_calibration
 from .dataset import PARAMETERS, Dataset  # noqa: E402
 from .effects import EFFECTS  # noqa: E402
 from .fit import ModelSettings  # noqa: E402
@@ -103,71 +103,27 @@ def residual_structure(c: Calibration) -> dict:
 
 
 def _plots(out: OutputDir, c: Calibration) -> list[str]:
-    files = []
+    """The calibration's figures (`plots.calibration`) from its numbers."""
     p = c.problem
     which = p.series_of_point
+    fits = []
     for k, s in enumerate(c.dataset.series):
         m = which == k
         scale, unit, xlabel = UNIT[s.kind]
-        fig, ax = plt.subplots(figsize=(6.4, 3.6))
-        ax.errorbar(s.x, s.y * scale, yerr=s.sigma * scale, fmt=".", ms=3, color="k",
-                    label="data", alpha=0.7)
-        order = np.argsort(s.x)
-        few = s.x.size < 3  # a line through one or two points shows nothing: markers
-        ax.plot(s.x[order], c.base.prediction[m][order] * scale, "s" if few else "-",
-                mfc="none", label="base fit")
-        if c.chosen is not c.base:
-            ax.plot(s.x[order], c.chosen.prediction[m][order] * scale, "D" if few else "--",
-                    mfc="none", label=f"with {c.chosen.effect}")
-        if s.holdout.any():
-            ax.plot(s.x[s.holdout], s.y[s.holdout] * scale, "o", mfc="none", color="r",
-                    ms=6, label="held out")
-        title = s.name + (f" (N = {s.cycles:g})" if s.cycles is not None else "")
-        ax.set(xlabel=xlabel, ylabel=f"{s.kind} [{unit}]", title=title)
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        name = f"fit_{s.name}.png"
-        fig.savefig(out.file(name), dpi=110)
-        plt.close(fig)
-        files.append(name)
-    # residual structure
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    cyc = np.concatenate([s.cycle_counts for s in c.dataset.series])
-    for k, s in enumerate(c.dataset.series):
-        m = which == k
-        if s.kind == "profile":
-            axes[0].plot(s.x, c.base.residual[m], ".", ms=3, label=f"N = {s.cycles:g}")
-        axes[1].plot(cyc[m], c.base.residual[m], ".", ms=3, label=s.name)
-    axes[0].set(xlabel="bushing angle [rad]", ylabel="base residual [sigma]",
-                title="profile residual vs angle")
-    axes[1].set(xlabel="cycles", ylabel="base residual [sigma]", title="residual vs cycles")
-    for ax in axes[:2]:
-        ax.axhline(0, color="0.5", lw=0.8)
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=6)
-    if not any(s.kind == "profile" for s in c.dataset.series):
-        axes[0].text(0.5, 0.5, "no profile measured", ha="center", va="center",
-                     transform=axes[0].transAxes, color="0.4")
-    h = residual_structure(c).get("force_residual_harmonics")
-    if h:
-        axes[2].bar(list(h), list(h.values()))
-        axes[2].set(xlabel="crank order", ylabel="amplitude [sigma]",
-                    title="force residual harmonics")
-    else:
-        axes[2].set_axis_off()
-    fig.tight_layout()
-    fig.savefig(out.file("residual_structure.png"), dpi=110)
-    plt.close(fig)
-    files.append("residual_structure.png")
-    fig, ax = plt.subplots(figsize=(6.4, 3.2))
-    ax.barh([s.effect for s in c.scores][::-1], [s.statistic for s in c.scores][::-1])
-    ax.axvline(LR_CRITICAL[1], color="r", ls="--", lw=1, label="p = 0.001 (a strength)")
-    ax.set(xscale="symlog", xlabel="score statistic (chi-square(1) under 'no effect')")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out.file("candidates.png"), dpi=110)
-    plt.close(fig)
-    files.append("candidates.png")
+        fits.append(plots_calibration.SeriesFit(
+            name=s.name, kind=s.kind, unit=unit, xlabel=xlabel, scale=scale, x=s.x, y=s.y,
+            sigma=s.sigma, holdout=s.holdout, base=c.base.prediction[m],
+            chosen=None if c.chosen is c.base else c.chosen.prediction[m],
+            chosen_label=f"with {c.chosen.effect}", cycles=s.cycles))
+    files = [plots_calibration.series_fit(out.file(f"fit_{f.name}.png"), f).name for f in fits]
+    cycles = [s.cycle_counts for s in c.dataset.series]
+    residuals = [c.base.residual[which == k] for k in range(len(c.dataset.series))]
+    harmonics = residual_structure(c).get("force_residual_harmonics")
+    files.append(plots_calibration.residual_structure(
+        out.file("residual_structure.png"), fits, residuals, cycles, harmonics).name)
+    files.append(plots_calibration.candidates(
+        out.file("candidates.png"), [s.effect for s in c.scores],
+        [s.statistic for s in c.scores], LR_CRITICAL[1]).name)
     return files
 
 

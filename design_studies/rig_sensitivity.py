@@ -35,6 +35,7 @@ import jax
 jax.config.update("jax_enable_x64", True)  # diffwear computes in float64
 
 from diffwear.io import OutputDir
+from diffwear.plots import sweep as plots_sweep
 from diffwear.sweep import sensitivity as sens_mod
 from diffwear.sweep.models import RigWear
 
@@ -67,16 +68,16 @@ def main() -> None:
            for o in outputs}
     print("AD vs FD relative difference:", rel)
     ad.to_csv(out.file("elasticities.csv"))
-    sens_mod.tornado(out.file("tornado_max_depth_mm.png"), ad, "max_depth_mm",
+    plots_sweep.tornado(out.file("tornado_max_depth_mm.png"), ad, "max_depth_mm",
                      title=f"rig, {a.cycles:g} cycles: max wear depth")
     t0 = time.perf_counter()
     prop = sens_mod.propagate_scatter(model, point, "k", scatter=0.5, n=a.samples, seed=0,
                                       outputs=outputs,
                                       life=("max_depth_mm", LIFE_LIMIT_MM, a.cycles))
     t_uq = time.perf_counter() - t0
-    sens_mod.histogram(out.file("hist_max_depth_mm.png"), prop, "max_depth_mm",
+    plots_sweep.histogram(out.file("hist_max_depth_mm.png"), prop, "max_depth_mm",
                        xlabel="max wear depth [mm]")
-    sens_mod.histogram(out.file("hist_life_cycles.png"), prop, "life_cycles",
+    plots_sweep.histogram(out.file("hist_life_cycles.png"), prop, "life_cycles",
                        xlabel=f"cycles to {LIFE_LIMIT_MM} mm")
     print(prop.stats)
     out.json("summary.json", {

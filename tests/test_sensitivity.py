@@ -13,14 +13,13 @@ import numpy as np
 import pytest
 
 from diffwear.errors import InputError
+from diffwear.plots.sweep import histogram, tornado
 from diffwear.sweep.sensitivity import (
     finite_differences,
-    histogram,
     moments,
     propagate_scatter,
     sample,
     sensitivity,
-    tornado,
 )
 
 MODEL = '''

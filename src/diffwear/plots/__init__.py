@@ -5,7 +5,8 @@ command selects Agg (files only); a notebook keeps its inline backend.
 `panels`: stacked time series, contact loci, wear profiles (shared);
 `wear`: the wear studies; `pin_pivot`: the pin-pivot study; `design`: the
 bushing design's life maps; `calibration`: the calibration's fits, residual
-structure and candidate scores.
+structure and candidate scores; `sweep`: grids (heatmaps, line plots),
+tornado plots of elasticities, histograms of sampled outputs.
 """
 
 from .panels import polar_loci, stacked, wear_panels

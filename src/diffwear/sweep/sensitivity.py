@@ -7,13 +7,14 @@ backward pass per output, and what diffrax's default adjoint supports;
 solved with ``adjoint=diffrax.ForwardMode()``), and the
 elasticities e = d ln y / d ln p = (p / y) dy/dp: the % change of an output per
 % change of a parameter.  `finite_differences` gives the central-difference
-gradient for checks; `tornado` draws the elasticities as a tornado plot.
+gradient for checks; `diffwear.plots.sweep.tornado` draws the elasticities as a
+tornado plot.
 
 `propagate_scatter(model_fn, params, "k", scatter=0.5)`: samples one parameter
 (by default the Archard wear coefficient) and runs the samples through `sweep`
 (vmapped, the same path as any sweep), giving the distribution of the outputs
 (and of the wear life, if asked) next to the linearised estimate from the
-gradient.  `histogram` plots it.
+gradient.  `diffwear.plots.sweep.histogram` plots it.
 
 Scatter of the wear coefficient: repeated pin-on-disc tests of one material
 pair scatter by +-40-60 % (Podra & Andersson 1999, "Simulating sliding wear
@@ -156,33 +157,6 @@ def finite_differences(model_fn: Callable[[dict], dict], params: Mapping, *,
                        method=f"central differences (step {rel_step:g} p)")
 
 
-def tornado(path, sens: Sensitivity, output: str, *, rel_change: float = 0.1,
-            title: str | None = None) -> Path:
-    """Tornado plot: the linearised change of ``output`` [%] for each parameter
-    moved by +-``rel_change`` (bars sorted by size; = +-elasticity x change)."""
-    import matplotlib.pyplot as plt
-
-    e = {p: sens.elasticity(output, p) for p in sens.wrt}
-    order = sorted(e, key=lambda p: abs(e[p]) if math.isfinite(e[p]) else -1)
-    fig, ax = plt.subplots(figsize=(6.4, 0.45 * len(order) + 1.4))
-    for i, p in enumerate(order):
-        d = 100 * e[p] * rel_change
-        ax.barh(i, d, color="tab:red", alpha=0.8)
-        ax.barh(i, -d, color="tab:blue", alpha=0.8)
-        ax.text(abs(d), i, f"  e = {e[p]:+.2f}", va="center", fontsize=8)
-    ax.set_yticks(range(len(order)), order)
-    ax.axvline(0, color="k", lw=0.8)
-    ax.set_xlabel(f"change of {output} [%] for p x (1 +- {rel_change:g}) "
-                  "(red: +, blue: -; linearised)")
-    ax.set_title(title or f"sensitivity of {output} ({sens.method})", fontsize=9)
-    lim = max([abs(100 * v * rel_change) for v in e.values() if math.isfinite(v)] + [1e-12])
-    ax.set_xlim(-1.35 * lim, 1.35 * lim)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
-
-
 # ------------------------------------------------------------------ uncertainty
 def sample(p0: float, scatter: float, n: int, *, distribution: str = "lognormal",
            seed: int = 0) -> np.ndarray:
@@ -284,40 +258,5 @@ def propagate_scatter(model_fn: Callable[[dict], dict], params: Mapping, name: s
     return Propagation(name, p0, scatter, distribution, res, sens.outputs, g, life_info, stats)
 
 
-def histogram(path, prop: Propagation, output: str, *, bins: int = 20, xlabel: str | None = None,
-              title: str | None = None) -> Path:
-    """Histogram of the sampled ``output`` (or "life_cycles") with the
-    linearised normal estimate and the design-point value."""
-    import matplotlib.pyplot as plt
-
-    if output == "life_cycles":
-        if prop.life is None:
-            raise InputError("histogram of 'life_cycles': this propagation computed no life "
-                             "(give propagate_scatter(..., life=(output, limit, cycles)))")
-        x = prop.life["samples"]
-    else:
-        x = prop.result[output]
-    s = prop.stats[output]
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    ax.hist(x, bins=bins, density=True, alpha=0.6, label=f"{len(x)} samples")
-    grid = np.linspace(np.min(x), np.max(x), 200)
-    if s["std_linear"] > 0:
-        pdf = np.exp(-0.5 * ((grid - s["mean_linear"]) / s["std_linear"]) ** 2)
-        ax.plot(grid, pdf / (s["std_linear"] * math.sqrt(2 * math.pi)), "k--",
-                label="linearised (normal)")
-    ax.axvline(s["mean"], color="tab:red", label=f"mean {s['mean']:.4g}")
-    ax.axvspan(s["p5"], s["p95"], color="tab:red", alpha=0.08, label="5-95 %")
-    ax.set_xlabel(xlabel or output)
-    ax.set_ylabel("density")
-    ax.legend(fontsize=8)
-    ax.set_title(title or (f"{output}: {prop.name} {prop.distribution}, "
-                           f"+-{100 * prop.scatter:.0f} %"),
-                 fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
-
-
-__all__ = ["Sensitivity", "sensitivity", "finite_differences", "tornado", "sample", "moments",
-           "Propagation", "propagate_scatter", "histogram"]
+__all__ = ["Sensitivity", "sensitivity", "finite_differences", "sample", "moments",
+           "Propagation", "propagate_scatter"]

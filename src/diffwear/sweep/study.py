@@ -32,6 +32,7 @@ from ..config.sweep import SweepSpec
 from ..config.units import DIMENSIONS, key_suffix
 from ..errors import SolverError
 from ..io import OutputDir
+from ..plots import sweep as plots_sweep
 from .result import SweepResult
 from .runner import sweep
 
@@ -158,68 +159,24 @@ def _netcdf(spec: SweepSpec, res: SweepResult, out: OutputDir) -> str:
 
 
 def _figures(spec: SweepSpec, res: SweepResult, out: OutputDir) -> list[str]:
-    import matplotlib.pyplot as plt
-
     names = [k for k in res.outputs if k not in SKIP_PLOTS]
+    title = spec.title or spec.model_name
     files = []
     if len(res.grid_names) == 1:
         (g,) = res.grid_names
         x = shown(spec, g, res.axis(g))
         for k in names:
-            fig, ax = plt.subplots(figsize=(6, 3.6))
-            ax.plot(x, res.grid(k), "o-")
-            ax.set_xlabel(label(spec, g))
-            ax.set_ylabel(k)
-            ax.grid(alpha=0.3)
-            if _geometric(x):
-                ax.set_xscale("log")
-            ax.set_title(f"{spec.title or spec.model_name}: {k}", fontsize=9)
-            fig.tight_layout()
-            fig.savefig(out.file(f"{k}.png"), dpi=110)
-            plt.close(fig)
-            files.append(f"{k}.png")
+            files.append(plots_sweep.line(out.file(f"{k}.png"), x, res.grid(k),
+                                          xlabel=label(spec, g), ylabel=k,
+                                          title=f"{title}: {k}").name)
     elif len(res.grid_names) == 2:
         gy, gx = res.grid_names
         x, y = shown(spec, gx, res.axis(gx)), shown(spec, gy, res.axis(gy))
         for k in names:
-            files.append(heatmap(out.file(f"{k}.png"), x, y, res.grid(k), xlabel=label(spec, gx),
-                                 ylabel=label(spec, gy), title=f"{spec.title or spec.model_name}:"
-                                 f" {k}").name)
+            files.append(plots_sweep.heatmap(out.file(f"{k}.png"), x, y, res.grid(k),
+                                             xlabel=label(spec, gx), ylabel=label(spec, gy),
+                                             title=f"{title}: {k}").name)
     return files
-
-
-def _geometric(v) -> bool:
-    v = np.asarray(v, dtype=float)
-    if v.size < 3 or np.any(v <= 0):
-        return False
-    r = v[1:] / v[:-1]
-    return bool(np.allclose(r, r[0], rtol=1e-6) and not np.isclose(r[0], 1.0))
-
-
-def heatmap(path, x, y, z, *, xlabel: str, ylabel: str, title: str, annotate: bool = True):
-    """Heatmap of z[i, j] at (x[j], y[i]) (cells centred on the values; log axes
-    for geometric grids); values written in the cells up to 10 x 10."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.4, 4.8))
-    mesh = ax.pcolormesh(x, y, z, shading="nearest", cmap="viridis")
-    fig.colorbar(mesh, ax=ax)
-    if _geometric(x):
-        ax.set_xscale("log")
-    if _geometric(y):
-        ax.set_yscale("log")
-    if annotate and z.shape[0] <= 10 and z.shape[1] <= 10:
-        for i, yi in enumerate(y):
-            for j, xj in enumerate(x):
-                ax.text(xj, yi, f"{z[i, j]:.3g}", ha="center", va="center", fontsize=7,
-                        color="w")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
 
 
 def _report(spec: SweepSpec, res: SweepResult, summary: dict, figures: list[str]) -> str:
@@ -254,4 +211,4 @@ def _report(spec: SweepSpec, res: SweepResult, summary: dict, figures: list[str]
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["run", "write", "heatmap", "column_name", "failed_points"]
+__all__ = ["run", "write", "column_name", "failed_points"]

@@ -713,12 +713,12 @@ def exudyn_clearance_kv(exe: str, clearance: float = 0.5e-3) -> dict:
 
 def ch8_optimisation(repeats: int) -> dict:
     """Thesis Ch. 8 design optimisation, owned by `diffwear.design`: the case
-    calls ``diffwear.design.benchmark_case(quick)`` (quick when ``repeats`` is
+    calls ``diffwear.cli.design.benchmark_case(quick)`` (quick when ``repeats`` is
     the quick count) and reports ``available: False`` until that module exists."""
     import importlib
 
     try:
-        design = importlib.import_module("diffwear.design")
+        design = importlib.import_module("diffwear.cli.design")
     except ModuleNotFoundError as err:
         if err.name not in ("diffwear.design",):
             raise  # the module exists but one of its imports is broken: say so
@@ -851,7 +851,7 @@ def calibration_loop(repeats: int) -> dict:
     from diffwear.calibrate import load_dataset
     from diffwear.calibrate.effects import NAMES, EffectValues
     from diffwear.calibrate.fit import Fitter, ModelSettings, Problem
-    from diffwear.calibrate.study import run as calibrate
+    from diffwear.cli.calibrate import run as calibrate
     from diffwear.io import OutputDir
 
     data = load_dataset(CALIBRATION_DATASET)

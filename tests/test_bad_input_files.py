@@ -6,10 +6,11 @@ the problem, ``diffwear run`` exits with code 2, and a results folder given as
 import jax.numpy as jnp
 import pytest
 
-from diffwear import cli, runner
+from diffwear import cli
 from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.config import load
 from diffwear.errors import InputError
+from diffwear.mechanism_file import motion
 
 DESIGN = SHIPPED_MECHANISMS / "ideal_slider_crank.toml"
 TEXT = DESIGN.read_text()
@@ -237,7 +238,7 @@ def test_unassemblable_mechanism_fails_before_output(tmp_path, capsys):
                         'point_j = ["0 m", "10 m"]\nbody_j = "ground"             # slides'))
     study = load(path)  # the file itself is well-formed
     with pytest.raises(InputError) as info:
-        runner.initial_state(study)
+        motion.initial_state(study)
     _check_message(str(info.value), str(path), ["initial", "cannot be assembled"])
     out = tmp_path / "results"
     assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 2
@@ -251,10 +252,10 @@ def test_diverged_assembly_is_diagnosed_at_the_guess(tmp_path, monkeypatch):
     path = tmp_path / "model.toml"
     path.write_text(TEXT.replace("\n[[forces]]", extra + "\n[[forces]]", 1))
     study = load(path)
-    monkeypatch.setattr(runner, "_consistent_state",
+    monkeypatch.setattr(motion, "_consistent_state",
                         lambda mech, q: jnp.full(mech.n_state, jnp.nan))
     with pytest.raises(InputError) as info:
-        runner.initial_state(study)
+        motion.initial_state(study)
     _check_message(str(info.value), str(path), ["initial", "singular", "driver2"])
 
 

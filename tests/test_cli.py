@@ -358,7 +358,7 @@ def test_run_warns_when_a_clearance_joint_never_makes_contact(tmp_path, capsys):
 def test_penetration_through_the_bushing_is_fatal():
     from types import SimpleNamespace
 
-    from diffwear.runner import contact_warnings
+    from diffwear.mechanism_file import contact_warnings
 
     joint = SimpleNamespace(name="j", pin_radius=0.0095)
     ok = contact_warnings(joint, {"fraction_in_contact": 0.9, "max_penetration_m": 2e-6})
@@ -375,10 +375,10 @@ def test_four_bar_mechanism_file_wears_from_the_cli_and_from_python(tmp_path):
     the worn volume agrees with Archard's law summed over the loads."""
     import numpy as np
 
-    from diffwear import mechanism_wear
     from diffwear.config import load
+    from diffwear.mechanism_file import initial_state
+    from diffwear.mechanism_file import wear as mechanism_wear
     from diffwear.quasistatic import QuasiStatic
-    from diffwear.runner import initial_state
 
     path = SHIPPED_MECHANISMS / "four_bar_wear.toml"
     out = tmp_path / "fb"

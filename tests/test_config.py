@@ -16,13 +16,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from diffwear import cli, runner
+from diffwear import cli
 from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.config import FORCE_TYPES, JOINT_TYPES, ElementType, load, load_dict, loads, schema
 from diffwear.config import units as U
 from diffwear.dynamics import Baumgarte, simulate
 from diffwear.errors import InputError
 from diffwear.mechanism import LinearSpring
+from diffwear.mechanism_file import motion
 from diffwear.presets import slider_crank
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -316,11 +317,11 @@ def test_design_file_trajectory_equals_preset(short_study):
     # The file's run (runner: its own integrator settings) against `simulate`
     # with its defaults.  Both are assembled by the runner's compiled
     # `consistent_state` (the eager one agrees to ~1e-16 but costs seconds).
-    y0_file = runner.initial_state(short_study)
-    y0_ref = runner._consistent_state(mech, q_guess)
+    y0_file = motion.initial_state(short_study)
+    y0_ref = motion._consistent_state(mech, q_guess)
     np.testing.assert_array_equal(y0_file, y0_ref)
     ref = jax.jit(lambda m, y: simulate(m, y, SHORT_T, ts=ts))(mech, y0_ref).raise_if_failed()
-    traj = runner.integrate(short_study, y0_file)
+    traj = motion.integrate(short_study, y0_file)
     np.testing.assert_allclose(traj.ts, ref.ts, rtol=0, atol=1e-15)
     np.testing.assert_allclose(traj.ys, ref.ys, rtol=1e-12, atol=1e-12)
     assert float(jnp.max(jnp.abs(traj.ys[:, 2] - math.pi * ts))) < 1e-9  # driven crank angle

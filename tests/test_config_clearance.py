@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from diffwear import cli, runner
+from diffwear import cli
 from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.config import load, loads
 from diffwear.contact import (
@@ -24,6 +24,7 @@ from diffwear.contact import (
 )
 from diffwear.dynamics import simulate
 from diffwear.errors import InputError
+from diffwear.mechanism_file import motion
 from diffwear.presets import (
     RIG_JOINT,
     clearance_slider_crank,
@@ -94,14 +95,14 @@ def test_design_file_trajectory_equals_preset(preset, short_study):
     assembly to be comparable at 1e-10)."""
     mech, y_preset = preset
     ideal, q_guess = slider_crank()
-    q, qd, _ = ideal.split(runner._consistent_state(ideal, q_guess))
+    q, qd, _ = ideal.split(motion._consistent_state(ideal, q_guess))
     y_ref = mech.join(q, qd, mech.initial_aux(q, qd))
-    y0 = runner.initial_state(short_study)
+    y0 = motion.initial_state(short_study)
     np.testing.assert_array_equal(y0, y_ref)
     np.testing.assert_allclose(y0, y_preset, rtol=0, atol=1e-14)
     ts = jnp.linspace(0.0, SHORT_T, SHORT_N)
     ref = jax.jit(lambda m, y: simulate(m, y, SHORT_T, ts=ts))(mech, y_ref).raise_if_failed()
-    traj = runner.integrate(short_study, y0)
+    traj = motion.integrate(short_study, y0)
     np.testing.assert_allclose(traj.ts, ref.ts, rtol=0, atol=1e-15)
     np.testing.assert_allclose(traj.ys, ref.ys, rtol=1e-10, atol=1e-10)
 

@@ -82,11 +82,44 @@ def test_no_module_getattr_import_tricks():
     assert not tricks, tricks
 
 
+# The package's layers, bottom to top: a module imports only from its own
+# package or from a lower layer (peers in one layer do not import each other).
+LAYERS = (
+    ("errors",),                          # the error classes
+    ("choices", "_checks", "io", "report", "gradient_check"),  # options, checks, outputs
+    ("mechanism",),                       # bodies, joints, forces: the DAE's terms
+    ("dynamics", "contact", "fem"),       # integration; contact laws; FEM contact
+    ("wear",),                            # Archard wear, the profile, the evolution
+    ("quasistatic",),                     # the quasi-static joint model
+    ("presets",),                         # the thesis mechanisms in code
+    ("sweep", "plots"),                   # the sweep engine; figures from plain data
+    ("studies",),                         # the thesis studies
+    ("config",),                          # input formats: mechanism and sweep files
+    ("mechanism_file",),                  # a loaded mechanism file, run whole
+    ("calibrate", "design"),              # fitting to data; the bushing design
+    ("cli",),                             # the command and its output folders
+)
+
+
+def test_imports_follow_the_layers():
+    rank = {pkg: i for i, layer in enumerate(LAYERS) for pkg in layer}
+
+    def package(module: str) -> str:
+        return module.split(".")[1] if "." in module else module
+
+    unplaced = sorted({package(m) for m in MODULES if "." in m} - set(rank))
+    assert not unplaced, f"place these in LAYERS: {unplaced}"
+    upward = sorted((m, d) for m, deps in _graph().items() if "." in m for d in deps
+                    if "." in d and package(d) != package(m)
+                    and rank[package(d)] >= rank[package(m)])
+    assert not upward, "\n".join(f"{m} -> {d}" for m, d in upward)
+
+
 def test_the_core_does_not_import_the_command_line_layer():
     """mechanism, dynamics, contact, fem, wear and quasistatic never import the
     studies, drivers, plots or the CLI."""
     core = ("mechanism", "dynamics", "contact", "fem", "wear", "quasistatic")
-    upper = ("diffwear.cli", "diffwear.studies", "diffwear.plots", "diffwear.runner",
+    upper = ("diffwear.cli", "diffwear.studies", "diffwear.plots", "diffwear.mechanism_file",
              "diffwear.design", "diffwear.calibrate", "diffwear.sweep")
     graph = _graph()
     bad = [(m, d) for m, deps in graph.items() for d in deps
@@ -134,4 +167,4 @@ def test_only_the_command_line_chooses_the_matplotlib_backend():
     """A library import never switches the user's backend (a notebook keeps
     its inline one); the ``diffwear`` command selects Agg itself."""
     chooses = [name for name, path in MODULES.items() if "matplotlib.use(" in path.read_text()]
-    assert chooses == ["diffwear.cli"], chooses
+    assert chooses == ["diffwear.cli.command"], chooses

@@ -1,7 +1,10 @@
 """Named choices of public options, in one module without heavy imports (the
 command line builds its parser from them before it imports JAX)."""
 
+from collections.abc import Iterable
 from pathlib import Path
+
+from .errors import InputError
 
 # How a wear evolution extrapolates over cycles (`diffwear.wear.evolve`, --method).
 WEAR_METHODS = ("constant", "adaptive", "error")
@@ -9,6 +12,23 @@ WEAR_METHODS = ("constant", "adaptive", "error")
 WEAR_CONTACTS = ("efm", "fem")
 # The wear model (--model): the dynamic reference or the quasi-static joint.
 WEAR_MODELS = ("dynamic", "quasi-static")
+
+
+
+def check_wear_model(model: str, dynamic_only: Iterable[tuple[bool, str]] = ()) -> None:
+    """`InputError` for a wear model that does not exist, or for an option
+    given (``(given, "--option value")`` pairs) that only the dynamic model
+    takes: the quasi-static model has no extrapolation, no checkpoints and no
+    FEM pressure, it integrates the wear in the cycle count itself."""
+    if model not in WEAR_MODELS:
+        raise InputError(f"--model {model!r}; allowed: {', '.join(WEAR_MODELS)}")
+    if model == "quasi-static":
+        for given, option in dynamic_only:
+            if given:
+                raise InputError(f"{option} belongs to the dynamic model (--model dynamic); "
+                                 "the quasi-static model integrates the wear in the cycle "
+                                 "count itself (seconds, no checkpoints) with the EFM pressure")
+
 
 # Mechanism files shipped with the package, loadable by name (`diffwear run rig`).
 SHIPPED_MECHANISMS = Path(__file__).resolve().parent / "config" / "mechanisms"

@@ -17,7 +17,7 @@ the reason.
 
 The wearing joint is the file's clearance joint with a wear law (``[rig]
 joint`` names it when there are several); its cycle is that of
-`diffwear.mechanism_wear.drive`.
+`diffwear.mechanism_file.wear.drive`.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from ..config import Study, load_dict, units
 from ..contact import centred_state
 from ..dynamics import consistent_state
 from ..errors import InputError
-from ..mechanism_wear import drive, drive_period, wearing_joints
+from ..mechanism_file.wear import drive, drive_period, wearing_joints
 from ..quasistatic.loads import ideal_parent
 from .effects import EffectValues, wear_law
 from .quasi_static import QuasiStaticRigHistory

@@ -16,7 +16,7 @@ joins the mechanism's forces (after those of ``[[forces]]``), and the study's
 ``assembly`` mechanism holds the ideal joint that stands in for it at t = 0.
 
 Every problem raises `InputError("<file>: <key path>: <what>; allowed: ...")`.
-Nothing here integrates or assembles; see `diffwear.runner`.
+Nothing here integrates or assembles; see `diffwear.cli.run`.
 """
 
 from __future__ import annotations

@@ -10,7 +10,6 @@ from .optimise import (
     least_material,
     longest_common_life,
 )
-from .study import benchmark_case
 from .two_joint import (
     DEPTH_BOUNDS,
     DIAMETER_BOUNDS,
@@ -29,7 +28,7 @@ from .two_joint import (
 
 __all__ = [
     "DesignResult", "bushing_volume", "equal_life", "finite_difference_jacobian",
-    "jacobian", "kkt_check", "least_material", "longest_common_life", "benchmark_case",
+    "jacobian", "kkt_check", "least_material", "longest_common_life",
     "DEPTH_BOUNDS", "DIAMETER_BOUNDS", "JOINTS", "LOWER", "SWEEP_MODEL", "TABLE_8_4", "TABLE_8_5",
     "UPPER", "VARIABLES", "WEAR_LIMIT", "TwoJointLife", "bushing", "check_design",
 ]

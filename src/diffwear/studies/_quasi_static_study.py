@@ -19,6 +19,7 @@ from ..contact import ContactHistory
 from ..mechanism.geometry import safe_angle
 from ..presets import PTFE_DENSITY, WearJointDesign
 from ..quasistatic import QuasiStatic
+from ..report import Bullets, Report
 from ..wear import worn_volume
 from ..wear.status import STATUS_OK, STATUS_TEXT
 from ._report import comparison_table, peak_line, write_report
@@ -112,24 +113,26 @@ def run(out, *, name, mech, design: WearJointDesign, y0, cycles, period, thesis:
     summary["files"] = sorted(set(out.files)) + ["report.md", "summary.json"]
     warnings = []
     if margin_worn < 1.0:
-        warnings.append(f"- warning: at the final profile the load may not hold the pin on the "
+        warnings.append(f"warning: at the final profile the load may not hold the pin on the "
                         f"wall where it turns fastest (contact margin {margin_worn:.2f} < 1); "
                         "check with the dynamic model (--model dynamic)")
-    rows = [
-        f"# {name}\n", description + "\n",
+    report = Report(name, [
+        description,
         "Model: quasi-static joint (the pin at the equilibrium of the EFM springs under the "
-        "ideal mechanism's joint load; wear integrated in the cycle count).\n",
-        *comparison_table("diffwear (quasi-static)", summary, thesis), "",
-        f"- cycles: {summary['cycles']:.0f} in {summary['wear_steps']} steps of the wear ODE; "
-        f"status: {STATUS_TEXT[status]}",
-        peak_line(summary),
-        f"- contact margin (load / load needed to hold the pin on the wall): unworn "
-        f"{margin:.3g}, final profile {margin_worn:.3g}",
-        f"- mean |joint force| {summary['mean_joint_force_first_cycle_N']:.1f} N, mean total "
-        f"normal load (unworn) {summary['mean_normal_load_first_cycle_N']:.1f} N",
-        f"- wall time {wall_time:.2f} s, compile time {compile_time:.1f} s",
-        *warnings, *extra_report, ""]
-    write_report(out, rows, figs, summary)
+        "ideal mechanism's joint load; wear integrated in the cycle count).",
+        comparison_table("diffwear (quasi-static)", summary, thesis),
+        Bullets([
+            f"cycles: {summary['cycles']:.0f} in {summary['wear_steps']} steps of the wear ODE; "
+            f"status: {STATUS_TEXT[status]}",
+            peak_line(summary),
+            f"contact margin (load / load needed to hold the pin on the wall): unworn "
+            f"{margin:.3g}, final profile {margin_worn:.3g}",
+            f"mean |joint force| {summary['mean_joint_force_first_cycle_N']:.1f} N, mean total "
+            f"normal load (unworn) {summary['mean_normal_load_first_cycle_N']:.1f} N",
+            f"wall time {wall_time:.2f} s, compile time {compile_time:.1f} s",
+            *warnings]),
+        *extra_report])
+    write_report(out, report, figs, summary)
     log(f"[{name}] quasi-static: max depth {summary['max_wear_depth_mm']:.4f} mm, volume "
         f"{volume:.2f} mm^3, {wall_time:.2f} s (+{compile_time:.1f} s compile)")
     for w in warnings:

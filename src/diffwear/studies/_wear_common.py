@@ -11,12 +11,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..choices import WEAR_CONTACTS as CONTACTS
-from ..choices import WEAR_MODELS
+from ..choices import check_wear_model
 from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state
 from ..errors import InputError
 from ..io import CHECKPOINT as OUT_CHECKPOINT
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
+from ..report import Block, Bullets, Report, Table
 from ..wear import wear_cycle, worn_mechanism, worn_volume
 from ..wear.evolution import ChunkedEvolution, Evolver, load_checkpoint, save_checkpoint
 from ..wear.fem_route import FemEvolver, default_model
@@ -169,19 +170,13 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
     if thesis_cycles is not None and thesis and int(cycles) != int(thesis_cycles):
         why = (f"the thesis's values are for {int(thesis_cycles):,} cycles and this run has "
                f"{int(cycles):,}: not compared")
-        extra_report = [*extra_report, f"- {why}"]
+        extra_report = [*extra_report, Bullets([why])]
         extra_summary = {**(extra_summary or {}), "thesis_not_compared": why}
         thesis = {}
-    if model not in WEAR_MODELS:
-        raise InputError(f"--model must be one of {', '.join(WEAR_MODELS)}, got {model!r}")
+    check_wear_model(model, ((method != "constant", f"--method {method}"),
+                             (contact != "efm", f"--contact {contact}"),
+                             (resume, "--resume")))
     if model == "quasi-static":
-        for given, why in ((method != "constant", f"--method {method}"),
-                           (contact != "efm", f"--contact {contact}"),
-                           (resume, "--resume")):
-            if given:
-                raise InputError(f"{why} belongs to the dynamic model; the quasi-static model "
-                                 "integrates the wear in the cycle count itself (seconds, no "
-                                 "checkpoints) with the EFM pressure")
         from . import _quasi_static_study
 
         mech = mech_builder(mech0, design, n_theta)(params_of(design))
@@ -252,18 +247,17 @@ def route_numbers(res, design: WearJointDesign, wall_time, compile_time) -> dict
             "wall_time_s": wall_time, "compile_time_s": compile_time}
 
 
-def route_table(fem: dict, efm: dict, ratio: float) -> list[str]:
-    """Report lines: the FEM route next to the EFM route (both run here)."""
-    rows = ["", "FEM route next to the EFM route (both run here, same dynamics):", "",
-            "| route | max depth [mm] | volume [mm^3] | k x sum(N ds) [mm^3] | wall time [s] "
-            "| compile [s] |", "|---|---|---|---|---|---|"]
-    for tag, d in (("FEM", fem), ("EFM", efm)):
-        rows.append(f"| {tag} | {d['max_wear_depth_mm']:.4f} | {d['wear_volume_mm3']:.2f} | "
-                    f"{d['archard_k_times_load_sliding_mm3']:.2f} | {d['wall_time_s']:.1f} | "
-                    f"{d['compile_time_s']:.1f} |")
-    rows += ["", f"- wall time FEM / EFM route: {ratio:.2f} (thesis: 11 h / 7 h = 1.6 on the "
-             "rig, 162 / 92 min = 1.8 on wear-5000)"]
-    return rows
+def route_table(fem: dict, efm: dict, ratio: float) -> list[Block]:
+    """Report blocks: the FEM route next to the EFM route (both run here)."""
+    return [
+        "FEM route next to the EFM route (both run here, same dynamics):",
+        Table(("route", "max depth [mm]", "volume [mm^3]", "k x sum(N ds) [mm^3]",
+               "wall time [s]", "compile [s]"),
+              [(tag, f"{d['max_wear_depth_mm']:.4f}", f"{d['wear_volume_mm3']:.2f}",
+                f"{d['archard_k_times_load_sliding_mm3']:.2f}", f"{d['wall_time_s']:.1f}",
+                f"{d['compile_time_s']:.1f}") for tag, d in (("FEM", fem), ("EFM", efm))]),
+        Bullets([f"wall time FEM / EFM route: {ratio:.2f} (thesis: 11 h / 7 h = 1.6 on the "
+                 "rig, 162 / 92 min = 1.8 on wear-5000)"])]
 
 
 def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, cycles,
@@ -343,21 +337,22 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
     if warnings:
         summary["warnings"] = warnings
     summary["files"] = sorted(set(out.files)) + ["report.md", "summary.json"]
-    rows = [
-        f"# {name}\n", description + "\n",
-        *comparison_table(label, summary, thesis),
-        "",
-        f"- cycles: {summary['cycles']:.0f}; dynamic cycles simulated: "
-        f"{summary['dynamic_cycles_simulated']} (method {method}, A/A0 {extrapolation}; "
-        "incl. 1 warm-up cycle whose wear is discarded)",
-        f"- Archard check: k x sum(N ds) = {summary['archard_k_times_load_sliding_mm3']:.3f} mm^3",
-        peak_line(summary),
-        f"- mean |joint force| first cycle {summary['mean_joint_force_first_cycle_N']:.1f} N, "
-        f"mean total normal load {summary['mean_normal_load_first_cycle_N']:.1f} N",
-        f"- wall time {wall_time:.1f} s, compile time {compile_time:.1f} s",
-        *extra_report, *(f"- warning: {w}" for w in warnings), "",
-    ]
-    write_report(out, rows, figs, summary)
+    report = Report(name, [
+        description,
+        comparison_table(label, summary, thesis),
+        Bullets([
+            f"cycles: {summary['cycles']:.0f}; dynamic cycles simulated: "
+            f"{summary['dynamic_cycles_simulated']} (method {method}, A/A0 {extrapolation}; "
+            "incl. 1 warm-up cycle whose wear is discarded)",
+            f"Archard check: k x sum(N ds) = {summary['archard_k_times_load_sliding_mm3']:.3f} "
+            "mm^3",
+            peak_line(summary),
+            f"mean |joint force| first cycle {summary['mean_joint_force_first_cycle_N']:.1f} N, "
+            f"mean total normal load {summary['mean_normal_load_first_cycle_N']:.1f} N",
+            f"wall time {wall_time:.1f} s, compile time {compile_time:.1f} s"]),
+        *extra_report,
+        Bullets([f"warning: {w}" for w in warnings])])
+    write_report(out, report, figs, summary)
     for w in warnings:
         print(f"diffwear: warning: {name}: {w}", file=sys.stderr)
     log(f"[{name}] max depth {summary['max_wear_depth_mm']:.4f} mm, volume "

@@ -26,6 +26,7 @@ from ..presets import (
     clearance_slider_crank,
     slider_crank,
 )
+from ..report import Figure, Report, Table, render
 
 NAME = "clearance-sweep"
 DESCRIPTION = "Ch. 3/6: crank-rod clearance joint, LN / KV / EFM x 4 clearances vs the ideal joint"
@@ -140,15 +141,16 @@ def run(out: OutputDir, *, cycles: int = CYCLES, laws=CONTACT_LAWS, clearances=C
                      rmax=max(float(np.max(r, initial=0.0)) for _, r in loci.values()) or None)
     summary = {"study": NAME, "cycles": cycles, "transient_s": TRANSIENT, "rtol": RTOL,
                "atol": ATOL, "ideal_peak_force_N": float(f_ideal[keep].max()), "cases": cases}
-    rows = ["| law | c [mm] | peak [N] | rel. RMS vs ideal | contact | steps/cycle | s/cycle |",
-            "|---|---|---|---|---|---|---|"]
-    rows += [f"| {k['law']} | {k['clearance_mm']:g} | {k['peak_force_N']:.0f} | "
-             f"{k['rel_rms_vs_ideal']:.2%} | {k['contact_fraction']:.0%} | "
-             f"{k['steps_per_cycle']:.0f} | {k['wall_time_per_cycle_s']:.3f} |" for k in cases]
-    out.text("report.md", "\n".join([
-        f"# {NAME}\n", DESCRIPTION + ".\n",
+    out.text("report.md", render(Report(NAME, [
+        DESCRIPTION + ".",
         f"Ideal joint peak force {summary['ideal_peak_force_N']:.0f} N. Statistics over cycles "
-        f"2..{cycles}; Tsit5, rtol = atol = {RTOL:g}.\n", *rows, "",
-        *[f"![{f}]({f})\n" for f in figs]]))
+        f"2..{cycles}; Tsit5, rtol = atol = {RTOL:g}.",
+        Table(("law", "c [mm]", "peak [N]", "rel. RMS vs ideal", "contact", "steps/cycle",
+               "s/cycle"),
+              [(k["law"], f"{k['clearance_mm']:g}", f"{k['peak_force_N']:.0f}",
+                f"{k['rel_rms_vs_ideal']:.2%}", f"{k['contact_fraction']:.0%}",
+                f"{k['steps_per_cycle']:.0f}", f"{k['wall_time_per_cycle_s']:.3f}")
+               for k in cases]),
+        *(Figure(f) for f in figs)])))
     out.json("summary.json", summary)
     return summary

@@ -24,6 +24,7 @@ from ..dynamics import (
 )
 from ..io import OutputDir
 from ..presets import TABLE_2_1, slider_crank
+from ..report import Report, Table
 from ._report import write_report
 
 NAME = "ideal-slider-crank"
@@ -127,19 +128,17 @@ def run(out: OutputDir, *, duration: float = DURATION, log=print) -> dict:
         "compile_time_s": compile_time,
         "files": sorted(set(out.files)) + ["report.md", "summary.json"],
     }
-    report = [
-        f"# {NAME}\n",
+    report = Report(NAME, [
         "Ideal slider-crank of thesis Table 2-1 (half-lengths l1 = 1 m, l2 = 1.75 m; "
         "masses 10/15/30 kg), crank at pi rad/s, gravity -y, Baumgarte alpha = beta = 250 1/s, "
-        "Tsit5 with rtol = atol = 1e-8.\n",
-        "| quantity | value |", "|---|---|",
-        f"| max constraint violation | {summary['max_constraint_violation']:.3e} m |",
-        f"| max crank-rod joint force | {summary['max_joint_force_N']:.1f} N |",
-        f"| dynamic vs kinematic crank COM | {kin_err:.2e} m |",
-        f"| integrator steps | {summary['integrator_steps']} |",
-        f"| run time (after compile) | {wall:.3f} s |",
-        f"| compile time | {compile_time:.2f} s |\n",
-    ]
+        "Tsit5 with rtol = atol = 1e-8.",
+        Table(("quantity", "value"), [
+            ("max constraint violation", f"{summary['max_constraint_violation']:.3e} m"),
+            ("max crank-rod joint force", f"{summary['max_joint_force_N']:.1f} N"),
+            ("dynamic vs kinematic crank COM", f"{kin_err:.2e} m"),
+            ("integrator steps", summary["integrator_steps"]),
+            ("run time (after compile)", f"{wall:.3f} s"),
+            ("compile time", f"{compile_time:.2f} s")])])
     write_report(out, report, figs, summary)
     log(f"[{NAME}] max joint force {summary['max_joint_force_N']:.1f} N; "
         f"report: {out.path / 'report.md'}")

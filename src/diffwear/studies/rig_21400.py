@@ -25,6 +25,7 @@ from ..presets import (
     rig_slider_crank,
     with_wear_joint,
 )
+from ..report import Bullets
 from ..wear import evolve, worn_volume
 from ..wear.cycle import clearance_element
 from . import _wear_common as common
@@ -105,4 +106,4 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
             "9.500 mm pin, wall 6.342 mm, depth 13.1 mm, mu 0.13, k 5.05e-4 mm^3/(N m), "
             f"30 rpm. Worn mass with PTFE density {PTFE_DENSITY / 1e3:g} g/cm^3."),
         extra_summary={"spring_free_length_m": l0, "spring_force_at_t0_N": spring_mid},
-        extra_report=[f"- spring force at t = 0 (crank angle 0): {spring_mid:.1f} N"])
+        extra_report=[Bullets([f"spring force at t = 0 (crank angle 0): {spring_mid:.1f} N"])])

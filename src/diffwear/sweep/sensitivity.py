@@ -44,6 +44,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import InputError
+from ..report import Table, markdown
 from .result import SweepResult
 from .runner import sweep
 
@@ -90,12 +91,10 @@ class Sensitivity:
     def markdown(self, outputs: Sequence[str] | None = None) -> str:
         """Elasticity table: a row per parameter, a column per output."""
         outs = list(outputs or self.gradient)
-        lines = ["| parameter | value (SI) | " + " | ".join(f"d ln {o} / d ln p" for o in outs)
-                 + " |", "|---|---:|" + "---:|" * len(outs)]
-        for p in self.wrt:
-            cells = " | ".join(f"{self.elasticity(o, p):+.3f}" for o in outs)
-            lines.append(f"| {p} | {self.params[p]:.4g} | {cells} |")
-        return "\n".join(lines)
+        return markdown(Table(
+            ("parameter", "value (SI)", *(f"d ln {o} / d ln p" for o in outs)),
+            [(p, f"{self.params[p]:.4g}", *(f"{self.elasticity(o, p):+.3f}" for o in outs))
+             for p in self.wrt], align="l" + "r" * (len(outs) + 1)))
 
 
 def _split(model_fn, params: Mapping, wrt, outputs):

@@ -6,8 +6,8 @@ crank revolutions (the first driver's period) with the quasi-static wear model
 at the equilibrium of the EFM springs, the profile integrated in the cycle
 count), and, with a depth ``limit``, the revolutions until each joint's peak
 wear reaches it.  The joints must use the elastic-foundation law (a pressure
-distribution to wear).  Outputs per joint: the worn profile and the peak-depth
-history (CSV), the worn volume; a figure of the profiles and histories.
+distribution to wear).  Per joint: the worn profile, the peak-depth history
+and the worn volume (`diffwear.cli.run` writes them).
 """
 
 from __future__ import annotations
@@ -20,21 +20,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import plots
-from ._checks import require_float64
-from .config import Study
-from .contact.clearance_joint import ClearanceJoint
-from .errors import InputError
-from .io import OutputDir
-from .mechanism.constraints import Driver
-from .quasistatic import QuasiStatic
-from .wear import worn_volume
-from .wear.status import STATUS_CONTACT_LOSS, STATUS_OK, STATUS_PIERCED, STATUS_TEXT
+from .._checks import require_float64
+from ..config import Study
+from ..contact.clearance_joint import ClearanceJoint
+from ..errors import InputError
+from ..io import OutputDir
+from ..mechanism.constraints import Driver
+from ..quasistatic import QuasiStatic
+from ..wear import worn_volume
+from .motion import first_driver
 
 FILE_WEAR_SLOTS = 2000
-# per-joint numbers passed from a model's result into summary.json
-_REPORTED = ("contact_margin", "method", "dynamic_cycles", "wall_time_s", "compile_time_s",
-             "checkpoint", "resumed_from_cycles")
 
 
 def wearing_joints(study: Study) -> tuple[str, ...]:
@@ -50,9 +46,9 @@ def wearing_joints(study: Study) -> tuple[str, ...]:
 
 def drive(study: Study) -> Driver:
     """The first driver with a non-zero speed: its revolution is the cycle."""
-    for c in study.mechanism.constraints:
-        if isinstance(c, Driver) and float(c.omega) != 0.0:
-            return c
+    driver = first_driver(study.mechanism)
+    if driver is not None:
+        return driver
     raise InputError(f"{study.file}: a wear study needs a driver with a non-zero speed (the "
                      "crank cycle); allowed: a [[joints]] type = \"driver\" entry")
 
@@ -141,8 +137,8 @@ def evolve_file_dynamic(study: Study, y0, *, cycles: float, method: str = "const
     extrapolated over the cycles between by ``method``).  One wearing joint;
     with ``out`` the run is checkpointed there after each tenth of it and
     ``resume=True`` continues from that checkpoint."""
-    from .studies._wear_common import default_constant_a, run_evolution
-    from .wear.model import Dynamic
+    from ..studies._wear_common import default_constant_a, run_evolution
+    from ..wear.model import Dynamic
 
     require_float64("wear of a mechanism file")
     joints = dynamic_wear_joint(study)
@@ -177,45 +173,3 @@ def evolve_file_dynamic(study: Study, y0, *, cycles: float, method: str = "const
         "dynamic_cycles": int(res.dynamic_cycles),
         "wall_time_s": wall_time, "compile_time_s": compile_time, **info,
     }}
-
-
-def write_wear(study: Study, out: OutputDir, wear: dict, *, cycles: float,
-               limit: float | None) -> dict:
-    """CSV files and a figure per joint; returns the summary's ``joints`` and
-    warnings, and ``stopped``: a sentence per joint that wore through its wall
-    or whose model failed (the caller reports them as a failure once
-    everything is written)."""
-    joints, warnings, pierced = {}, [], []
-    for name, w in wear.items():
-        out.csv(f"wear_profile_{name}.csv", {"theta_rad": w["theta"], "depth_mm": w["depth"] * 1e3})
-        out.csv(f"wear_history_{name}.csv", {"cycles": w["history_cycles"],
-                                             "max_depth_mm": w["history_peak"] * 1e3})
-        joints[name] = {"max_wear_depth_mm": float(np.max(w["depth"])) * 1e3,
-                        "wear_volume_mm3": w["volume"] * 1e9, "cycles": w["cycles"],
-                        "model": w["model"], "status": w["status"],
-                        **{k: w[k] for k in _REPORTED if k in w}}
-        if limit is not None:
-            joints[name]["limit_mm"] = limit * 1e3
-            joints[name]["cycles_to_limit"] = w["cycles_to_limit"]
-        if w["status"] == STATUS_CONTACT_LOSS:
-            warnings.append(f"clearance joint {name!r}: the load cannot hold the pin on the "
-                            f"bushing wall (contact margin {w['contact_margin']:.2g} < 1): the "
-                            "quasi-static wear model does not hold there")
-        elif w["status"] == STATUS_PIERCED:
-            pierced.append(f"clearance joint {name!r} wore through its {w['wall'] * 1e3:g} mm "
-                           f"bushing wall after {w['cycles']:,.0f} cycles (max depth "
-                           f"{joints[name]['max_wear_depth_mm']:.4f} mm)")
-        elif w["status"] != STATUS_OK:
-            pierced.append(f"the wear of clearance joint {name!r} stopped after "
-                           f"{w['cycles']:,.0f} cycles: "
-                           f"{STATUS_TEXT.get(w['status'], 'status ' + str(w['status']))}")
-        elif w.get("contact_margin_worn", math.inf) < 1.0:
-            warnings.append(f"clearance joint {name!r}: on the worn profile the pin may lift "
-                            f"off the wall (contact margin {w['contact_margin_worn']:.2g})")
-    models = "/".join(sorted({w["model"] for w in wear.values()}))
-    figure = out.file("wear.png")
-    plots.wear_panels(figure, {n: (w["theta"], w["depth"]) for n, w in wear.items()},
-                      {n: (w["history_cycles"], w["history_peak"]) for n, w in wear.items()},
-                      title=f"{study.title or study.file}: wear after {cycles:,.0f} cycles "
-                            f"({models} model)")
-    return {"joints": joints, "warnings": warnings, "figure": figure.name, "stopped": pierced}

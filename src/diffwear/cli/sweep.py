@@ -33,8 +33,9 @@ from ..config.units import DIMENSIONS, key_suffix
 from ..errors import SolverError
 from ..io import OutputDir
 from ..plots import sweep as plots_sweep
-from .result import SweepResult
-from .runner import sweep
+from ..report import Block, Figure, Report, Table, render
+from ..sweep.result import SweepResult
+from ..sweep.runner import sweep
 
 SKIP_PLOTS = ("status",)
 
@@ -76,7 +77,7 @@ def run(spec: SweepSpec, out: OutputDir, *, chunk_size: int | None = None, clien
     if client is None:
         res = sweep(spec.model, spec.base, spec.grid, chunk_size=chunk)
     else:
-        from .distributed import sweep_distributed
+        from ..sweep.distributed import sweep_distributed
 
         res = sweep_distributed(spec.model, spec.base, spec.grid, client=client, chunk_size=chunk)
     wall = time.perf_counter() - started
@@ -125,7 +126,7 @@ def write(spec: SweepSpec, res: SweepResult, out: OutputDir, *, input_text=None,
         "workers": info.get("workers"), "wall_time_s": wall_s,
         "netcdf": netcdf,
     }
-    out.text("report.md", _report(spec, res, summary, figures))
+    out.text("report.md", render(_report(spec, res, summary, figures)))
     summary["files"] = [*out.files, "summary.json"]
     out.json("summary.json", summary)
     if bad.size:
@@ -179,36 +180,36 @@ def _figures(spec: SweepSpec, res: SweepResult, out: OutputDir) -> list[str]:
     return files
 
 
-def _report(spec: SweepSpec, res: SweepResult, summary: dict, figures: list[str]) -> str:
-    lines = [f"# sweep: {spec.title or spec.model_name}", "",
-             f"Model `{spec.model_name}` from `{spec.file}`; settings "
-             f"{spec.settings or '(defaults)'}; {len(res)} points "
-             f"({' x '.join(f'{g} {n}' for g, n in zip(res.grid_names, res.grid_shape))}).",
-             "", "| axis | values |", "|---|---|"]
-    for g in res.grid_names:
-        vals = ", ".join(f"{v:.4g}" for v in shown(spec, g, res.axis(g)))
-        lines.append(f"| {label(spec, g)} | {vals} |")
-    lines += ["", "| output | min | max | max at |", "|---|---:|---:|---|"]
+def _report(spec: SweepSpec, res: SweepResult, summary: dict, figures: list[str]) -> Report:
+    outputs = []
     for k, s in summary["outputs"].items():
         if s["min"] is None:
-            lines.append(f"| {k} | - | - | - |")
+            outputs.append((k, "-", "-", "-"))
             continue
         at = ", ".join(f"{g} = {float(shown(spec, g, v)):.4g}" for g, v in s["argmax"].items())
-        lines.append(f"| {k} | {s['min']:.6g} | {s['max']:.6g} | {at} |")
-    if summary["failed_points"]:
-        lines += ["", f"**{len(summary['failed_points'])} point(s) failed** (indices in "
-                  "summary.json `failed_points`)."]
+        outputs.append((k, f"{s['min']:.6g}", f"{s['max']:.6g}", at))
     pps = summary["points_per_s"]
-    lines += ["", f"Compile {summary['compile_s']:.1f} s, run {summary['run_s']:.1f} s"
-              + (f" ({pps:.2f} points/s)" if pps else "") + ".", "",
-              "Tables: [results.csv](results.csv), [results.npz](results.npz)"
-              + (", [results.nc](results.nc)" if summary["netcdf"] == "results.nc" else "")
-              + ", [summary.json](summary.json), [input.toml](input.toml)."]
-    if figures:
-        lines += [""] + [f"![{f}]({f})" for f in figures]
-    elif len(res.grid_names) > 2:
-        lines += ["", "No figures for a grid of more than 2 axes: see the tables."]
-    return "\n".join(lines) + "\n"
+    failed = summary["failed_points"]
+    blocks: list[Block] = [
+        f"Model `{spec.model_name}` from `{spec.file}`; settings "
+        f"{spec.settings or '(defaults)'}; {len(res)} points "
+        f"({' x '.join(f'{g} {n}' for g, n in zip(res.grid_names, res.grid_shape))}).",
+        Table(("axis", "values"),
+              [(label(spec, g), ", ".join(f"{v:.4g}" for v in shown(spec, g, res.axis(g))))
+               for g in res.grid_names]),
+        Table(("output", "min", "max", "max at"), outputs, align="lrrl"),
+        f"**{len(failed)} point(s) failed** (indices in summary.json `failed_points`)."
+        if failed else "",
+        f"Compile {summary['compile_s']:.1f} s, run {summary['run_s']:.1f} s"
+        + (f" ({pps:.2f} points/s)" if pps else "") + ".",
+        "Tables: [results.csv](results.csv), [results.npz](results.npz)"
+        + (", [results.nc](results.nc)" if summary["netcdf"] == "results.nc" else "")
+        + ", [summary.json](summary.json), [input.toml](input.toml).",
+        *(Figure(f) for f in figures),
+        "No figures for a grid of more than 2 axes: see the tables."
+        if not figures and len(res.grid_names) > 2 else "",
+    ]
+    return Report(f"sweep: {spec.title or spec.model_name}", blocks)
 
 
 __all__ = ["run", "write", "column_name", "failed_points"]

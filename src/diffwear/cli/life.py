@@ -15,12 +15,13 @@ import time
 
 import numpy as np
 
+from ..design.optimise import jacobian, jacobian_method, life_of
+from ..design.two_joint import VARIABLES, TwoJointLife, check_design
 from ..errors import InputError
 from ..io import OutputDir
 from ..quasistatic import QuasiStatic
+from ..report import Block, Report, Table, render
 from ..wear import Dynamic
-from .optimise import jacobian, jacobian_method, life_of
-from .two_joint import VARIABLES, TwoJointLife, check_design
 
 NAME = "two-joint"
 MODELS = ("quasi-static", "dynamic")
@@ -62,15 +63,15 @@ def run(out: OutputDir, x, *, model: str = "quasi-static", with_jacobian: bool =
         summary["jacobian_method"] = jacobian_method(life)
     summary["wall_time_s"] = time.perf_counter() - t0
     out.json("summary.json", summary)
-    lines = [f"# Lives of one two-joint design ({summary['model']} model)", "",
-             "| d1 mm | d2 mm | h1 mm | h2 mm | cyc1 | cyc2 |", "|---|---|---|---|---|---|",
-             "| " + " | ".join(f"{v:.3f}" for v in summary["x_mm"])
-             + f" | {summary['cyc1']:,.0f} | {summary['cyc2']:,.0f} |", ""]
+    blocks: list[Block] = [Table(("d1 mm", "d2 mm", "h1 mm", "h2 mm", "cyc1", "cyc2"),
+                                 [(*(f"{v:.3f}" for v in summary["x_mm"]),
+                                   f"{summary['cyc1']:,.0f}", f"{summary['cyc2']:,.0f}")])]
     if with_jacobian:
-        lines += [f"Jacobian [cycles/mm] ({summary['jacobian_method']}):", "",
-                  "| | d1 | d2 | h1 | h2 |", "|---|---|---|---|---|",
-                  *[f"| cyc{i + 1} | " + " | ".join(f"{v:,.2f}" for v in row) + " |"
-                    for i, row in enumerate(summary["jacobian"])], ""]
-    out.text("report.md", "\n".join(lines))
+        blocks += [f"Jacobian [cycles/mm] ({summary['jacobian_method']}):",
+                   Table(("", "d1", "d2", "h1", "h2"),
+                         [(f"cyc{i + 1}", *(f"{v:,.2f}" for v in row))
+                          for i, row in enumerate(summary["jacobian"])])]
+    out.text("report.md", render(Report(
+        f"Lives of one two-joint design ({summary['model']} model)", blocks)))
     log(f"[life {NAME}] {summary['model']}: cyc1 {cycles[0]:,.0f}, cyc2 {cycles[1]:,.0f}")
     return summary

@@ -16,20 +16,21 @@ from typing import Any
 
 import numpy as np  # noqa: E402
 
-from ..io import OutputDir  # noqa: E402
-from ..plots import calibration as plots_calibration
-from .dataset import PARAMETERS, Dataset  # noqa: E402
-from .effects import EFFECTS  # noqa: E402
-from .fit import ModelSettings  # noqa: E402
-from .frame_check import frame_check  # noqa: E402
-from .identify import (  # noqa: E402
+from ..calibrate.dataset import PARAMETERS, Dataset  # noqa: E402
+from ..calibrate.effects import EFFECTS  # noqa: E402
+from ..calibrate.fit import ModelSettings  # noqa: E402
+from ..calibrate.frame_check import frame_check  # noqa: E402
+from ..calibrate.identify import (  # noqa: E402
     GOF_SIGMAS,
     LR_CRITICAL,
     STRENGTH_SIGMAS,
     Calibration,
     calibrate,
 )
-from .residual_words import describe_residuals  # noqa: E402
+from ..calibrate.residual_words import describe_residuals  # noqa: E402
+from ..io import OutputDir  # noqa: E402
+from ..plots import calibration as plots_calibration
+from ..report import Block, Bullets, Figure, Report, Section, Table, render
 
 # SI units of the fitted parameters in the report (the dataset's own units are
 # converted on loading: k in mm^3/(N m) is 1e-9 1/Pa)
@@ -131,106 +132,107 @@ def _fmt(v, digits=4):
     return "n/a" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{digits}g}"
 
 
-def _report(c: Calibration, summary: dict, files: list[str]) -> str:
+def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
     d = c.dataset
-    lines = [f"# Calibration: {d.name}", "", d.description or "", "",
-             f"Dataset `{d.path}`: {len(d.series)} series, "
-             f"{c.base.n_fit} fit points, {c.base.n_holdout} held-out points; fitted: "
-             f"{', '.join(d.fit_names)}.  Model: {summary['model_settings']['description']}.  "
-             "Residuals are in units of each series' stated 1-sigma noise.", ""]
-    for note in d.notes:
-        lines += [f"> {note}", ""]
-    for w in summary.get("frame_warnings", []):
-        lines += [f"> **Warning:** {w['message']}.", ""]
+    blocks: list[Block] = [
+        d.description or "",
+        f"Dataset `{d.path}`: {len(d.series)} series, "
+        f"{c.base.n_fit} fit points, {c.base.n_holdout} held-out points; fitted: "
+        f"{', '.join(d.fit_names)}.  Model: {summary['model_settings']['description']}.  "
+        "Residuals are in units of each series' stated 1-sigma noise.",
+        *(f"> {note}" for note in d.notes),
+        *(f"> **Warning:** {w['message']}." for w in summary.get("frame_warnings", [])),
+    ]
     if c.base.n_fit <= len(d.fit_names) + 2:
-        lines += [f"**What these data can support:** {c.base.n_fit} numbers for "
-                  f"{len(d.fit_names)} fitted parameters leave {c.base.dof} degree(s) of "
-                  "freedom: enough to calibrate, not to tell candidate effects apart (a "
-                  "score test needs residual structure: profiles at several cycle counts, "
-                  "a mass history or a force trace).", ""]
+        blocks.append(f"**What these data can support:** {c.base.n_fit} numbers for "
+                      f"{len(d.fit_names)} fitted parameters leave {c.base.dof} degree(s) of "
+                      "freedom: enough to calibrate, not to tell candidate effects apart (a "
+                      "score test needs residual structure: profiles at several cycle counts, "
+                      "a mass history or a force trace).")
     ident = summary["effect_identified"]
-    lines += ["## Result", "",
-              f"- effect identified: **{ident}**"
-              + (f", strength {_fmt(summary['effect_strength'])} +- "
-                 f"{_fmt(summary['effect_strength_std'], 2)} (1 sigma)" if ident != "none"
-                 else "")
-              + (f", {_shape_text(ident, summary)}" if summary.get("effect_shape") else ""),
-              f"- residual unexplained: {'**yes**' if summary['residual_unexplained'] else 'no'}"
-              f" (chi2 {c.gof['chi2']:.1f} on {c.gof['dof']} dof; noise allows "
-              f"{c.gof['limit']:.1f})", ""]
-    if summary.get("suspect"):
-        lines += [f"- mechanism suspect: **{summary['suspect']}**"
-                  + _suspect_verdict(summary["suspects"][0]), ""]
-    lines += ["| | base model | final model |", "|---|---|---|",
-              f"| held-out RMSE [sigma] | {_fmt(summary['heldout_rmse_before'])} | "
-              f"{_fmt(summary['heldout_rmse_after'])} |",
-              f"| fit RMSE [sigma] | {_fmt(summary['fit_rmse_before'])} | "
-              f"{_fmt(summary['fit_rmse_after'])} |"]
     final = c.chosen if ident != "none" else c.base
-    for n in d.fit_names:
-        unit = REPORT_UNITS[PARAMETERS[n]]
-        lines.append(f"| {n} [{unit}] | {_fmt(c.base.params[n])} +- "
-                     f"{_fmt(c.base.params_std[n], 2)} | "
-                     f"{_fmt(final.params[n])} +- {_fmt(final.params_std[n], 2)} |")
-    lines += ["", "## Candidates", "",
-              "Score test at zero strength from the base fit (module "
-              "`diffwear.calibrate.identify`; an effect with a shape is scored over its "
-              "prior and its p-value corrected for that); the best few refitted with their "
-              "shape.  A candidate qualifies with a likelihood-ratio drop above the "
-              f"chi-square critical value at p = 0.001 ({LR_CRITICAL[1]} for a strength, "
-              f"{LR_CRITICAL[2]} with a shape), |s| >= {STRENGTH_SIGMAS} sigma on "
-              "the allowed side and a lower held-out chi2; the penalised criterion (BIC: "
-              "ln n per fitted number) chooses among them, and the result must leave "
-              f"noise-sized residuals (chi2 <= dof + {GOF_SIGMAS} sqrt(2 dof)).", "",
-              "| effect | score | p | refit strength | refit shape | held-out RMSE | qualifies |",
-              "|---|---|---|---|---|---|---|"]
+    blocks.append(Section("Result", [
+        Bullets([
+            f"effect identified: **{ident}**"
+            + (f", strength {_fmt(summary['effect_strength'])} +- "
+               f"{_fmt(summary['effect_strength_std'], 2)} (1 sigma)" if ident != "none"
+               else "")
+            + (f", {_shape_text(ident, summary)}" if summary.get("effect_shape") else ""),
+            f"residual unexplained: {'**yes**' if summary['residual_unexplained'] else 'no'}"
+            f" (chi2 {c.gof['chi2']:.1f} on {c.gof['dof']} dof; noise allows "
+            f"{c.gof['limit']:.1f})"]),
+        Bullets([f"mechanism suspect: **{summary['suspect']}**"
+                 + _suspect_verdict(summary["suspects"][0])] if summary.get("suspect") else []),
+        Table(("", "base model", "final model"), [
+            ("held-out RMSE [sigma]", _fmt(summary["heldout_rmse_before"]),
+             _fmt(summary["heldout_rmse_after"])),
+            ("fit RMSE [sigma]", _fmt(summary["fit_rmse_before"]),
+             _fmt(summary["fit_rmse_after"])),
+            *((f"{n} [{REPORT_UNITS[PARAMETERS[n]]}]",
+               f"{_fmt(c.base.params[n])} +- {_fmt(c.base.params_std[n], 2)}",
+               f"{_fmt(final.params[n])} +- {_fmt(final.params_std[n], 2)}")
+              for n in d.fit_names)]),
+    ]))
+    candidates = []
     for cand in summary["candidates"]:
-        refit = ("" if "refit_strength" not in cand else
-                 f"{_fmt(cand['refit_strength'])} +- {_fmt(cand['refit_strength_std'], 2)}")
-        shape = _fmt(cand.get("refit_shape"), 3) if cand.get("refit_shape") else ""
-        ho = _fmt(cand.get("refit_heldout_rmse")) if "refit_strength" in cand else ""
-        q = ("yes" if cand.get("qualifies") else "no") if "refit_strength" in cand else ""
-        lines.append(f"| {cand['name']} | {_fmt(cand['score'])} | {_fmt(cand['p_value'], 2)} | "
-                     f"{refit} | {shape} | {ho} | {q} |")
-    lines += ["", "Library: " + "; ".join(
-        f"`{e.name}`: {e.description}" + (f" ({e.source})" if e.source else "")
-        for e in EFFECTS), ""]
+        refitted = "refit_strength" in cand
+        candidates.append((
+            cand["name"], _fmt(cand["score"]), _fmt(cand["p_value"], 2),
+            f"{_fmt(cand['refit_strength'])} +- {_fmt(cand['refit_strength_std'], 2)}"
+            if refitted else "",
+            _fmt(cand.get("refit_shape"), 3) if cand.get("refit_shape") else "",
+            _fmt(cand.get("refit_heldout_rmse")) if refitted else "",
+            ("yes" if cand.get("qualifies") else "no") if refitted else ""))
+    blocks.append(Section("Candidates", [
+        "Score test at zero strength from the base fit (module "
+        "`diffwear.calibrate.identify`; an effect with a shape is scored over its "
+        "prior and its p-value corrected for that); the best few refitted with their "
+        "shape.  A candidate qualifies with a likelihood-ratio drop above the "
+        f"chi-square critical value at p = 0.001 ({LR_CRITICAL[1]} for a strength, "
+        f"{LR_CRITICAL[2]} with a shape), |s| >= {STRENGTH_SIGMAS} sigma on "
+        "the allowed side and a lower held-out chi2; the penalised criterion (BIC: "
+        "ln n per fitted number) chooses among them, and the result must leave "
+        f"noise-sized residuals (chi2 <= dof + {GOF_SIGMAS} sqrt(2 dof)).",
+        Table(("effect", "score", "p", "refit strength", "refit shape", "held-out RMSE",
+               "qualifies"), candidates),
+        "Library: " + "; ".join(f"`{e.name}`: {e.description}"
+                                + (f" ({e.source})" if e.source else "") for e in EFFECTS)]))
     if summary["suspects"]:
-        lines += ["## Mechanism suspects", "",
-                  "No wear effect explains the data, so the rig parameters the dataset neither "
-                  "fits nor excludes (`suspect = false`) were scored the same way (derivative "
-                  "in the logarithm of the parameter); when the residual is unexplained the "
-                  "best is refitted and named, if its score passes p = 0.001 corrected for the "
-                  "number of suspects.", "",
-                  "| parameter | score | p | stated | first-step factor |", "|---|---|---|---|---|"]
-        for sp in summary["suspects"][:6]:
-            lines.append(f"| {sp['name']} | {_fmt(sp['score'])} | {_fmt(sp['p_value'], 2)} | "
-                         f"{_fmt(sp['value'])} | {_fmt(sp['factor'], 3)} |")
-        lines.append("")
+        blocks.append(Section("Mechanism suspects", [
+            "No wear effect explains the data, so the rig parameters the dataset neither "
+            "fits nor excludes (`suspect = false`) were scored the same way (derivative "
+            "in the logarithm of the parameter); when the residual is unexplained the "
+            "best is refitted and named, if its score passes p = 0.001 corrected for the "
+            "number of suspects.",
+            Table(("parameter", "score", "p", "stated", "first-step factor"),
+                  [(sp["name"], _fmt(sp["score"]), _fmt(sp["p_value"], 2), _fmt(sp["value"]),
+                    _fmt(sp["factor"], 3)) for sp in summary["suspects"][:6]])]))
     check = summary.get("model_check")
     if check:
-        lines += ["## Check on the dynamic model", "",
-                  f"The final fit evaluated, not refitted, on the {check['description']}:", "",
-                  "| | fitted model | dynamic model |", "|---|---|---|",
-                  f"| chi2, {check['n_fit']} fit points | {_fmt(check['chi2_fit_model'])} | "
-                  f"{_fmt(check['chi2_fit'])} |",
-                  f"| chi2, {check['n_holdout']} held-out points | "
-                  f"{_fmt(check['chi2_holdout_model'])} | {_fmt(check['chi2_holdout'])} |", ""]
-    lines += ["## Residual structure (base fit)", ""]
-    lines += [f"- {w}" for w in summary["residual_words"]] + [""]
+        blocks.append(Section("Check on the dynamic model", [
+            f"The final fit evaluated, not refitted, on the {check['description']}:",
+            Table(("", "fitted model", "dynamic model"), [
+                (f"chi2, {check['n_fit']} fit points", _fmt(check["chi2_fit_model"]),
+                 _fmt(check["chi2_fit"])),
+                (f"chi2, {check['n_holdout']} held-out points",
+                 _fmt(check["chi2_holdout_model"]), _fmt(check["chi2_holdout"]))])]))
+    structure = []
     for key, value in residual_structure(c).items():
         if isinstance(value, dict):
             value = ", ".join(f"{k}: {_fmt(v, 3)}" for k, v in value.items())
         elif isinstance(value, list):
             value = ", ".join(_fmt(v, 3) for v in value)
-        lines.append(f"- {key.replace('_', ' ')}: {value}")
-    lines += ["", "## Error per series", "",
-              "| series | RMS before [sigma] | RMS after [sigma] |", "|---|---|---|"]
-    for name, (before, after) in summary["series_rms"].items():
-        lines.append(f"| {name} | {_fmt(before, 3)} | {_fmt(after, 3)} |")
-    lines += ["", "## Plots", ""] + [f"![{f}]({f})" for f in files]
-    lines += ["", f"Wall time {c.wall_time_s:.0f} s.", ""]
-    return "\n".join(lines)
+        structure.append(f"{key.replace('_', ' ')}: {value}")
+    blocks += [
+        Section("Residual structure (base fit)", [Bullets(summary["residual_words"]),
+                                                  Bullets(structure)]),
+        Section("Error per series", [Table(
+            ("series", "RMS before [sigma]", "RMS after [sigma]"),
+            [(name, _fmt(before, 3), _fmt(after, 3))
+             for name, (before, after) in summary["series_rms"].items()])]),
+        Section("Plots", [*(Figure(f) for f in files), f"Wall time {c.wall_time_s:.0f} s."]),
+    ]
+    return Report(f"Calibration: {d.name}", blocks)
 
 
 def frame_warnings(c: Calibration) -> list[dict]:
@@ -302,7 +304,7 @@ def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSetting
         "held_out": p.holdout.astype(int)})
     summary["series"] = names
     summary["plots"] = files
-    out.text("report.md", _report(c, summary, files))
+    out.text("report.md", render(_report(c, summary, files)))
     out.json("summary.json", summary)
     log(f"wrote {out.path}")
     return summary

@@ -12,19 +12,17 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from ._checks import check_int_option
-from .choices import WEAR_CONTACTS, WEAR_METHODS, WEAR_MODELS, shipped_mechanism_names
-from .errors import DiffwearError, InputError
+from .._checks import check_int_option
+from ..choices import WEAR_CONTACTS, WEAR_METHODS, WEAR_MODELS, shipped_mechanism_names
+from ..errors import DiffwearError, InputError
 
 # Upper bound of --cycles: 1e8 crank cycles is ~6 years at 30 rpm.
 MAX_CYCLES = 100_000_000
 
 
 def _study(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from .io import OutputDir
-    from .studies import STUDIES
+    from ..io import OutputDir
+    from ..studies import STUDIES
 
     if args.list or args.name is None:
         width = max(len(n) for n in STUDIES)
@@ -37,11 +35,12 @@ def _study(args: argparse.Namespace) -> int:
     if args.out is None:
         raise InputError("study: --out DIR is required")
     kwargs = {}
-    if args.resume is not None:
-        _options_from_checkpoint(args)
+    accepted = inspect.signature(STUDIES[args.name].run).parameters
+    if args.resume is not None and "resume" not in accepted:
+        raise InputError(f"study {args.name!r} does not take --resume (wear studies do)")
+    _options_from_checkpoint(args)
     if args.cycles is not None:
         check_int_option("--cycles", args.cycles, 1, MAX_CYCLES)
-    accepted = inspect.signature(STUDIES[args.name].run).parameters
     for option in ("cycles", "method", "contact", "model"):
         value = getattr(args, option)
         if value is None:
@@ -50,10 +49,6 @@ def _study(args: argparse.Namespace) -> int:
             raise InputError(f"study {args.name!r} does not take --{option}")
         kwargs[option] = value
     if args.resume is not None:
-        if "resume" not in accepted:
-            raise InputError(f"study {args.name!r} does not take --resume (wear studies do)")
-        if not (Path(args.resume) / "checkpoint.npz").is_file():
-            raise InputError(f"--resume {args.resume}: no checkpoint.npz there to resume from")
         kwargs["resume"] = True
     if "progress" in accepted:
         kwargs["progress"] = not args.quiet
@@ -80,15 +75,19 @@ _RESUMED_OPTIONS = {"cycles": "cycles", "method": "method", "contact": "contact"
                     "model": "model", "limit_mm": "limit"}
 
 
-def _options_from_checkpoint(args: argparse.Namespace) -> None:
-    """Fill the options the user left out from the checkpoint's record (an
-    option given explicitly is kept: the study then checks it matches)."""
-    from .io import CHECKPOINT
-    from .wear.evolution import load_checkpoint
+def _options_from_checkpoint(args: argparse.Namespace, origin: str = "") -> None:
+    """--resume DIR: `InputError` unless DIR holds a checkpoint (``origin``
+    says which runs write one); fill the options the user left out from its
+    record (an option given explicitly is kept: the study then checks it
+    matches)."""
+    from ..io import CHECKPOINT
+    from ..wear.evolution import load_checkpoint
 
+    if args.resume is None:
+        return
     path = Path(args.resume) / CHECKPOINT
     if not path.is_file():
-        return  # reported below, with the other --resume checks
+        raise InputError(f"--resume {args.resume}: no {CHECKPOINT} there to resume from{origin}")
     _, meta = load_checkpoint(path)
     for key, option in _RESUMED_OPTIONS.items():
         if getattr(args, option, None) is None and key in meta:
@@ -98,7 +97,7 @@ def _options_from_checkpoint(args: argparse.Namespace) -> None:
 
 def _interrupted(args: argparse.Namespace, folders) -> str:
     """One line for Ctrl-C: where the checkpoint is and how to resume."""
-    from .io import CHECKPOINT
+    from ..io import CHECKPOINT
 
     for out in folders:
         if (out.path / CHECKPOINT).is_file() and not (out.path / "summary.json").exists():
@@ -112,22 +111,16 @@ def _interrupted(args: argparse.Namespace, folders) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from . import runner
-    from .config import load
-    from .config.loader import decode
+    from ..config import load
+    from ..config.loader import decode
+    from . import run as runner
 
     study = load(args.file)  # every input check happens before --out is touched
     text = decode(Path(study.file).read_bytes(), study.file)
     _resume_folder(args)
     if args.out is None:
         raise InputError("run: --out DIR is required")
-    if args.resume is not None:
-        if not (Path(args.resume) / "checkpoint.npz").is_file():
-            raise InputError(f"--resume {args.resume}: no checkpoint.npz there to resume from "
-                             "(checkpoints come from a --model dynamic wear run)")
-        _options_from_checkpoint(args)
+    _options_from_checkpoint(args, " (checkpoints come from a --model dynamic wear run)")
     if args.cycles is not None:
         check_int_option("--cycles", args.cycles, 1, MAX_CYCLES)
     limit = None
@@ -146,12 +139,10 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from .config.loader import decode
-    from .config.sweep import MAX_POINTS, load_sweep
-    from .io import OutputDir
-    from .sweep import study
+    from ..config.loader import decode
+    from ..config.sweep import MAX_POINTS, load_sweep
+    from ..io import OutputDir
+    from . import sweep as study
 
     spec = load_sweep(args.file)  # every input check happens before --out is touched
     if args.chunk_size is not None:
@@ -188,8 +179,8 @@ def _sweep(args: argparse.Namespace) -> int:
 
 
 def _design(args: argparse.Namespace) -> int:
-    from .design import study
-    from .io import OutputDir
+    from ..io import OutputDir
+    from . import design as study
 
     if args.list or args.name is None:
         if args.out is not None and not args.list:
@@ -211,8 +202,8 @@ def _design(args: argparse.Namespace) -> int:
 
 
 def _life(args: argparse.Namespace) -> int:
-    from .design import life_point
-    from .io import OutputDir
+    from ..io import OutputDir
+    from . import life as life_point
 
     if args.name != life_point.NAME:
         raise InputError(f"unknown life problem {args.name!r}; available: {life_point.NAME}")
@@ -229,10 +220,10 @@ def _life(args: argparse.Namespace) -> int:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
-    from .calibrate import load_dataset
-    from .calibrate.fit import ModelSettings
-    from .calibrate.study import run
-    from .io import OutputDir
+    from ..calibrate import load_dataset
+    from ..calibrate.fit import ModelSettings
+    from ..io import OutputDir
+    from .calibrate import run
 
     data = load_dataset(args.data)  # every input check happens before --out is touched
     check_int_option("--top", args.top, 1, 5)
@@ -433,7 +424,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import matplotlib
 
     matplotlib.use("Agg")  # the command writes figures to files; no window
-    from .io import _OPEN, release_all
+    from ..io import _OPEN, release_all
 
     try:
         return args.func(args)
@@ -446,6 +437,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         release_all()
 
-
-if __name__ == "__main__":
-    sys.exit(main())

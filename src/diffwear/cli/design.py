@@ -22,12 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import check_int_option
-from ..errors import InputError
-from ..io import OutputDir
-from ..plots import design as plots_design
-from ..quasistatic import QuasiStatic
-from ..wear import Dynamic
-from .optimise import (
+from ..design.optimise import (
     LONGEST_LIFE_CORNER,
     AtTarget,
     equal_life,
@@ -39,8 +34,14 @@ from .optimise import (
     longest_common_life,
     space_mapped,
 )
-from .robust import monte_carlo_check, percentile_of, robust_least_material
-from .two_joint import LOWER, SWEEP_MODEL, TABLE_8_4, TABLE_8_5, UPPER, TwoJointLife
+from ..design.robust import monte_carlo_check, percentile_of, robust_least_material
+from ..design.two_joint import LOWER, SWEEP_MODEL, TABLE_8_4, TABLE_8_5, UPPER, TwoJointLife
+from ..errors import InputError
+from ..io import OutputDir
+from ..plots import design as plots_design
+from ..quasistatic import QuasiStatic
+from ..report import Block, Report, Table, render
+from ..wear import Dynamic
 
 NAME = "two-joint"
 DESCRIPTION = ("Ch. 8: bushing diameters and depths of two wearing joints for equal life "
@@ -313,7 +314,7 @@ def run(out: OutputDir, *, settings: dict | None = None, log=print) -> dict:
         "quick": settings == {**QUICK, "problems": settings["problems"]},
     }
     out.json("summary.json", summary)
-    out.text("report.md", _report(summary))
+    out.text("report.md", render(_report(summary)))
     log(f"[{NAME}] equal life: d = {np.round(eq.x[:2] * 1e3, 3).tolist()} mm, h = "
         f"{np.round(eq.x[2:] * 1e3, 3).tolist()} mm, cyc = {np.round(eq.cycles).tolist()} "
         f"({reference.wear_model.name}), gap {eq.rel_gap:.2e}; {dynamic_runs} dynamic runs; "
@@ -321,14 +322,14 @@ def run(out: OutputDir, *, settings: dict | None = None, log=print) -> dict:
     return summary
 
 
-def _row(name, s):
-    return (f"| {name} | {s['d1_mm']:.2f} | {s['d2_mm']:.2f} | {s['h1_mm']:.2f} | "
-            f"{s['h2_mm']:.2f} | {s['cyc1']:,.0f} | {s['cyc2']:,.0f} | "
-            f"{100 * s['rel_gap']:.2f} % | "
-            f"{s['bushing_volume_mm3'] / 1e3:.1f} | {s['model_evaluations']} |")
+def _row(name, s) -> tuple:
+    return (name, f"{s['d1_mm']:.2f}", f"{s['d2_mm']:.2f}", f"{s['h1_mm']:.2f}",
+            f"{s['h2_mm']:.2f}", f"{s['cyc1']:,.0f}", f"{s['cyc2']:,.0f}",
+            f"{100 * s['rel_gap']:.2f} %", f"{s['bushing_volume_mm3'] / 1e3:.1f}",
+            s["model_evaluations"])
 
 
-def _report(s: dict) -> str:
+def _report(s: dict) -> Report:
     t = s["thesis_optimum_table_8_4"]
     corrected = s["corrected_on"] is not None
     how = (f"optimistix Levenberg-Marquardt on the {s['model']} model with {s['jacobian_method']} "
@@ -337,55 +338,55 @@ def _report(s: dict) -> str:
         how += (f"; each answer corrected on the {s['corrected_on']} model (output space "
                 f"mapping) until its residual there is below 0.5 %: lives below are the "
                 f"{s['corrected_on']} model's; {s['dynamic_runs']} {s['corrected_on']} runs in all")
-    lines = [
-        "# Two-joint bushing design (thesis Ch. 8)", "",
+    blocks: list[Block] = [
         "Table 2-1 slider-crank, PTFE bushings in the rod at crank-rod (1) and rod-slider (2), "
-        "k 5.05e-4 mm^3/(N m), mu 0.13, limit 2 mm, Table 8-3 box. Optimiser: " + how + ".", "",
-        "| problem | d1 mm | d2 mm | h1 mm | h2 mm | cyc1 | cyc2 | gap | PTFE cm^3 | model runs |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-        _row("equal life (from box centre)", s),
-        *[_row(title, s[key]) for key, title in (
-            ("longest_common_life", "equal life, longest common life"),
-            ("least_material", "equal life, least material at "
-             f"{s.get('least_material', {}).get('target_cycles', 0):,.0f} cycles")) if key in s],
-        "",
+        "k 5.05e-4 mm^3/(N m), mu 0.13, limit 2 mm, Table 8-3 box. Optimiser: " + how + ".",
+        Table(("problem", "d1 mm", "d2 mm", "h1 mm", "h2 mm", "cyc1", "cyc2", "gap",
+               "PTFE cm^3", "model runs"), [
+            _row("equal life (from box centre)", s),
+            *[_row(title, s[key]) for key, title in (
+                ("longest_common_life", "equal life, longest common life"),
+                ("least_material", "equal life, least material at "
+                 f"{s.get('least_material', {}).get('target_cycles', 0):,.0f} cycles"))
+              if key in s]]),
     ]
     if "robust" in s:
         r = s["robust"]
         det = r["deterministic"]
         check = r["percentile_check"]
-        lines += [
+        blocks += [
             f"Robust design ({s['model']} model, lives at the median k): the weaker joint's "
             f"life must reach {r['target_cycles']:,.0f} cycles in "
             f"{100 * r['reliability']:.0f} % of the mechanisms, each bushing's k log-normal "
             f"with 95 % within +-{100 * r['k_scatter']:.0f} %"
             + (f" ({r['asked_cycles']:,.0f} cycles asked: out of reach, the best 10th "
                f"percentile in the box is {r['best_percentile_in_box']:,.0f})"
-               if r["asked_cycles"] > r["target_cycles"] else "") + ":", "",
-            "| design | h1 mm | h2 mm | cyc1 (median k) | cyc2 (median k) | P10 of weaker life "
-            "| PTFE cm^3 |", "|---|---|---|---|---|---|---|",
-            f"| deterministic least material | {det['h1_mm']:.2f} | {det['h2_mm']:.2f} | "
-            f"{det['cyc1']:,.0f} | {det['cyc2']:,.0f} | {det['percentile']:,.0f} | "
-            f"{det['bushing_volume_mm3'] / 1e3:.1f} |",
-            f"| robust | {r['h1_mm']:.2f} | {r['h2_mm']:.2f} | {r['cyc1']:,.0f} | {r['cyc2']:,.0f} "
-            f"| {check['percentile']:,.0f} ({check['interval'][0]:,.0f}-"
-            f"{check['interval'][1]:,.0f}, {check['samples']:,} samples) | "
-            f"{r['bushing_volume_mm3'] / 1e3:.1f} |", "",
+               if r["asked_cycles"] > r["target_cycles"] else "") + ":",
+            Table(("design", "h1 mm", "h2 mm", "cyc1 (median k)", "cyc2 (median k)",
+                   "P10 of weaker life", "PTFE cm^3"), [
+                ("deterministic least material", f"{det['h1_mm']:.2f}", f"{det['h2_mm']:.2f}",
+                 f"{det['cyc1']:,.0f}", f"{det['cyc2']:,.0f}", f"{det['percentile']:,.0f}",
+                 f"{det['bushing_volume_mm3'] / 1e3:.1f}"),
+                ("robust", f"{r['h1_mm']:.2f}", f"{r['h2_mm']:.2f}", f"{r['cyc1']:,.0f}",
+                 f"{r['cyc2']:,.0f}",
+                 f"{check['percentile']:,.0f} ({check['interval'][0]:,.0f}-"
+                 f"{check['interval'][1]:,.0f}, {check['samples']:,} samples)",
+                 f"{r['bushing_volume_mm3'] / 1e3:.1f}")]),
             "Reliability costs "
             f"{100 * (r['bushing_volume_mm3'] / det['bushing_volume_mm3'] - 1):.0f} "
-            "% more PTFE.", ""]
+            "% more PTFE."]
         mc = r.get("monte_carlo_check")
         if mc is not None:
-            lines += [
+            blocks.append(
                 f"Monte-Carlo check: the {s['model']} model itself at {mc['samples']:,} sampled "
                 f"k pairs gives a P10 of {mc['percentile']:,.0f} cycles (95 % interval "
                 f"{mc['interval'][0]:,.0f}-{mc['interval'][1]:,.0f}): "
                 + ("it confirms the reported percentile." if mc["confirms"] else
-                   "**the reported percentile lies outside it**."), ""]
-    lines += [
+                   "**the reported percentile lies outside it**."))
+    blocks += [
         f"Thesis optimum (Table 8-4) in our {t['model']} model: cyc1 = {t['cyc1']:,.0f}, cyc2 = "
         f"{t['cyc2']:,.0f}, gap {100 * t['rel_gap']:.1f} % (thesis full model: 121,600 / "
-        "117,600, 3.3 %).", "",
+        "117,600, 3.3 %).",
         f"Trend over the Table 8-3 box (from the life maps, {s['trend']['map_model']}; "
         "thesis: life rises strongly with "
         "depth and falls weakly with diameter): life rises with depth: "
@@ -393,11 +394,11 @@ def _report(s: dict) -> str:
         f"{', '.join(f'{r:.2f}x' for r in s['trend']['depth_life_ratio'])} for joints 1, 2); "
         f"falls with diameter: {s['trend']['life_falls_with_diameter']} (largest vs smallest "
         "diameter: "
-        f"{', '.join(f'{100 * r:+.2f} %' for r in s['trend']['diameter_relative_change'])}).", "",
-        "![joint 1](life_map_joint1.png) ![joint 2](life_map_joint2.png)", "",
+        f"{', '.join(f'{100 * r:+.2f} %' for r in s['trend']['diameter_relative_change'])}).",
+        "![joint 1](life_map_joint1.png) ![joint 2](life_map_joint2.png)",
         "Data: `summary.json`, `history.csv`, `life_maps.csv`.",
     ]
-    return "\n".join(lines) + "\n"
+    return Report("Two-joint bushing design (thesis Ch. 8)", blocks)
 
 
 def benchmark_case(quick: bool) -> dict:

@@ -1,0 +1,309 @@
+"""``diffwear run FILE.toml``: simulate a loaded `Study` and write its outputs.
+
+The motion and the wear come from `diffwear.mechanism_file`; this module checks
+the options, writes the files and the report.  Outputs in the results folder:
+
+    summary.json          key numbers (written last: marks a finished run)
+    report.md             what was run and what came out, linking the rest
+    trajectory.csv        t_s, then <body>_x_m, <body>_y_m, <body>_phi_rad for every body,
+                          then <body>_vx_m_s, <body>_vy_m_s, <body>_omega_rad_s
+    reaction_<joint>.csv  t_s, fx_N, fy_N, m_Nm: the wrench the joint exerts ON the
+                          output's body (global axes; moment about that body's COM)
+    contact_<joint>.csv   clearance joints: t_s, force_N (|force| on the bushing body),
+                          normal_load_N, theta_rad (contact angle, bushing frame),
+                          penetration_m (> 0: in contact)
+    trajectory.png, reactions.png
+    input.toml            copy of the mechanism file
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Callable
+
+import jax
+import numpy as np
+
+from .. import plots
+from ..choices import WEAR_METHODS, check_wear_model
+from ..config import Study
+from ..errors import InputError, SolverError
+from ..io import OutputDir
+from ..mechanism import Mechanism
+from ..mechanism_file import (
+    Results,
+    check_motion,
+    check_step_budget,
+    contact_warnings,
+    initial_state,
+    integrate,
+    postprocess,
+)
+from ..mechanism_file import wear as mechanism_wear
+from ..report import Block, Bullets, Figure, Report, Section, Table, render
+from ..wear.status import STATUS_CONTACT_LOSS, STATUS_OK, STATUS_PIERCED, STATUS_TEXT
+
+# per-joint numbers passed from a model's result into summary.json
+_REPORTED = ("contact_margin", "method", "dynamic_cycles", "wall_time_s", "compile_time_s",
+             "checkpoint", "resumed_from_cycles")
+
+
+def _trajectory_columns(mech: Mechanism, r: Results) -> dict:
+    cols = {"t_s": r.ts}
+    for i, b in enumerate(mech.body_names):
+        cols |= {f"{b}_x_m": r.q[:, 3 * i], f"{b}_y_m": r.q[:, 3 * i + 1],
+                 f"{b}_phi_rad": r.q[:, 3 * i + 2]}
+    for i, b in enumerate(mech.body_names):
+        cols |= {f"{b}_vx_m_s": r.qd[:, 3 * i], f"{b}_vy_m_s": r.qd[:, 3 * i + 1],
+                 f"{b}_omega_rad_s": r.qd[:, 3 * i + 2]}
+    return cols
+
+
+def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time: float,
+          input_text: str | None = None, started: float | None = None,
+          wear: dict | None = None) -> dict:
+    """Write every output file; returns the summary (also ``summary.json``)."""
+    mech, sim = study.mechanism, study.simulation
+    if input_text is not None:
+        out.text("input.toml", input_text)
+    out.csv("trajectory.csv", _trajectory_columns(mech, r))
+    by_joint = {c.name: float(np.max(np.abs(r.violation[:, mech.constraint_rows(c.name)])))
+                for c in mech.constraints}
+    reactions = {}
+    for o in study.reactions:
+        w = r.reactions[o.joint]
+        name = f"reaction_{o.joint}.csv"
+        out.csv(name, {"t_s": r.ts, "fx_N": w[:, 0], "fy_N": w[:, 1], "m_Nm": w[:, 2]})
+        reactions[o.joint] = {
+            "on_body": o.on,
+            "max_force_N": float(np.max(np.hypot(w[:, 0], w[:, 1]))),
+            "max_abs_moment_Nm": float(np.max(np.abs(w[:, 2]))),
+            "file": name,
+        }
+    contacts = {}
+    warnings = []
+    for co in study.contacts:
+        h = r.contacts[co.joint]
+        name = f"contact_{co.joint}.csv"
+        out.csv(name, {"t_s": r.ts, "force_N": h[:, 0], "normal_load_N": h[:, 1],
+                       "theta_rad": h[:, 2], "penetration_m": h[:, 3]})
+        contacts[co.joint] = {
+            "max_force_N": float(np.max(h[:, 0])),
+            "max_penetration_m": float(np.max(h[:, 3])),
+            "fraction_in_contact": float(np.mean(h[:, 3] > 0)),
+            "file": name,
+        }
+        warnings += contact_warnings(mech.element(co.joint), contacts[co.joint])
+
+    panels = [(f"{c} [{u}]", {b: r.q[:, 3 * i + k] for i, b in enumerate(mech.body_names)})
+              for k, (c, u) in enumerate((("x", "m"), ("y", "m"), ("φ", "rad")))]
+    if r.violation.shape[1]:
+        panels.append(("max |Φ| [m, rad]", {"all constraints": np.max(np.abs(r.violation), axis=1)
+                                             + 1e-300}))
+    figures = [plots.stacked(out.file("trajectory.png"), r.ts, panels, xlabel="time [s]",
+                             logy=[False, False, False, True][: len(panels)],
+                             title=f"{study.title or study.file}: body coordinates")]
+    if study.reactions:
+        figures.append(plots.stacked(out.file("reactions.png"), r.ts, [
+            ("|F| [N]", {f"{o.joint} on {o.on}": np.hypot(r.reactions[o.joint][:, 0],
+                                                           r.reactions[o.joint][:, 1])
+                         for o in study.reactions}),
+            ("M about COM [N m]", {f"{o.joint} on {o.on}": r.reactions[o.joint][:, 2]
+                                   for o in study.reactions}),
+        ], xlabel="time [s]", title=f"{study.title or study.file}: joint reactions"))
+
+    wall = time.perf_counter() - started if started is not None else simulate_time
+    summary = {
+        "file": study.file,
+        "title": study.title,
+        "duration_s": sim.duration,
+        "n_save": sim.n_save,
+        "max_constraint_violation": max(by_joint.values(), default=0.0),
+        "max_constraint_violation_by_joint": by_joint,
+        "reactions": reactions,
+        "contacts": contacts,
+        "integrator_steps": steps,
+        "simulate_time_s": simulate_time,
+        "wall_time_s": wall,
+        "files": sorted(set(out.files)) + ["report.md", "summary.json"],
+        "warnings": [w for w, _ in warnings] + (wear["warnings"] if wear else []),
+    }
+    if wear is not None:
+        summary["joints"] = wear["joints"]
+        if wear["stopped"]:
+            summary["wear_stopped"] = wear["stopped"]
+        figures.append(out.path / wear["figure"])
+    out.text("report.md", render(_report(study, summary, [f.name for f in figures])))
+    out.json("summary.json", summary)
+    fatal = [w for w, is_fatal in warnings if is_fatal]
+    if fatal:  # the outputs are written; the run is reported as failed
+        raise SolverError(f"{study.file}: {fatal[0]} (results written to {out.path})")
+    return summary
+
+
+def _report(study: Study, s: dict, figures: list[str]) -> Report:
+    mech, sim = study.mechanism, study.simulation
+    blocks: list[Block] = [
+        f"Mechanism file: `{study.file}` (copy: [input.toml](input.toml))."
+        + (f"  Source of the numbers: {study.source}." if study.source else ""),
+        f"{len(mech.bodies)} bodies ({', '.join(mech.body_names)}), "
+        f"{len(mech.constraints)} joints ({', '.join(c.name for c in mech.constraints) or '-'}), "
+        f"{len(mech.forces)} force elements ({', '.join(f.name for f in mech.forces) or '-'}); "
+        f"{mech.n_coords} coordinates, {mech.n_constraints} constraint rows.",
+        f"Simulated 0 .. {sim.duration:g} s ({sim.n_save} saved states) with Tsit5, PID step "
+        f"control (rtol {sim.rtol:g}, atol {sim.atol:g}), Baumgarte alpha = "
+        f"{sim.baumgarte_alpha:g} 1/s, beta = {sim.baumgarte_beta:g} 1/s.",
+        Table(("quantity", "value"), [
+            ("max constraint violation",
+             f"{s['max_constraint_violation']:.3e} (m; rad for angle rows)"),
+            ("integrator steps", s["integrator_steps"]),
+            ("simulation time (incl. compilation)", f"{s['simulate_time_s']:.2f} s"),
+            ("wall time", f"{s['wall_time_s']:.2f} s")]),
+    ]
+    if s["reactions"]:
+        blocks.append(Section("Joint reactions", [
+            "Wrench the joint exerts **on** the named body: force in global axes, moment about "
+            "that body's centre of mass (for a driver: the driving torque).",
+            Table(("joint", "on body", "max abs(F) [N]", "max abs(M) [N m]", "file"),
+                  [(j, r["on_body"], f"{r['max_force_N']:.4g}", f"{r['max_abs_moment_Nm']:.4g}",
+                    f"[{r['file']}]({r['file']})") for j, r in s["reactions"].items()])]))
+    if s["contacts"]:
+        blocks.append(Section("Clearance joints", [
+            "Contact force on the bushing body; penetration > 0 means contact.",
+            Table(("joint", "max abs(F) [N]", "max penetration [m]", "in contact", "file"),
+                  [(j, f"{c['max_force_N']:.4g}", f"{c['max_penetration_m']:.3e}",
+                    f"{100 * c['fraction_in_contact']:.1f} %", f"[{c['file']}]({c['file']})")
+                   for j, c in s["contacts"].items()])]))
+    if s.get("joints"):
+        models = "/".join(sorted({w["model"] for w in s["joints"].values()}))
+        blocks.append(Section(f"Wear ({models} model)", [
+            "Every clearance joint with a wear law, over the cycles given (one cycle: one "
+            "revolution of the first driver).",
+            Table(("joint", "cycles", "max depth [mm]", "volume [mm^3]", "cycles to limit",
+                   "files"),
+                  [(j, f"{w['cycles']:,.0f}", f"{w['max_wear_depth_mm']:.4g}",
+                    f"{w['wear_volume_mm3']:.4g}", _to_limit(w),
+                    f"[profile](wear_profile_{j}.csv), [history](wear_history_{j}.csv)")
+                   for j, w in s["joints"].items()]),
+            Bullets([f"stopped: {why}" for why in s.get("wear_stopped", [])], strong=True)]))
+    if s.get("warnings"):
+        blocks.append(Section("Warnings", [Bullets(s["warnings"], strong=True)]))
+    blocks.append(Section("Files", [Bullets([
+        "[summary.json](summary.json): the numbers above",
+        "[trajectory.csv](trajectory.csv): t_s; every body's x_m, y_m, phi_rad (centre of "
+        "mass), then vx_m_s, vy_m_s, omega_rad_s"]), *(Figure(f) for f in figures)]))
+    return Report(study.title or str(study.file), blocks)
+
+
+def _to_limit(w: dict) -> str:
+    """The report's "cycles to limit" cell of one wearing joint."""
+    if w.get("cycles_to_limit") is not None and math.isfinite(w["cycles_to_limit"]):
+        return f"{w['cycles_to_limit']:,.0f} (to {w['limit_mm']:g} mm)"
+    return f"not within the run's settings (to {w['limit_mm']:g} mm)" if "limit_mm" in w else "-"
+
+
+def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str | None = None,
+        cycles: float | None = None, limit: float | None = None, model: str = "quasi-static",
+        method: str = "constant", resume: bool = False, progress: bool = False,
+        log: Callable[..., None] = print) -> dict:
+    """Assemble, integrate, write; with ``cycles`` also the wear of every
+    clearance joint with a wear law (`diffwear.mechanism_file`) on ``model``
+    ("quasi-static" or "dynamic", the latter with ``method`` and checkpoints
+    in ``out_dir``, which ``resume=True`` continues), and with ``limit`` [m]
+    the cycles to that depth.  Bad input fails before ``out_dir`` is touched."""
+    started = time.perf_counter()
+    check_step_budget(study)
+    if cycles is None and (resume or model != "quasi-static" or method != "constant"):
+        raise InputError("--model, --method and --resume belong to a wear study: give "
+                         "--cycles N")
+    if cycles is not None:
+        check_wear_options(model, method, resume)
+        if model == "dynamic":
+            mechanism_wear.dynamic_wear_joint(study)
+        mechanism_wear.bushing_walls(study, mechanism_wear.wearing_joints(study), limit)
+        mechanism_wear.drive_period(study)
+    y0 = initial_state(study)
+    check_motion(study, y0)
+    out = OutputDir(out_dir, overwrite=overwrite, resume=resume)
+    log(f"[{study.file}] integrating {study.simulation.duration:g} s (first run compiles) ...")
+    t0 = time.perf_counter()
+    traj = jax.block_until_ready(integrate(study, y0))
+    simulate_time = time.perf_counter() - t0
+    results = postprocess(study, traj)
+    wear = None
+    if cycles is not None:
+        log(f"[{study.file}] wear over {cycles:,.0f} cycles ({model} model) ...")
+        if model == "dynamic":
+            evolved = mechanism_wear.evolve_file_dynamic(
+                study, y0, cycles=cycles, method=method, limit=limit, out=out, resume=resume,
+                progress=progress)
+        else:
+            evolved = mechanism_wear.evolve_file(study, y0, cycles=cycles, limit=limit)
+        wear = write_wear(study, out, evolved, cycles=cycles, limit=limit)
+    summary = write(study, results, out, steps=int(traj.num_steps), simulate_time=simulate_time,
+                    input_text=input_text, started=started, wear=wear)
+    for w in summary["warnings"]:
+        print(f"diffwear: warning: {w}", file=sys.stderr)
+    log(f"[{study.file}] max constraint violation {summary['max_constraint_violation']:.2e}; "
+        f"report: {out.path / 'report.md'}")
+    if wear is not None and wear["stopped"]:
+        raise SolverError(f"{study.file}: " + "; ".join(wear["stopped"])
+                          + f"; stopped, results so far written to {out.path}")
+    return summary
+
+
+def write_wear(study: Study, out: OutputDir, wear: dict, *, cycles: float,
+               limit: float | None) -> dict:
+    """CSV files and a figure per joint; returns the summary's ``joints`` and
+    warnings, and ``stopped``: a sentence per joint that wore through its wall
+    or whose model failed (the caller reports them as a failure once
+    everything is written)."""
+    joints, warnings, pierced = {}, [], []
+    for name, w in wear.items():
+        out.csv(f"wear_profile_{name}.csv", {"theta_rad": w["theta"], "depth_mm": w["depth"] * 1e3})
+        out.csv(f"wear_history_{name}.csv", {"cycles": w["history_cycles"],
+                                             "max_depth_mm": w["history_peak"] * 1e3})
+        joints[name] = {"max_wear_depth_mm": float(np.max(w["depth"])) * 1e3,
+                        "wear_volume_mm3": w["volume"] * 1e9, "cycles": w["cycles"],
+                        "model": w["model"], "status": w["status"],
+                        **{k: w[k] for k in _REPORTED if k in w}}
+        if limit is not None:
+            joints[name]["limit_mm"] = limit * 1e3
+            joints[name]["cycles_to_limit"] = w["cycles_to_limit"]
+        if w["status"] == STATUS_CONTACT_LOSS:
+            warnings.append(f"clearance joint {name!r}: the load cannot hold the pin on the "
+                            f"bushing wall (contact margin {w['contact_margin']:.2g} < 1): the "
+                            "quasi-static wear model does not hold there")
+        elif w["status"] == STATUS_PIERCED:
+            pierced.append(f"clearance joint {name!r} wore through its {w['wall'] * 1e3:g} mm "
+                           f"bushing wall after {w['cycles']:,.0f} cycles (max depth "
+                           f"{joints[name]['max_wear_depth_mm']:.4f} mm)")
+        elif w["status"] != STATUS_OK:
+            pierced.append(f"the wear of clearance joint {name!r} stopped after "
+                           f"{w['cycles']:,.0f} cycles: "
+                           f"{STATUS_TEXT.get(w['status'], 'status ' + str(w['status']))}")
+        elif w.get("contact_margin_worn", math.inf) < 1.0:
+            warnings.append(f"clearance joint {name!r}: on the worn profile the pin may lift "
+                            f"off the wall (contact margin {w['contact_margin_worn']:.2g})")
+    models = "/".join(sorted({w["model"] for w in wear.values()}))
+    figure = out.file("wear.png")
+    plots.wear_panels(figure, {n: (w["theta"], w["depth"]) for n, w in wear.items()},
+                      {n: (w["history_cycles"], w["history_peak"]) for n, w in wear.items()},
+                      title=f"{study.title or study.file}: wear after {cycles:,.0f} cycles "
+                            f"({models} model)")
+    return {"joints": joints, "warnings": warnings, "figure": figure.name, "stopped": pierced}
+
+
+def check_wear_options(model: str, method: str, resume: bool) -> None:
+    """`InputError` for a wear model or method that does not exist, or one the
+    quasi-static model does not take (it has no extrapolation and no
+    checkpoints: it integrates the wear in the cycle count, in seconds)."""
+    if method not in WEAR_METHODS:
+        raise InputError(f"--method {method!r}; allowed: {', '.join(WEAR_METHODS)}")
+    check_wear_model(model, ((method != "constant", f"--method {method}"),
+                             (resume, "--resume")))
+
+
+__all__ = ["check_wear_options", "run", "write", "write_wear"]

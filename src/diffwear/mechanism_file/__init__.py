@@ -1,0 +1,22 @@
+"""A loaded mechanism file (`diffwear.config.Study`) run as a whole: its motion
+(`motion`: initial state, trajectory, reactions, contacts, up-front checks)
+and the wear of its clearance joints (`wear`: quasi-static or dynamic, each
+joint stopped at its bushing wall).  ``diffwear run FILE`` writes what these
+compute (`diffwear.cli.run`)."""
+
+from . import wear
+from .motion import (
+    Results,
+    check_motion,
+    check_step_budget,
+    contact_warnings,
+    first_driver,
+    initial_state,
+    integrate,
+    postprocess,
+)
+from .wear import evolve_file, evolve_file_dynamic
+
+__all__ = ["Results", "check_motion", "check_step_budget", "contact_warnings", "evolve_file",
+           "evolve_file_dynamic", "first_driver", "initial_state", "integrate", "postprocess",
+           "wear"]

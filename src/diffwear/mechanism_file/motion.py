@@ -1,0 +1,197 @@
+"""A mechanism file's motion: the consistent initial state, the trajectory,
+the joint reactions and contacts along it, and the checks that refuse a run up
+front (a step budget too small for the drivers' revolutions, a linkage that
+cannot move through its cycle) or flag results outside the clearance-joint
+model's validity.
+
+Stages with their own error classes, so that the command line's exit code says
+which one failed: `initial_state` (assembly; `InputError`), `integrate`
+(`SolverError`).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import NamedTuple
+
+import equinox as eqx
+import jax
+import numpy as np
+
+from ..config import Study
+from ..config.study import Simulation
+from ..contact import centred_state, contact_history
+from ..dynamics import (
+    along_trajectory,
+    check_assembly,
+    consistent_state,
+    reaction_wrench,
+    simulate,
+)
+from ..dynamics.kinematics import check_cycle_motion
+from ..dynamics.simulate import Trajectory
+from ..errors import InputError
+from ..mechanism import Mechanism
+from ..mechanism.constraints import Driver
+from ..quasistatic.loads import fully_driven, ideal_parent
+
+_consistent_state = eqx.filter_jit(functools.partial(consistent_state, check=False))
+
+
+def initial_state(study: Study):
+    """Consistent y0 = [q, qd, aux] at t = 0 from the file's ``[initial]`` guess;
+    `InputError` if the mechanism does not assemble near it.
+
+    Same result as ``consistent_state(mech, q_guess)`` but compiled (the eager
+    Newton iteration costs seconds); the check then runs on concrete values.
+    With clearance joints the assembly is that of ``study.assembly`` (each one
+    an ideal revolute at the same points): the pins start centred with the
+    ideal joints' velocities, and the contact states at their initial values.
+    """
+    mech = study.mechanism if study.assembly is None else study.assembly
+    y0 = _consistent_state(mech, study.q_guess)
+    finite = bool(np.all(np.isfinite(np.asarray(y0))))
+    try:
+        check_assembly(mech, y0[: mech.n_coords], finite, q_guess=study.q_guess)
+    except InputError as err:
+        raise InputError(f"{study.file}: initial: {err}") from None
+    if study.assembly is None:
+        return y0
+    return centred_state(mech, y0, study.mechanism)
+
+
+@eqx.filter_jit
+def _integrate(mech: Mechanism, y0, sim: Simulation) -> Trajectory:
+    return simulate(mech, y0, sim.duration, ts=sim.ts(), baumgarte=sim.baumgarte(),
+                    stepsize_controller=sim.controller(), max_steps=sim.max_steps)
+
+
+def integrate(study: Study, y0) -> Trajectory:
+    """The study's trajectory; `SolverError` (naming the file) if the solve failed."""
+    traj = _integrate(study.mechanism, y0, study.simulation)
+    return traj.raise_if_failed(study.file, study.mechanism)
+
+
+class Results(NamedTuple):
+    ts: np.ndarray          # (T,) s
+    q: np.ndarray           # (T, n) m / rad
+    qd: np.ndarray          # (T, n) m/s / rad/s
+    violation: np.ndarray   # (T, m) constraint residuals (m or rad per row)
+    reactions: dict         # joint -> (T, 3): fx [N], fy [N], moment about COM [N m]
+    contacts: dict = {}     # clearance joint -> (T, 4): |F| [N], normal load [N],
+                            #   contact angle [rad], penetration [m]
+
+
+@eqx.filter_jit
+def _contacts(mech: Mechanism, ys, joints):
+    out = {}
+    for joint in joints:
+        h = contact_history(mech, joint, ys)
+        out[joint] = jax.numpy.stack([h.force_magnitude, h.normal_load, h.contact_angle,
+                                      h.penetration], axis=-1)
+    return out
+
+
+@eqx.filter_jit
+def _post(mech: Mechanism, ts, ys, sim: Simulation, outputs):
+    _, lam, _ = along_trajectory(mech, ts, ys, sim.baumgarte())
+    q, qd, _ = jax.vmap(mech.split)(ys)
+    phi = jax.vmap(mech.phi)(q, ts)
+    wrenches = {
+        o.joint: jax.vmap(lambda qq, ll, t, o=o: reaction_wrench(mech, qq, ll, t, o.joint, o.on))(
+            q, lam, ts)
+        for o in outputs
+    }
+    return q, qd, phi, wrenches
+
+
+def postprocess(study: Study, traj: Trajectory) -> Results:
+    q, qd, phi, wrenches = _post(study.mechanism, traj.ts, traj.ys, study.simulation,
+                                 study.reactions)
+    contacts = _contacts(study.mechanism, traj.ys, tuple(o.joint for o in study.contacts))
+    return Results(np.asarray(traj.ts), np.asarray(q), np.asarray(qd), np.asarray(phi),
+                   {k: np.asarray(v) for k, v in wrenches.items()},
+                   {k: np.asarray(v) for k, v in contacts.items()})
+
+
+def first_driver(mechanism: Mechanism) -> Driver | None:
+    """The first driver with a non-zero speed (its revolution is the mechanism's
+    cycle), or None."""
+    return next((c for c in mechanism.constraints
+                 if isinstance(c, Driver) and float(c.omega) != 0.0), None)
+
+
+# A penalty contact holds for elastic penetrations of microns: one of 10 % of
+# the pin radius means the pin is through the bushing (e.g. a rod shorter than
+# the crank forcing an assembly the clearance cannot take).
+MAX_PENETRATION_OF_PIN_RADIUS = 0.1
+
+
+def contact_warnings(joint, contact: dict) -> list[tuple[str, bool]]:
+    """(message, fatal) for results outside the clearance joint model's
+    validity: no contact at all (a warning), or a penetration beyond
+    `MAX_PENETRATION_OF_PIN_RADIUS` of the pin radius (fatal)."""
+    out = []
+    if contact["fraction_in_contact"] == 0.0:
+        out.append((f"clearance joint {joint.name!r} never made contact: the pin moved freely "
+                    "inside the bushing for the whole run (a clearance larger than the "
+                    "motion?)", False))
+    radius = float(joint.pin_radius)
+    if contact["max_penetration_m"] > MAX_PENETRATION_OF_PIN_RADIUS * radius:
+        out.append((f"clearance joint {joint.name!r}: penetration "
+                    f"{contact['max_penetration_m'] * 1e3:.3g} mm is "
+                    f"{contact['max_penetration_m'] / radius:.0%} of the pin radius "
+                    f"{radius * 1e3:g} mm: the pin is through the bushing and the contact model "
+                    "does not hold (geometry that cannot assemble with this clearance, e.g. a "
+                    "rod shorter than the crank?)", True))
+    return out
+
+
+# Integrator steps per crank revolution, a lower bound: the ideal slider-crank
+# takes 2,276 steps per revolution at the default tolerances (performance docs).
+MIN_STEPS_PER_REVOLUTION = 500
+
+
+def check_step_budget(study: Study) -> None:
+    """Refuse up front a run whose drivers turn more revolutions than the step
+    budget (``max_steps``) can take at `MIN_STEPS_PER_REVOLUTION`."""
+    sim = study.simulation
+    for c in study.mechanism.constraints:
+        omega = getattr(c, "omega", None)
+        if omega is None:
+            continue
+        turns = sim.duration * abs(float(omega)) / (2 * np.pi)
+        need = turns * MIN_STEPS_PER_REVOLUTION
+        if need > sim.max_steps:
+            raise InputError(
+                f"{study.file}: driver {c.name!r} turns {turns:.3g} revolutions in "
+                f"{sim.duration:g} s: at least {need:.2g} integrator steps, beyond the budget "
+                f"max_steps = {sim.max_steps:,}; allowed: a speed or duration within it, "
+                "or a larger [simulation] max_steps")
+
+
+# Samples of the cycle in the motion check (5 degrees of the driver apart).
+MOTION_SAMPLES = 73
+
+
+def check_motion(study: Study, y0) -> None:
+    """Refuse up front a linkage that cannot move through its cycle (links too
+    short to reach, a crank that cannot turn fully, a dead point): the ideal
+    mechanism (clearance joints taken as revolute joints) is closed at
+    `MOTION_SAMPLES` instants over one revolution of its first driver (or the
+    run's duration, if shorter).  Mechanisms the drivers do not fully
+    determine are not checked (their motion is not kinematic)."""
+    ideal = ideal_parent(study.mechanism)
+    driver = first_driver(ideal)
+    if driver is None or not fully_driven(ideal):
+        return
+    sim = study.simulation
+    span = min(sim.duration, 2 * math.pi / abs(float(driver.omega)))
+    q0, _, _ = ideal.split(y0)
+    ts = np.linspace(0.0, span, MOTION_SAMPLES)
+    check_cycle_motion(ideal, q0, ts, what=str(study.file), driver=f"driver {driver.name!r}")
+
+
+__all__ = ["Results", "check_motion", "check_step_budget", "contact_warnings", "first_driver",
+           "initial_state", "integrate", "postprocess"]

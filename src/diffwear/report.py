@@ -1,0 +1,103 @@
+"""Reports as data: a `Report` is a title and a list of blocks (paragraphs,
+`Table`, `Bullets`, `Figure`, nested `Section`); `render` writes the markdown
+of every ``report.md``.  A driver states what to report; how it looks is
+decided here, once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Union
+
+
+@dataclass(frozen=True)
+class Table:
+    """A markdown table; ``align`` one letter per column, "l" or "r"
+    (default: the renderer's left alignment)."""
+
+    header: Sequence[str]
+    rows: Sequence[Sequence[Any]]
+    align: str = ""
+
+    def __post_init__(self):
+        width = len(self.header)
+        bad = [i for i, r in enumerate(self.rows) if len(r) != width]
+        if bad:
+            raise ValueError(f"table {list(self.header)}: rows {bad} do not have {width} cells")
+        if self.align and (len(self.align) != width or set(self.align) - {"l", "r"}):
+            raise ValueError(f"table align {self.align!r}: one of 'l', 'r' per column")
+
+
+@dataclass(frozen=True)
+class Bullets:
+    """A bullet list; ``strong``: each item in bold (warnings, failures)."""
+
+    items: Sequence[str]
+    strong: bool = False
+
+
+@dataclass(frozen=True)
+class Figure:
+    """An image in the output folder, by file name."""
+
+    file: str
+
+
+@dataclass(frozen=True)
+class Section:
+    title: str
+    blocks: Sequence[Block] = field(default_factory=tuple)
+
+
+Block = Union[str, Table, Bullets, Figure, Section]
+
+
+@dataclass(frozen=True)
+class Report:
+    title: str
+    blocks: Sequence[Block] = field(default_factory=tuple)
+
+
+def _cell(value: Any) -> str:
+    return str(value).replace("|", "\\|").replace("\n", " ")
+
+
+def _block(block: Block, level: int) -> list[str]:
+    if isinstance(block, str):
+        return [block]
+    if isinstance(block, Table):
+        rule = [":---" if a == "l" else "---:" for a in block.align] if block.align else \
+            ["---"] * len(block.header)
+        return ["| " + " | ".join(_cell(h) for h in block.header) + " |",
+                "|" + "|".join(rule) + "|",
+                *("| " + " | ".join(_cell(c) for c in row) + " |" for row in block.rows)]
+    if isinstance(block, Bullets):
+        return [f"- **{item}**" if block.strong else f"- {item}" for item in block.items]
+    if isinstance(block, Figure):
+        return [f"![{block.file}]({block.file})"]
+    if isinstance(block, Section):
+        return _blocks(block.blocks, level + 1, heading=f"{'#' * (level + 1)} {block.title}")
+    raise TypeError(f"not a report block: {type(block).__name__}")
+
+
+def _blocks(blocks: Sequence[Block], level: int, heading: str) -> list[str]:
+    lines = [heading]
+    for b in blocks:
+        if (isinstance(b, str) and not b) or (isinstance(b, Bullets) and not b.items):
+            continue
+        lines += ["", *_block(b, level)]
+    return lines
+
+
+def markdown(block: Block) -> str:
+    """One block as markdown (e.g. a table for a notebook or a docstring)."""
+    return "\n".join(_block(block, 1))
+
+
+def render(report: Report) -> str:
+    """The report as markdown: ``# title``, then each block, blank-line separated."""
+    return "\n".join(_blocks(report.blocks, 1, heading=f"# {report.title}")) + "\n"
+
+
+__all__ = ["Block", "Bullets", "Figure", "Report", "Section", "Table", "markdown", "render"]

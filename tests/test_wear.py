@@ -229,3 +229,37 @@ def test_contact_loss_over_a_large_part_of_a_cycle_warns():
     assert len(warnings) == 1
     assert "lost contact over 30% of the last dynamic cycle" in warnings[0]
     assert "A = 25 cycles" in warnings[0]
+
+
+def test_extrapolation_strategies_are_objects_and_names_map_onto_them(problem):
+    """``method=`` takes a strategy object; each name is shorthand for one,
+    built with the same settings (so both run the same scan), and bad
+    settings are refused when the object is made."""
+    from diffwear.wear import Adaptive, Constant, ErrorControlled, Evolver
+
+    mech_of, p, y0 = problem
+    mech = mech_of(p)
+
+    def strategy(**kw):
+        return Evolver(mech, "crank_rod", 6, period=PERIOD, max_dynamic=4, **kw).strategy
+
+    assert strategy(method="constant", extrapolation=2.0) == Constant(2.0)
+    assert strategy(method="adaptive", extrapolation=3.0,
+                    adaptive={"criterion": "pressure_jump"}) == \
+        Adaptive(a0=3.0, criterion="pressure_jump")
+    assert strategy(method="error", rtol=1e-3, atol=1e-8) == \
+        ErrorControlled(rtol=1e-3, atol=1e-8, dn0=1.0)
+    # ceil(6 / 2.5) = 3 scan slots for constant A; max_dynamic for the others
+    assert Evolver(mech, "crank_rod", 6, period=PERIOD, method=Constant(2.5)).n_slots == 3
+    assert Evolver(mech, "crank_rod", 6, period=PERIOD, method=Adaptive(),
+                   max_dynamic=4).n_slots == 4
+    res = evolve(mech, "crank_rod", y0, 4, period=PERIOD, method=Constant(2.0))
+    ref = evolve(mech, "crank_rod", y0, 4, period=PERIOD, method="constant", extrapolation=2.0)
+    assert float(res.cycles) == 4.0 and int(res.dynamic_cycles) == 1 + 2
+    np.testing.assert_array_equal(np.asarray(res.depth), np.asarray(ref.depth))
+    with pytest.raises(InputError, match="A must be >= 1"):
+        Constant(0.5)
+    with pytest.raises(InputError, match="criterion"):
+        Adaptive(criterion="smoothness")
+    with pytest.raises(InputError, match="extrapolation object"):
+        strategy(method="linear")

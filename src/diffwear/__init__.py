@@ -13,15 +13,17 @@ The names most users need, by task::
     dynamics    simulate, consistent_state
     contact     ClearanceJoint, with_clearance, contact_history, LankaraniNikravesh,
                 KelvinVoigt, ElasticFoundation, CoulombFriction, ArchardWear
-    wear        evolve, cycles_to_limit, Dynamic, QuasiStatic, worn_volume
+    wear        evolve (method=Constant(A) | Adaptive() | ErrorControlled()),
+                cycles_to_limit, Dynamic, QuasiStatic, worn_volume
     design      TwoJointLife
     sweeps      sweep.sweep, sensitivity, finite_differences
     data        load_dataset, calibrate.calibrate
 
-(``sweep`` and ``calibrate`` are the subpackages: a function of the same name
-at the top would hide them.)
     checks      gradcheck, GradCheck
     errors      DiffwearError, InputError, SolverError
+
+(``sweep`` and ``calibrate`` are the subpackages: a function of the same name
+at the top would hide them.)
 """
 
 from importlib.metadata import PackageNotFoundError
@@ -54,7 +56,15 @@ from .mechanism import (
 )
 from .quasistatic import QuasiStatic
 from .sweep.sensitivity import finite_differences, sensitivity
-from .wear import Dynamic, cycles_to_limit, evolve, worn_volume
+from .wear import (
+    Adaptive,
+    Constant,
+    Dynamic,
+    ErrorControlled,
+    cycles_to_limit,
+    evolve,
+    worn_volume,
+)
 
 try:  # the one version string is pyproject.toml's
     __version__ = _version("diffwear")
@@ -65,7 +75,8 @@ __all__ = [
     "presets", "Mechanism", "Body", "RevoluteJoint", "TranslationalJoint", "Driver",
     "Gravity", "LinearSpring", "simulate", "consistent_state", "ClearanceJoint",
     "with_clearance", "contact_history", "LankaraniNikravesh", "KelvinVoigt",
-    "ElasticFoundation", "CoulombFriction", "ArchardWear", "evolve", "cycles_to_limit",
+    "ElasticFoundation", "CoulombFriction", "ArchardWear", "evolve", "Constant",
+    "Adaptive", "ErrorControlled", "cycles_to_limit",
     "Dynamic", "QuasiStatic", "worn_volume", "TwoJointLife", "sweep", "sensitivity",
     "finite_differences", "load_dataset", "calibrate", "gradcheck", "GradCheck",
     "DiffwearError", "InputError", "SolverError",

@@ -22,6 +22,12 @@ from .evolution import (
     worn_mechanism,
     worn_volume,
 )
+from .extrapolation import (
+    AbstractExtrapolation,
+    Adaptive,
+    Constant,
+    ErrorControlled,
+)
 from .life import (
     LifeResult,
 )
@@ -43,5 +49,6 @@ __all__ = [
     "LifeResult", "cycles_to_limit", "AbstractWearModel", "Dynamic", "peak_depth",
     "STATUS_TEXT",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
+    "AbstractExtrapolation", "Constant", "Adaptive", "ErrorControlled",
     "Evolver", "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint",
 ]

@@ -7,10 +7,10 @@ The bushing wear profile h(theta_k) [m] is an array carried through
 end of one cycle into the next (no restart transient), and adds A x (wear of
 that cycle) to the profile: one simulated cycle stands for A real cycles.
 
-Methods
+Methods (strategy objects, `wear.extrapolation`; or their names)
 -------
-``"constant"``  fixed A (A = 1: every cycle simulated).
-``"adaptive"``  the thesis's scheme (Eq. 4-20): A_{j+1} = A_j + A_inc while the
+``"constant"``  `Constant(A)`: fixed A (A = 1: every cycle simulated).
+``"adaptive"``  `Adaptive(...)`: the thesis's scheme (Eq. 4-20): A_{j+1} = A_j + A_inc while the
                 wear increment stays smooth, else A_j - A_dec; one integer A per
                 cycle.  "Smooth" (``criterion``):
                 ``"increment_change"`` (default): the wear increment of this
@@ -23,8 +23,8 @@ Methods
                 worn pocket is such a jump, so this criterion shrinks A to 1
                 once a pocket forms (seen on the rig: A = 1 after ~6 cycles);
                 the thesis applied it to FEM element pressures.  The thesis
-                gives no constants; ours are `ADAPTIVE_DEFAULTS`.
-``"error"``     the profile as a slow ODE in the cycle count N,
+                gives no constants; ours are `Adaptive`'s defaults.
+``"error"``     `ErrorControlled(rtol, atol)`: the profile as a slow ODE in the cycle count N,
                 dh/dN = f(h) = wear of one dynamic cycle at profile h, integrated
                 by an embedded Heun-Euler (RK2(1)) pair with step-size control on
                 max_k |h_err| <= atol + rtol max_k |h|.  Accuracy decides how many
@@ -43,6 +43,7 @@ the evolution stops updating, keeps the results so far and reports ``status``;
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -58,24 +59,11 @@ from jax import lax
 from jaxtyping import Array, Float
 
 from .._checks import require_float64
-from ..choices import WEAR_METHODS
 from ..errors import InputError, SolverError
 from ..mechanism import Mechanism
 from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle, wear_parts
+from .extrapolation import extrapolation_method
 from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_PIERCED, STATUS_SOLVER
-
-# Adaptive-A constants (thesis Eq. 4-20 gives none; it started at A ~ 3900 and
-# settled near 6000 for 100,000 cycles, i.e. A ~ 4-6 % of the run).  Ours: start
-# at 1 % of the run, grow by 1 % of the run per smooth cycle, shrink by 2 % of
-# the run when the pressure jump is too large, never below 1.  A jump
-# of 25 % of the peak between neighbouring grid points marks a kinked profile
-# (a smooth peak of half-width >= 8 grid cells stays well below it).
-# "increment_change": a 10 % change of the per-cycle wear increment between two
-# consecutive dynamic cycles marks a non-smooth evolution (the steady rig cycles
-# differ by well under 1 %, the start-up transient by more).
-ADAPTIVE_DEFAULTS = dict(a0_fraction=0.01, inc_fraction=0.01, dec_fraction=0.02,
-                         criterion="increment_change", change_fraction=0.10,
-                         p_crit_fraction=0.25)
 
 
 class WearLimitError(SolverError):
@@ -217,30 +205,15 @@ class Evolver:
                  wall_thickness=None, warmup_cycles=1, adaptive=None,
                  cycle_rtol=CYCLE_RTOL, cycle_atol=CYCLE_ATOL, adjoint=None,
                  max_steps=200_000):
-        if method not in WEAR_METHODS:
-            raise InputError(f"method must be one of {', '.join(map(repr, WEAR_METHODS))}, "
-                             f"got {method!r}")
+        self.strategy = extrapolation_method(method, extrapolation=extrapolation, rtol=rtol,
+                                             atol=atol, adaptive=adaptive)
+        self.method = self.strategy.name
         self.index, el = clearance_element(mech, joint)
-        self.mech, self.joint, self.method, self.period = mech, joint, method, period
-        self.extrapolation, self.warmup_cycles = extrapolation, warmup_cycles
-        self.rtol, self.atol = rtol, atol
+        self.mech, self.joint, self.period = mech, joint, period
+        self.warmup_cycles = warmup_cycles
         self.cycle_kw = dict(rtol=cycle_rtol, atol=cycle_atol, adjoint=adjoint,
                              max_steps=max_steps)
-        if method == "constant":
-            a = float(extrapolation)
-            if a < 1.0 or not math.isfinite(a):
-                raise InputError(f"extrapolation factor A must be >= 1, got {a}")
-            if float(cycles) <= 0:
-                raise InputError(f"cycles must be > 0, got {cycles}")
-            self.a = a
-            self.n_slots = int(math.ceil(float(cycles) / a - 1e-9))
-        else:
-            self.n_slots = _slots(max_dynamic, cycles)
-        if method == "adaptive":
-            self.opts = {**ADAPTIVE_DEFAULTS, **(adaptive or {})}
-            if self.opts["criterion"] not in ("increment_change", "pressure_jump"):
-                raise InputError(f"adaptive criterion must be 'increment_change' or "
-                                 f"'pressure_jump', got {self.opts['criterion']!r}")
+        self.n_slots = self.strategy.slots(cycles, max_dynamic)
         self.c_base = el.profile.clearance
         law, wear = wear_parts(el)
         self.radius, self.bdepth, self.k = el.bushing_radius, law.depth, wear.coefficient
@@ -310,23 +283,12 @@ class Evolver:
         c = dict(h=h0, y=y, t=t, n=jnp.zeros(()), dyn=jnp.asarray(self.warmup_cycles),
                  ls=jnp.zeros(()), status=jnp.where(warm_ok, STATUS_OK, STATUS_SOLVER),
                  fail_n=jnp.zeros(()), fail_h=jnp.zeros(()))
-        if self.method == "adaptive":
-            ca, ex = self.cycles_arr, self.extrapolation
-            a0 = (jnp.maximum(jnp.round(self.opts["a0_fraction"] * ca), 1.0)
-                  if ex in (None, 1.0) else jnp.asarray(ex, dtype=float))
-            c.update(a=a0, dh_prev=h0)
-        elif self.method == "error":
-            ca, ex = self.cycles_arr, self.extrapolation
-            dn0 = (jnp.maximum(0.01 * ca, 1.0) if ex in (None, 1.0)
-                   else jnp.asarray(ex, dtype=float))
-            c.update(dn=dn0, have_k1=jnp.array(False), k1=h0, ls1=jnp.zeros(()))
-        return c
+        return self.strategy.init(self, c)
 
     def run(self, state: dict, length: int):
         """``length`` scan slots from ``state``: (new state, history of these slots)."""
-        step = {"constant": self._step_constant, "adaptive": self._step_adaptive,
-                "error": self._step_error}[self.method]
-        return lax.scan(step, state, None, length=int(length))
+        return lax.scan(functools.partial(self.strategy.step, self), state, None,
+                        length=int(length))
 
     def result(self, final: dict, hist: dict) -> EvolutionResult:
         # all scan slots used before reaching ``cycles``: say so, never return a short run
@@ -339,92 +301,6 @@ class Evolver:
             fail_depth=jnp.where(short, jnp.max(final["h"]), final["fail_h"]), history=hist,
             state=final,
         )
-
-    # ------------------------------------------------------------ scan steps
-    def _step_constant(self, c, _):
-        """Constant A."""
-        def do(c):
-            a_i = jnp.minimum(self.a, self.cycles_arr - c["n"])
-            r = self.run_cycle(c["h"], c["y"], c["t"])
-            out = self.finish(c, c["h"] + a_i * r.depth_increment, r.y_end,
-                              c["t"] + self.period, a_i, a_i * r.load_sliding, r.ok)
-            out["dyn"] = c["dyn"] + 1
-            return out, a_i
-
-        c2, a_i, go = self.when_active(do, c)
-        return c2, self.record(c2, a_i, go)
-
-    def _step_adaptive(self, c, _):
-        """Adaptive A (Eq. 4-20)."""
-        opts, ca = self.opts, self.cycles_arr
-        a_inc = jnp.maximum(jnp.round(opts["inc_fraction"] * ca), 1.0)
-        a_dec = jnp.maximum(jnp.round(opts["dec_fraction"] * ca), 1.0)
-
-        def do(c):
-            a_i = jnp.minimum(c["a"], ca - c["n"])
-            r = self.run_cycle(c["h"], c["y"], c["t"])
-            dh = r.depth_increment
-            if opts["criterion"] == "pressure_jump":
-                # sliding-weighted mean pressure of the cycle at each node [Pa]
-                s_cycle = 2 * jnp.pi * self.radius  # relative rotation 2 pi per crank cycle
-                p = dh / (self.k * s_cycle)
-                jump = jnp.max(jnp.abs(jnp.roll(p, -1) - p))
-                smooth = jump < opts["p_crit_fraction"] * jnp.max(p)
-            else:
-                change = jnp.max(jnp.abs(dh - c["dh_prev"]))
-                smooth = change < opts["change_fraction"] * jnp.max(jnp.abs(dh))
-            out = self.finish(c, c["h"] + a_i * dh, r.y_end, c["t"] + self.period, a_i,
-                              a_i * r.load_sliding, r.ok)
-            out["dyn"] = c["dyn"] + 1
-            out["a"] = jnp.where(smooth, c["a"] + a_inc, jnp.maximum(c["a"] - a_dec, 1.0))
-            out["dh_prev"] = dh
-            return out, a_i
-
-        c2, a_i, go = self.when_active(do, c)
-        return c2, self.record(c2, a_i, go)
-
-    def _step_error(self, c, _):
-        """Error-controlled (Heun-Euler)."""
-        period, rtol, atol = self.period, self.rtol, self.atol
-
-        def do(c):
-            def stage1(c):
-                r = self.run_cycle(c["h"], c["y"], c["t"])
-                return r.depth_increment, r.load_sliding, r.y_end, c["t"] + period, r.ok, 1
-
-            def cached(c):
-                return c["k1"], c["ls1"], c["y"], c["t"], jnp.array(True), 0
-
-            k1, ls1, y1, t1, ok1, n1 = lax.cond(c["have_k1"], cached, stage1, c)
-            dn = jnp.minimum(c["dn"], self.cycles_arr - c["n"])
-            r2 = self.run_cycle(c["h"] + dn * k1, y1, t1)
-            k2 = r2.depth_increment
-            h_new = c["h"] + 0.5 * dn * (k1 + k2)
-            err = 0.5 * dn * jnp.max(jnp.abs(k2 - k1))
-            tol = atol + rtol * jnp.max(jnp.abs(h_new))
-            ratio = err / tol
-            accept = ratio <= 1.0
-            ok = ok1 & r2.ok
-            factor = jnp.clip(0.9 * jnp.where(ratio > 0, ratio, 1e-10) ** -0.5, 0.3, 4.0)
-            dls = 0.5 * dn * (ls1 + r2.load_sliding)
-            out = self.finish(c, jnp.where(accept, h_new, c["h"]), r2.y_end, t1 + period,
-                              jnp.where(accept, dn, 0.0), jnp.where(accept, dls, 0.0), ok)
-            out["dyn"] = c["dyn"] + n1 + 1
-            out["dn"] = dn * factor
-            out["have_k1"] = ~accept
-            out["k1"], out["ls1"] = k1, ls1
-            return out, jnp.where(accept, dn, 0.0)
-
-        c2, a_i, go = self.when_active(do, c)
-        return c2, self.record(c2, a_i, go & (a_i > 0))
-
-
-def _slots(max_dynamic, cycles) -> int:
-    if max_dynamic is None:
-        raise InputError("methods 'adaptive' and 'error' need max_dynamic (scan slots)")
-    if int(max_dynamic) < 1:
-        raise InputError(f"max_dynamic must be >= 1, got {max_dynamic}")
-    return int(max_dynamic)
 
 
 # ------------------------------------------------------- chunks and checkpoints

@@ -67,6 +67,8 @@ cycle.  The FE grid is the profile grid (same n_theta nodes, theta_j =
 
 from __future__ import annotations
 
+from typing import cast
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -83,6 +85,7 @@ from ..mechanism import Mechanism
 from ..mechanism.geometry import grid_angles, safe_norm
 from .cycle import CycleResult, clearance_element, wear_cycle, wear_parts
 from .evolution import EvolutionResult, Evolver, _with_profile
+from .extrapolation import AbstractExtrapolation, Constant
 
 FORCE_MODES = ("resultant", "normal")
 
@@ -302,13 +305,14 @@ class FemEvolver(Evolver):
     explicit step, ``fem_explicit``."""
 
     def __init__(self, mech: Mechanism, joint: str, cycles, *, fem: FemWearModel,
-                 method: str = "constant", **kw):
-        if method != "constant":
+                 method: str | AbstractExtrapolation = "constant", **kw):
+        if not isinstance(method, Constant) and method != "constant":
             raise InputError(f"the FEM wear route supports method 'constant' only (constant "
                              f"A, as the thesis's FEM runs), got {method!r}")
         if not isinstance(fem, FemWearModel):
             raise InputError(f"fem must be a FemWearModel, got {type(fem).__name__}")
         super().__init__(mech, joint, cycles, method=method, **kw)
+        self.a = float(cast(Constant, self.strategy).a)
         _, el = clearance_element(mech, joint)
         rb, b = concrete(el.bushing_radius), concrete(fem.outer_radius)
         if rb is not None and b is not None and not b > rb:
@@ -346,8 +350,11 @@ class FemEvolver(Evolver):
                  fem_explicit=jnp.zeros(()))
         return c
 
+    def run(self, state: dict, length: int):
+        return lax.scan(self._step_constant, state, None, length=int(length))
+
     def _step_constant(self, c, _):
-        """Constant A with the FE increment (else as `Evolver._step_constant`)."""
+        """Constant A with the FE increment (else as `Constant.step`)."""
         def do(c):
             a_i = jnp.minimum(self.a, self.cycles_arr - c["n"])
             r, inc, (step, ls), fem_state = self.fem_cycle(c, a_i)

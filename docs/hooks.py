@@ -172,3 +172,4 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
         if key in markdown:
             markdown = markdown.replace(key, make())
     return markdown
+

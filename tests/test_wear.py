@@ -202,7 +202,7 @@ def test_interrupted_chunked_run_resumes_to_the_same_result(problem, short_run, 
         run.run(on_chunk=interrupt)
     ck, meta = load_checkpoint(path)
     assert seen == [2] and ck.slots_done == 2 and meta == {"cycles": 6}
-    assert float(ck.state["n"]) == 4.0 and ck.history["cycles"].shape == (2,)
+    assert float(ck.state.n) == 4.0 and ck.history["cycles"].shape == (2,)
     assert not list(tmp_path.glob("*.tmp"))
     res = run.run(start=ck).check()
     for name in ("depth", "y", "t", "cycles", "dynamic_cycles", "load_sliding", "status"):
@@ -214,8 +214,8 @@ def test_interrupted_chunked_run_resumes_to_the_same_result(problem, short_run, 
                                    np.asarray(ref.history[key]), rtol=1e-12, err_msg=key)
     np.testing.assert_allclose(float(_metrics(mech_of, p, res)[1]),
                                float(_metrics(mech_of, p, ref)[1]), rtol=1e-12)
-    for k, v in ref.state.items():
-        np.testing.assert_allclose(np.asarray(res.state[k]), np.asarray(v), rtol=1e-12,
+    for k, v in ref.state.as_dict().items():
+        np.testing.assert_allclose(np.asarray(res.state.as_dict()[k]), np.asarray(v), rtol=1e-12,
                                    err_msg=k)
 
 

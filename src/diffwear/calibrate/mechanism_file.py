@@ -33,7 +33,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..config import Study, load_dict, units
+from ..config import MechanismFile, load_dict, units
 from ..contact import centred_state
 from ..dynamics import consistent_state
 from ..errors import InputError
@@ -195,7 +195,7 @@ def wearing_joint(study, joint: str | None, file: str) -> str:
 
 
 def load_file(path: Path):
-    """(parsed TOML, `Study`) of a mechanism file."""
+    """(parsed TOML, `MechanismFile`) of a mechanism file."""
     from ..config import load
 
     study = load(path)
@@ -221,8 +221,8 @@ class QuasiStaticFileHistory(QuasiStaticRigHistory):
         return self.joint_name
 
     @property
-    def file_study(self) -> Study:
-        assert isinstance(self.study, Study)  # set by `file_model`
+    def file_study(self) -> MechanismFile:
+        assert isinstance(self.study, MechanismFile)  # set by `file_model`
         return self.study
 
     @property

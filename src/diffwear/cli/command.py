@@ -115,8 +115,8 @@ def _run(args: argparse.Namespace) -> int:
     from ..config.loader import decode
     from . import run as runner
 
-    study = load(args.file)  # every input check happens before --out is touched
-    text = decode(Path(study.file).read_bytes(), study.file)
+    mfile = load(args.file)  # every input check happens before --out is touched
+    text = decode(Path(mfile.file).read_bytes(), mfile.file)
     _resume_folder(args)
     if args.out is None:
         raise InputError("run: --out DIR is required")
@@ -131,7 +131,7 @@ def _run(args: argparse.Namespace) -> int:
             raise InputError(f"--limit {args.limit:g}: a wear depth in mm; allowed: (0, 1000)")
         limit = args.limit * 1e-3
     log = (lambda *a, **k: None) if args.quiet else print
-    runner.run(study, args.out, overwrite=args.overwrite, input_text=text, log=log,
+    runner.run(mfile, args.out, overwrite=args.overwrite, input_text=text, log=log,
                cycles=args.cycles, limit=limit, model=args.model or "quasi-static",
                method=args.method or "constant", resume=args.resume is not None,
                progress=not args.quiet)
@@ -142,7 +142,7 @@ def _sweep(args: argparse.Namespace) -> int:
     from ..config.loader import decode
     from ..config.sweep import MAX_POINTS, load_sweep
     from ..io import OutputDir
-    from . import sweep as study
+    from . import sweep as driver
 
     spec = load_sweep(args.file)  # every input check happens before --out is touched
     if args.chunk_size is not None:
@@ -156,7 +156,7 @@ def _sweep(args: argparse.Namespace) -> int:
     log = (lambda *a, **k: None) if args.quiet else print
     out = OutputDir(args.out, overwrite=args.overwrite)
     if args.cluster is None and args.workers is None:
-        study.run(spec, out, chunk_size=args.chunk_size, input_text=text, log=log)
+        driver.run(spec, out, chunk_size=args.chunk_size, input_text=text, log=log)
         return 0
     try:
         from distributed import Client, LocalCluster
@@ -169,35 +169,35 @@ def _sweep(args: argparse.Namespace) -> int:
         except (OSError, TimeoutError) as err:
             raise InputError(f"--cluster {args.cluster}: cannot connect ({err})") from None
         with client:
-            study.run(spec, out, chunk_size=args.chunk_size, client=client, input_text=text,
+            driver.run(spec, out, chunk_size=args.chunk_size, client=client, input_text=text,
                       log=log)
         return 0
     with LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
                       dashboard_address=None) as cluster, Client(cluster) as client:
-        study.run(spec, out, chunk_size=args.chunk_size, client=client, input_text=text, log=log)
+        driver.run(spec, out, chunk_size=args.chunk_size, client=client, input_text=text, log=log)
     return 0
 
 
 def _design(args: argparse.Namespace) -> int:
     from ..io import OutputDir
-    from . import design as study
+    from . import design as driver
 
     if args.list or args.name is None:
         if args.out is not None and not args.list:
-            raise InputError(f"design: name the problem to solve (available: {study.NAME}); "
+            raise InputError(f"design: name the problem to solve (available: {driver.NAME}); "
                              f"nothing was written to {args.out}")
-        print(f"{study.NAME}  {study.DESCRIPTION}")
+        print(f"{driver.NAME}  {driver.DESCRIPTION}")
         return 0
-    if args.name != study.NAME:
-        raise InputError(f"unknown design problem {args.name!r}; available: {study.NAME}")
+    if args.name != driver.NAME:
+        raise InputError(f"unknown design problem {args.name!r}; available: {driver.NAME}")
     if args.out is None:
         raise InputError("design: --out DIR is required")
-    settings = study.settings(quick=args.quick, steps=args.steps,
+    settings = driver.settings(quick=args.quick, steps=args.steps,
                               dynamic_steps=args.dynamic_steps, map_points=args.map_points,
                               n_theta=args.n_theta, problems=args.problems, model=args.model)
     out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
     log = (lambda *a, **k: None) if args.quiet else print
-    study.run(out, settings=settings, log=log)
+    driver.run(out, settings=settings, log=log)
     return 0
 
 

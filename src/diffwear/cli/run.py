@@ -1,4 +1,4 @@
-"""``diffwear run FILE.toml``: simulate a loaded `Study` and write its outputs.
+"""``diffwear run FILE.toml``: simulate a loaded `MechanismFile` and write its outputs.
 
 The motion and the wear come from `diffwear.mechanism_file`; this module checks
 the options, writes the files and the report.  Outputs in the results folder:
@@ -28,7 +28,7 @@ import numpy as np
 
 from .. import plots
 from ..choices import WEAR_METHODS, check_wear_model
-from ..config import Study
+from ..config import MechanismFile
 from ..errors import InputError, SolverError
 from ..io import OutputDir
 from ..mechanism import Mechanism
@@ -61,18 +61,18 @@ def _trajectory_columns(mech: Mechanism, r: Results) -> dict:
     return cols
 
 
-def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time: float,
+def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simulate_time: float,
           input_text: str | None = None, started: float | None = None,
           wear: dict | None = None) -> dict:
     """Write every output file; returns the summary (also ``summary.json``)."""
-    mech, sim = study.mechanism, study.simulation
+    mech, sim = mfile.mechanism, mfile.simulation
     if input_text is not None:
         out.text("input.toml", input_text)
     out.csv("trajectory.csv", _trajectory_columns(mech, r))
     by_joint = {c.name: float(np.max(np.abs(r.violation[:, mech.constraint_rows(c.name)])))
                 for c in mech.constraints}
     reactions = {}
-    for o in study.reactions:
+    for o in mfile.reactions:
         w = r.reactions[o.joint]
         name = f"reaction_{o.joint}.csv"
         out.csv(name, {"t_s": r.ts, "fx_N": w[:, 0], "fy_N": w[:, 1], "m_Nm": w[:, 2]})
@@ -84,7 +84,7 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
         }
     contacts = {}
     warnings = []
-    for co in study.contacts:
+    for co in mfile.contacts:
         h = r.contacts[co.joint]
         name = f"contact_{co.joint}.csv"
         out.csv(name, {"t_s": r.ts, "force_N": h[:, 0], "normal_load_N": h[:, 1],
@@ -104,20 +104,20 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
                                              + 1e-300}))
     figures = [plots.stacked(out.file("trajectory.png"), r.ts, panels, xlabel="time [s]",
                              logy=[False, False, False, True][: len(panels)],
-                             title=f"{study.title or study.file}: body coordinates")]
-    if study.reactions:
+                             title=f"{mfile.title or mfile.file}: body coordinates")]
+    if mfile.reactions:
         figures.append(plots.stacked(out.file("reactions.png"), r.ts, [
             ("|F| [N]", {f"{o.joint} on {o.on}": np.hypot(r.reactions[o.joint][:, 0],
                                                            r.reactions[o.joint][:, 1])
-                         for o in study.reactions}),
+                         for o in mfile.reactions}),
             ("M about COM [N m]", {f"{o.joint} on {o.on}": r.reactions[o.joint][:, 2]
-                                   for o in study.reactions}),
-        ], xlabel="time [s]", title=f"{study.title or study.file}: joint reactions"))
+                                   for o in mfile.reactions}),
+        ], xlabel="time [s]", title=f"{mfile.title or mfile.file}: joint reactions"))
 
     wall = time.perf_counter() - started if started is not None else simulate_time
     summary = {
-        "file": study.file,
-        "title": study.title,
+        "file": mfile.file,
+        "title": mfile.title,
         "duration_s": sim.duration,
         "n_save": sim.n_save,
         "max_constraint_violation": max(by_joint.values(), default=0.0),
@@ -135,19 +135,19 @@ def write(study: Study, r: Results, out: OutputDir, *, steps: int, simulate_time
         if wear["stopped"]:
             summary["wear_stopped"] = wear["stopped"]
         figures.append(out.path / wear["figure"])
-    out.text("report.md", render(_report(study, summary, [f.name for f in figures])))
+    out.text("report.md", render(_report(mfile, summary, [f.name for f in figures])))
     out.json("summary.json", summary)
     fatal = [w for w, is_fatal in warnings if is_fatal]
     if fatal:  # the outputs are written; the run is reported as failed
-        raise SolverError(f"{study.file}: {fatal[0]} (results written to {out.path})")
+        raise SolverError(f"{mfile.file}: {fatal[0]} (results written to {out.path})")
     return summary
 
 
-def _report(study: Study, s: dict, figures: list[str]) -> Report:
-    mech, sim = study.mechanism, study.simulation
+def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
+    mech, sim = mfile.mechanism, mfile.simulation
     blocks: list[Block] = [
-        f"Mechanism file: `{study.file}` (copy: [input.toml](input.toml))."
-        + (f"  Source of the numbers: {study.source}." if study.source else ""),
+        f"Mechanism file: `{mfile.file}` (copy: [input.toml](input.toml))."
+        + (f"  Source of the numbers: {mfile.source}." if mfile.source else ""),
         f"{len(mech.bodies)} bodies ({', '.join(mech.body_names)}), "
         f"{len(mech.constraints)} joints ({', '.join(c.name for c in mech.constraints) or '-'}), "
         f"{len(mech.forces)} force elements ({', '.join(f.name for f in mech.forces) or '-'}); "
@@ -194,7 +194,7 @@ def _report(study: Study, s: dict, figures: list[str]) -> Report:
         "[summary.json](summary.json): the numbers above",
         "[trajectory.csv](trajectory.csv): t_s; every body's x_m, y_m, phi_rad (centre of "
         "mass), then vx_m_s, vy_m_s, omega_rad_s"]), *(Figure(f) for f in figures)]))
-    return Report(study.title or str(study.file), blocks)
+    return Report(mfile.title or str(mfile.file), blocks)
 
 
 def _to_limit(w: dict) -> str:
@@ -204,57 +204,57 @@ def _to_limit(w: dict) -> str:
     return f"not within the run's settings (to {w['limit_mm']:g} mm)" if "limit_mm" in w else "-"
 
 
-def run(study: Study, out_dir: str, *, overwrite: bool = False, input_text: str | None = None,
-        cycles: float | None = None, limit: float | None = None, model: str = "quasi-static",
-        method: str = "constant", resume: bool = False, progress: bool = False,
-        log: Callable[..., None] = print) -> dict:
+def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
+        input_text: str | None = None, cycles: float | None = None,
+        limit: float | None = None, model: str = "quasi-static", method: str = "constant",
+        resume: bool = False, progress: bool = False, log: Callable[..., None] = print) -> dict:
     """Assemble, integrate, write; with ``cycles`` also the wear of every
     clearance joint with a wear law (`diffwear.mechanism_file`) on ``model``
     ("quasi-static" or "dynamic", the latter with ``method`` and checkpoints
     in ``out_dir``, which ``resume=True`` continues), and with ``limit`` [m]
     the cycles to that depth.  Bad input fails before ``out_dir`` is touched."""
     started = time.perf_counter()
-    check_step_budget(study)
+    check_step_budget(mfile)
     if cycles is None and (resume or model != "quasi-static" or method != "constant"):
-        raise InputError("--model, --method and --resume belong to a wear study: give "
+        raise InputError("--model, --method and --resume belong to a wear mfile: give "
                          "--cycles N")
     if cycles is not None:
         check_wear_options(model, method, resume)
         if model == "dynamic":
-            mechanism_wear.dynamic_wear_joint(study)
-        mechanism_wear.bushing_walls(study, mechanism_wear.wearing_joints(study), limit)
-        mechanism_wear.drive_period(study)
-    y0 = initial_state(study)
-    check_motion(study, y0)
+            mechanism_wear.dynamic_wear_joint(mfile)
+        mechanism_wear.bushing_walls(mfile, mechanism_wear.wearing_joints(mfile), limit)
+        mechanism_wear.drive_period(mfile)
+    y0 = initial_state(mfile)
+    check_motion(mfile, y0)
     out = OutputDir(out_dir, overwrite=overwrite, resume=resume)
-    log(f"[{study.file}] integrating {study.simulation.duration:g} s (first run compiles) ...")
+    log(f"[{mfile.file}] integrating {mfile.simulation.duration:g} s (first run compiles) ...")
     t0 = time.perf_counter()
-    traj = jax.block_until_ready(integrate(study, y0))
+    traj = jax.block_until_ready(integrate(mfile, y0))
     simulate_time = time.perf_counter() - t0
-    results = postprocess(study, traj)
+    results = postprocess(mfile, traj)
     wear = None
     if cycles is not None:
-        log(f"[{study.file}] wear over {cycles:,.0f} cycles ({model} model) ...")
+        log(f"[{mfile.file}] wear over {cycles:,.0f} cycles ({model} model) ...")
         if model == "dynamic":
             evolved = mechanism_wear.evolve_file_dynamic(
-                study, y0, cycles=cycles, method=method, limit=limit, out=out, resume=resume,
+                mfile, y0, cycles=cycles, method=method, limit=limit, out=out, resume=resume,
                 progress=progress)
         else:
-            evolved = mechanism_wear.evolve_file(study, y0, cycles=cycles, limit=limit)
-        wear = write_wear(study, out, evolved, cycles=cycles, limit=limit)
-    summary = write(study, results, out, steps=int(traj.num_steps), simulate_time=simulate_time,
+            evolved = mechanism_wear.evolve_file(mfile, y0, cycles=cycles, limit=limit)
+        wear = write_wear(mfile, out, evolved, cycles=cycles, limit=limit)
+    summary = write(mfile, results, out, steps=int(traj.num_steps), simulate_time=simulate_time,
                     input_text=input_text, started=started, wear=wear)
     for w in summary["warnings"]:
         print(f"diffwear: warning: {w}", file=sys.stderr)
-    log(f"[{study.file}] max constraint violation {summary['max_constraint_violation']:.2e}; "
+    log(f"[{mfile.file}] max constraint violation {summary['max_constraint_violation']:.2e}; "
         f"report: {out.path / 'report.md'}")
     if wear is not None and wear["stopped"]:
-        raise SolverError(f"{study.file}: " + "; ".join(wear["stopped"])
+        raise SolverError(f"{mfile.file}: " + "; ".join(wear["stopped"])
                           + f"; stopped, results so far written to {out.path}")
     return summary
 
 
-def write_wear(study: Study, out: OutputDir, wear: dict, *, cycles: float,
+def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: float,
                limit: float | None) -> dict:
     """CSV files and a figure per joint; returns the summary's ``joints`` and
     warnings, and ``stopped``: a sentence per joint that wore through its wall
@@ -291,7 +291,7 @@ def write_wear(study: Study, out: OutputDir, wear: dict, *, cycles: float,
     figure = out.file("wear.png")
     plots.wear_panels(figure, {n: (w["theta"], w["depth"]) for n, w in wear.items()},
                       {n: (w["history_cycles"], w["history_peak"]) for n, w in wear.items()},
-                      title=f"{study.title or study.file}: wear after {cycles:,.0f} cycles "
+                      title=f"{mfile.title or mfile.file}: wear after {cycles:,.0f} cycles "
                             f"({models} model)")
     return {"joints": joints, "warnings": warnings, "figure": figure.name, "stopped": pierced}
 

@@ -1,6 +1,7 @@
-"""Mechanisms and simulation studies from TOML files (``diffwear run FILE.toml``).
+"""The input formats: mechanism files (``diffwear run FILE.toml``) and sweep
+files (`sweep.load_sweep`).
 
-`load` reads a file into a `Study` (mechanism, coordinate guess, integration
+`load` reads a file into a `MechanismFile` (mechanism, coordinate guess, integration
 settings, requested outputs); every problem is an `InputError` naming the file,
 the key path and what is allowed.  New element types register in
 `JOINT_TYPES` / `FORCE_TYPES` (see `elements`); units live in `units.DIMENSIONS`.
@@ -12,10 +13,10 @@ from .elements import FORCE_TYPES, JOINT_TYPES, ElementType, FieldError
 
 JOINT_TYPES["clearance"] = CLEARANCE
 from .loader import load, load_dict, loads
-from .study import ContactOutput, ReactionOutput, Simulation, Study
+from .mechanism_file import ContactOutput, MechanismFile, ReactionOutput, Simulation
 
 __all__ = [
     "schema", "units", "FORCE_TYPES", "JOINT_TYPES", "ElementType", "FieldError", "load",
     "load_dict", "loads",
-    "ContactOutput", "ReactionOutput", "Simulation", "Study",
+    "ContactOutput", "ReactionOutput", "Simulation", "MechanismFile",
 ]

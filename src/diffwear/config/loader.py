@@ -1,4 +1,4 @@
-"""Read a mechanism file (TOML, stdlib `tomllib`) into a `Study`.
+"""Read a mechanism file (TOML, stdlib `tomllib`) into a `MechanismFile`.
 
 Top level (see README "Mechanism files"):
 
@@ -31,6 +31,18 @@ from ..choices import SHIPPED_MECHANISMS, shipped_mechanism_names
 from ..errors import InputError
 from ..mechanism import GROUND, AbstractForceElement, Body, Mechanism
 from .elements import FORCE_TYPES, JOINT_TYPES, ElementType, FieldError
+from .mechanism_file import (
+    DEFAULT_ALPHA,
+    DEFAULT_ATOL,
+    DEFAULT_BETA,
+    DEFAULT_MAX_STEPS,
+    DEFAULT_N_SAVE,
+    DEFAULT_RTOL,
+    ContactOutput,
+    MechanismFile,
+    ReactionOutput,
+    Simulation,
+)
 from .schema import (
     NAME_RULE,
     Context,
@@ -46,18 +58,6 @@ from .schema import (
     show,
     suggest,
     toml_type,
-)
-from .study import (
-    DEFAULT_ALPHA,
-    DEFAULT_ATOL,
-    DEFAULT_BETA,
-    DEFAULT_MAX_STEPS,
-    DEFAULT_N_SAVE,
-    DEFAULT_RTOL,
-    ContactOutput,
-    ReactionOutput,
-    Simulation,
-    Study,
 )
 
 SECTIONS = ("title", "source", "bodies", "joints", "forces", "initial", "simulation", "outputs")
@@ -112,7 +112,7 @@ def resolve(path: str | Path) -> Path:
     return candidate
 
 
-def load(path: str | Path) -> Study:
+def load(path: str | Path) -> MechanismFile:
     """Load a mechanism file (a path, or the name of a shipped one:
     `shipped_mechanisms`); raise `InputError` naming the file for any problem."""
     path = resolve(path)
@@ -149,7 +149,7 @@ def decode(data: bytes, file: str, note: str = "TOML files are UTF-8") -> str:
     return text.removeprefix("\ufeff")
 
 
-def loads(source: str | bytes, file: str = "<string>") -> Study:
+def loads(source: str | bytes, file: str = "<string>") -> MechanismFile:
     """Load mechanism-file text (``file`` names it in messages)."""
     text = decode(source, file) if isinstance(source, bytes) else source
     if not text.strip():
@@ -163,8 +163,8 @@ def loads(source: str | bytes, file: str = "<string>") -> Study:
     return load_dict(data, file=file)
 
 
-def load_dict(data: Mapping, file: str = "<dict>") -> Study:
-    """Build a `Study` from parsed TOML (a dict of dicts, lists and scalars)."""
+def load_dict(data: Mapping, file: str = "<dict>") -> MechanismFile:
+    """Build a `MechanismFile` from parsed TOML (a dict of dicts, lists and scalars)."""
     ctx = Context(file)
     if not isinstance(data, Mapping):
         raise ctx.error("(top level)", f"expected a table, got {toml_type(data)}")
@@ -197,7 +197,7 @@ def load_dict(data: Mapping, file: str = "<dict>") -> Study:
         raise InputError(f"{file}: {err}") from None
     reactions, contacts = _outputs(ctx, data.get("outputs", {}), mechanism)
 
-    return Study(
+    return MechanismFile(
         file=file,
         title=title,
         source=source,

@@ -1,4 +1,4 @@
-"""A loaded mechanism file (`diffwear.config.Study`) run as a whole: its motion
+"""A loaded mechanism file (`diffwear.config.MechanismFile`) run as a whole: its motion
 (`motion`: initial state, trajectory, reactions, contacts, up-front checks)
 and the wear of its clearance joints (`wear`: quasi-static or dynamic, each
 joint stopped at its bushing wall).  ``diffwear run FILE`` writes what these

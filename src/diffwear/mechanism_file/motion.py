@@ -19,8 +19,8 @@ import equinox as eqx
 import jax
 import numpy as np
 
-from ..config import Study
-from ..config.study import Simulation
+from ..config import MechanismFile
+from ..config.mechanism_file import Simulation
 from ..contact import centred_state, contact_history
 from ..dynamics import (
     along_trajectory,
@@ -39,26 +39,26 @@ from ..quasistatic.loads import fully_driven, ideal_parent
 _consistent_state = eqx.filter_jit(functools.partial(consistent_state, check=False))
 
 
-def initial_state(study: Study):
+def initial_state(mfile: MechanismFile):
     """Consistent y0 = [q, qd, aux] at t = 0 from the file's ``[initial]`` guess;
     `InputError` if the mechanism does not assemble near it.
 
     Same result as ``consistent_state(mech, q_guess)`` but compiled (the eager
     Newton iteration costs seconds); the check then runs on concrete values.
-    With clearance joints the assembly is that of ``study.assembly`` (each one
+    With clearance joints the assembly is that of ``mfile.assembly`` (each one
     an ideal revolute at the same points): the pins start centred with the
     ideal joints' velocities, and the contact states at their initial values.
     """
-    mech = study.mechanism if study.assembly is None else study.assembly
-    y0 = _consistent_state(mech, study.q_guess)
+    mech = mfile.mechanism if mfile.assembly is None else mfile.assembly
+    y0 = _consistent_state(mech, mfile.q_guess)
     finite = bool(np.all(np.isfinite(np.asarray(y0))))
     try:
-        check_assembly(mech, y0[: mech.n_coords], finite, q_guess=study.q_guess)
+        check_assembly(mech, y0[: mech.n_coords], finite, q_guess=mfile.q_guess)
     except InputError as err:
-        raise InputError(f"{study.file}: initial: {err}") from None
-    if study.assembly is None:
+        raise InputError(f"{mfile.file}: initial: {err}") from None
+    if mfile.assembly is None:
         return y0
-    return centred_state(mech, y0, study.mechanism)
+    return centred_state(mech, y0, mfile.mechanism)
 
 
 @eqx.filter_jit
@@ -67,10 +67,10 @@ def _integrate(mech: Mechanism, y0, sim: Simulation) -> Trajectory:
                     stepsize_controller=sim.controller(), max_steps=sim.max_steps)
 
 
-def integrate(study: Study, y0) -> Trajectory:
-    """The study's trajectory; `SolverError` (naming the file) if the solve failed."""
-    traj = _integrate(study.mechanism, y0, study.simulation)
-    return traj.raise_if_failed(study.file, study.mechanism)
+def integrate(mfile: MechanismFile, y0) -> Trajectory:
+    """The mfile's trajectory; `SolverError` (naming the file) if the solve failed."""
+    traj = _integrate(mfile.mechanism, y0, mfile.simulation)
+    return traj.raise_if_failed(mfile.file, mfile.mechanism)
 
 
 class Results(NamedTuple):
@@ -106,10 +106,10 @@ def _post(mech: Mechanism, ts, ys, sim: Simulation, outputs):
     return q, qd, phi, wrenches
 
 
-def postprocess(study: Study, traj: Trajectory) -> Results:
-    q, qd, phi, wrenches = _post(study.mechanism, traj.ts, traj.ys, study.simulation,
-                                 study.reactions)
-    contacts = _contacts(study.mechanism, traj.ys, tuple(o.joint for o in study.contacts))
+def postprocess(mfile: MechanismFile, traj: Trajectory) -> Results:
+    q, qd, phi, wrenches = _post(mfile.mechanism, traj.ts, traj.ys, mfile.simulation,
+                                 mfile.reactions)
+    contacts = _contacts(mfile.mechanism, traj.ys, tuple(o.joint for o in mfile.contacts))
     return Results(np.asarray(traj.ts), np.asarray(q), np.asarray(qd), np.asarray(phi),
                    {k: np.asarray(v) for k, v in wrenches.items()},
                    {k: np.asarray(v) for k, v in contacts.items()})
@@ -153,11 +153,11 @@ def contact_warnings(joint, contact: dict) -> list[tuple[str, bool]]:
 MIN_STEPS_PER_REVOLUTION = 500
 
 
-def check_step_budget(study: Study) -> None:
+def check_step_budget(mfile: MechanismFile) -> None:
     """Refuse up front a run whose drivers turn more revolutions than the step
     budget (``max_steps``) can take at `MIN_STEPS_PER_REVOLUTION`."""
-    sim = study.simulation
-    for c in study.mechanism.constraints:
+    sim = mfile.simulation
+    for c in mfile.mechanism.constraints:
         omega = getattr(c, "omega", None)
         if omega is None:
             continue
@@ -165,7 +165,7 @@ def check_step_budget(study: Study) -> None:
         need = turns * MIN_STEPS_PER_REVOLUTION
         if need > sim.max_steps:
             raise InputError(
-                f"{study.file}: driver {c.name!r} turns {turns:.3g} revolutions in "
+                f"{mfile.file}: driver {c.name!r} turns {turns:.3g} revolutions in "
                 f"{sim.duration:g} s: at least {need:.2g} integrator steps, beyond the budget "
                 f"max_steps = {sim.max_steps:,}; allowed: a speed or duration within it, "
                 "or a larger [simulation] max_steps")
@@ -175,22 +175,22 @@ def check_step_budget(study: Study) -> None:
 MOTION_SAMPLES = 73
 
 
-def check_motion(study: Study, y0) -> None:
+def check_motion(mfile: MechanismFile, y0) -> None:
     """Refuse up front a linkage that cannot move through its cycle (links too
     short to reach, a crank that cannot turn fully, a dead point): the ideal
     mechanism (clearance joints taken as revolute joints) is closed at
     `MOTION_SAMPLES` instants over one revolution of its first driver (or the
     run's duration, if shorter).  Mechanisms the drivers do not fully
     determine are not checked (their motion is not kinematic)."""
-    ideal = ideal_parent(study.mechanism)
+    ideal = ideal_parent(mfile.mechanism)
     driver = first_driver(ideal)
     if driver is None or not fully_driven(ideal):
         return
-    sim = study.simulation
+    sim = mfile.simulation
     span = min(sim.duration, 2 * math.pi / abs(float(driver.omega)))
     q0, _, _ = ideal.split(y0)
     ts = np.linspace(0.0, span, MOTION_SAMPLES)
-    check_cycle_motion(ideal, q0, ts, what=str(study.file), driver=f"driver {driver.name!r}")
+    check_cycle_motion(ideal, q0, ts, what=str(mfile.file), driver=f"driver {driver.name!r}")
 
 
 __all__ = ["Results", "check_motion", "check_step_budget", "contact_warnings", "first_driver",

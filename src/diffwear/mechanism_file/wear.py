@@ -21,7 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import require_float64
-from ..config import Study
+from ..config import MechanismFile
 from ..contact.clearance_joint import ClearanceJoint
 from ..errors import InputError
 from ..io import OutputDir
@@ -33,46 +33,46 @@ from .motion import first_driver
 FILE_WEAR_SLOTS = 2000
 
 
-def wearing_joints(study: Study) -> tuple[str, ...]:
+def wearing_joints(mfile: MechanismFile) -> tuple[str, ...]:
     """Names of the clearance joints with a wear law; `InputError` if none."""
-    names = tuple(f.name for f in study.mechanism.forces
+    names = tuple(f.name for f in mfile.mechanism.forces
                   if isinstance(f, ClearanceJoint) and f.wear is not None)
     if not names:
-        raise InputError(f"{study.file}: the mechanism has no clearance joint with a wear law "
+        raise InputError(f"{mfile.file}: the mechanism has no clearance joint with a wear law "
                          "to wear; allowed: a [[joints]] type = \"clearance\" entry with "
                          "wear = { coefficient = ... }")
     return names
 
 
-def drive(study: Study) -> Driver:
+def drive(mfile: MechanismFile) -> Driver:
     """The first driver with a non-zero speed: its revolution is the cycle."""
-    driver = first_driver(study.mechanism)
+    driver = first_driver(mfile.mechanism)
     if driver is not None:
         return driver
-    raise InputError(f"{study.file}: a wear study needs a driver with a non-zero speed (the "
+    raise InputError(f"{mfile.file}: a wear mfile needs a driver with a non-zero speed (the "
                      "crank cycle); allowed: a [[joints]] type = \"driver\" entry")
 
 
-def drive_period(study: Study) -> float:
+def drive_period(mfile: MechanismFile) -> float:
     """2 pi / |omega| of `drive`: the period of one cycle [s]."""
-    return 2 * math.pi / abs(float(drive(study).omega))
+    return 2 * math.pi / abs(float(drive(mfile).omega))
 
 
-def bushing_walls(study: Study, joints, limit: float | None = None) -> list[float]:
+def bushing_walls(mfile: MechanismFile, joints, limit: float | None = None) -> list[float]:
     """Per joint, its bushing wall thickness [m] (the elastic foundation's
     layer thickness; infinite where the file states none); `InputError` for a
     depth ``limit`` the wall does not allow."""
-    stated = dict(study.bushing_walls)
+    stated = dict(mfile.bushing_walls)
     walls = [stated.get(name, math.inf) for name in joints]
     for name, wall in zip(joints, walls):
         if limit is not None and limit >= wall:
-            raise InputError(f"{study.file}: --limit {limit * 1e3:g} mm is not less than the "
+            raise InputError(f"{mfile.file}: --limit {limit * 1e3:g} mm is not less than the "
                              f"bushing wall of clearance joint {name!r} ({wall * 1e3:g} mm): "
                              "the joint wears through first; allowed: a limit below the wall")
     return walls
 
 
-def evolve_file(study: Study, y0, *, cycles: float, limit: float | None = None,
+def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None = None,
                 model: QuasiStatic | None = None) -> dict:
     """Per joint: depth profile [m], grid angles, peak-depth history, volume
     [m^3], status, and (with ``limit`` [m]) the cycles to reach it."""
@@ -81,10 +81,10 @@ def evolve_file(study: Study, y0, *, cycles: float, limit: float | None = None,
     # peak grows slower than the step rule expects (slots after the end cost
     # nothing; the four-bar example's joint needs ~12x the 40 steps to its wall)
     model = QuasiStatic(max_steps=FILE_WEAR_SLOTS) if model is None else model
-    joints = wearing_joints(study)
-    period = drive_period(study)
-    walls = bushing_walls(study, joints, limit)
-    mech = study.mechanism
+    joints = wearing_joints(mfile)
+    period = drive_period(mfile)
+    walls = bushing_walls(mfile, joints, limit)
+    mech = mfile.mechanism
     res = jax.jit(lambda y: model.evolve(mech, joints, y, period=period, cycles=cycles,
                                          wall_thickness=walls))(y0)
     life = None
@@ -112,24 +112,24 @@ def evolve_file(study: Study, y0, *, cycles: float, limit: float | None = None,
 
 
 # Dynamic cycles simulated by a file's dynamic wear run with constant
-# extrapolation (A = cycles / this), as the Ch. 7 rig study; the adaptive and
+# extrapolation (A = cycles / this), as the Ch. 7 rig mfile; the adaptive and
 # error-controlled methods get 4x as many scan slots.
 DYNAMIC_CYCLES = 50
 
 
-def dynamic_wear_joint(study: Study) -> tuple[str, ...]:
+def dynamic_wear_joint(mfile: MechanismFile) -> tuple[str, ...]:
     """The one wearing joint the dynamic model evolves; `InputError` if the
     file has more."""
-    joints = wearing_joints(study)
+    joints = wearing_joints(mfile)
     if len(joints) > 1:
-        raise InputError(f"{study.file}: the dynamic wear model evolves one clearance joint over "
+        raise InputError(f"{mfile.file}: the dynamic wear model evolves one clearance joint over "
                          f"a fixed number of cycles; this file wears {len(joints)} "
                          f"({', '.join(joints)}); allowed: --model quasi-static, or one joint "
                          "with a wear law")
     return joints
 
 
-def evolve_file_dynamic(study: Study, y0, *, cycles: float, method: str = "constant",
+def evolve_file_dynamic(mfile: MechanismFile, y0, *, cycles: float, method: str = "constant",
                         limit: float | None = None, out: OutputDir | None = None,
                         resume: bool = False, progress: bool = False) -> dict:
     """`evolve_file` on the dynamic model (the reference: the mechanism with
@@ -141,16 +141,16 @@ def evolve_file_dynamic(study: Study, y0, *, cycles: float, method: str = "const
     from ..wear.model import Dynamic
 
     require_float64("wear of a mechanism file")
-    joints = dynamic_wear_joint(study)
+    joints = dynamic_wear_joint(mfile)
     (name,) = joints
-    period = drive_period(study)
-    walls = bushing_walls(study, joints, limit)
-    mech = study.mechanism
+    period = drive_period(mfile)
+    walls = bushing_walls(mfile, joints, limit)
+    mech = mfile.mechanism
     el = mech.element(name)
-    meta = {"study": f"run {Path(study.file).name}", "model": "dynamic",
+    meta = {"mfile": f"run {Path(mfile.file).name}", "model": "dynamic",
             "limit_mm": None if limit is None else round(limit * 1e3, 12),
             # the checkpoint of another file (or an edited one) is not resumed
-            "file_crc32": f"{zlib.crc32(Path(study.file).read_bytes()):08x}"}
+            "file_crc32": f"{zlib.crc32(Path(mfile.file).read_bytes()):08x}"}
     res, compile_time, wall_time, info = run_evolution(
         lambda _: mech, jnp.zeros(()), y0, cycles, period, method=method,
         extrapolation=default_constant_a(cycles, DYNAMIC_CYCLES),

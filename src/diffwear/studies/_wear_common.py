@@ -121,14 +121,14 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
     n_slots = make(p).n_slots
     run = ChunkedEvolution(make, p, y0, max(1, math.ceil(n_slots / chunks)))
     compile_time = run.compile()
-    done0 = 0.0 if start is None else float(start.state["n"])
+    done0 = 0.0 if start is None else float(start.state.n)
     bar = tqdm(total=float(cycles), initial=done0, unit="cycle", disable=not progress,
                desc=meta.get("study", "wear"), dynamic_ncols=True,
                bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} cycles [{elapsed}<{remaining}]")
 
     def on_chunk(ck):
         save_checkpoint(path, ck, meta)
-        bar.update(float(ck.state["n"]) - bar.n)
+        bar.update(float(ck.state.n) - bar.n)
 
     t0 = time.perf_counter()
     try:
@@ -217,7 +217,8 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
         fem=fem if contact == "fem" else None)
     extra_summary["contact"] = contact
     if contact == "fem":
-        fem_summary = {"explicit_fallback_cycles": int(np.asarray(res.state["fem_explicit"])),
+        fallback = res.state.memory["fem_explicit"]
+        fem_summary = {"explicit_fallback_cycles": int(np.asarray(fallback)),
                        **route_numbers(res, design, wt, ct)}
         ratio = wt / efm_wt
         extra_summary.update(

@@ -13,6 +13,7 @@ from .evolution import (
     Checkpoint,
     ChunkedEvolution,
     EvolutionResult,
+    EvolutionState,
     Evolver,
     WearLimitError,
     evolve,
@@ -50,5 +51,6 @@ __all__ = [
     "STATUS_TEXT",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "AbstractExtrapolation", "Constant", "Adaptive", "ErrorControlled",
-    "Evolver", "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint",
+    "Evolver", "EvolutionState", "ChunkedEvolution", "Checkpoint", "save_checkpoint",
+    "load_checkpoint",
 ]

@@ -43,6 +43,7 @@ the evolution stops updating, keeps the results so far and reports ``status``;
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import math
@@ -87,6 +88,46 @@ def worn_volume(depth_profile, bushing_radius, bushing_depth) -> Float[Array, ""
     return bushing_depth * bushing_radius * (2 * jnp.pi / n) * jnp.sum(depth_profile, axis=-1)
 
 
+class EvolutionState(eqx.Module):
+    """Where a wear evolution stands after some scan slots: the carry of
+    ``lax.scan`` and what a checkpoint holds.  ``memory``: what the
+    extrapolation strategy (e.g. `Adaptive`'s current A) or the pressure route
+    (the FEM compliance) keeps between slots, by name."""
+
+    h: Float[Array, " n"]               # wear depth on the profile grid [m]
+    y: Float[Array, " s"]               # mechanism state
+    t: Float[Array, ""]                 # simulated time [s]
+    n: Float[Array, ""]                 # real cycles represented
+    dyn: Array                          # dynamic cycles simulated (incl. warm-up)
+    ls: Float[Array, ""]                # A-weighted sum of int N ds [N m]
+    status: Array                       # `wear.status` code
+    fail_n: Float[Array, ""]            # cycles when it stopped (0 while running)
+    fail_h: Float[Array, ""]            # max depth when it stopped [m]
+    memory: dict = eqx.field(default_factory=dict)
+
+    def replace(self, **changes) -> EvolutionState:
+        """A copy with the named fields changed; memory entries by their names."""
+        memory = {k: changes.pop(k) for k in list(changes) if k not in _STATE_FIELDS}
+        if memory:
+            changes["memory"] = {**self.memory, **memory}
+        return dataclasses.replace(self, **changes)
+
+    def as_dict(self) -> dict:
+        """Flat name -> array (fields, then memory): the checkpoint's layout."""
+        return {**{k: getattr(self, k) for k in _STATE_FIELDS}, **self.memory}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> EvolutionState:
+        missing = [k for k in _STATE_FIELDS if k not in d]
+        if missing:
+            raise InputError(f"evolution state without {missing}")
+        return cls(**{k: d[k] for k in _STATE_FIELDS},
+                   memory={k: v for k, v in d.items() if k not in _STATE_FIELDS})
+
+
+_STATE_FIELDS = ("h", "y", "t", "n", "dyn", "ls", "status", "fail_n", "fail_h")
+
+
 class EvolutionResult(eqx.Module):
     """Final wear profile and state, counters, and per-slot history.
 
@@ -104,7 +145,7 @@ class EvolutionResult(eqx.Module):
     fail_cycles: Float[Array, ""]       # real cycles done when it stopped
     fail_depth: Float[Array, ""]        # max depth when it stopped [m]
     history: dict
-    state: dict | None = None           # evolution state at the end (`Evolver`): resumable
+    state: EvolutionState | None = None  # evolution state at the end (`Evolver`): resumable
 
     def check(self, what: str = "wear evolution") -> "EvolutionResult":
         """Raise `WearLimitError` (carrying this result) if the run stopped early."""
@@ -157,7 +198,7 @@ def evolve(
     cycle_atol: float = CYCLE_ATOL,
     adjoint=None,
     max_steps: int = 200_000,
-    start: dict | None = None,
+    start: EvolutionState | None = None,
     slots: int | None = None,
 ) -> EvolutionResult:
     """Evolve the wear of clearance joint ``joint`` over ``cycles`` real cycles.
@@ -188,15 +229,14 @@ def evolve(
 
 
 class Evolver:
-    """The wear evolution as an explicit state machine: `init` (warm-up, initial
-    state pytree), `run` (``lax.scan`` over scan slots from a state), `result`.
+    """The wear evolution as an explicit state machine: `init` (warm-up, the
+    initial `EvolutionState`), `run` (``lax.scan`` over scan slots from a
+    state, each slot one step of the extrapolation strategy), `result`.
 
-    The state is a dict of arrays: profile ``h``, mechanism state ``y``, time
-    ``t``, real cycles ``n``, dynamic cycles ``dyn``, load-sliding sum ``ls``,
-    ``status``/``fail_n``/``fail_h``, and the method's memory (``a``, ``dh_prev``
-    for "adaptive"; ``dn``, ``have_k1``, ``k1``, ``ls1`` for "error").  Running
-    the slots in several scans, each from the state the previous one returned,
-    computes exactly what one scan does.  Pure Python bookkeeping around pure
+    The strategy keeps its memory in ``EvolutionState.memory`` (``a``,
+    ``dh_prev`` for `Adaptive`; ``dn``, ``have_k1``, ``k1``, ``ls1`` for
+    `ErrorControlled`).  Running the slots in several scans, each from the
+    state the previous one returned, computes exactly what one scan does.  Pure Python bookkeeping around pure
     functions: build it inside a jitted function from traced mechanism leaves.
     """
 
@@ -226,43 +266,40 @@ class Evolver:
         return wear_cycle(_with_profile(self.mech, self.index, self.c_base + h), self.joint,
                           y, t, self.period, n_save=n_save, **self.cycle_kw)
 
-    def finish(self, c, h_new, y_new, t_new, dn, dls, ok):
+    def finish(self, c: EvolutionState, h_new, y_new, t_new, dn, dls, ok) -> EvolutionState:
         """Accept a step unless it failed (then stop, keep the old state).  A
         step that wears through the wall is cut to the fraction of it at which
         the first node reaches the wall (the step is linear in its length), and
         the evolution stops there: it reports the cycles and depth at the wall."""
-        dh = h_new - c["h"]
+        dh = h_new - c.h
         # double where: no infinite wall in the division (its gradient is NaN)
-        room = jnp.where(jnp.isfinite(self.wall), self.wall - c["h"], 0.0)
+        room = jnp.where(jnp.isfinite(self.wall), self.wall - c.h, 0.0)
         pierced = ok & (jnp.max(h_new) >= self.wall)
         rising = dh > 0.0
         fraction = jnp.clip(jnp.min(jnp.where(rising, room / jnp.where(rising, dh, 1.0),
                                               jnp.inf)), 0.0, 1.0)
         f = jnp.where(pierced, fraction, 1.0)
         status = jnp.where(~ok, STATUS_SOLVER, jnp.where(pierced, STATUS_PIERCED, STATUS_OK))
-        out = dict(c)
-        out["h"] = jnp.where(ok, c["h"] + f * dh, c["h"])
-        out["y"] = jnp.where(ok, y_new, c["y"])
-        out["t"] = jnp.where(ok, t_new, c["t"])
-        out["n"] = jnp.where(ok, c["n"] + f * dn, c["n"])
-        out["ls"] = jnp.where(ok, c["ls"] + f * dls, c["ls"])
-        out["status"] = status
-        out["fail_n"] = jnp.where(~ok, c["n"] + dn, jnp.where(pierced, out["n"], 0.0))
-        out["fail_h"] = jnp.where(~ok, jnp.max(h_new), jnp.where(pierced, jnp.max(out["h"]), 0.0))
-        return out
+        h = jnp.where(ok, c.h + f * dh, c.h)
+        n = jnp.where(ok, c.n + f * dn, c.n)
+        return c.replace(
+            h=h, y=jnp.where(ok, y_new, c.y), t=jnp.where(ok, t_new, c.t), n=n,
+            ls=jnp.where(ok, c.ls + f * dls, c.ls), status=status,
+            fail_n=jnp.where(~ok, c.n + dn, jnp.where(pierced, n, 0.0)),
+            fail_h=jnp.where(~ok, jnp.max(h_new), jnp.where(pierced, jnp.max(h), 0.0)))
 
     def record(self, c, a, valid):
         """One history entry (one per scan slot)."""
-        return dict(cycles=c["n"], max_depth=jnp.max(c["h"]),
-                    volume=worn_volume(c["h"], self.radius, self.bdepth), extrapolation=a,
-                    valid=valid, dynamic_cycles=c["dyn"])
+        return dict(cycles=c.n, max_depth=jnp.max(c.h),
+                    volume=worn_volume(c.h, self.radius, self.bdepth), extrapolation=a,
+                    valid=valid, dynamic_cycles=c.dyn)
 
     def idle_record(self, c):
         """The history entry of a slot after the end (what `run` records there)."""
         return self.record(c, jnp.zeros(()), jnp.array(False))
 
     def active(self, c):
-        return (c["status"] == STATUS_OK) & (c["n"] < self.cycles_arr - 1e-9)
+        return (c.status == STATUS_OK) & (c.n < self.cycles_arr - 1e-9)
 
     def when_active(self, do, c):
         """``do(c) -> (state, A)`` if the evolution is still running, else a
@@ -272,7 +309,7 @@ class Evolver:
         return c2, a_i, go
 
     # ------------------------------------------------------------------ state
-    def init(self, y0) -> dict:
+    def init(self, y0) -> EvolutionState:
         """Warm-up cycles (wear discarded), then the initial evolution state."""
         h0 = jnp.zeros_like(self.c_base)
         y, t = y0, jnp.zeros(())
@@ -280,36 +317,35 @@ class Evolver:
         for _ in range(self.warmup_cycles):
             r = self.run_cycle(h0, y, t)
             y, t, warm_ok = r.y_end, t + self.period, warm_ok & r.ok
-        c = dict(h=h0, y=y, t=t, n=jnp.zeros(()), dyn=jnp.asarray(self.warmup_cycles),
-                 ls=jnp.zeros(()), status=jnp.where(warm_ok, STATUS_OK, STATUS_SOLVER),
-                 fail_n=jnp.zeros(()), fail_h=jnp.zeros(()))
+        c = EvolutionState(h=h0, y=y, t=t, n=jnp.zeros(()), dyn=jnp.asarray(self.warmup_cycles),
+                           ls=jnp.zeros(()), status=jnp.where(warm_ok, STATUS_OK, STATUS_SOLVER),
+                           fail_n=jnp.zeros(()), fail_h=jnp.zeros(()))
         return self.strategy.init(self, c)
 
-    def run(self, state: dict, length: int):
+    def run(self, state: EvolutionState, length: int):
         """``length`` scan slots from ``state``: (new state, history of these slots)."""
         return lax.scan(functools.partial(self.strategy.step, self), state, None,
                         length=int(length))
 
-    def result(self, final: dict, hist: dict) -> EvolutionResult:
+    def result(self, final: EvolutionState, hist: dict) -> EvolutionResult:
         # all scan slots used before reaching ``cycles``: say so, never return a short run
-        short = (final["status"] == STATUS_OK) & (final["n"] < self.cycles_arr - 1e-6)
+        short = (final.status == STATUS_OK) & (final.n < self.cycles_arr - 1e-6)
         return EvolutionResult(
-            depth=final["h"], y=final["y"], t=final["t"], cycles=final["n"],
-            dynamic_cycles=final["dyn"], load_sliding=final["ls"],
-            status=jnp.where(short, STATUS_INCOMPLETE, final["status"]),
-            fail_cycles=jnp.where(short, final["n"], final["fail_n"]),
-            fail_depth=jnp.where(short, jnp.max(final["h"]), final["fail_h"]), history=hist,
+            depth=final.h, y=final.y, t=final.t, cycles=final.n, dynamic_cycles=final.dyn,
+            load_sliding=final.ls, status=jnp.where(short, STATUS_INCOMPLETE, final.status),
+            fail_cycles=jnp.where(short, final.n, final.fail_n),
+            fail_depth=jnp.where(short, jnp.max(final.h), final.fail_h), history=hist,
             state=final,
         )
 
 
 # ------------------------------------------------------- chunks and checkpoints
 class Checkpoint(NamedTuple):
-    """Where a chunked evolution stands: ``state`` (`Evolver` state, numpy),
+    """Where a chunked evolution stands: ``state`` (`EvolutionState`, numpy),
     ``history`` (per-slot history of the slots run so far, numpy) and
     ``slots_done`` (scan slots run, possibly past the end on the last chunk)."""
 
-    state: dict
+    state: EvolutionState
     history: dict
     slots_done: int
 
@@ -349,8 +385,7 @@ class ChunkedEvolution:
         return time.perf_counter() - t0
 
     def done(self, state) -> bool:
-        return not (int(state["status"]) == STATUS_OK
-                    and float(state["n"]) < self.cycles - 1e-9)
+        return not (int(state.status) == STATUS_OK and float(state.n) < self.cycles - 1e-9)
 
     def run(self, start: Checkpoint | None = None, on_chunk=None) -> EvolutionResult:
         p = self._p
@@ -387,7 +422,7 @@ def _as_numpy(tree):
 def save_checkpoint(path, ckpt: Checkpoint, meta: dict) -> None:
     """Write ``ckpt`` and ``meta`` (JSON-able) to ``path`` (.npz) atomically."""
     path = Path(path)
-    arrays = {f"state.{k}": np.asarray(v) for k, v in ckpt.state.items()}
+    arrays = {f"state.{k}": np.asarray(v) for k, v in ckpt.state.as_dict().items()}
     arrays.update({f"history.{k}": np.asarray(v) for k, v in ckpt.history.items()})
     arrays["slots_done"] = np.asarray(ckpt.slots_done)
     arrays["meta"] = np.asarray(json.dumps(meta))
@@ -403,9 +438,10 @@ def load_checkpoint(path) -> tuple[Checkpoint, dict]:
     """Read a checkpoint written by `save_checkpoint`: (checkpoint, meta)."""
     try:
         with np.load(path, allow_pickle=False) as z:
-            state = {k[6:]: z[k] for k in z.files if k.startswith("state.")}
+            state = EvolutionState.from_dict(
+                {k[6:]: z[k] for k in z.files if k.startswith("state.")})
             hist = {k[8:]: z[k] for k in z.files if k.startswith("history.")}
             slots, meta = int(z["slots_done"]), json.loads(str(z["meta"]))
-    except (OSError, KeyError, ValueError) as err:
+    except (OSError, KeyError, ValueError, InputError) as err:
         raise InputError(f"cannot read checkpoint {path}: {err}") from err
     return Checkpoint(state, hist, slots), meta

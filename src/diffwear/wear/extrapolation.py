@@ -27,7 +27,7 @@ from ..choices import WEAR_METHODS
 from ..errors import InputError
 
 if TYPE_CHECKING:  # the evolution drives the strategy; no import at run time
-    from .evolution import Evolver
+    from .evolution import EvolutionState, Evolver
 
 ADAPTIVE_CRITERIA = ("increment_change", "pressure_jump")
 
@@ -45,11 +45,11 @@ class AbstractExtrapolation(eqx.Module):
             raise InputError(f"max_dynamic must be >= 1, got {max_dynamic}")
         return int(max_dynamic)
 
-    def init(self, ev: Evolver, c: dict) -> dict:
+    def init(self, ev: Evolver, c: EvolutionState) -> EvolutionState:
         """The strategy's memory added to the initial evolution state."""
         return c
 
-    def step(self, ev: Evolver, c: dict, _):
+    def step(self, ev: Evolver, c: EvolutionState, _):
         """One scan slot: (new state, history entry)."""
         raise NotImplementedError
 
@@ -71,14 +71,13 @@ class Constant(AbstractExtrapolation):
             raise InputError(f"cycles must be > 0, got {cycles}")
         return int(math.ceil(float(cycles) / float(self.a) - 1e-9))
 
-    def step(self, ev: Evolver, c: dict, _):
+    def step(self, ev: Evolver, c: EvolutionState, _):
         def do(c):
-            a_i = jnp.minimum(float(self.a), ev.cycles_arr - c["n"])
-            r = ev.run_cycle(c["h"], c["y"], c["t"])
-            out = ev.finish(c, c["h"] + a_i * r.depth_increment, r.y_end,
-                            c["t"] + ev.period, a_i, a_i * r.load_sliding, r.ok)
-            out["dyn"] = c["dyn"] + 1
-            return out, a_i
+            a_i = jnp.minimum(float(self.a), ev.cycles_arr - c.n)
+            r = ev.run_cycle(c.h, c.y, c.t)
+            out = ev.finish(c, c.h + a_i * r.depth_increment, r.y_end,
+                            c.t + ev.period, a_i, a_i * r.load_sliding, r.ok)
+            return out.replace(dyn=c.dyn + 1), a_i
 
         c2, a_i, go = ev.when_active(do, c)
         return c2, ev.record(c2, a_i, go)
@@ -116,19 +115,19 @@ class Adaptive(AbstractExtrapolation):
             raise InputError(f"adaptive criterion must be 'increment_change' or "
                              f"'pressure_jump', got {self.criterion!r}")
 
-    def init(self, ev: Evolver, c: dict) -> dict:
+    def init(self, ev: Evolver, c: EvolutionState) -> EvolutionState:
         a0 = (jnp.maximum(jnp.round(self.a0_fraction * ev.cycles_arr), 1.0)
               if self.a0 in (None, 1.0) else jnp.asarray(self.a0, dtype=float))
-        return {**c, "a": a0, "dh_prev": jnp.zeros_like(c["h"])}
+        return c.replace(a=a0, dh_prev=jnp.zeros_like(c.h))
 
-    def step(self, ev: Evolver, c: dict, _):
+    def step(self, ev: Evolver, c: EvolutionState, _):
         ca = ev.cycles_arr
         a_inc = jnp.maximum(jnp.round(self.inc_fraction * ca), 1.0)
         a_dec = jnp.maximum(jnp.round(self.dec_fraction * ca), 1.0)
 
         def do(c):
-            a_i = jnp.minimum(c["a"], ca - c["n"])
-            r = ev.run_cycle(c["h"], c["y"], c["t"])
+            a_i = jnp.minimum(c.memory["a"], ca - c.n)
+            r = ev.run_cycle(c.h, c.y, c.t)
             dh = r.depth_increment
             if self.criterion == "pressure_jump":
                 # sliding-weighted mean pressure of the cycle at each node [Pa]
@@ -137,14 +136,14 @@ class Adaptive(AbstractExtrapolation):
                 jump = jnp.max(jnp.abs(jnp.roll(p, -1) - p))
                 smooth = jump < self.p_crit_fraction * jnp.max(p)
             else:
-                change = jnp.max(jnp.abs(dh - c["dh_prev"]))
+                change = jnp.max(jnp.abs(dh - c.memory["dh_prev"]))
                 smooth = change < self.change_fraction * jnp.max(jnp.abs(dh))
-            out = ev.finish(c, c["h"] + a_i * dh, r.y_end, c["t"] + ev.period, a_i,
+            out = ev.finish(c, c.h + a_i * dh, r.y_end, c.t + ev.period, a_i,
                             a_i * r.load_sliding, r.ok)
-            out["dyn"] = c["dyn"] + 1
-            out["a"] = jnp.where(smooth, c["a"] + a_inc, jnp.maximum(c["a"] - a_dec, 1.0))
-            out["dh_prev"] = dh
-            return out, a_i
+            return out.replace(
+                dyn=c.dyn + 1, dh_prev=dh,
+                a=jnp.where(smooth, c.memory["a"] + a_inc,
+                            jnp.maximum(c.memory["a"] - a_dec, 1.0))), a_i
 
         c2, a_i, go = ev.when_active(do, c)
         return c2, ev.record(c2, a_i, go)
@@ -162,28 +161,28 @@ class ErrorControlled(AbstractExtrapolation):
     dn0: float | None = eqx.field(default=None, static=True)
     name: ClassVar[str] = "error"
 
-    def init(self, ev: Evolver, c: dict) -> dict:
+    def init(self, ev: Evolver, c: EvolutionState) -> EvolutionState:
         dn0 = (jnp.maximum(0.01 * ev.cycles_arr, 1.0) if self.dn0 in (None, 1.0)
                else jnp.asarray(self.dn0, dtype=float))
-        h0 = jnp.zeros_like(c["h"])
-        return {**c, "dn": dn0, "have_k1": jnp.array(False), "k1": h0, "ls1": jnp.zeros(())}
+        return c.replace(dn=dn0, have_k1=jnp.array(False), k1=jnp.zeros_like(c.h),
+                         ls1=jnp.zeros(()))
 
-    def step(self, ev: Evolver, c: dict, _):
+    def step(self, ev: Evolver, c: EvolutionState, _):
         period, rtol, atol = ev.period, self.rtol, self.atol
 
         def do(c):
             def stage1(c):
-                r = ev.run_cycle(c["h"], c["y"], c["t"])
-                return r.depth_increment, r.load_sliding, r.y_end, c["t"] + period, r.ok, 1
+                r = ev.run_cycle(c.h, c.y, c.t)
+                return r.depth_increment, r.load_sliding, r.y_end, c.t + period, r.ok, 1
 
             def cached(c):
-                return c["k1"], c["ls1"], c["y"], c["t"], jnp.array(True), 0
+                return c.memory["k1"], c.memory["ls1"], c.y, c.t, jnp.array(True), 0
 
-            k1, ls1, y1, t1, ok1, n1 = lax.cond(c["have_k1"], cached, stage1, c)
-            dn = jnp.minimum(c["dn"], ev.cycles_arr - c["n"])
-            r2 = ev.run_cycle(c["h"] + dn * k1, y1, t1)
+            k1, ls1, y1, t1, ok1, n1 = lax.cond(c.memory["have_k1"], cached, stage1, c)
+            dn = jnp.minimum(c.memory["dn"], ev.cycles_arr - c.n)
+            r2 = ev.run_cycle(c.h + dn * k1, y1, t1)
             k2 = r2.depth_increment
-            h_new = c["h"] + 0.5 * dn * (k1 + k2)
+            h_new = c.h + 0.5 * dn * (k1 + k2)
             err = 0.5 * dn * jnp.max(jnp.abs(k2 - k1))
             tol = atol + rtol * jnp.max(jnp.abs(h_new))
             ratio = err / tol
@@ -191,12 +190,10 @@ class ErrorControlled(AbstractExtrapolation):
             ok = ok1 & r2.ok
             factor = jnp.clip(0.9 * jnp.where(ratio > 0, ratio, 1e-10) ** -0.5, 0.3, 4.0)
             dls = 0.5 * dn * (ls1 + r2.load_sliding)
-            out = ev.finish(c, jnp.where(accept, h_new, c["h"]), r2.y_end, t1 + period,
+            out = ev.finish(c, jnp.where(accept, h_new, c.h), r2.y_end, t1 + period,
                             jnp.where(accept, dn, 0.0), jnp.where(accept, dls, 0.0), ok)
-            out["dyn"] = c["dyn"] + n1 + 1
-            out["dn"] = dn * factor
-            out["have_k1"] = ~accept
-            out["k1"], out["ls1"] = k1, ls1
+            out = out.replace(dyn=c.dyn + n1 + 1, dn=dn * factor, have_k1=~accept, k1=k1,
+                              ls1=ls1)
             return out, jnp.where(accept, dn, 0.0)
 
         c2, a_i, go = ev.when_active(do, c)

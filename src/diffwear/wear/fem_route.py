@@ -84,7 +84,7 @@ from ..fem.contact import TOL
 from ..mechanism import Mechanism
 from ..mechanism.geometry import grid_angles, safe_norm
 from .cycle import CycleResult, clearance_element, wear_cycle, wear_parts
-from .evolution import EvolutionResult, Evolver, _with_profile
+from .evolution import EvolutionResult, EvolutionState, Evolver, _with_profile
 from .extrapolation import AbstractExtrapolation, Constant
 
 FORCE_MODES = ("resultant", "normal")
@@ -325,44 +325,41 @@ class FemEvolver(Evolver):
         return ring_compliance(self.fem, self.el.bushing_radius, h)
 
     def fem_cycle(self, c, a_i) -> tuple[CycleResult, FemIncrement, tuple, dict]:
-        """One dynamic cycle at profile c["h"] with its FE wear, the implicit
+        """One dynamic cycle at profile ``c.h`` with its FE wear, the implicit
         profile step for A = ``a_i``, and the refreshed compliance state."""
         fem, el = self.fem, self.el
-        stale = c["fem_age"] >= fem.refresh_interval
-        cmat = lax.cond(stale, lambda h: self.compliance(h), lambda h: c["fem_C"], c["h"])
-        age = jnp.where(stale, 0.0, c["fem_age"]) + 1.0
-        mech = _with_profile(self.mech, self.index, self.c_base + c["h"])
-        r = wear_cycle(mech, self.joint, c["y"], c["t"], self.period,
+        stale = c.memory["fem_age"] >= fem.refresh_interval
+        cmat = lax.cond(stale, lambda h: self.compliance(h), lambda h: c.memory["fem_C"], c.h)
+        age = jnp.where(stale, 0.0, c.memory["fem_age"]) + 1.0
+        mech = _with_profile(self.mech, self.index, self.c_base + c.h)
+        r = wear_cycle(mech, self.joint, c.y, c.t, self.period,
                        n_save=fem.n_samples + 1, **self.cycle_kw)
         assert r.ys is not None  # saved: n_save is given
         samples = joint_samples(mech, self.joint, r.ys, fem.force)
-        contact = ring_contact(cmat, self.w0, el.bushing_radius, el.pin_radius, c["h"],
+        contact = ring_contact(cmat, self.w0, el.bushing_radius, el.pin_radius, c.h,
                                wear_parts(el)[0].depth)
         inc = fem_increment(contact, samples, r.ts, self.k)
         step, ls, fallback = implicit_step(contact, samples, r.ts, inc, self.k, a_i,
                                            fem.jacobian_samples)
         return r, inc, (step, ls), {"fem_C": cmat, "fem_age": age,
-                                    "fem_explicit": c["fem_explicit"] + fallback}
+                                    "fem_explicit": c.memory["fem_explicit"] + fallback}
 
-    def init(self, y0) -> dict:
+    def init(self, y0) -> EvolutionState:
         c = super().init(y0)
-        c.update(fem_C=self.compliance(c["h"]), fem_age=jnp.zeros(()),
-                 fem_explicit=jnp.zeros(()))
-        return c
+        return c.replace(fem_C=self.compliance(c.h), fem_age=jnp.zeros(()),
+                         fem_explicit=jnp.zeros(()))
 
-    def run(self, state: dict, length: int):
+    def run(self, state: EvolutionState, length: int):
         return lax.scan(self._step_constant, state, None, length=int(length))
 
     def _step_constant(self, c, _):
         """Constant A with the FE increment (else as `Constant.step`)."""
         def do(c):
-            a_i = jnp.minimum(self.a, self.cycles_arr - c["n"])
+            a_i = jnp.minimum(self.a, self.cycles_arr - c.n)
             r, inc, (step, ls), fem_state = self.fem_cycle(c, a_i)
             ok = r.ok & inc.ok & jnp.all(jnp.isfinite(step))
-            out = self.finish(c, c["h"] + step, r.y_end, c["t"] + self.period, a_i, ls, ok)
-            out["dyn"] = c["dyn"] + 1
-            out.update(fem_state)
-            return out, a_i
+            out = self.finish(c, c.h + step, r.y_end, c.t + self.period, a_i, ls, ok)
+            return out.replace(dyn=c.dyn + 1, **fem_state), a_i
 
         c2, a_i, go = self.when_active(do, c)
         return c2, self.record(c2, a_i, go)

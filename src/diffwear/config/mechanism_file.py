@@ -63,7 +63,7 @@ class ContactOutput(eqx.Module):
     joint: str = eqx.field(static=True)
 
 
-class Study(eqx.Module):
+class MechanismFile(eqx.Module):
     """A loaded mechanism file (see `diffwear.config.load`).
 
     ``assembly``: the mechanism with every clearance joint replaced by the ideal

@@ -2,7 +2,7 @@
 
 `load_dataset` reads a folder into a `Dataset` (everything in SI units);
 `write_dataset` writes one (used by data generators) so that loading it back
-gives the same values to ~1 ulp.  The format is documented in the README
+gives the same values to ~1 ulp.  The format is documented in the docs ("Dataset format")
 ("The dataset format").
 
 Every problem raises `InputError` naming the file (``dataset.toml`` or the
@@ -782,7 +782,7 @@ def _rule_holdout(s: Series, holdout_from: float | None) -> np.ndarray:
 
 def _manifest_text(name, description, preset, parameters, series, bushing_density,
                    holdout_from_cycles) -> str:
-    lines = ["# measured wear data (diffwear.calibrate format, see the diffwear README)",
+    lines = ["# measured wear data (diffwear.calibrate format: the docs, 'Dataset format')",
              "[dataset]", f"name = {_toml_string(name)}"]
     if description:
         lines.append(f"description = {_toml_string(description)}")

@@ -342,7 +342,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_life)
 
-    p = sub.add_parser("run", help="simulate a mechanism file (TOML; see README 'Mechanism files')",
+    p = sub.add_parser("run", help="simulate a mechanism file (TOML; see the docs, "
+                       "'Mechanism files')",
                        description="Simulate a mechanism file; with --cycles also the wear of "
                        "every clearance joint that has a wear law (quasi-static model, or "
                        "--model dynamic), with --limit the cycles until its wear reaches that "
@@ -368,7 +369,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_run)
 
-    p = sub.add_parser("sweep", help="evaluate a model over a parameter grid (TOML; see README "
+    p = sub.add_parser("sweep", help="evaluate a model over a parameter grid (TOML; see the docs, "
                        "'Sweeps, sensitivity and clusters')",
                        description="Evaluate a ready-made model (rig-wear, clearance-force) at "
                        "every point of a grid given in a sweep file, vmapped in chunks; write "
@@ -389,7 +390,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_sweep)
 
     p = sub.add_parser("calibrate", help="fit the rig model to measured wear data and identify "
-                       "a missing effect (see README 'Measured data')",
+                       "a missing effect (see the docs, 'Calibration')",
                        description="Fit the dataset's uncertain parameters through the rig "
                        "model (quasi-static by default: exact forward-mode Jacobians; "
                        "Levenberg-Marquardt), rank the candidate effects by score tests, refit "

@@ -1,6 +1,6 @@
 """Read a mechanism file (TOML, stdlib `tomllib`) into a `MechanismFile`.
 
-Top level (see README "Mechanism files"):
+Top level (see the docs, "Mechanism files"):
 
     title, source         optional strings, shown in the report
     [[bodies]]            name, mass, inertia

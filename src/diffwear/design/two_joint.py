@@ -9,7 +9,7 @@ diameter d_j and the bushing depth (axial length) h_j of each joint, inside the
 Table 8-3 box; the life of joint j is the number of crank cycles until its
 maximum wear depth reaches 2 mm (Table 8-3), `cycles_to_limit`.
 
-Assumptions beyond the thesis (also in the README):
+Assumptions beyond the thesis (also in the docs, "Assumptions beyond the thesis"):
 
 * Clearance 0.0005 mm (Table 3-2's smallest; the thesis's Ch. 8 text gives no
   other value), the same at both joints; the bore diameter d is the pin

@@ -7,7 +7,7 @@ failure into a `SolverError` that names the time reached.
 
 Default solver: explicit Tsit5 with a PID step-size controller.  For the stiff
 penalty contacts of this project this beat implicit Kvaerno5 by a wide margin
-(see benchmarks/README and the README's performance section).
+(see the performance docs).
 """
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ ln(1 + s) / 1.96): a positive, right-skewed coefficient, as wear coefficients
 spanning decades are usually treated.  ``distribution="uniform"`` takes
 k0 (1 + U(-s, s)) instead (the literal "+-s").
 
-Caveat (README, Performance): gradients through the adaptive rig evolution are
+Caveat (docs, "Which derivatives to trust"): gradients through the adaptive rig evolution are
 those of the frozen-step discretisation; at the rig's cycle tolerance 1e-6 they
 differ from central differences by up to ~4 % (clearance).  The checks in the
 tests use a tightly integrated model.

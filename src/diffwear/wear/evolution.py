@@ -236,8 +236,9 @@ class Evolver:
     The strategy keeps its memory in ``EvolutionState.memory`` (``a``,
     ``dh_prev`` for `Adaptive`; ``dn``, ``have_k1``, ``k1``, ``ls1`` for
     `ErrorControlled`).  Running the slots in several scans, each from the
-    state the previous one returned, computes exactly what one scan does.  Pure Python bookkeeping around pure
-    functions: build it inside a jitted function from traced mechanism leaves.
+    state the previous one returned, computes exactly what one scan does.
+    Pure Python bookkeeping around pure functions: build it inside a jitted
+    function from traced mechanism leaves.
     """
 
     def __init__(self, mech: Mechanism, joint: str, cycles, *, period, method="constant",

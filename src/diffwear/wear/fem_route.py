@@ -102,7 +102,7 @@ MIN_JOINT_FORCE = 1e-6  # N
 # gap error of 1e-13 m and a force error of 1e-9 of the load: nothing for wear.
 ACCEPT_RESIDUAL = 1e-9
 
-# Defaults, chosen by convergence checks on the rig (README "FEM wear route"):
+# Defaults, chosen by convergence checks on the rig (docs, "FEM contact and the FEM route"):
 # n_samples: the rig's cycle increment changes by < 1e-3 (max) from 64 to 256
 # samples; n_r: 4 Q9 layers through the wall (peak pressure within 1e-3 of 8).
 DEFAULT_SAMPLES = 64

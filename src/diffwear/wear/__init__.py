@@ -13,7 +13,6 @@ from .evolution import (
     Checkpoint,
     ChunkedEvolution,
     EvolutionResult,
-    EvolutionState,
     Evolver,
     WearLimitError,
     evolve,
@@ -40,6 +39,7 @@ from .model import (
 from .peak import (
     peak_depth,
 )
+from .state import EvolutionState
 from .status import (
     STATUS_TEXT,
 )

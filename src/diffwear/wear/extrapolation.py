@@ -17,17 +17,35 @@ state (`init`); `Evolver` owns the shared bookkeeping (`run_cycle`, `finish`,
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, ClassVar
+from typing import Any, ClassVar, Protocol
 
 import equinox as eqx
 import jax.numpy as jnp
 from jax import lax
+from jaxtyping import Array
 
 from ..choices import WEAR_METHODS
 from ..errors import InputError
+from .state import EvolutionState
 
-if TYPE_CHECKING:  # the evolution drives the strategy; no import at run time
-    from .evolution import EvolutionState, Evolver
+
+class EvolutionDriver(Protocol):
+    """What a strategy uses of the evolution that drives it
+    (`diffwear.wear.evolution.Evolver`)."""
+
+    cycles_arr: Array
+    period: Any
+    radius: Any
+    k: Any
+
+    def run_cycle(self, h, y, t, n_save=None) -> Any: ...
+
+    def finish(self, c: EvolutionState, h_new, y_new, t_new, dn, dls, ok
+               ) -> EvolutionState: ...
+
+    def record(self, c: EvolutionState, a, valid) -> dict: ...
+
+    def when_active(self, do, c: EvolutionState) -> tuple: ...
 
 ADAPTIVE_CRITERIA = ("increment_change", "pressure_jump")
 
@@ -45,11 +63,11 @@ class AbstractExtrapolation(eqx.Module):
             raise InputError(f"max_dynamic must be >= 1, got {max_dynamic}")
         return int(max_dynamic)
 
-    def init(self, ev: Evolver, c: EvolutionState) -> EvolutionState:
+    def init(self, ev: EvolutionDriver, c: EvolutionState) -> EvolutionState:
         """The strategy's memory added to the initial evolution state."""
         return c
 
-    def step(self, ev: Evolver, c: EvolutionState, _):
+    def step(self, ev: EvolutionDriver, c: EvolutionState, _):
         """One scan slot: (new state, history entry)."""
         raise NotImplementedError
 
@@ -71,7 +89,7 @@ class Constant(AbstractExtrapolation):
             raise InputError(f"cycles must be > 0, got {cycles}")
         return int(math.ceil(float(cycles) / float(self.a) - 1e-9))
 
-    def step(self, ev: Evolver, c: EvolutionState, _):
+    def step(self, ev: EvolutionDriver, c: EvolutionState, _):
         def do(c):
             a_i = jnp.minimum(float(self.a), ev.cycles_arr - c.n)
             r = ev.run_cycle(c.h, c.y, c.t)
@@ -115,12 +133,12 @@ class Adaptive(AbstractExtrapolation):
             raise InputError(f"adaptive criterion must be 'increment_change' or "
                              f"'pressure_jump', got {self.criterion!r}")
 
-    def init(self, ev: Evolver, c: EvolutionState) -> EvolutionState:
+    def init(self, ev: EvolutionDriver, c: EvolutionState) -> EvolutionState:
         a0 = (jnp.maximum(jnp.round(self.a0_fraction * ev.cycles_arr), 1.0)
               if self.a0 in (None, 1.0) else jnp.asarray(self.a0, dtype=float))
         return c.replace(a=a0, dh_prev=jnp.zeros_like(c.h))
 
-    def step(self, ev: Evolver, c: EvolutionState, _):
+    def step(self, ev: EvolutionDriver, c: EvolutionState, _):
         ca = ev.cycles_arr
         a_inc = jnp.maximum(jnp.round(self.inc_fraction * ca), 1.0)
         a_dec = jnp.maximum(jnp.round(self.dec_fraction * ca), 1.0)
@@ -161,13 +179,13 @@ class ErrorControlled(AbstractExtrapolation):
     dn0: float | None = eqx.field(default=None, static=True)
     name: ClassVar[str] = "error"
 
-    def init(self, ev: Evolver, c: EvolutionState) -> EvolutionState:
+    def init(self, ev: EvolutionDriver, c: EvolutionState) -> EvolutionState:
         dn0 = (jnp.maximum(0.01 * ev.cycles_arr, 1.0) if self.dn0 in (None, 1.0)
                else jnp.asarray(self.dn0, dtype=float))
         return c.replace(dn=dn0, have_k1=jnp.array(False), k1=jnp.zeros_like(c.h),
                          ls1=jnp.zeros(()))
 
-    def step(self, ev: Evolver, c: EvolutionState, _):
+    def step(self, ev: EvolutionDriver, c: EvolutionState, _):
         period, rtol, atol = ev.period, self.rtol, self.atol
 
         def do(c):

@@ -47,6 +47,7 @@ class EvolutionDriver(Protocol):
 
     def when_active(self, do, c: EvolutionState) -> tuple: ...
 
+
 ADAPTIVE_CRITERIA = ("increment_change", "pressure_jump")
 
 

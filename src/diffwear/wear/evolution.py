@@ -208,7 +208,6 @@ class Evolver:
                  max_steps=200_000):
         self.strategy = extrapolation_method(method, extrapolation=extrapolation, rtol=rtol,
                                              atol=atol, adaptive=adaptive)
-        self.method = self.strategy.name
         self.index, el = clearance_element(mech, joint)
         self.mech, self.joint, self.period = mech, joint, period
         self.warmup_cycles = warmup_cycles
@@ -226,6 +225,13 @@ class Evolver:
     def run_cycle(self, h, y, t, n_save=None):
         return wear_cycle(_with_profile(self.mech, self.index, self.c_base + h), self.joint,
                           y, t, self.period, n_save=n_save, **self.cycle_kw)
+
+    def advance(self, c: EvolutionState, a):
+        """One dynamic cycle from ``c`` and the profile step it gives for A = ``a``
+        real cycles: (depth step, load-sliding step, end state, ok, memory
+        updates).  Linear in the cycle's wear here; the FEM route overrides it."""
+        r = self.run_cycle(c.h, c.y, c.t)
+        return a * r.depth_increment, a * r.load_sliding, r.y_end, r.ok, {}
 
     def finish(self, c: EvolutionState, h_new, y_new, t_new, dn, dls, ok) -> EvolutionState:
         """Accept a step unless it failed (then stop, keep the old state).  A

@@ -40,6 +40,8 @@ class EvolutionDriver(Protocol):
 
     def run_cycle(self, h, y, t, n_save=None) -> Any: ...
 
+    def advance(self, c: EvolutionState, a) -> tuple: ...
+
     def finish(self, c: EvolutionState, h_new, y_new, t_new, dn, dls, ok
                ) -> EvolutionState: ...
 
@@ -93,10 +95,9 @@ class Constant(AbstractExtrapolation):
     def step(self, ev: EvolutionDriver, c: EvolutionState, _):
         def do(c):
             a_i = jnp.minimum(float(self.a), ev.cycles_arr - c.n)
-            r = ev.run_cycle(c.h, c.y, c.t)
-            out = ev.finish(c, c.h + a_i * r.depth_increment, r.y_end,
-                            c.t + ev.period, a_i, a_i * r.load_sliding, r.ok)
-            return out.replace(dyn=c.dyn + 1), a_i
+            step, ls, y_end, ok, memory = ev.advance(c, a_i)
+            out = ev.finish(c, c.h + step, y_end, c.t + ev.period, a_i, ls, ok)
+            return out.replace(dyn=c.dyn + 1, **memory), a_i
 
         c2, a_i, go = ev.when_active(do, c)
         return c2, ev.record(c2, a_i, go)
@@ -235,7 +236,8 @@ def extrapolation_method(method, *, extrapolation=1.0, rtol=1e-2, atol=1e-7,
         return Constant(1.0 if ex is None else ex)
     if method == "adaptive":
         opts = dict(adaptive or {})
-        unknown = sorted(set(opts) - set(Adaptive.__dataclass_fields__) - {"name"})
+        # A_0 comes from ``extrapolation``, not from the settings
+        unknown = sorted(set(opts) - set(Adaptive.__dataclass_fields__) - {"name", "a0"})
         if unknown:
             raise InputError(f"adaptive settings {unknown}; allowed: a0_fraction, "
                              "inc_fraction, dec_fraction, criterion, change_fraction, "

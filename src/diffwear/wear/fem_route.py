@@ -67,8 +67,6 @@ cycle.  The FE grid is the profile grid (same n_theta nodes, theta_j =
 
 from __future__ import annotations
 
-from typing import cast
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -312,7 +310,6 @@ class FemEvolver(Evolver):
         if not isinstance(fem, FemWearModel):
             raise InputError(f"fem must be a FemWearModel, got {type(fem).__name__}")
         super().__init__(mech, joint, cycles, method=method, **kw)
-        self.a = float(cast(Constant, self.strategy).a)
         _, el = clearance_element(mech, joint)
         rb, b = concrete(el.bushing_radius), concrete(fem.outer_radius)
         if rb is not None and b is not None and not b > rb:
@@ -349,20 +346,12 @@ class FemEvolver(Evolver):
         return c.replace(fem_C=self.compliance(c.h), fem_age=jnp.zeros(()),
                          fem_explicit=jnp.zeros(()))
 
-    def run(self, state: EvolutionState, length: int):
-        return lax.scan(self._step_constant, state, None, length=int(length))
-
-    def _step_constant(self, c, _):
-        """Constant A with the FE increment (else as `Constant.step`)."""
-        def do(c):
-            a_i = jnp.minimum(self.a, self.cycles_arr - c.n)
-            r, inc, (step, ls), fem_state = self.fem_cycle(c, a_i)
-            ok = r.ok & inc.ok & jnp.all(jnp.isfinite(step))
-            out = self.finish(c, c.h + step, r.y_end, c.t + self.period, a_i, ls, ok)
-            return out.replace(dyn=c.dyn + 1, **fem_state), a_i
-
-        c2, a_i, go = self.when_active(do, c)
-        return c2, self.record(c2, a_i, go)
+    def advance(self, c: EvolutionState, a):
+        """The FE increment's implicit profile step for A = ``a`` (else as
+        `Evolver.advance`), and the refreshed compliance."""
+        r, inc, (step, ls), fem_state = self.fem_cycle(c, a)
+        ok = r.ok & inc.ok & jnp.all(jnp.isfinite(step))
+        return step, ls, r.y_end, ok, fem_state
 
 
 def evolve_fem(mech: Mechanism, joint: str, y0, cycles, *, period, fem: FemWearModel,

@@ -14,7 +14,6 @@ WEAR_CONTACTS = ("efm", "fem")
 WEAR_MODELS = ("dynamic", "quasi-static")
 
 
-
 def check_wear_model(model: str, dynamic_only: Iterable[tuple[bool, str]] = ()) -> None:
     """`InputError` for a wear model that does not exist, or for an option
     given (``(given, "--option value")`` pairs) that only the dynamic model

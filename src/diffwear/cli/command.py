@@ -20,6 +20,11 @@ from ..errors import DiffwearError, InputError
 MAX_CYCLES = 100_000_000
 
 
+def _log(args: argparse.Namespace):
+    """Where a driver's progress lines go: ``print``, or nowhere with --quiet."""
+    return (lambda *a, **k: None) if args.quiet else print
+
+
 def _study(args: argparse.Namespace) -> int:
     from ..io import OutputDir
     from ..studies import STUDIES
@@ -54,7 +59,7 @@ def _study(args: argparse.Namespace) -> int:
         kwargs["progress"] = not args.quiet
     out = OutputDir(args.out, overwrite=args.overwrite,  # after every input check
                     resume=args.resume is not None)
-    log = (lambda *a, **k: None) if args.quiet else print
+    log = _log(args)
     STUDIES[args.name].run(out, log=log, **kwargs)
     return 0
 
@@ -130,7 +135,7 @@ def _run(args: argparse.Namespace) -> int:
         if not (0.0 < args.limit < 1e3):
             raise InputError(f"--limit {args.limit:g}: a wear depth in mm; allowed: (0, 1000)")
         limit = args.limit * 1e-3
-    log = (lambda *a, **k: None) if args.quiet else print
+    log = _log(args)
     runner.run(mfile, args.out, overwrite=args.overwrite, input_text=text, log=log,
                cycles=args.cycles, limit=limit, model=args.model or "quasi-static",
                method=args.method or "constant", resume=args.resume is not None,
@@ -153,7 +158,7 @@ def _sweep(args: argparse.Namespace) -> int:
         raise InputError("--cluster ADDRESS and --workers N exclude each other (--workers "
                          "starts a local cluster)")
     text = decode(Path(args.file).read_bytes(), args.file)
-    log = (lambda *a, **k: None) if args.quiet else print
+    log = _log(args)
     out = OutputDir(args.out, overwrite=args.overwrite)
     if args.cluster is None and args.workers is None:
         driver.run(spec, out, chunk_size=args.chunk_size, input_text=text, log=log)
@@ -196,26 +201,26 @@ def _design(args: argparse.Namespace) -> int:
                               dynamic_steps=args.dynamic_steps, map_points=args.map_points,
                               n_theta=args.n_theta, problems=args.problems, model=args.model)
     out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
-    log = (lambda *a, **k: None) if args.quiet else print
+    log = _log(args)
     driver.run(out, settings=settings, log=log)
     return 0
 
 
 def _life(args: argparse.Namespace) -> int:
     from ..io import OutputDir
-    from . import life as life_point
+    from . import life as driver
 
-    if args.name != life_point.NAME:
-        raise InputError(f"unknown life problem {args.name!r}; available: {life_point.NAME}")
+    if args.name != driver.NAME:
+        raise InputError(f"unknown life problem {args.name!r}; available: {driver.NAME}")
     if args.out is None:
         raise InputError("life: --out DIR is required")
-    x = life_point.design_from_mm((args.d1, args.d2, args.h1, args.h2))
-    if args.model not in life_point.MODELS:
+    x = driver.design_from_mm((args.d1, args.d2, args.h1, args.h2))
+    if args.model not in driver.MODELS:
         raise InputError(f"--model: unknown model {args.model!r}; choose from "
-                         f"{', '.join(life_point.MODELS)}")
+                         f"{', '.join(driver.MODELS)}")
     out = OutputDir(args.out, overwrite=args.overwrite)  # after every input check
-    log = (lambda *a, **k: None) if args.quiet else print
-    life_point.run(out, x, model=args.model, with_jacobian=args.jacobian, log=log)
+    log = _log(args)
+    driver.run(out, x, model=args.model, with_jacobian=args.jacobian, log=log)
     return 0
 
 
@@ -237,7 +242,7 @@ def _calibrate(args: argparse.Namespace) -> int:
     if args.model != "dynamic" and not args.no_dynamic_check:
         settings.with_model("dynamic").build(data.max_cycles)
     out = OutputDir(args.out, overwrite=args.overwrite)
-    log = (lambda *a, **k: None) if args.quiet else print
+    log = _log(args)
     run(data, out, settings=settings, top=args.top, check=not args.no_dynamic_check, log=log)
     return 0
 

@@ -68,7 +68,7 @@ def _integrate(mech: Mechanism, y0, sim: Simulation) -> Trajectory:
 
 
 def integrate(mfile: MechanismFile, y0) -> Trajectory:
-    """The mfile's trajectory; `SolverError` (naming the file) if the solve failed."""
+    """The file's trajectory; `SolverError` (naming the file) if the solve failed."""
     traj = _integrate(mfile.mechanism, y0, mfile.simulation)
     return traj.raise_if_failed(mfile.file, mfile.mechanism)
 

@@ -112,7 +112,7 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
 
 
 # Dynamic cycles simulated by a file's dynamic wear run with constant
-# extrapolation (A = cycles / this), as the Ch. 7 rig mfile; the adaptive and
+# extrapolation (A = cycles / this), as the Ch. 7 rig study; the adaptive and
 # error-controlled methods get 4x as many scan slots.
 DYNAMIC_CYCLES = 50
 

@@ -53,6 +53,18 @@ M = (2.0, 0.5773502691896258, 0.4226497308103742)
 ME = (2.113248654051871, 1.0, 0.4226497308103742)
 
 
+def ros3p_step(f, t, y, h, w_solve, ft):
+    """One ROS3P step from (t, y) of length h: (y1, error estimate).
+    ``w_solve(rhs)`` applies (I / (h gamma) - J)^-1; ``ft`` = df/dt at (t, y)."""
+    u1 = w_solve(f(t, y) + GAMMAS[0] * h * ft)
+    u2 = w_solve(f(t + ALPHA[1] * h, y + A21 * u1) + (C21 / h) * u1 + GAMMAS[1] * h * ft)
+    u3 = w_solve(f(t + ALPHA[2] * h, y + A31 * u1 + A32 * u2) + (C31 * u1 + C32 * u2) / h
+                 + GAMMAS[2] * h * ft)
+    y1 = y + M[0] * u1 + M[1] * u2 + M[2] * u3
+    err = (M[0] - ME[0]) * u1 + (M[1] - ME[1]) * u2 + (M[2] - ME[2]) * u3
+    return y1, err
+
+
 def rosenbrock(f, t0, t1, y0, n_stiff, *, rtol, atol, h0=1e-4, max_steps=200_000):
     """Integrate y' = f(t, y) from t0 to t1 with ROS3P.  The Jacobian is exact
     in the first ``n_stiff`` states (columns); the remaining states must not
@@ -72,15 +84,7 @@ def rosenbrock(f, t0, t1, y0, n_stiff, *, rtol, atol, h0=1e-4, max_steps=200_000
         j11, j21, ft = jac(t, y)
         hg = h * GAMMA
         lu = jax.scipy.linalg.lu_factor(jnp.eye(n_stiff) / hg - j11)
-        f0 = f(t, y)
-        u1 = solve(lu, j21, hg, f0 + GAMMAS[0] * h * ft)
-        f1 = f(t + ALPHA[1] * h, y + A21 * u1)
-        u2 = solve(lu, j21, hg, f1 + (C21 / h) * u1 + GAMMAS[1] * h * ft)
-        f2 = f(t + ALPHA[2] * h, y + A31 * u1 + A32 * u2)
-        u3 = solve(lu, j21, hg, f2 + (C31 * u1 + C32 * u2) / h + GAMMAS[2] * h * ft)
-        y1 = y + M[0] * u1 + M[1] * u2 + M[2] * u3
-        err = (M[0] - ME[0]) * u1 + (M[1] - ME[1]) * u2 + (M[2] - ME[2]) * u3
-        return y1, err
+        return ros3p_step(f, t, y, h, lambda rhs: solve(lu, j21, hg, rhs), ft)
 
     def cond(c):
         t, _, _, k, _, ok = c
@@ -119,18 +123,33 @@ def check_order() -> list[float]:
             j = jax.jacfwd(lambda z: f(t, z))(y)
             ft = jax.jvp(lambda s: f(s, y), (t,), (jnp.ones_like(t),))[1]
             w = jnp.eye(1) / (h * GAMMA) - j
-            u1 = jnp.linalg.solve(w, f(t, y) + GAMMAS[0] * h * ft)
-            u2 = jnp.linalg.solve(w, f(t + h, y + A21 * u1) + (C21 / h) * u1
-                                  + GAMMAS[1] * h * ft)
-            u3 = jnp.linalg.solve(w, f(t + h, y + A31 * u1 + A32 * u2)
-                                  + (C31 * u1 + C32 * u2) / h + GAMMAS[2] * h * ft)
-            return y + M[0] * u1 + M[1] * u2 + M[2] * u3
+            return ros3p_step(f, t, y, h, lambda rhs: jnp.linalg.solve(w, rhs), ft)[0]
 
         return jax.lax.fori_loop(0, nsteps, body, jnp.ones(1))
 
     ref = fixed(4096)
     errs = [float(jnp.abs(fixed(n) - ref)[0]) for n in (16, 32, 64)]
     return [math.log2(errs[i] / errs[i + 1]) for i in range(2)]
+
+
+def tsit5_cycle(rtol, period):
+    """One cycle of ``period`` on Tsit5 (the wear cycle's PID settings):
+    jitted (mech, y, t0) -> Trajectory."""
+    import diffrax
+
+    from diffwear.dynamics import simulate
+
+    ctrl = diffrax.PIDController(rtol=rtol, atol=rtol, pcoeff=0.3, icoeff=0.4)
+    return jax.jit(lambda m, y, t0: simulate(m, y, t0 + period, t0=t0, stepsize_controller=ctrl))
+
+
+def ros3p_cycle(rtol, period, n_stiff):
+    """One cycle on ROS3P: jitted (mech, y, t0) -> (y1, steps, accepted, ok)."""
+    from diffwear.dynamics.equations import Baumgarte, vector_field
+
+    return jax.jit(lambda m, y, t0: rosenbrock(
+        lambda t, z: vector_field(t, z, (m, Baumgarte())), t0, t0 + period, y, n_stiff,
+        rtol=rtol, atol=rtol))
 
 
 def evolution_errors(mech, ys, n_stiff, cycles=21_400.0, a=428.0):
@@ -140,24 +159,18 @@ def evolution_errors(mech, ys, n_stiff, cycles=21_400.0, a=428.0):
     max depth and volume against Tsit5 at rtol 1e-8 (the reference).  A = 428
     is the rig study's own (50 wear cycles).  Each run once to compile, once
     timed."""
-    import diffrax
-
-    from diffwear.dynamics import simulate
-    from diffwear.dynamics.equations import Baumgarte, vector_field
     from diffwear.studies._wear_common import JOINT
     from diffwear.studies.rig_21400 import PERIOD
     from diffwear.wear import worn_mechanism, worn_volume
     from diffwear.wear.cycle import reset_wear
 
     def tsit5(rtol):
-        ctrl = diffrax.PIDController(rtol=rtol, atol=rtol, pcoeff=0.3, icoeff=0.4)
-        return jax.jit(lambda m, y, t0: simulate(m, y, t0 + PERIOD, t0=t0,
-                                                 stepsize_controller=ctrl).y_final)
+        cycle = tsit5_cycle(rtol, PERIOD)
+        return lambda m, y, t0: cycle(m, y, t0).y_final
 
     def ros3p(rtol):
-        return jax.jit(lambda m, y, t0: rosenbrock(
-            lambda t, z: vector_field(t, z, (m, Baumgarte())), t0, t0 + PERIOD, y, n_stiff,
-            rtol=rtol, atol=rtol)[0])
+        cycle = ros3p_cycle(rtol, PERIOD, n_stiff)
+        return lambda m, y, t0: cycle(m, y, t0)[0]
 
     def evolve(cycle):
         el0 = mech.element(JOINT)
@@ -198,30 +211,17 @@ def main(argv=None):
     print("ROS3P observed orders on the test equation:", [round(o, 2) for o in orders])
     assert all(2.7 < o < 3.4 for o in orders), orders
 
-    import diffrax
-
-    from diffwear.dynamics import simulate
     from diffwear.dynamics.equations import Baumgarte, vector_field
     from diffwear.studies.rig_21400 import PERIOD, _setup
 
     mech0, mech, y0 = _setup()
     n_stiff = 2 * mech.n_coords
-    args_ = (mech, Baumgarte())
+    jcols = np.asarray(jax.jacfwd(lambda y: vector_field(0.3, y, (mech, Baumgarte())))(y0))
+    assert np.abs(jcols[:, n_stiff:]).max() == 0.0, \
+        "the wear/contact states feed back: J is not block"
 
-    def f(t, y):
-        return vector_field(t, y, args_)
-
-    jcols = np.asarray(jax.jacfwd(lambda y: f(0.3, y))(y0))[:, n_stiff:]
-    assert np.abs(jcols).max() == 0.0, "the wear/contact states feed back: J is not block"
-
-    def tsit5(rtol):
-        ctrl = diffrax.PIDController(rtol=rtol, atol=rtol, pcoeff=0.3, icoeff=0.4)
-        return jax.jit(lambda y, t0: simulate(mech, y, t0 + PERIOD, t0=t0,
-                                              stepsize_controller=ctrl))
-
-    warm = tsit5(1e-8)(y0, 0.0)
-    ys = warm.y_final
-    ref = tsit5(1e-10)(ys, PERIOD)
+    ys = tsit5_cycle(1e-8, PERIOD)(mech, y0, 0.0).y_final
+    ref = tsit5_cycle(1e-10, PERIOD)(mech, ys, PERIOD)
     y_ref = np.asarray(ref.y_final)
     dwear_ref = y_ref[n_stiff:] - np.asarray(ys)[n_stiff:]
 
@@ -242,14 +242,13 @@ def main(argv=None):
 
     rows = []
     for rtol in (1e-4, 1e-5, 1e-6, 1e-8):
-        out, s = timed(tsit5(rtol), ys, PERIOD)
+        out, s = timed(tsit5_cycle(rtol, PERIOD), mech, ys, PERIOD)
         rows.append(dict(solver="Tsit5", rtol=rtol, steps=int(out.num_steps),
                          accepted=int(out.num_accepted_steps), s_per_cycle=s,
                          **dict(zip(("err_state", "err_wear"), errors(out.y_final)))))
     for rtol in (1e-4, 3e-5, 1e-5, 1e-6):
-        fn = jax.jit(lambda y, t0, rtol=rtol: rosenbrock(f, t0, t0 + PERIOD, y, n_stiff,
-                                                          rtol=rtol, atol=rtol))
-        (y1, k, acc, ok), s = timed(fn, ys, jnp.asarray(PERIOD))
+        (y1, k, acc, ok), s = timed(ros3p_cycle(rtol, PERIOD, n_stiff), mech, ys,
+                                    jnp.asarray(PERIOD))
         rows.append(dict(solver="ROS3P (exact 18x18 J)", rtol=rtol, steps=int(k),
                          accepted=int(acc), s_per_cycle=s, ok=bool(ok),
                          **dict(zip(("err_state", "err_wear"), errors(y1)))))

@@ -263,7 +263,7 @@ GRAD_DYNAMIC, GRAD_DYNAMIC_QUICK = 10, 1
 GRAD_FD_STEPS = (1e-3, 1e-2)  # relative central-difference steps of the check
 
 
-def rig_gradient(repeats: int) -> dict:
+def rig_gradient(repeats: int, integrator: str = "tsit5") -> dict:
     """Jacobian of the rig-21400 result (smooth max depth [mm], volume [mm^3];
     `sweep.models.RigWear` outputs) w.r.t. (k, clearance, depth, diameter),
     as relative changes p = p0 (1 + x), through warm-up + 10 wear cycles (quick:
@@ -281,8 +281,10 @@ def rig_gradient(repeats: int) -> dict:
     from diffwear.studies import _wear_common as common
     from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, _setup
     from diffwear.wear import evolve, smooth_max, worn_volume
+    from diffwear.wear.cycle import cycle_integrator
 
     quick = repeats <= QUICK_REPEATS
+    solver, tol = cycle_integrator(integrator)
     dyn = GRAD_DYNAMIC_QUICK if quick else GRAD_DYNAMIC
     mech0, _, y0 = _setup()
     p0 = common.params_of(RIG_JOINT)
@@ -294,7 +296,7 @@ def rig_gradient(repeats: int) -> dict:
             m = mech_of_p(p)
             r = evolve(m, common.JOINT, y0, RIG_CYCLES, period=PERIOD,
                        extrapolation=RIG_CYCLES / dyn, wall_thickness=RIG_JOINT.wall,
-                       adjoint=adjoint)
+                       adjoint=adjoint, cycle_solver=solver, cycle_rtol=tol, cycle_atol=tol)
             el = m.element(common.JOINT)
             # RigWear's outputs: smooth max (temperature 0.1 um) and volume
             return jnp.stack([smooth_max(r.depth, 1e-7) * 1e3,
@@ -898,6 +900,7 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig-21400 FEM vs EFM route": rig_21400_fem_route,
     "vmap sweep 64 points vs 64 single runs": vmap_sweep,
     "rig-21400 gradient (4 parameters)": rig_gradient,
+    "rig-21400 gradient (4 parameters, ROS3P)": lambda r: rig_gradient(r, "ros3p"),
     "rig cycle profile": rig_profile,
     "ch8-optimisation": ch8_optimisation,
     "rig-21400 quasi-static": rig_21400_quasi_static,

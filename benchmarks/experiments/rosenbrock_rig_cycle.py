@@ -9,7 +9,7 @@ below).  So the exact Jacobian is d f / d(q, qd), 18 forward-mode tangents,
 and the step matrix (I / (h gamma) - J) factorises as one 18 x 18 LU plus a
 back-substitution for the wear rows.
 
-Method: ROS3P (Lang and Verwer 2001, BIT 41: third order, L-stable, embedded
+Method: ROS3P (Lang and Verwer 2001, BIT 41: third order, A-stable, embedded
 second-order solution for step control), in the transformed form of Hairer
 and Wanner (Solving ODEs II, eq. IV.7.25).  The coefficients are checked here
 by the global error's order on a scalar test equation before any timing.

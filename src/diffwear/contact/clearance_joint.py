@@ -27,6 +27,7 @@ from .archard import SLIP_RATE_WIDTH, ArchardWear
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
 from .laws import AbstractContactLaw, ElasticFoundation
+from .linearised import LinearisedLaw
 from .profile import BushingProfile
 
 
@@ -85,6 +86,18 @@ class ClearanceJoint(AbstractForceElement):
     @property
     def n_aux(self) -> int:
         return self.law.n_memory + (self.profile.n + 1 if self.wear is not None else 0)
+
+    @property
+    def feedback_aux(self) -> tuple[int, ...]:
+        # the law's memory feeds back; the wear depth and load x sliding
+        # accumulators are integrals of the contact (the profile is fixed within
+        # a simulation)
+        return tuple(range(self.law.n_memory))
+
+    def for_state_jacobian(self) -> "ClearanceJoint":
+        if isinstance(self.law, LinearisedLaw):
+            return self
+        return eqx.tree_at(lambda j: j.law, self, LinearisedLaw(self.law))
 
     def initial_aux(self, frames):
         parts = [self.law.initial_memory()]

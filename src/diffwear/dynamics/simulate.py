@@ -12,6 +12,7 @@ penalty contacts of this project this beat implicit Kvaerno5 by a wide margin
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, cast
 
 import diffrax
@@ -25,6 +26,7 @@ from .._checks import require_float64
 from ..errors import SolverError
 from ..mechanism import Mechanism
 from .equations import Baumgarte, vector_field
+from .rosenbrock import AbstractRosenbrock
 
 
 class Trajectory(eqx.Module):
@@ -106,11 +108,18 @@ def simulate(
 
     ``ts``: times at which to save (default: only ``t1``).  The defaults are
     Tsit5, a PID controller with rtol = atol = 1e-8 on the whole state, and
-    recursive-checkpoint reverse-mode adjoints.
+    recursive-checkpoint reverse-mode adjoints.  A Rosenbrock ``solver``
+    (`ROS3P`, `ROS34PW2`) without ``jacobian_states`` gets the mechanism's
+    `Mechanism.feedback_states` as its Jacobian structure and integrates
+    `Mechanism.for_state_jacobian` (same values, cheaper Jacobians).
     """
     require_float64("simulate")
     baumgarte = Baumgarte() if baumgarte is None else baumgarte
     solver = diffrax.Tsit5() if solver is None else solver
+    if isinstance(solver, AbstractRosenbrock):
+        if solver.jacobian_states is None:
+            solver = dataclasses.replace(solver, jacobian_states=mech.feedback_states)
+        mech = mech.for_state_jacobian()  # same forces, cheaper Jacobian columns
     if stepsize_controller is None:
         stepsize_controller = diffrax.PIDController(rtol=1e-8, atol=1e-8, pcoeff=0.3, icoeff=0.4)
     adjoint = diffrax.RecursiveCheckpointAdjoint() if adjoint is None else adjoint

@@ -34,6 +34,21 @@ class AbstractForceElement(eqx.Module):
         return 0
 
     @property
+    def feedback_aux(self) -> tuple[int, ...]:
+        """Entries of the element's aux state (0 .. n_aux - 1) that its forces or
+        aux rates read.  The others are integrals of the motion that never feed
+        back (e.g. wear accumulators); a solver may take their Jacobian columns
+        as zero.  Default: all of them."""
+        return tuple(range(self.n_aux))
+
+    def for_state_jacobian(self) -> "AbstractForceElement":
+        """The element with the same forces, differentiated cheaply along many
+        state directions at once (a Jacobian of the right-hand side); default:
+        itself.  A clearance joint maps the directions through its contact
+        law's Jacobian in the pin's motion (`diffwear.contact.linearised`)."""
+        return self
+
+    @property
     @abc.abstractmethod
     def bodies(self) -> tuple[str, ...]:
         """Bodies the element acts on ("ground" allowed)."""

@@ -86,6 +86,25 @@ class Mechanism(eqx.Module):
     def n_state(self) -> int:
         return 2 * self.n_coords + self.n_aux
 
+    def for_state_jacobian(self) -> "Mechanism":
+        """The same mechanism with each force element's `for_state_jacobian`
+        (same right-hand side; cheaper full Jacobians, dearer single
+        tangents).  The Rosenbrock solvers' simulations use it."""
+        return eqx.tree_at(lambda m: m.forces, self,
+                           tuple(f.for_state_jacobian() for f in self.forces))
+
+    @property
+    def feedback_states(self) -> tuple[int, ...]:
+        """Indices of the states the vector field reads: q, qd and each force
+        element's `feedback_aux`.  The other states (wear accumulators) have zero
+        Jacobian columns; `diffwear.dynamics.ROS3P` forms only these columns."""
+        out = list(range(2 * self.n_coords))
+        start = 2 * self.n_coords
+        for f in self.forces:
+            out += [start + i for i in f.feedback_aux]
+            start += f.n_aux
+        return tuple(out)
+
     def constraint_rows(self, name: str) -> slice:
         """Rows of Phi (and entries of lambda) that belong to constraint ``name``."""
         return _block(self.constraints, name, lambda c: c.n_rows, "constraint")

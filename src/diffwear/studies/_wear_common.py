@@ -19,6 +19,7 @@ from ..io import CHECKPOINT as OUT_CHECKPOINT
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..report import Block, Bullets, Report, Table
 from ..wear import wear_cycle, worn_mechanism, worn_volume
+from ..wear.cycle import cycle_integrator
 from ..wear.evolution import ChunkedEvolution, Evolver, load_checkpoint, save_checkpoint
 from ..wear.fem_route import FemEvolver, default_model
 from ._report import comparison_table, peak_line, write_report
@@ -57,17 +58,18 @@ CHECKPOINT = OUT_CHECKPOINT  # the name `io.OutputDir` knows
 CONTACT_LOSS_WARNING = 0.25
 CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
 # checkpoint keys added later, with the value that checkpoints written before meant
-META_DEFAULTS = {"contact": "efm"}
+META_DEFAULTS = {"contact": "efm", "integrator": "tsit5"}
 
 
 def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, max_dynamic,
                   wall, n_theta, rtol=1e-2, atol=1e-6, out=None, meta=None, resume=False,
-                  progress=False, chunks=CHUNKS, fem=None, joint=JOINT):
+                  progress=False, chunks=CHUNKS, fem=None, joint=JOINT, integrator="tsit5"):
     """Compile (timed) and run (timed) the whole evolution of clearance joint
     ``joint``.
 
     ``fem``: a `FemWearModel` for the FEM wear route (`wear.fem_route`), else
-    (None) the EFM route.
+    (None) the EFM route.  ``integrator``: the dynamic cycles' integrator by
+    name, at its tolerance (`wear.cycle.CYCLE_INTEGRATORS`).
 
     Without ``out``: one jitted function.  With ``out`` (an `OutputDir`): in
     ``chunks`` chunks of scan slots (`ChunkedEvolution`, same result), saving
@@ -76,8 +78,10 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
     ``meta``.  ``progress``: a tqdm bar of real cycles done (with time left).
     Returns (result, compile time, run time, info for the summary).
     """
+    solver, tol = cycle_integrator(integrator)
     kw = dict(period=period, method=method, extrapolation=extrapolation,
-              max_dynamic=max_dynamic, wall_thickness=wall, rtol=rtol, atol=atol)
+              max_dynamic=max_dynamic, wall_thickness=wall, rtol=rtol, atol=atol,
+              cycle_solver=solver, cycle_rtol=tol, cycle_atol=tol)
 
     def make(p):
         if fem is None:
@@ -101,7 +105,7 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
 
     meta = {**(meta or {}), "cycles": float(cycles), "method": method,
             "extrapolation": float(extrapolation), "n_theta": int(n_theta),
-            "contact": "efm" if fem is None else "fem"}
+            "contact": "efm" if fem is None else "fem", "integrator": integrator}
     if fem is not None:
         meta.update(fem_refresh_interval=float(fem.refresh_interval),
                     fem_samples=fem.n_samples, fem_layers=fem.n_layers, fem_force=fem.force)
@@ -152,7 +156,8 @@ def check_contact(contact) -> str:
 def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, period, method,
                    extrapolation, target_dynamic, n_theta, thesis: dict, description: str, log,
                    resume=False, progress=False, extra_summary=None, extra_report=(),
-                   contact="efm", fem=None, model="dynamic", thesis_cycles=None) -> dict:
+                   contact="efm", fem=None, model="dynamic", thesis_cycles=None,
+                   integrator="tsit5") -> dict:
     """The body of a wear study: ``design``'s wear joint swapped into ``mech0``
     (differentiable in k, clearance, depth, diameter), the evolution over
     ``cycles`` (constant A = cycles / ``target_dynamic`` unless ``extrapolation``
@@ -162,6 +167,8 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
     ``contact="fem"``: the wear pressure from the FE ring (`wear.fem_route`;
     ``fem`` a `FemWearModel`, default `default_model(design)`); the EFM route is
     run first (one jit, not checkpointed) so that the report compares both.
+    ``integrator``: the dynamic cycles' integrator ("tsit5" or "ros3p",
+    `wear.cycle.CYCLE_INTEGRATORS`).
 
     ``thesis_cycles``: the cycle count the ``thesis`` values are for; a run of
     another length is not compared with them (report, plots and summary say
@@ -175,7 +182,9 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
         thesis = {}
     check_wear_model(model, ((method != "constant", f"--method {method}"),
                              (contact != "efm", f"--contact {contact}"),
+                             (integrator != "tsit5", f"--integrator {integrator}"),
                              (resume, "--resume")))
+    cycle_integrator(integrator)  # a bad name fails before any work
     if model == "quasi-static":
         from . import _quasi_static_study
 
@@ -192,7 +201,7 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
     params = params_of(design)
     a = extrapolation or default_constant_a(cycles, target_dynamic)
     common_kw = dict(method=method, extrapolation=a, max_dynamic=4 * target_dynamic,
-                     wall=design.wall, n_theta=n_theta)
+                     wall=design.wall, n_theta=n_theta, integrator=integrator)
     extra_summary, extra_report = dict(extra_summary or {}), list(extra_report)
     label = "diffwear"
     if contact == "fem":
@@ -216,6 +225,7 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
         meta={"study": name}, resume=resume, progress=progress,
         fem=fem if contact == "fem" else None)
     extra_summary["contact"] = contact
+    extra_summary["integrator"] = integrator
     if contact == "fem":
         fallback = res.state.memory["fem_explicit"]
         fem_summary = {"explicit_fallback_cycles": int(np.asarray(fallback)),

@@ -87,7 +87,7 @@ def calibrate_free_length(l0_guesses=(0.50, 0.56), *, cycles=RIG_CYCLES, dynamic
 def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
         extrapolation: float | None = None, free_length: float | None = None,
         log=print, resume: bool = False, progress: bool = False,
-        contact: str = "efm", model: str = "dynamic") -> dict:
+        contact: str = "efm", model: str = "dynamic", integrator: str = "tsit5") -> dict:
     l0 = RIG_SPRING_FREE_LENGTH if free_length is None else free_length
     mech0, _, y0 = _setup(TABLE_7_1, l0)
     log(f"[{NAME}] spring free length L0 {l0:.5f} m")
@@ -97,7 +97,7 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
         out, name=NAME, mech0=mech0, design=RIG_JOINT, y0=y0, cycles=cycles, period=PERIOD,
         method=method, extrapolation=extrapolation, target_dynamic=TARGET_DYNAMIC,
         n_theta=N_THETA, thesis=THESIS, log=log, resume=resume, progress=progress,
-        contact=contact, model=model, thesis_cycles=RIG_CYCLES,
+        contact=contact, model=model, integrator=integrator, thesis_cycles=RIG_CYCLES,
         description=(
             "Rig of thesis Ch. 7: Table 7-1 read as half-lengths (crank 38.1 mm, rod 101.6 mm "
             "COM distances), gravity -y in the plane, slider spring 525.4 N/m pulling the "

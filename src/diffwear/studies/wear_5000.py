@@ -35,14 +35,16 @@ THESIS = {  # Table 6-4
 
 def run(out: OutputDir, *, cycles: int = WEAR_5000_CYCLES, method: str = "constant",
         extrapolation: float | None = None, log=print, resume: bool = False,
-        progress: bool = False, contact: str = "efm", model: str = "dynamic") -> dict:
+        progress: bool = False, contact: str = "efm", model: str = "dynamic",
+        integrator: str = "tsit5") -> dict:
     mech0, q_guess = slider_crank(TABLE_2_1)
     y0 = common.initial_state(mech0, q_guess, with_wear_joint(mech0, WEAR_5000, n_theta=N_THETA))
     return common.run_wear_study(
         out, name=NAME, mech0=mech0, design=WEAR_5000, y0=y0, cycles=cycles,
         period=2 * math.pi / THESIS_CRANK_SPEED, method=method, extrapolation=extrapolation,
         target_dynamic=TARGET_DYNAMIC, n_theta=N_THETA, thesis=THESIS, log=log, resume=resume,
-        progress=progress, contact=contact, model=model, thesis_cycles=WEAR_5000_CYCLES,
+        progress=progress, contact=contact, model=model, integrator=integrator,
+        thesis_cycles=WEAR_5000_CYCLES,
         description=(
             "Table 2-1 slider-crank (half-lengths 1 m / 1.75 m), gravity -y, crank-rod EFM "
             "clearance joint: pin R 20 mm, c 0.005 mm, depth 12.8 mm, bushing outer R 33.31 mm "

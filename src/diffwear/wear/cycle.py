@@ -19,7 +19,7 @@ from .._checks import require_float64
 from ..contact.archard import ArchardWear
 from ..contact.clearance_joint import ClearanceJoint
 from ..contact.laws import ElasticFoundation
-from ..dynamics import simulate
+from ..dynamics import ROS3P, simulate
 from ..errors import InputError
 from ..mechanism import Mechanism
 
@@ -28,6 +28,28 @@ from ..mechanism import Mechanism
 # ~3500 Tsit5 steps; tests/test_wear.py checks the wear result converges.
 CYCLE_RTOL = 1e-6
 CYCLE_ATOL = 1e-6
+
+# The wear cycle's integrators by name, each with the tolerance (rtol = atol)
+# at which it is used.  Tsit5 is stability-bound on the stiff EFM contact
+# (~2,800 accepted steps per rig cycle at any rtol from 1e-4 to 1e-6); the
+# linearly implicit ROS3P is not, and at rtol 1e-4 (~650 steps per rig cycle)
+# keeps the wear studies' depth and volume within 1e-4 of Tsit5 at 1e-8
+# (tests/test_rosenbrock.py; the performance docs give the measurements).
+CYCLE_INTEGRATORS: dict[str, tuple[type[diffrax.AbstractSolver], float]] = {
+    "tsit5": (diffrax.Tsit5, CYCLE_RTOL),
+    "ros3p": (ROS3P, 1e-4),
+}
+
+
+def cycle_integrator(name: str) -> tuple[diffrax.AbstractSolver, float]:
+    """(solver, tolerance) of the wear cycle's integrator ``name``
+    (`CYCLE_INTEGRATORS`)."""
+    try:
+        cls, tol = CYCLE_INTEGRATORS[name]
+    except KeyError:
+        raise InputError(f"unknown cycle integrator {name!r}; choose one of "
+                         f"{sorted(CYCLE_INTEGRATORS)}") from None
+    return cls(), tol
 
 
 class CycleResult(eqx.Module):
@@ -98,9 +120,11 @@ def wear_cycle_joints(
     n_save: int | None = None,
     adjoint: diffrax.AbstractAdjoint | None = None,
     max_steps: int = 200_000,
+    solver: diffrax.AbstractSolver | None = None,
 ) -> JointsCycleResult:
     """One cycle [t0, t0 + period] from ``y`` with the wear states of every
-    joint in ``joints`` reset: the wear of several joints in one integration."""
+    joint in ``joints`` reset: the wear of several joints in one integration.
+    ``solver``: the integrator (default Tsit5; see `CYCLE_INTEGRATORS`)."""
     require_float64("wear_cycle_joints")
     elements = [clearance_element(mech, j)[1] for j in joints]
     y0 = y
@@ -110,7 +134,7 @@ def wear_cycle_joints(
     t1 = t0 + period
     ts = None if n_save is None else t0 + period * jnp.linspace(0.0, 1.0, n_save)
     traj = simulate(
-        mech, y0, t1, t0=t0, ts=ts, adjoint=adjoint, max_steps=max_steps,
+        mech, y0, t1, t0=t0, ts=ts, adjoint=adjoint, max_steps=max_steps, solver=solver,
         stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol, pcoeff=0.3, icoeff=0.4),
     )
     y1 = traj.ys[-1]
@@ -140,16 +164,19 @@ def wear_cycle(
     n_save: int | None = None,
     adjoint: diffrax.AbstractAdjoint | None = None,
     max_steps: int = 200_000,
+    solver: diffrax.AbstractSolver | None = None,
 ) -> CycleResult:
     """Integrate one cycle [t0, t0 + period] from state ``y`` (wear states reset).
 
     ``n_save``: also return the trajectory at ``n_save`` equally spaced times
-    (for contact loci and joint-force plots).  Pure and jit-able; failure is
-    reported in ``ok`` (False on an integrator failure or a non-finite state).
+    (for contact loci and joint-force plots).  ``solver``: the integrator
+    (default Tsit5; `CYCLE_INTEGRATORS` names the choices and their
+    tolerances).  Pure and jit-able; failure is reported in ``ok`` (False on an
+    integrator failure or a non-finite state).
     """
     require_float64("wear_cycle")
     r = wear_cycle_joints(mech, (joint,), y, t0, period, rtol=rtol, atol=atol, n_save=n_save,
-                          adjoint=adjoint, max_steps=max_steps)
+                          adjoint=adjoint, max_steps=max_steps, solver=solver)
     return CycleResult(y_end=r.y_end, depth_increment=r.depth_increment[0],
                        load_sliding=r.load_sliding[0], num_steps=r.num_steps, ok=r.ok,
                        ts=r.ts, ys=r.ys)

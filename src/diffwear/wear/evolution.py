@@ -158,6 +158,7 @@ def evolve(
     cycle_atol: float = CYCLE_ATOL,
     adjoint=None,
     max_steps: int = 200_000,
+    cycle_solver=None,
     start: EvolutionState | None = None,
     slots: int | None = None,
 ) -> EvolutionResult:
@@ -170,7 +171,9 @@ def evolve(
     method "error".  ``wall_thickness`` [m]: stop when max depth reaches it.
     ``warmup_cycles`` dynamic cycles are run first and their wear discarded
     (start-up transient of the pin from the centred position; the thesis drops
-    its first ~1.3 revolutions too).
+    its first ~1.3 revolutions too).  ``cycle_rtol``, ``cycle_atol``,
+    ``cycle_solver`` (default Tsit5; `diffwear.wear.cycle.CYCLE_INTEGRATORS`),
+    ``adjoint``, ``max_steps``: each dynamic cycle's integration.
 
     Resuming: ``start`` is an evolution state (``EvolutionResult.state`` of an
     earlier call, or `Evolver.init`); the warm-up is then skipped and ``y0``
@@ -182,7 +185,7 @@ def evolve(
                  extrapolation=extrapolation, max_dynamic=max_dynamic, rtol=rtol, atol=atol,
                  wall_thickness=wall_thickness, warmup_cycles=warmup_cycles, adaptive=adaptive,
                  cycle_rtol=cycle_rtol, cycle_atol=cycle_atol, adjoint=adjoint,
-                 max_steps=max_steps)
+                 max_steps=max_steps, cycle_solver=cycle_solver)
     state = ev.init(y0) if start is None else start
     state, hist = ev.run(state, ev.n_slots if slots is None else int(slots))
     return ev.result(state, hist)
@@ -205,14 +208,14 @@ class Evolver:
                  extrapolation=1.0, max_dynamic=None, rtol=1e-2, atol=1e-7,
                  wall_thickness=None, warmup_cycles=1, adaptive=None,
                  cycle_rtol=CYCLE_RTOL, cycle_atol=CYCLE_ATOL, adjoint=None,
-                 max_steps=200_000):
+                 max_steps=200_000, cycle_solver=None):
         self.strategy = extrapolation_method(method, extrapolation=extrapolation, rtol=rtol,
                                              atol=atol, adaptive=adaptive)
         self.index, el = clearance_element(mech, joint)
         self.mech, self.joint, self.period = mech, joint, period
         self.warmup_cycles = warmup_cycles
         self.cycle_kw = dict(rtol=cycle_rtol, atol=cycle_atol, adjoint=adjoint,
-                             max_steps=max_steps)
+                             max_steps=max_steps, solver=cycle_solver)
         self.n_slots = self.strategy.slots(cycles, max_dynamic)
         self.c_base = el.profile.clearance
         law, wear = wear_parts(el)

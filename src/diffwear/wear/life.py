@@ -205,6 +205,7 @@ def dynamic_cycles_to_limit(
     cycle_atol: float = CYCLE_ATOL,
     adjoint=None,
     max_steps: int = 200_000,
+    cycle_solver=None,
 ) -> LifeResult:
     """Cycles until the maximum bushing wear depth of each of ``joints`` reaches
     ``limit`` [m] (see the module notes for the stepping and the derivative).
@@ -216,8 +217,10 @@ def dynamic_cycles_to_limit(
     slots (default 3 x steps + 4: the implicit gain per slot is below
     limit / steps, and the slowest joint carries on once the fastest is done).
     ``warmup_cycles`` dynamic cycles run first with their wear
-    discarded (the pin's start-up transient).  Pure and jit-able; a solver
-    failure or a joint that never reaches the limit is reported in ``status``.
+    discarded (the pin's start-up transient).  ``cycle_solver``: the dynamic
+    cycles' integrator (default Tsit5; `diffwear.wear.cycle.CYCLE_INTEGRATORS`).
+    Pure and jit-able; a solver failure or a joint that never reaches the
+    limit is reported in ``status``.
     """
     joints = tuple(joints)
     if not joints:
@@ -235,7 +238,8 @@ def dynamic_cycles_to_limit(
     limit = jnp.asarray(limit, dtype=float)
     dh_target = limit / steps
     n_j = len(joints)
-    kw = dict(rtol=cycle_rtol, atol=cycle_atol, adjoint=adjoint, max_steps=max_steps)
+    kw = dict(rtol=cycle_rtol, atol=cycle_atol, adjoint=adjoint, max_steps=max_steps,
+              solver=cycle_solver)
 
     def run_cycle(hs, y, t, n_save=None):
         return wear_cycle_joints(_with_profiles(mech, indices, bases, hs), joints, y, t,

@@ -1,0 +1,273 @@
+"""Linearly implicit (Rosenbrock) diffrax solvers with a structured Jacobian.
+
+The stiffness of a mechanism with penalty contact lies in the few states the
+contact forces read back: the coordinates and velocities (and a contact law's
+memory).  The wear accumulators of a clearance joint are integrals of the
+contact: they never feed back into the right-hand side within a cycle, so their
+Jacobian columns are exactly zero.  These solvers form the Jacobian only over
+the states that feed back (``jacobian_states``; `simulate` fills them in from
+`Mechanism.feedback_states`), which makes the step matrix one small LU (18 x 18
+on the three-body rig) plus a back-substitution for the other rows.
+
+Methods, both third order with an embedded second-order solution for the step
+controller:
+
+* `ROS3P` (Lang and Verwer 2001, BIT 41, 731-738): three stages, A-stable
+  (R(-inf) = 1 - sqrt(3) = -0.73: stiff modes alternate and decay slowly), an
+  exact Jacobian at every step.
+* `ROS34PW2` (Rang and Angermann 2005, BIT 45, 761-787): four stages,
+  L-stable, stiffly accurate and a W-method: it keeps its order with any
+  approximation of the Jacobian, so the linearisation may be reused over
+  ``jacobian_every`` steps.
+
+Both are written in the transformed form of Hairer and Wanner (Solving ODEs
+II, 2nd ed., Sec. IV.7, Eq. 7.25) so that each stage is one back-substitution
+and no product with J.  Dense output: the cubic Hermite interpolant of the
+step's end values and slopes.  With the Jacobian in hand there is no Newton
+iteration and no convergence test; the step is set by accuracy, not by the
+stability limit of the contact stiffness that bounds explicit methods (the
+performance docs give the measured step counts).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import ClassVar, NamedTuple
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jax.scipy.linalg as jsl
+import numpy as np
+
+from ..errors import InputError
+
+
+class RosenbrockTableau(NamedTuple):
+    """Coefficients in the transformed form (Hairer-Wanner Eq. IV.7.25):
+
+        W = I / (h gamma) - J,
+        W u_i = f(t + alpha_i h, y + sum_j a_ij u_j) + sum_j (c_ij / h) u_j
+                + gamma_i h f_t,
+        y1 = y + sum_i m_i u_i,  error = sum_i (m_i - m_embedded_i) u_i.
+    """
+
+    gamma: float
+    a: tuple[tuple[float, ...], ...]
+    c: tuple[tuple[float, ...], ...]
+    alpha: tuple[float, ...]
+    gammas: tuple[float, ...]
+    m: tuple[float, ...]
+    m_embedded: tuple[float, ...]
+
+    @classmethod
+    def from_standard(cls, gamma, alpha, gamma_offdiag, b, b_embedded) -> "RosenbrockTableau":
+        """From the standard form (Hairer-Wanner Eq. IV.7.4: stage matrix
+        I - h gamma J, strictly lower alpha_ij and gamma_ij, weights b, b^) by
+        a = alpha Gamma^-1, c = diag(1 / gamma) - Gamma^-1, m = b Gamma^-1 with
+        Gamma = gamma_ij + gamma I."""
+        al, g_off = np.asarray(alpha, float), np.asarray(gamma_offdiag, float)
+        s = al.shape[0]
+        big_gamma = g_off + gamma * np.eye(s)
+        inv = np.linalg.inv(big_gamma)
+        a, c = al @ inv, np.eye(s) / gamma - inv
+        return cls(
+            gamma=float(gamma),
+            a=tuple(tuple(float(a[i, j]) for j in range(i)) for i in range(s)),
+            c=tuple(tuple(float(c[i, j]) for j in range(i)) for i in range(s)),
+            alpha=tuple(float(x) for x in al.sum(axis=1)),
+            gammas=tuple(float(x) for x in big_gamma.sum(axis=1)),
+            m=tuple(float(x) for x in np.asarray(b, float) @ inv),
+            m_embedded=tuple(float(x) for x in np.asarray(b_embedded, float) @ inv),
+        )
+
+
+# ROS3P, Lang and Verwer (2001), Table 2.1, in transformed form;
+# gamma = 1/2 + sqrt(3)/6.
+_ROS3P_GAMMA = 0.5 + math.sqrt(3.0) / 6.0
+ROS3P_TABLEAU = RosenbrockTableau(
+    gamma=_ROS3P_GAMMA,
+    a=((), (1.0 / _ROS3P_GAMMA,), (1.0 / _ROS3P_GAMMA, 0.0)),
+    c=((), (-1.607695154586736,), (-3.464101615137755, -1.732050807568877)),
+    alpha=(0.0, 1.0, 1.0),
+    gammas=(_ROS3P_GAMMA, -0.2113248654051871, -1.077350269189626),
+    m=(2.0, 0.5773502691896258, 0.4226497308103742),
+    m_embedded=(2.113248654051871, 1.0, 0.4226497308103742),
+)
+
+# ROS34PW2, Rang and Angermann (2005), Table 4.1 (standard form).
+_PW2_GAMMA = 4.3586652150845900e-01
+ROS34PW2_TABLEAU = RosenbrockTableau.from_standard(
+    gamma=_PW2_GAMMA,
+    alpha=[[0.0, 0.0, 0.0, 0.0],
+           [8.7173304301691801e-01, 0.0, 0.0, 0.0],
+           [8.4457060015369423e-01, -1.1299064236397981e-01, 0.0, 0.0],
+           [0.0, 0.0, 1.0, 0.0]],
+    gamma_offdiag=[[0.0, 0.0, 0.0, 0.0],
+                   [-8.7173304301691801e-01, 0.0, 0.0, 0.0],
+                   [-9.0338057013044082e-01, 5.4180672388095326e-02, 0.0, 0.0],
+                   [2.4212380706095346e-01, -1.2232505839045147e00, 5.4526025533510214e-01, 0.0]],
+    b=[2.4212380706095346e-01, -1.2232505839045147e00, 1.5452602553351023e00,
+       4.3586652150845900e-01],
+    b_embedded=[3.7810903145819369e-01, -9.6042292212423178e-02, 0.5,
+                2.1793326075422950e-01],
+)
+
+
+class Linearisation(NamedTuple):
+    """The solver state: f(t0, y0), the columns [f_t, J[:, jacobian_states]]
+    of the last linearisation (rows: f_t, then one per Jacobian state) and the
+    number of steps it has served."""
+
+    f0: jax.Array
+    columns: jax.Array
+    age: jax.Array
+
+
+class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
+    """A Rosenbrock method for a state that is one 1-D array, with the Jacobian
+    formed only over ``jacobian_states`` (see the module notes).
+
+    ``jacobian_states``: indices of the states the vector field reads (its
+    Jacobian columns); every other state must not feed back (its column is
+    taken as zero; its rows stay exact).  ``None``: all states (a dense
+    Jacobian).  Passed to `diffwear.dynamics.simulate`, a solver without them
+    gets the mechanism's `Mechanism.feedback_states`.
+    """
+
+    jacobian_states: eqx.AbstractVar[tuple[int, ...] | None]
+    differentiate_jacobian: eqx.AbstractVar[bool]
+    tableau: eqx.AbstractClassVar[RosenbrockTableau]
+
+    term_structure: ClassVar = diffrax.AbstractTerm
+    interpolation_cls: ClassVar[Callable[..., diffrax.ThirdOrderHermitePolynomialInterpolation]] \
+        = diffrax.ThirdOrderHermitePolynomialInterpolation
+
+    def __check_init__(self):
+        js = self.jacobian_states
+        if js is not None and (len(js) == 0 or min(js) < 0 or len(set(js)) != len(js)):
+            raise InputError(f"{type(self).__name__}: jacobian_states must be distinct "
+                             f"non-negative state indices, got {js!r}")
+
+    @property
+    def reuse(self) -> int:
+        """Steps one linearisation serves (1: an exact Jacobian at every step)."""
+        return 1
+
+    def order(self, terms):
+        return 3
+
+    def func(self, terms, t0, y0, args):
+        return terms.vf(t0, y0, args)
+
+    def _blocks(self, y0) -> tuple[np.ndarray, np.ndarray]:
+        """(states with Jacobian columns, the others), checked against ``y0``."""
+        if not (isinstance(y0, jax.Array) and y0.ndim == 1):
+            structure = jax.tree_util.tree_structure(y0)
+            raise InputError(f"{type(self).__name__} integrates a state that is one 1-D array "
+                             f"(the mechanism's packed state), got {structure}")
+        n = y0.shape[0]
+        if self.jacobian_states is None:
+            return np.arange(n), np.arange(0)
+        js = np.asarray(self.jacobian_states, dtype=int)
+        if js.max() >= n:
+            raise InputError(f"{type(self).__name__}: jacobian_states index {int(js.max())} is "
+                             f"outside the state (size {n})")
+        return js, np.setdiff1d(np.arange(n), js)
+
+    def _linearise(self, terms, t0, y0, args) -> Linearisation:
+        stiff, _ = self._blocks(y0)
+        k, dtype = stiff.size, y0.dtype
+        f0, linear = jax.linearize(lambda t, y: terms.vf(t, y, args), jnp.asarray(t0, dtype), y0)
+        dts = jnp.zeros(k + 1, dtype).at[0].set(1.0)
+        dys = jnp.zeros((k + 1, y0.shape[0]), dtype).at[1 + np.arange(k), stiff].set(1.0)
+        columns = jax.vmap(linear)(dts, dys)
+        if not self.differentiate_jacobian:
+            columns = jax.lax.stop_gradient(columns)
+        return Linearisation(f0, columns, jnp.zeros((), jnp.int32))
+
+    def init(self, terms, t0, t1, y0, args):
+        if self.reuse == 1:
+            return None
+        return self._linearise(terms, t0, y0, args)
+
+    def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        tab = self.tableau
+        stiff, free = self._blocks(y0)
+        dtype = y0.dtype
+        t0 = jnp.asarray(t0, dtype)
+        h = jnp.asarray(t1, dtype) - t0
+
+        def f(t, y):
+            return terms.vf(t, y, args)
+
+        if solver_state is None:
+            lin = self._linearise(terms, t0, y0, args)
+        else:
+            # reuse the linearisation for ``reuse`` steps; f0 is the last step's
+            # end slope (a rejected step keeps the state it started from)
+            fresh = (solver_state.age >= self.reuse) | jnp.asarray(made_jump)
+            lin = jax.lax.cond(fresh, lambda: self._linearise(terms, t0, y0, args),
+                               lambda: solver_state)
+        f0, f_t, jac = lin.f0, lin.columns[0], lin.columns[1:].T
+        hg = h * tab.gamma
+        lu = jsl.lu_factor(jnp.eye(stiff.size, dtype=dtype) / hg - jac[stiff])
+        j_free = jac[free]
+
+        def w_solve(rhs):
+            # W = [[I/hg - J_ss, 0], [-J_fs, I/hg]] in (stiff, free) order
+            top = jsl.lu_solve(lu, rhs[stiff])
+            return jnp.zeros_like(rhs).at[stiff].set(top).at[free].set(
+                hg * (rhs[free] + j_free @ top))
+
+        def combine(coeffs, vectors):
+            return sum((c * v for c, v in zip(coeffs, vectors) if c != 0.0), jnp.zeros_like(y0))
+
+        us: list[jax.Array] = []
+        for i in range(len(tab.m)):
+            f_stage = f0 if i == 0 else f(t0 + tab.alpha[i] * h, y0 + combine(tab.a[i], us))
+            us.append(w_solve(f_stage + combine(tab.c[i], us) / h + tab.gammas[i] * h * f_t))
+        y1 = y0 + combine(tab.m, us)
+        y_error = combine([m - me for m, me in zip(tab.m, tab.m_embedded)], us)
+        f1 = f(t0 + h, y1)
+        dense_info = dict(y0=y0, y1=y1, k0=h * f0, k1=h * f1)
+        state = None if solver_state is None else Linearisation(f1, lin.columns, lin.age + 1)
+        return y1, y_error, dense_info, state, diffrax.RESULTS.successful
+
+
+class ROS3P(AbstractRosenbrock):
+    """ROS3P (Lang and Verwer 2001): three stages, third order, A-stable, an
+    exact Jacobian at every step.  Cost per step: one linearisation (the
+    vector field and len(jacobian_states) + 1 tangents, batched), one LU of
+    that size, two more evaluations and one at the step's end (dense output).
+    Differentiable with diffrax's adjoints (the reverse pass goes through the
+    LU)."""
+
+    jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
+    differentiate_jacobian: bool = eqx.field(static=True, default=True)
+    tableau: ClassVar[RosenbrockTableau] = ROS3P_TABLEAU
+
+
+class ROS34PW2(AbstractRosenbrock):
+    """ROS34PW2 (Rang and Angermann 2005): four stages, third order, L-stable,
+    stiffly accurate, and a W-method: its order holds with any Jacobian, so a
+    linearisation serves ``jacobian_every`` steps (1: fresh at every step).
+    Between linearisations a step costs four evaluations of the vector field
+    and an LU of the Jacobian block; the step controller sees the price of a
+    stale Jacobian as a smaller step."""
+
+    jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
+    differentiate_jacobian: bool = eqx.field(static=True, default=False)
+    jacobian_every: int = eqx.field(static=True, default=1)
+    tableau: ClassVar[RosenbrockTableau] = ROS34PW2_TABLEAU
+
+    def __check_init__(self):
+        if not (isinstance(self.jacobian_every, int) and self.jacobian_every >= 1):
+            raise InputError(f"ROS34PW2: jacobian_every must be an integer >= 1, got "
+                             f"{self.jacobian_every!r}")
+
+    @property
+    def reuse(self) -> int:
+        return self.jacobian_every

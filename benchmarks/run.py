@@ -121,9 +121,10 @@ def clearance_cycle(law: str, clearance_mm: float) -> Callable[[int], dict]:
     return case
 
 
-def rig_21400(repeats: int) -> dict:
+def rig_21400(repeats: int, integrator: str = "tsit5") -> dict:
     """The whole ``rig-21400`` wear evolution (constant A = 428, 50 wear cycles
-    after one warm-up cycle), compiled once; one or two steady repeats."""
+    after one warm-up cycle), its cycles on ``integrator`` at its tolerance
+    (`wear.cycle.CYCLE_INTEGRATORS`), compiled once; one or two steady repeats."""
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
     from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, TARGET_DYNAMIC, _setup
@@ -135,9 +136,12 @@ def rig_21400(repeats: int) -> dict:
     import jax
 
     from diffwear.wear import evolve
+    from diffwear.wear.cycle import cycle_integrator
 
+    solver, tol = cycle_integrator(integrator)
     fn = jax.jit(lambda p, y: evolve(mech_of_p(p), common.JOINT, y, RIG_CYCLES, period=PERIOD,
-                                     extrapolation=a, wall_thickness=RIG_JOINT.wall))
+                                     extrapolation=a, wall_thickness=RIG_JOINT.wall,
+                                     cycle_solver=solver, cycle_rtol=tol, cycle_atol=tol))
     res, metrics = time_jitted(fn, (common.params_of(RIG_JOINT), y0), min(repeats, 2))
     res.check("benchmark rig-21400")
     dyn = int(res.dynamic_cycles)
@@ -149,6 +153,54 @@ def rig_21400(repeats: int) -> dict:
             "wear_volume_mm3": float(worn_volume(res.depth, el.bushing_radius,
                                                  el.law.depth)) * 1e9,
             "repeats": min(repeats, 2)}
+
+
+def rig_cycle_integrators(repeats: int) -> dict:
+    """One rig wear cycle (after the warm-up) on each wear-cycle integrator at
+    its tolerance (Tsit5 rtol 1e-6, ROS3P 1e-4: `wear.cycle.CYCLE_INTEGRATORS`)
+    against Tsit5 at rtol = atol = 1e-10: steps, time per cycle and per step,
+    and the errors of the end state (q, qd; relative to the largest entry) and
+    of the cycle's wear increment (relative to its peak).  The evolution's
+    agreement (what the wear answer needs) is in the rig-21400 cases."""
+    import diffrax
+    import jax
+    import numpy as np
+
+    from diffwear.dynamics import simulate
+    from diffwear.studies.rig_21400 import PERIOD, _setup
+    from diffwear.wear.cycle import CYCLE_INTEGRATORS, cycle_integrator
+
+    _, mech, y0 = _setup()
+    n = 2 * mech.n_coords
+
+    def cycle(solver, tol):
+        ctrl = diffrax.PIDController(rtol=tol, atol=tol, pcoeff=0.3, icoeff=0.4)
+        return jax.jit(lambda m, y, t0: simulate(m, y, t0 + PERIOD, t0=t0, solver=solver,
+                                                 stepsize_controller=ctrl))
+
+    ys = cycle(None, 1e-8)(mech, y0, 0.0).y_final
+    ref = np.asarray(cycle(None, 1e-10)(mech, ys, PERIOD).y_final)
+    dwear_ref = ref[n:] - np.asarray(ys)[n:]
+    out: dict = {}
+    for name in CYCLE_INTEGRATORS:
+        solver, tol = cycle_integrator(name)
+        traj, m = time_jitted(cycle(solver, tol), (mech, ys, PERIOD), repeats)
+        traj.raise_if_failed(f"benchmark rig cycle {name}", mech)
+        y1 = np.asarray(traj.y_final)
+        steps = int(traj.num_steps)
+        out.update({
+            f"{name}_rtol": tol, f"{name}_run_s": m["run_s"], f"{name}_compile_s": m["compile_s"],
+            f"{name}_steps": steps, f"{name}_accepted_steps": int(traj.num_accepted_steps),
+            f"{name}_us_per_step": m["run_s"] / steps * 1e6,
+            f"{name}_err_state": float(np.abs(y1[:n] - ref[:n]).max() / np.abs(ref[:n]).max()),
+            f"{name}_err_wear": float(np.abs(y1[n:] - np.asarray(ys)[n:] - dwear_ref).max()
+                                      / np.abs(dwear_ref).max())})
+    out.update({"compile_s": out["ros3p_compile_s"], "run_s": out["ros3p_run_s"],
+                "run_s_per_cycle": out["ros3p_run_s"], "integrator_steps": out["ros3p_steps"],
+                "us_per_step": out["ros3p_us_per_step"],
+                "speedup_ros3p_over_tsit5": out["tsit5_run_s"] / out["ros3p_run_s"],
+                "repeats": repeats})
+    return out
 
 
 def rig_21400_fem_route(repeats: int) -> dict:
@@ -899,6 +951,8 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig-21400 (constant A)": rig_21400,
     "rig-21400 FEM vs EFM route": rig_21400_fem_route,
     "vmap sweep 64 points vs 64 single runs": vmap_sweep,
+    "rig cycle, Tsit5 and ROS3P": rig_cycle_integrators,
+    "rig-21400 (ROS3P)": lambda r: rig_21400(r, "ros3p"),
     "rig-21400 gradient (4 parameters)": rig_gradient,
     "rig-21400 gradient (4 parameters, ROS3P)": lambda r: rig_gradient(r, "ros3p"),
     "rig cycle profile": rig_profile,

@@ -134,6 +134,19 @@ def test_structured_step_is_the_dense_step(mechanisms, law):
                                atol=1e-11 * float(jnp.abs(dense).max()))
 
 
+def test_jacobian_states_anywhere_in_the_state():
+    """A quadrature state first (y0' = y1^2, never read) and a stiff pair
+    after it: the step with the Jacobian over states 1, 2 (index arrays, not
+    a leading block) is the dense step."""
+    term = diffrax.ODETerm(lambda t, y, a: jnp.stack([y[1] ** 2, y[2] - 1e4 * y[1] ** 3,
+                                                      -1e3 * y[2] + jnp.sin(t)]))
+    y = jnp.array([0.3, 0.5, -0.2])
+    for solver in (ROS3P, ROS34PW2):
+        dense = solver().step(term, 0.1, 0.2, y, None, None, False)[0]
+        structured = solver(jacobian_states=(1, 2)).step(term, 0.1, 0.2, y, None, None, False)[0]
+        np.testing.assert_allclose(np.asarray(structured), np.asarray(dense), rtol=1e-13)
+
+
 @pytest.mark.parametrize("law", ["ln", "efm"])
 def test_linearised_law_has_the_same_values_and_derivatives(mechanisms, law):
     """Values, derivatives along pin motions (several at once, as in a

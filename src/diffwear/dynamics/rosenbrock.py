@@ -162,27 +162,30 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
     def func(self, terms, t0, y0, args):
         return terms.vf(t0, y0, args)
 
-    def _blocks(self, y0) -> tuple[np.ndarray, np.ndarray]:
-        """(states with Jacobian columns, the others), checked against ``y0``."""
+    def _blocks(self, y0) -> tuple[np.ndarray | slice, np.ndarray | slice]:
+        """(states with Jacobian columns, the others), checked against ``y0``:
+        slices when the former are a leading block (a mechanism's q, qd and
+        contact memory usually are), else index arrays."""
         if not (isinstance(y0, jax.Array) and y0.ndim == 1):
             structure = jax.tree_util.tree_structure(y0)
             raise InputError(f"{type(self).__name__} integrates a state that is one 1-D array "
                              f"(the mechanism's packed state), got {structure}")
         n = y0.shape[0]
-        if self.jacobian_states is None:
-            return np.arange(n), np.arange(0)
-        js = np.asarray(self.jacobian_states, dtype=int)
+        js = np.arange(n) if self.jacobian_states is None else np.asarray(self.jacobian_states)
         if js.max() >= n:
             raise InputError(f"{type(self).__name__}: jacobian_states index {int(js.max())} is "
                              f"outside the state (size {n})")
+        if np.array_equal(js, np.arange(js.size)):
+            return slice(0, js.size), slice(js.size, n)
         return js, np.setdiff1d(np.arange(n), js)
 
     def _linearise(self, terms, t0, y0, args) -> Linearisation:
         stiff, _ = self._blocks(y0)
-        k, dtype = stiff.size, y0.dtype
+        index, dtype = np.arange(y0.shape[0])[stiff], y0.dtype
+        k = index.size
         f0, linear = jax.linearize(lambda t, y: terms.vf(t, y, args), jnp.asarray(t0, dtype), y0)
         dts = jnp.zeros(k + 1, dtype).at[0].set(1.0)
-        dys = jnp.zeros((k + 1, y0.shape[0]), dtype).at[1 + np.arange(k), stiff].set(1.0)
+        dys = jnp.zeros((k + 1, y0.shape[0]), dtype).at[1 + np.arange(k), index].set(1.0)
         columns = jax.vmap(linear)(dts, dys)
         if not self.differentiate_jacobian:
             columns = jax.lax.stop_gradient(columns)
@@ -213,14 +216,16 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
                                lambda: solver_state)
         f0, f_t, jac = lin.f0, lin.columns[0], lin.columns[1:].T
         hg = h * tab.gamma
-        lu = jsl.lu_factor(jnp.eye(stiff.size, dtype=dtype) / hg - jac[stiff])
+        lu = jsl.lu_factor(jnp.eye(jac.shape[1], dtype=dtype) / hg - jac[stiff])
         j_free = jac[free]
 
         def w_solve(rhs):
             # W = [[I/hg - J_ss, 0], [-J_fs, I/hg]] in (stiff, free) order
             top = jsl.lu_solve(lu, rhs[stiff])
-            return jnp.zeros_like(rhs).at[stiff].set(top).at[free].set(
-                hg * (rhs[free] + j_free @ top))
+            rest = hg * (rhs[free] + j_free @ top)
+            if isinstance(stiff, slice):
+                return jnp.concatenate([top, rest])
+            return jnp.zeros_like(rhs).at[stiff].set(top).at[free].set(rest)
 
         def combine(coeffs, vectors):
             return sum((c * v for c, v in zip(coeffs, vectors) if c != 0.0), jnp.zeros_like(y0))

@@ -135,10 +135,19 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
     taken as zero; its rows stay exact).  ``None``: all states (a dense
     Jacobian).  Passed to `diffwear.dynamics.simulate`, a solver without them
     gets the mechanism's `Mechanism.feedback_states`.
+
+    ``differentiate_jacobian``: derivatives of the solution go through the
+    Jacobian (the exact derivative of the discrete solution; second
+    derivatives of the vector field) or hold it at the unperturbed run
+    (cheaper; keeps the method's order only for a W-method).
+    ``dense_output``: the cubic Hermite interpolant between steps (one more
+    evaluation per step); without it, the chord (`simulate` drops it when
+    only the end state is saved: the end values are exact either way).
     """
 
     jacobian_states: eqx.AbstractVar[tuple[int, ...] | None]
     differentiate_jacobian: eqx.AbstractVar[bool]
+    dense_output: eqx.AbstractVar[bool]
     tableau: eqx.AbstractClassVar[RosenbrockTableau]
 
     term_structure: ClassVar = diffrax.AbstractTerm
@@ -236,8 +245,12 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
             us.append(w_solve(f_stage + combine(tab.c[i], us) / h + tab.gammas[i] * h * f_t))
         y1 = y0 + combine(tab.m, us)
         y_error = combine([m - me for m, me in zip(tab.m, tab.m_embedded)], us)
-        f1 = f(t0 + h, y1)
-        dense_info = dict(y0=y0, y1=y1, k0=h * f0, k1=h * f1)
+        if self.dense_output or solver_state is not None:
+            f1 = f(t0 + h, y1)  # the Hermite slope; the next step's f0 when reused
+        if self.dense_output:
+            dense_info = dict(y0=y0, y1=y1, k0=h * f0, k1=h * f1)
+        else:  # equal slopes: the cubic is the chord, exact at both ends
+            dense_info = dict(y0=y0, y1=y1, k0=y1 - y0, k1=y1 - y0)
         state = None if solver_state is None else Linearisation(f1, lin.columns, lin.age + 1)
         return y1, y_error, dense_info, state, diffrax.RESULTS.successful
 
@@ -252,6 +265,7 @@ class ROS3P(AbstractRosenbrock):
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
     differentiate_jacobian: bool = eqx.field(static=True, default=True)
+    dense_output: bool = eqx.field(static=True, default=True)
     tableau: ClassVar[RosenbrockTableau] = ROS3P_TABLEAU
 
 
@@ -265,6 +279,7 @@ class ROS34PW2(AbstractRosenbrock):
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
     differentiate_jacobian: bool = eqx.field(static=True, default=False)
+    dense_output: bool = eqx.field(static=True, default=True)
     jacobian_every: int = eqx.field(static=True, default=1)
     tableau: ClassVar[RosenbrockTableau] = ROS34PW2_TABLEAU
 

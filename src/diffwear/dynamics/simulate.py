@@ -119,6 +119,8 @@ def simulate(
     if isinstance(solver, AbstractRosenbrock):
         if solver.jacobian_states is None:
             solver = dataclasses.replace(solver, jacobian_states=mech.feedback_states)
+        if ts is None:  # only t1 is saved: an end value of a step
+            solver = dataclasses.replace(solver, dense_output=False)
         mech = mech.for_state_jacobian()  # same forces, cheaper Jacobian columns
     if stepsize_controller is None:
         stepsize_controller = diffrax.PIDController(rtol=1e-8, atol=1e-8, pcoeff=0.3, icoeff=0.4)

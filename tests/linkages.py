@@ -48,3 +48,22 @@ def four_bar(a=CRANK, b=COUPLER, c=ROCKER, d=GROUND_LINK, *, omega=CRANK_SPEED, 
     forces = (Gravity(),) if gravity else ()
     q_guess = jnp.array([a / 2, 0.0, 0.0, 0.2, 0.15, 0.9, d - 0.05, 0.15, 1.9])
     return Mechanism(bodies, constraints, forces), q_guess
+
+
+def seated_rotor(clearance, modulus, mu=0.13):
+    """A driven, unbalanced 10 kg rotor on an EFM clearance pivot (pin R 10 mm,
+    PTFE-like bushing of Young's modulus ``modulus``), the pin seated against
+    the wall at the start so that the contact never opens (gravity plus the
+    centripetal load): a smooth, well-conditioned problem for derivatives.
+    Returns (mechanism, y0); the pivot is named "pivot"."""
+    from diffwear.contact import PTFE, ClearanceJoint, CoulombFriction, Material
+    from diffwear.presets import efm_law
+
+    law = efm_law(Material(modulus, PTFE.poisson_ratio), 0.01 + clearance, 5e-3, 0.01, 0.3, 10.0)
+    joint = ClearanceJoint("pivot", "rotor", (-0.05, 0.0), "ground", (0.0, 0.0), 0.01,
+                           0.01 + clearance, law, friction=CoulombFriction(mu), n_theta=72)
+    mech = Mechanism((Body("rotor", 10.0, 0.1),), (Driver("drive", "rotor", 2 * jnp.pi),),
+                     (Gravity(), joint))
+    q = jnp.stack([jnp.asarray(0.05), -clearance - 1e-6, jnp.asarray(0.0)])
+    qd = jnp.array([0.0, 0.05 * 2 * jnp.pi, 2 * jnp.pi])
+    return mech, mech.join(q, qd, mech.initial_aux(q, qd))

@@ -5,8 +5,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from linkages import seated_rotor
 
-from diffwear.contact import PTFE, Material
+from diffwear.contact import PTFE
 from diffwear.dynamics import simulate
 from diffwear.errors import SolverError
 from diffwear.presets import clearance_slider_crank
@@ -72,18 +73,9 @@ def _rotor_normal_load(clearance, modulus, mu, adjoint):
     contact never opens: a smooth, well-conditioned statistic.  Fixed steps
     (dt = 1e-4 s, below the 4e-4 s Tsit5 limit at the ~9 kHz contact mode) make
     finite differences and the derivative of the discrete solution agree."""
-    from diffwear.contact import ClearanceJoint, CoulombFriction, contact_history
-    from diffwear.mechanism import Body, Driver, Gravity, Mechanism
-    from diffwear.presets import efm_law
+    from diffwear.contact import contact_history
 
-    law = efm_law(Material(modulus, PTFE.poisson_ratio), 0.01 + clearance, 5e-3, 0.01, 0.3, 10.0)
-    joint = ClearanceJoint("pivot", "rotor", (-0.05, 0.0), "ground", (0.0, 0.0), 0.01,
-                           0.01 + clearance, law, friction=CoulombFriction(mu), n_theta=72)
-    mech = Mechanism((Body("rotor", 10.0, 0.1),), (Driver("drive", "rotor", 2 * jnp.pi),),
-                     (Gravity(), joint))
-    q = jnp.stack([jnp.asarray(0.05), -clearance - 1e-6, jnp.asarray(0.0)])
-    qd = jnp.array([0.0, 0.05 * 2 * jnp.pi, 2 * jnp.pi])
-    y0 = mech.join(q, qd, mech.initial_aux(q, qd))
+    mech, y0 = seated_rotor(clearance, modulus, mu)
     ts = jnp.linspace(0.2, 0.4, 21)
     traj = simulate(mech, y0, 0.4, ts=ts, dt0=1e-4, stepsize_controller=diffrax.ConstantStepSize(),
                     max_steps=5000, adjoint=adjoint)

@@ -2,6 +2,7 @@
 the structured Jacobian, the linearised contact law, agreement with Tsit5,
 derivatives, and the wear they give in the thesis studies."""
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -12,6 +13,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from linkages import seated_rotor
 
 from diffwear.contact import ArchardWear, BushingProfile, PinKinematics
 from diffwear.contact.linearised import LinearisedLaw
@@ -134,6 +136,33 @@ def test_structured_step_is_the_dense_step(mechanisms, law):
                                atol=1e-11 * float(jnp.abs(dense).max()))
 
 
+@pytest.mark.parametrize("law, solver", [("efm", ROS3P()), ("ln", ROS34PW2())],
+                         ids=["EFM-ROS3P", "LN-ROS34PW2"])
+def test_step_derivative_rule_is_autodiff_of_the_step(mechanisms, law, solver):
+    """The step's hand-made derivative (stage equations differentiated, the
+    factorised W reused) equals autodiff through the Jacobian's formation,
+    along the state and along a contact parameter (the clearance profile)."""
+    from diffwear.dynamics.rosenbrock import _fresh_step, _plain_fresh_step
+
+    mech, y = mechanisms[law]
+    solver = dataclasses.replace(solver, jacobian_states=mech.feedback_states)
+    i = [f.name for f in mech.forces].index("crank_rod")
+    term, t0, h = diffrax.ODETerm(vector_field), jnp.asarray(0.3), jnp.asarray(2e-4)
+    dy = jax.random.normal(jax.random.PRNGKey(1), y.shape) * jnp.abs(y).max() * 1e-3
+
+    def step(fn, s):
+        m = eqx.tree_at(lambda m: m.forces[i].profile.clearance, mech,
+                        mech.forces[i].profile.clearance * (1.0 + s))
+        return fn(solver, term, (m.for_state_jacobian(), Baumgarte()), t0, h, y + s * dy)
+
+    rule, plain = (jax.jvp(lambda s: step(fn, s), (0.0,), (1.0,))[1]
+                   for fn in (_fresh_step, _plain_fresh_step))
+    for a, b in zip(rule, plain):
+        scale = float(jnp.abs(b).max())
+        assert scale > 0
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-8, atol=1e-9 * scale)
+
+
 def test_jacobian_states_anywhere_in_the_state():
     """A quadrature state first (y0' = y1^2, never read) and a stiff pair
     after it: the step with the Jacobian over states 1, 2 (index arrays, not
@@ -229,23 +258,14 @@ def test_clearance_cycle_agrees_with_tsit5_at_saved_times():
 
 def _rotor_normal_load(clearance, modulus, solver, adjoint, steps=2000):
     """Mean normal load [N] in the EFM clearance pivot of a driven, unbalanced
-    rotor (the seated-pin problem of test_clearance_joint) on fixed steps of
+    rotor (`linkages.seated_rotor`) on fixed steps of
     1e-4 s.  (On 200 steps, 2.5x the explicit stability limit of its ~9 kHz
     contact mode, ROS3P runs stably but the mean load is rough in the
     clearance: central differences at relative steps 1e-2, 1e-3, 1e-4 give
     -0.97e5, -10.2e5 and -3.6e5 N/m.)"""
-    from diffwear.contact import PTFE, ClearanceJoint, CoulombFriction, Material, contact_history
-    from diffwear.mechanism import Body, Driver, Gravity, Mechanism
-    from diffwear.presets import efm_law
+    from diffwear.contact import contact_history
 
-    law = efm_law(Material(modulus, PTFE.poisson_ratio), 0.01 + clearance, 5e-3, 0.01, 0.3, 10.0)
-    joint = ClearanceJoint("pivot", "rotor", (-0.05, 0.0), "ground", (0.0, 0.0), 0.01,
-                           0.01 + clearance, law, friction=CoulombFriction(0.13), n_theta=72)
-    mech = Mechanism((Body("rotor", 10.0, 0.1),), (Driver("drive", "rotor", 2 * jnp.pi),),
-                     (Gravity(), joint))
-    q = jnp.stack([jnp.asarray(0.05), -clearance - 1e-6, jnp.asarray(0.0)])
-    qd = jnp.array([0.0, 0.05 * 2 * jnp.pi, 2 * jnp.pi])
-    y0 = mech.join(q, qd, mech.initial_aux(q, qd))
+    mech, y0 = seated_rotor(clearance, modulus)
     ts = jnp.linspace(0.1, 0.2, 11)
     traj = simulate(mech, y0, 0.2, ts=ts, dt0=0.2 / steps, solver=solver,
                     stepsize_controller=diffrax.ConstantStepSize(), max_steps=steps + 10,

@@ -205,27 +205,13 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
             return None
         return self._linearise(terms, t0, y0, args)
 
-    def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
-        tab = self.tableau
+    def _w_solve(self, lin: Linearisation, h, y0) -> Callable[[jax.Array], jax.Array]:
+        """x -> W^-1 x with W = I / (h gamma) - J, J the linearisation's
+        columns (zero in the other states)."""
         stiff, free = self._blocks(y0)
-        dtype = y0.dtype
-        t0 = jnp.asarray(t0, dtype)
-        h = jnp.asarray(t1, dtype) - t0
-
-        def f(t, y):
-            return terms.vf(t, y, args)
-
-        if solver_state is None:
-            lin = self._linearise(terms, t0, y0, args)
-        else:
-            # reuse the linearisation for ``reuse`` steps; f0 is the last step's
-            # end slope (a rejected step keeps the state it started from)
-            fresh = (solver_state.age >= self.reuse) | jnp.asarray(made_jump)
-            lin = jax.lax.cond(fresh, lambda: self._linearise(terms, t0, y0, args),
-                               lambda: solver_state)
-        f0, f_t, jac = lin.f0, lin.columns[0], lin.columns[1:].T
-        hg = h * tab.gamma
-        lu = jsl.lu_factor(jnp.eye(jac.shape[1], dtype=dtype) / hg - jac[stiff])
+        jac = lin.columns[1:].T
+        hg = h * self.tableau.gamma
+        lu = jsl.lu_factor(jnp.eye(jac.shape[1], dtype=y0.dtype) / hg - jac[stiff])
         j_free = jac[free]
 
         def w_solve(rhs):
@@ -236,23 +222,111 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
                 return jnp.concatenate([top, rest])
             return jnp.zeros_like(rhs).at[stiff].set(top).at[free].set(rest)
 
-        def combine(coeffs, vectors):
-            return sum((c * v for c, v in zip(coeffs, vectors) if c != 0.0), jnp.zeros_like(y0))
+        return w_solve
 
+    def _stages(self, terms, args, t0, h, y0, lin: Linearisation):
+        """(y1, error estimate, the stage increments u_i) of one step."""
+        tab = self.tableau
+        w_solve = self._w_solve(lin, h, y0)
         us: list[jax.Array] = []
         for i in range(len(tab.m)):
-            f_stage = f0 if i == 0 else f(t0 + tab.alpha[i] * h, y0 + combine(tab.a[i], us))
-            us.append(w_solve(f_stage + combine(tab.c[i], us) / h + tab.gammas[i] * h * f_t))
-        y1 = y0 + combine(tab.m, us)
-        y_error = combine([m - me for m, me in zip(tab.m, tab.m_embedded)], us)
+            f_stage = lin.f0 if i == 0 else terms.vf(t0 + tab.alpha[i] * h,
+                                                     y0 + _combine(tab.a[i], us, y0), args)
+            us.append(w_solve(f_stage + _combine(tab.c[i], us, y0) / h
+                              + tab.gammas[i] * h * lin.columns[0]))
+        y1 = y0 + _combine(tab.m, us, y0)
+        y_error = _combine([m - me for m, me in zip(tab.m, tab.m_embedded)], us, y0)
+        return y1, y_error, us
+
+    def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        dtype = y0.dtype if isinstance(y0, jax.Array) else float
+        t0 = jnp.asarray(t0, dtype)
+        h = jnp.asarray(t1, dtype) - t0
+        if solver_state is None:
+            y1, y_error, f0 = _fresh_step(self, terms, args, t0, h, y0)
+        else:
+            # reuse the linearisation for ``reuse`` steps; f0 is the last step's
+            # end slope (a rejected step keeps the state it started from)
+            fresh = (solver_state.age >= self.reuse) | jnp.asarray(made_jump)
+            lin = jax.lax.cond(fresh, lambda: self._linearise(terms, t0, y0, args),
+                               lambda: solver_state)
+            y1, y_error, _ = self._stages(terms, args, t0, h, y0, lin)
+            f0 = lin.f0
         if self.dense_output or solver_state is not None:
-            f1 = f(t0 + h, y1)  # the Hermite slope; the next step's f0 when reused
+            f1 = terms.vf(t0 + h, y1, args)  # the Hermite slope; the next f0 when reused
         if self.dense_output:
             dense_info = dict(y0=y0, y1=y1, k0=h * f0, k1=h * f1)
         else:  # equal slopes: the cubic is the chord, exact at both ends
             dense_info = dict(y0=y0, y1=y1, k0=y1 - y0, k1=y1 - y0)
         state = None if solver_state is None else Linearisation(f1, lin.columns, lin.age + 1)
         return y1, y_error, dense_info, state, diffrax.RESULTS.successful
+
+
+def _combine(coeffs, vectors, like):
+    """sum_i coeffs[i] vectors[i] (zero coefficients skipped)."""
+    return sum((c * v for c, v in zip(coeffs, vectors) if c != 0.0), jnp.zeros_like(like))
+
+
+def _plain_fresh_step(solver: AbstractRosenbrock, terms, args, t0, h, y0):
+    """(y1, error estimate, f(t0, y0)) of a step with a fresh linearisation."""
+    lin = solver._linearise(terms, t0, y0, args)
+    y1, y_error, _ = solver._stages(terms, args, t0, h, y0, lin)
+    return y1, y_error, lin.f0
+
+
+_fresh_step = eqx.filter_custom_jvp(_plain_fresh_step)
+
+
+@_fresh_step.def_jvp
+def _fresh_step_jvp(primals, tangents):
+    """The step's derivative along (y0, args) by differentiating the stage
+    equations W u_i = r_i themselves: W du_i = dr_i + (dJ) u_i, with the
+    Jacobian's change along the tangent applied to u_i as one second-order
+    directional derivative (and likewise for f_t), instead of differentiating
+    the formation of all of J's columns.  The factorised W serves the
+    tangents.  A Jacobian held at the unperturbed run drops the dJ terms."""
+    solver, terms, args, t0, h, y0 = primals
+    _, _, t_args, t_t0, t_h, t_y0 = tangents
+    if t_t0 is not None or t_h is not None:  # step times depend on the parameters
+        return eqx.filter_jvp(_plain_fresh_step, primals, tangents)
+    tab = solver.tableau
+    stiff, _ = solver._blocks(y0)
+    lin = solver._linearise(terms, t0, y0, args)
+    y1, y_error, us = solver._stages(terms, args, t0, h, y0, lin)
+    dy0 = jnp.zeros_like(y0) if t_y0 is None else t_y0
+
+    def f_jvp(t, y, dy):
+        """d f(t, y, args) along (dy, the args' tangent)."""
+        return eqx.filter_jvp(lambda z, a: terms.vf(t, z, a), (y, args), (dy, t_args))[1]
+
+    if solver.differentiate_jacobian:
+        # d/de [f_t, J u_1 .. J u_s] at (y0 + e dy0, args + e dargs), J over the
+        # Jacobian states only (the others' columns are taken as zero)
+        inner_t = jnp.zeros(len(us) + 1, y0.dtype).at[0].set(1.0)
+        inner_y = jnp.stack([jnp.zeros_like(y0)] + [
+            jnp.zeros_like(u).at[stiff].set(u[stiff]) for u in us])
+
+        def directional(z, a):
+            return jax.vmap(lambda dt, dz: jax.jvp(lambda s, x: terms.vf(s, x, a), (t0, z),
+                                                   (dt, dz))[1])(inner_t, inner_y)
+
+        d_lin = eqx.filter_jvp(directional, (y0, args), (dy0, t_args))[1]
+        d_ft, d_ju = d_lin[0], d_lin[1:]
+    else:
+        d_ft, d_ju = jnp.zeros_like(y0), jnp.zeros((len(us),) + y0.shape, y0.dtype)
+    w_solve = solver._w_solve(lin, h, y0)
+    dus: list[jax.Array] = []
+    for i in range(len(tab.m)):
+        y_stage = y0 + _combine(tab.a[i], us, y0)
+        dy_stage = dy0 + _combine(tab.a[i], dus, y0)
+        df_stage = f_jvp(t0 + tab.alpha[i] * h, y_stage, dy_stage)
+        if i == 0:
+            df0 = df_stage
+        dus.append(w_solve(df_stage + _combine(tab.c[i], dus, y0) / h
+                           + tab.gammas[i] * h * d_ft + d_ju[i]))
+    dy1 = dy0 + _combine(tab.m, dus, y0)
+    d_error = _combine([m - me for m, me in zip(tab.m, tab.m_embedded)], dus, y0)
+    return (y1, y_error, lin.f0), (dy1, d_error, df0)
 
 
 class ROS3P(AbstractRosenbrock):

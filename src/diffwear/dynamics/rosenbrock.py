@@ -84,8 +84,9 @@ class RosenbrockTableau(NamedTuple):
         )
 
 
-# ROS3P, Lang and Verwer (2001), Table 2.1, in transformed form;
-# gamma = 1/2 + sqrt(3)/6.
+# ROS3P (Lang and Verwer 2001) in transformed form, gamma = 1/2 + sqrt(3)/6.
+# tests/test_rosenbrock.py checks them: order 3 observed, R(-inf) = 1 - sqrt(3)
+# (the published stability limit).
 _ROS3P_GAMMA = 0.5 + math.sqrt(3.0) / 6.0
 ROS3P_TABLEAU = RosenbrockTableau(
     gamma=_ROS3P_GAMMA,
@@ -97,7 +98,9 @@ ROS3P_TABLEAU = RosenbrockTableau(
     m_embedded=(2.113248654051871, 1.0, 0.4226497308103742),
 )
 
-# ROS34PW2, Rang and Angermann (2005), Table 4.1 (standard form).
+# ROS34PW2 (Rang and Angermann 2005) in standard form.  tests/test_rosenbrock.py
+# checks them: order 3 observed with the exact and with a stale Jacobian (the
+# W-property), R(-inf) = 0 (L-stable).
 _PW2_GAMMA = 4.3586652150845900e-01
 ROS34PW2_TABLEAU = RosenbrockTableau.from_standard(
     gamma=_PW2_GAMMA,
@@ -334,8 +337,9 @@ class ROS3P(AbstractRosenbrock):
     exact Jacobian at every step.  Cost per step: one linearisation (the
     vector field and len(jacobian_states) + 1 tangents, batched), one LU of
     that size, two more evaluations and one at the step's end (dense output).
-    Differentiable with diffrax's adjoints (the reverse pass goes through the
-    LU)."""
+    Derivatives (forward and reverse, diffrax's adjoints) are exact for the
+    discrete solution: the step's rule solves the differentiated stage
+    equations with the factorised step matrix."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
     differentiate_jacobian: bool = eqx.field(static=True, default=True)

@@ -314,6 +314,8 @@ def test_wear_studies_on_ros3p_keep_the_recorded_wear(tmp_path, study):
                                  log=lambda *a: None)
     record = AGREEMENT["wear_studies"][study]["dynamic"]
     assert summary["integrator"] == "ros3p"
+    assert "dynamic cycles on ROS3P, rtol = atol = 0.0001" in (
+        tmp_path / study / "report.md").read_text()
     for key in ("max_wear_depth_mm", "wear_volume_mm3"):
         assert summary[key] == pytest.approx(record[key], rel=5e-3)
         assert summary[key] == pytest.approx(record[key], rel=1e-3)  # the measured margin

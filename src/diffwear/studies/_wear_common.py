@@ -146,6 +146,12 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
     return res, compile_time, time.perf_counter() - t0, info
 
 
+def _integrator_label(name: str) -> str:
+    """E.g. "Tsit5, rtol = atol = 1e-06" for a `wear.cycle.CYCLE_INTEGRATORS` name."""
+    solver, tol = cycle_integrator(name)
+    return f"{type(solver).__name__}, rtol = atol = {tol:g}"
+
+
 def check_contact(contact) -> str:
     if contact not in CONTACTS:
         raise InputError(f"--contact must be one of {', '.join(CONTACTS)} (the pressure "
@@ -360,7 +366,8 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
             peak_line(summary),
             f"mean |joint force| first cycle {summary['mean_joint_force_first_cycle_N']:.1f} N, "
             f"mean total normal load {summary['mean_normal_load_first_cycle_N']:.1f} N",
-            f"wall time {wall_time:.1f} s, compile time {compile_time:.1f} s"]),
+            f"wall time {wall_time:.1f} s, compile time {compile_time:.1f} s; dynamic cycles "
+            f"on {_integrator_label(summary.get('integrator', 'tsit5'))}"]),
         *extra_report,
         Bullets([f"warning: {w}" for w in warnings])])
     write_report(out, report, figs, summary)

@@ -38,7 +38,8 @@ import numpy as np  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
-def tsit5_cycle(rtol, period, solver=None):
+
+def cycle_on(rtol, period, solver=None):
     """One cycle of ``period`` on Tsit5 (or ``solver``) with the wear cycle's
     PID settings: jitted (mech, y, t0) -> Trajectory."""
     import diffrax
@@ -48,12 +49,6 @@ def tsit5_cycle(rtol, period, solver=None):
     ctrl = diffrax.PIDController(rtol=rtol, atol=rtol, pcoeff=0.3, icoeff=0.4)
     return jax.jit(lambda m, y, t0: simulate(m, y, t0 + period, t0=t0, solver=solver,
                                              stepsize_controller=ctrl))
-
-
-def rosenbrock_cycle(solver, rtol, period):
-    """One cycle of ``period`` on a library Rosenbrock ``solver`` (the wear
-    cycle's PID settings): jitted (mech, y, t0) -> Trajectory."""
-    return tsit5_cycle(rtol, period, solver)
 
 
 def evolution_errors(mech, ys, cycles=21_400.0, a=428.0):
@@ -69,13 +64,13 @@ def evolution_errors(mech, ys, cycles=21_400.0, a=428.0):
     from diffwear.wear import worn_mechanism, worn_volume
     from diffwear.wear.cycle import reset_wear
 
-    def tsit5(rtol):
-        cycle = tsit5_cycle(rtol, PERIOD)
-        return lambda m, y, t0: cycle(m, y, t0).y_final
+    def end_state_on(solver):
+        def make(rtol):
+            cycle = cycle_on(rtol, PERIOD, solver)
+            return lambda m, y, t0: cycle(m, y, t0).y_final
+        return make
 
-    def ros3p(rtol):
-        cycle = rosenbrock_cycle(ROS3P(), rtol, PERIOD)
-        return lambda m, y, t0: cycle(m, y, t0).y_final
+    tsit5, ros3p = end_state_on(None), end_state_on(ROS3P())
 
     def evolve(cycle):
         el0 = mech.element(JOINT)
@@ -118,8 +113,8 @@ def main(argv=None):
     mech0, mech, y0 = _setup()
     n_stiff = 2 * mech.n_coords
 
-    ys = tsit5_cycle(1e-8, PERIOD)(mech, y0, 0.0).y_final
-    ref = tsit5_cycle(1e-10, PERIOD)(mech, ys, PERIOD)
+    ys = cycle_on(1e-8, PERIOD)(mech, y0, 0.0).y_final
+    ref = cycle_on(1e-10, PERIOD)(mech, ys, PERIOD)
     y_ref = np.asarray(ref.y_final)
     dwear_ref = y_ref[n_stiff:] - np.asarray(ys)[n_stiff:]
 
@@ -140,7 +135,7 @@ def main(argv=None):
 
     rows = []
     for rtol in (1e-4, 1e-5, 1e-6, 1e-8):
-        out, s = timed(tsit5_cycle(rtol, PERIOD), mech, ys, PERIOD)
+        out, s = timed(cycle_on(rtol, PERIOD), mech, ys, PERIOD)
         rows.append(dict(solver="Tsit5", rtol=rtol, steps=int(out.num_steps),
                          accepted=int(out.num_accepted_steps), s_per_cycle=s,
                          **dict(zip(("err_state", "err_wear"), errors(out.y_final)))))
@@ -149,7 +144,7 @@ def main(argv=None):
                     ("ROS34PW2, Jacobian every 5 steps", ROS34PW2(jacobian_every=5), 1e-4),
                     ("ROS34PW2, Jacobian every 20 steps", ROS34PW2(jacobian_every=20), 1e-4)]
     for name, solver, rtol in rosenbrocks:
-        out, s = timed(rosenbrock_cycle(solver, rtol, PERIOD), mech, ys, PERIOD)
+        out, s = timed(cycle_on(rtol, PERIOD, solver), mech, ys, PERIOD)
         rows.append(dict(solver=name, rtol=rtol, steps=int(out.num_steps),
                          accepted=int(out.num_accepted_steps), s_per_cycle=s,
                          **dict(zip(("err_state", "err_wear"), errors(out.y_final)))))

@@ -17,7 +17,7 @@ from linkages import seated_rotor
 
 from diffwear.contact import ArchardWear, BushingProfile, PinKinematics
 from diffwear.contact.linearised import LinearisedLaw
-from diffwear.dynamics import ROS3P, ROS34PW2, Baumgarte, simulate, vector_field
+from diffwear.dynamics import ROS3P, ROS34PW2, Baumgarte, Rodas4, simulate, vector_field
 from diffwear.errors import InputError
 from diffwear.presets import clearance_slider_crank
 from diffwear.wear.cycle import CYCLE_INTEGRATORS, cycle_integrator
@@ -37,29 +37,34 @@ def _orders(errors):
 
 
 SOLVERS = {"ROS3P": ROS3P(), "ROS34PW2": ROS34PW2(),
-           "ROS34PW2, Jacobian of t = 0 only": ROS34PW2(jacobian_every=10**6)}
+           "ROS34PW2, Jacobian of t = 0 only": ROS34PW2(jacobian_every=10**6),
+           "Rodas4": Rodas4()}
 
 
 @pytest.mark.parametrize("name", SOLVERS)
-def test_observed_order_is_three(name):
+def test_observed_order(name):
     """Global error at t = 1 of y' = -y^2 + cos t on fixed steps h, h/2, h/4
-    against Tsit5 on 4,096 steps.  A W-method keeps its order with a stale
-    Jacobian (the last case: one Jacobian, at t = 0, for the whole run)."""
+    against Tsit5 on 4,096 steps: order 3 (ROS3P, ROS34PW2), 4 (Rodas4).  A
+    W-method keeps its order with a stale Jacobian (one Jacobian, at t = 0,
+    for the whole run)."""
+    order = SOLVERS[name].tableau.order
     term = diffrax.ODETerm(lambda t, y, a: -y ** 2 + jnp.cos(t))
     y0 = jnp.ones(1)
     ref = _fixed(diffrax.Tsit5(), term, 1.0, y0, 4096)
     errors = [float(jnp.abs(_fixed(SOLVERS[name], term, 1.0, y0, n) - ref)[0])
               for n in (16, 32, 64)]
-    assert all(2.8 < o < 3.3 for o in _orders(errors)), (errors, _orders(errors))
+    assert all(order - 0.2 < o < order + 0.3 for o in _orders(errors)), (errors, _orders(errors))
 
 
-@pytest.mark.parametrize("solver, r_infinity", [(ROS3P(), 1.0 - math.sqrt(3.0)), (ROS34PW2(), 0.0)],
-                         ids=["ROS3P", "ROS34PW2"])
+@pytest.mark.parametrize("solver, r_infinity",
+                         [(ROS3P(), 1.0 - math.sqrt(3.0)), (ROS34PW2(), 0.0), (Rodas4(), 0.0)],
+                         ids=["ROS3P", "ROS34PW2", "Rodas4"])
 def test_stability_function(solver, r_infinity):
     """One step of y' = lambda y is y1 = R(z) y0, z = h lambda.  At z = -1e8
     (an explicit step blows up) R is its published limit: 1 - sqrt(3) for the
-    A-stable ROS3P (Lang and Verwer 2001), 0 for the L-stable ROS34PW2; third
-    order: |R(z) - e^z| = O(z^4), so it falls 16x when z halves."""
+    A-stable ROS3P (Lang and Verwer 2001), 0 for the L-stable ROS34PW2 and
+    Rodas4; order p: |R(z) - e^z| = O(z^(p+1)), so it falls 2^(p+1) times
+    when z halves."""
     term = diffrax.ODETerm(lambda t, y, lam: lam * y)
 
     def r(z):
@@ -67,7 +72,8 @@ def test_stability_function(solver, r_infinity):
 
     assert r(-1e8) == pytest.approx(r_infinity, abs=1e-6)
     e1, e2 = abs(r(-0.2) - math.exp(-0.2)), abs(r(-0.1) - math.exp(-0.1))
-    assert 12.0 < e1 / e2 < 20.0
+    fall = 2.0 ** (solver.tableau.order + 1)
+    assert 0.75 * fall < e1 / e2 < 1.25 * fall
 
 
 def _sensitivity_errors(solver):
@@ -89,11 +95,13 @@ def test_derivatives_keep_the_order_where_the_method_allows():
     differentiates its Jacobian (its default) and keeps order 3; holding it
     (the derivative of the method with the Jacobian of the unperturbed run)
     drops to order 1 because ROS3P is not a W-method.  ROS34PW2 holds it by
-    default and keeps order 3: any Jacobian will do for a W-method."""
+    default and keeps order 3: any Jacobian will do for a W-method.  Rodas4
+    differentiates its Jacobian and keeps its order 4."""
     assert all(2.6 < o < 3.3 for o in _orders(_sensitivity_errors(ROS3P())))
     assert all(0.8 < o < 1.3 for o in _orders(
         _sensitivity_errors(ROS3P(differentiate_jacobian=False))))
     assert all(2.6 < o < 3.3 for o in _orders(_sensitivity_errors(ROS34PW2())))
+    assert all(3.6 < o < 4.4 for o in _orders(_sensitivity_errors(Rodas4())))
 
 
 @pytest.fixture(scope="module")
@@ -139,8 +147,9 @@ def test_structured_step_is_the_dense_step(mechanisms, law):
                                atol=1e-11 * float(jnp.abs(dense).max()))
 
 
-@pytest.mark.parametrize("law, solver", [("efm", ROS3P()), ("ln", ROS34PW2())],
-                         ids=["EFM-ROS3P", "LN-ROS34PW2"])
+@pytest.mark.parametrize("law, solver",
+                         [("efm", ROS3P()), ("ln", ROS34PW2()), ("efm", Rodas4())],
+                         ids=["EFM-ROS3P", "LN-ROS34PW2", "EFM-Rodas4"])
 def test_step_derivative_rule_is_autodiff_of_the_step(mechanisms, law, solver):
     """The step's hand-made derivative (stage equations differentiated, the
     factorised W reused) equals autodiff through the Jacobian's formation,
@@ -301,24 +310,33 @@ def test_gradients_match_finite_differences():
 AGREEMENT = json.loads((ROOT / "benchmarks" / "records" / "agreement.json").read_text())
 
 
+# Measured distance of each wear study on each Rosenbrock integrator (at its
+# tolerance in `CYCLE_INTEGRATORS`) from the recorded Tsit5 run, largest of
+# max depth and volume: the tests assert it with a margin, and all within 0.5 %.
+MEASURED = {("ros3p", "rig-21400"): 1.4e-4, ("ros3p", "wear-5000"): 1.2e-4,
+            ("rodas4", "rig-21400"): 6.8e-5, ("rodas4", "wear-5000"): 3.4e-3}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("study", ["rig-21400", "wear-5000"])
-def test_wear_studies_on_ros3p_keep_the_recorded_wear(tmp_path, study):
-    """The whole dynamic wear study with its cycles on ROS3P at rtol 1e-4:
-    max depth and volume within 0.5 % of the recorded Tsit5 run (rtol 1e-6;
-    measured: within 1.4e-4)."""
+@pytest.mark.parametrize("integrator, study", MEASURED)
+def test_wear_studies_on_rosenbrock_keep_the_recorded_wear(tmp_path, integrator, study):
+    """The whole dynamic wear study with its cycles on ROS3P or Rodas4 at
+    rtol 1e-4: max depth and volume within 0.5 % of the recorded Tsit5 run
+    (rtol 1e-6), and within 1.3x of the measured distance."""
     from diffwear.io import OutputDir
     from diffwear.studies import STUDIES
 
-    summary = STUDIES[study].run(OutputDir(tmp_path / study), integrator="ros3p",
+    summary = STUDIES[study].run(OutputDir(tmp_path / study), integrator=integrator,
                                  log=lambda *a: None)
     record = AGREEMENT["wear_studies"][study]["dynamic"]
-    assert summary["integrator"] == "ros3p"
-    assert "dynamic cycles on ROS3P, rtol = atol = 0.0001" in (
+    name = type(cycle_integrator(integrator)[0]).__name__
+    assert summary["integrator"] == integrator
+    assert f"dynamic cycles on {name}, rtol = atol = 0.0001" in (
         tmp_path / study / "report.md").read_text()
     for key in ("max_wear_depth_mm", "wear_volume_mm3"):
         assert summary[key] == pytest.approx(record[key], rel=5e-3)
-        assert summary[key] == pytest.approx(record[key], rel=1e-3)  # the measured margin
+        assert summary[key] == pytest.approx(record[key],
+                                             rel=max(1.3 * MEASURED[integrator, study], 1e-4))
 
 
 def test_bad_settings_are_refused():
@@ -336,4 +354,5 @@ def test_bad_settings_are_refused():
         cycle_integrator("rk4")
     solver, tol = cycle_integrator("ros3p")
     assert isinstance(solver, ROS3P) and tol == 1e-4
-    assert set(CYCLE_INTEGRATORS) == {"tsit5", "ros3p"}
+    assert isinstance(cycle_integrator("rodas4")[0], Rodas4)
+    assert set(CYCLE_INTEGRATORS) == {"tsit5", "ros3p", "rodas4"}

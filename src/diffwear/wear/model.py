@@ -51,7 +51,7 @@ class Dynamic(AbstractWearModel):
     limit (the life's accuracy knob; error ~ 1 / steps); ``scheme``:
     "implicit" (linearly implicit profile update) or "euler";
     ``cycle_rtol``/``cycle_atol``: tolerances of each dynamic cycle;
-    ``cycle_solver``: its integrator (default Tsit5; ``ROS3P()`` with
+    ``cycle_solver``: its integrator (default Tsit5; ``ROS3P()`` or ``Rodas4()`` with
     tolerances 1e-4 is several times faster, see
     `diffwear.wear.cycle.CYCLE_INTEGRATORS`);
     ``forward_mode``: differentiate with diffrax's `ForwardMode` (for

@@ -9,7 +9,8 @@ by tests/test_rosenbrock.py).  So the exact Jacobian is d f / d(q, qd), 18
 forward-mode tangents, and the step matrix (I / (h gamma) - J) factorises as
 one 18 x 18 LU plus a back-substitution for the wear rows.
 
-Methods: `diffwear.dynamics.ROS3P` (Lang and Verwer 2001) and the W-method
+Methods: `diffwear.dynamics.ROS3P` (Lang and Verwer 2001), `Rodas4`
+(Hairer and Wanner's RODAS, fourth order, L-stable) and the W-method
 `ROS34PW2` (Rang and Angermann 2005), with the Jacobian fresh at every step or
 reused over 5 and 20 steps (their coefficients are checked by the tests).
 
@@ -54,11 +55,12 @@ def cycle_on(rtol, period, solver=None):
 def evolution_errors(mech, ys, cycles=21_400.0, a=428.0):
     """The rig's wear over ``cycles`` with constant A = ``a`` (each wear cycle
     on the profile worn so far), its cycles integrated by Tsit5 at rtol 1e-6
-    (the wear cycle's setting) and 1e-4, and by ROS3P at 1e-4 / 1e-5: the final
+    (the wear cycle's setting) and 1e-4, by ROS3P at 1e-4 / 3e-5 / 1e-5 and
+    by Rodas4 at 1e-4 / 5e-5: the final
     max depth and volume against Tsit5 at rtol 1e-8 (the reference).  A = 428
     is the rig study's own (50 wear cycles).  Each run once to compile, once
     timed."""
-    from diffwear.dynamics import ROS3P
+    from diffwear.dynamics import ROS3P, Rodas4
     from diffwear.studies._wear_common import JOINT
     from diffwear.studies.rig_21400 import PERIOD
     from diffwear.wear import worn_mechanism, worn_volume
@@ -70,7 +72,7 @@ def evolution_errors(mech, ys, cycles=21_400.0, a=428.0):
             return lambda m, y, t0: cycle(m, y, t0).y_final
         return make
 
-    tsit5, ros3p = end_state_on(None), end_state_on(ROS3P())
+    tsit5, ros3p, rodas4 = end_state_on(None), end_state_on(ROS3P()), end_state_on(Rodas4())
 
     def evolve(cycle):
         el0 = mech.element(JOINT)
@@ -89,7 +91,8 @@ def evolution_errors(mech, ys, cycles=21_400.0, a=428.0):
                 float(worn_volume(h, el0.bushing_radius, el0.law.depth)) * 1e9, wall)
 
     runs = [("Tsit5", 1e-8, tsit5), ("Tsit5", 1e-6, tsit5), ("Tsit5", 1e-4, tsit5),
-            ("ROS3P", 1e-4, ros3p), ("ROS3P", 3e-5, ros3p), ("ROS3P", 1e-5, ros3p)]
+            ("ROS3P", 1e-4, ros3p), ("ROS3P", 3e-5, ros3p), ("ROS3P", 1e-5, ros3p),
+            ("Rodas4", 1e-4, rodas4), ("Rodas4", 5e-5, rodas4)]
     out = []
     for name, rtol, make in runs:
         cycle = make(rtol)
@@ -107,7 +110,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
-    from diffwear.dynamics import ROS3P, ROS34PW2
+    from diffwear.dynamics import ROS3P, ROS34PW2, Rodas4
     from diffwear.studies.rig_21400 import PERIOD, _setup
 
     mech0, mech, y0 = _setup()
@@ -140,6 +143,7 @@ def main(argv=None):
                          accepted=int(out.num_accepted_steps), s_per_cycle=s,
                          **dict(zip(("err_state", "err_wear"), errors(out.y_final)))))
     rosenbrocks = [("ROS3P", ROS3P(), rtol) for rtol in (1e-4, 3e-5, 1e-5, 1e-6)]
+    rosenbrocks += [("Rodas4", Rodas4(), rtol) for rtol in (2e-4, 1e-4, 5e-5, 1e-5)]
     rosenbrocks += [("ROS34PW2, fresh Jacobian", ROS34PW2(), 1e-4),
                     ("ROS34PW2, Jacobian every 5 steps", ROS34PW2(jacobian_every=5), 1e-4),
                     ("ROS34PW2, Jacobian every 20 steps", ROS34PW2(jacobian_every=20), 1e-4)]

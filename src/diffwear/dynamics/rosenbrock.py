@@ -404,8 +404,11 @@ class Rodas4(AbstractRosenbrock):
     accurate, an exact Jacobian at every step.  A step costs one
     linearisation, one LU and five more evaluations (six with dense output);
     at the loose tolerances of a wear cycle it takes about a third of ROS3P's
-    steps on the rig (the performance docs give the counts).  Derivatives are
-    exact for the discrete solution, as for `ROS3P`."""
+    steps on the rig (the performance docs give the counts).  A step's
+    derivative is exact for the discrete solution, as for `ROS3P`; but through
+    the rig's wear evolution at rtol 1e-4 its Jacobian disagrees with central
+    differences (measured in the performance docs), so derivatives of a wear
+    evolution are better taken on `ROS3P`."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
     differentiate_jacobian: bool = eqx.field(static=True, default=True)

@@ -9,18 +9,22 @@ the states that feed back (``jacobian_states``; `simulate` fills them in from
 `Mechanism.feedback_states`), which makes the step matrix one small LU (18 x 18
 on the three-body rig) plus a back-substitution for the other rows.
 
-Methods, both third order with an embedded second-order solution for the step
+Methods, each with an embedded solution one order lower for the step
 controller:
 
-* `ROS3P` (Lang and Verwer 2001, BIT 41, 731-738): three stages, A-stable
+* `ROS3P` (Lang and Verwer 2001, BIT 41, 731-738): three stages, third order,
+  A-stable
   (R(-inf) = 1 - sqrt(3) = -0.73: stiff modes alternate and decay slowly), an
   exact Jacobian at every step.
-* `ROS34PW2` (Rang and Angermann 2005, BIT 45, 761-787): four stages,
+* `ROS34PW2` (Rang and Angermann 2005, BIT 45, 761-787): four stages, third order,
   L-stable, stiffly accurate and a W-method: it keeps its order with any
   approximation of the Jacobian, so the linearisation may be reused over
   ``jacobian_every`` steps.
+* `Rodas4` (Hairer and Wanner, Solving ODEs II, Sec. VI.4): six stages,
+  fourth order, L-stable and stiffly accurate, an exact Jacobian at every
+  step.
 
-Both are written in the transformed form of Hairer and Wanner (Solving ODEs
+All are written in the transformed form of Hairer and Wanner (Solving ODEs
 II, 2nd ed., Sec. IV.7, Eq. 7.25) so that each stage is one back-substitution
 and no product with J.  Dense output: the cubic Hermite interpolant of the
 step's end values and slopes.  With the Jacobian in hand there is no Newton

@@ -12,12 +12,11 @@ on the three-body rig) plus a back-substitution for the other rows.
 Methods, each with an embedded solution one order lower for the step
 controller:
 
-* `ROS3P` (Lang and Verwer 2001, BIT 41, 731-738): three stages, third order,
-  A-stable
-  (R(-inf) = 1 - sqrt(3) = -0.73: stiff modes alternate and decay slowly), an
-  exact Jacobian at every step.
-* `ROS34PW2` (Rang and Angermann 2005, BIT 45, 761-787): four stages, third order,
-  L-stable, stiffly accurate and a W-method: it keeps its order with any
+* `ROS3P` (Lang and Verwer 2001, BIT 41, 731-738): three stages, third
+  order, A-stable (R(-inf) = 1 - sqrt(3) = -0.73: stiff modes alternate and
+  decay slowly), an exact Jacobian at every step.
+* `ROS34PW2` (Rang and Angermann 2005, BIT 45, 761-787): four stages, third
+  order, L-stable, stiffly accurate and a W-method: it keeps its order with any
   approximation of the Jacobian, so the linearisation may be reused over
   ``jacobian_every`` steps.
 * `Rodas4` (Hairer and Wanner, Solving ODEs II, Sec. VI.4): six stages,
@@ -409,10 +408,10 @@ class Rodas4(AbstractRosenbrock):
     linearisation, one LU and five more evaluations (six with dense output);
     at the loose tolerances of a wear cycle it takes about a third of ROS3P's
     steps on the rig (the performance docs give the counts).  A step's
-    derivative is exact for the discrete solution, as for `ROS3P`; but through
-    the rig's wear evolution at rtol 1e-4 its Jacobian disagrees with central
-    differences (measured in the performance docs), so derivatives of a wear
-    evolution are better taken on `ROS3P`."""
+    derivative is exact for the discrete solution, as for `ROS3P`.  The
+    tangents are not error-controlled: at the loose tolerance of a wear cycle
+    (1e-4) they can be far off on the rig's impacts (measured in the
+    performance docs), so take gradients at a tighter tolerance."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
     differentiate_jacobian: bool = eqx.field(static=True, default=True)

@@ -61,7 +61,8 @@ def main(argv=None):
         ctrl = diffrax.PIDController(rtol=tol, atol=tol, pcoeff=0.3, icoeff=0.4)
         kw = {} if adjoint is None else {"adjoint": adjoint}
         if which == "warm-up end state":
-            return simulate(m, y0, PERIOD, solver=solver, stepsize_controller=ctrl, **kw).y_final[:n]
+            y = simulate(m, y0, PERIOD, solver=solver, stepsize_controller=ctrl, **kw).y_final
+            return y[:n]
         y = simulate(m, y_settled, 2 * PERIOD, t0=PERIOD, solver=solver, stepsize_controller=ctrl,
                      **kw).y_final
         return jnp.sum(y[n:n + nodes])[None]

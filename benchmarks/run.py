@@ -317,7 +317,7 @@ GRAD_DYNAMIC, GRAD_DYNAMIC_QUICK = 10, 1
 GRAD_FD_STEPS = (1e-3, 1e-2)  # relative central-difference steps of the check
 
 
-def rig_gradient(repeats: int, integrator: str = "tsit5") -> dict:
+def rig_gradient(repeats: int, integrator: str = "tsit5", rtol: float | None = None) -> dict:
     """Jacobian of the rig-21400 result (smooth max depth [mm], volume [mm^3];
     `sweep.models.RigWear` outputs) w.r.t. (k, clearance, depth, diameter),
     as relative changes p = p0 (1 + x), through warm-up + 10 wear cycles (quick:
@@ -325,7 +325,9 @@ def rig_gradient(repeats: int, integrator: str = "tsit5") -> dict:
     (`jax.jacfwd`, diffrax ``ForwardMode``: 4 tangents vmapped); one tangent
     (`jax.jvp`); and (full mode only: its compilation takes ~2 min) reverse mode
     (`jax.jacrev`, ``RecursiveCheckpointAdjoint``).  Checked against central
-    differences with relative steps 1e-3 and 1e-2.  One timed call each."""
+    differences with relative steps 1e-3 and 1e-2.  One timed call each.
+    ``rtol``: the cycles' rtol = atol instead of the integrator's preset
+    (tangents are not error-controlled: benchmarks/experiments/tangent_accuracy.py)."""
     import diffrax
     import jax
     import jax.numpy as jnp
@@ -339,6 +341,7 @@ def rig_gradient(repeats: int, integrator: str = "tsit5") -> dict:
 
     quick = repeats <= QUICK_REPEATS
     solver, tol = cycle_integrator(integrator)
+    tol = tol if rtol is None else rtol
     dyn = GRAD_DYNAMIC_QUICK if quick else GRAD_DYNAMIC
     mech0, _, y0 = _setup()
     p0 = common.params_of(RIG_JOINT)
@@ -365,7 +368,8 @@ def rig_gradient(repeats: int, integrator: str = "tsit5") -> dict:
     jvp1 = jax.jit(lambda x: jax.jvp(fm, (x,), (jnp.eye(4)[1],))[1])
     _, m_j1 = time_jitted(jvp1, (x0,), 1)
     jac_fwd = np.asarray(jac_fwd)
-    out = {"dynamic_cycles": dyn + 1, "parameters": ["k", "clearance", "depth", "diameter"],
+    out = {"dynamic_cycles": dyn + 1, "integrator": integrator, "rtol": tol,
+           "parameters": ["k", "clearance", "depth", "diameter"],
            "outputs": ["max_depth_mm", "volume_mm3"], "value": np.asarray(base).tolist(),
            "forward_s": m_fwd["run_s"], "forward_compile_s": m_fwd["compile_s"],
            "jacfwd_s": m_jf["run_s"], "jacfwd_compile_s": m_jf["compile_s"],
@@ -959,6 +963,8 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig-21400 gradient (4 parameters)": rig_gradient,
     "rig-21400 gradient (4 parameters, ROS3P)": lambda r: rig_gradient(r, "ros3p"),
     "rig-21400 gradient (4 parameters, Rodas4)": lambda r: rig_gradient(r, "rodas4"),
+    "rig-21400 gradient (4 parameters, Rodas4 at rtol 1e-6)":
+        lambda r: rig_gradient(r, "rodas4", 1e-6),
     "rig cycle profile": rig_profile,
     "ch8-optimisation": ch8_optimisation,
     "rig-21400 quasi-static": rig_21400_quasi_static,

@@ -356,7 +356,8 @@ MEASURED = {("ros3p", "rig-21400"): 1.4e-4, ("ros3p", "wear-5000"): 1.2e-4,
 def test_wear_studies_on_rosenbrock_keep_the_recorded_wear(tmp_path, integrator, study):
     """The whole dynamic wear study with its cycles on ROS3P or Rodas4 at
     rtol 1e-4: max depth and volume within 0.5 % of the recorded Tsit5 run
-    (rtol 1e-6), and within 1.3x of the measured distance."""
+    (rtol 1e-6), and within twice the measured distance (at least 5e-4: other
+    CPUs may round differently and so step differently)."""
     from diffwear.io import OutputDir
     from diffwear.studies import STUDIES
 
@@ -370,7 +371,7 @@ def test_wear_studies_on_rosenbrock_keep_the_recorded_wear(tmp_path, integrator,
     for key in ("max_wear_depth_mm", "wear_volume_mm3"):
         assert summary[key] == pytest.approx(record[key], rel=5e-3)
         assert summary[key] == pytest.approx(record[key],
-                                             rel=max(1.3 * MEASURED[integrator, study], 1e-4))
+                                             rel=max(2.0 * MEASURED[integrator, study], 5e-4))
 
 
 def test_bad_settings_are_refused():

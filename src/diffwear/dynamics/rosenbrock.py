@@ -265,8 +265,10 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
         for i in range(len(tab.m)):
             f_stage = lin.f0 if i == 0 else terms.vf(t0 + tab.alpha[i] * h,
                                                      y0 + _combine(tab.a[i], us, y0), args)
-            us.append(w_solve(f_stage + _combine(tab.c[i], us, y0) / h
-                              + tab.gammas[i] * h * lin.columns[0]))
+            rhs = f_stage + _combine(tab.c[i], us, y0) / h
+            if tab.gammas[i] != 0.0:  # Rodas4's last two stages have no f_t term
+                rhs = rhs + tab.gammas[i] * h * lin.columns[0]
+            us.append(w_solve(rhs))
         y1 = y0 + _combine(tab.m, us, y0)
         y_error = _combine([m - me for m, me in zip(tab.m, tab.m_embedded)], us, y0)
         return y1, y_error, us
@@ -344,9 +346,6 @@ def _fresh_step_jvp(primals, tangents):
                                                    (dt, dz))[1])(inner_t, inner_y)
 
         d_lin = eqx.filter_jvp(directional, (y0, args), (dy0, t_args))[1]
-        d_ft, d_ju = d_lin[0], d_lin[1:]
-    else:
-        d_ft, d_ju = jnp.zeros_like(y0), jnp.zeros((len(us),) + y0.shape, y0.dtype)
     w_solve = solver._w_solve(lin, h, y0)
     dus: list[jax.Array] = []
     for i in range(len(tab.m)):
@@ -355,8 +354,12 @@ def _fresh_step_jvp(primals, tangents):
         df_stage = f_jvp(t0 + tab.alpha[i] * h, y_stage, dy_stage)
         if i == 0:
             df0 = df_stage
-        dus.append(w_solve(df_stage + _combine(tab.c[i], dus, y0) / h
-                           + tab.gammas[i] * h * d_ft + d_ju[i]))
+        rhs = df_stage + _combine(tab.c[i], dus, y0) / h
+        if solver.differentiate_jacobian:  # d_lin = [d f_t, (dJ) u_1, ..]
+            rhs = rhs + d_lin[1 + i]
+            if tab.gammas[i] != 0.0:
+                rhs = rhs + tab.gammas[i] * h * d_lin[0]
+        dus.append(w_solve(rhs))
     dy1 = dy0 + _combine(tab.m, dus, y0)
     d_error = _combine([m - me for m, me in zip(tab.m, tab.m_embedded)], dus, y0)
     return (y1, y_error, lin.f0), (dy1, d_error, df0)

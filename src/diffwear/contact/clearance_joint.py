@@ -21,7 +21,7 @@ from .._checks import check_positive, concrete
 from ..errors import InputError
 from ..mechanism import AbstractForceElement, Frames, Mechanism, RevoluteJoint
 from ..mechanism.constraints import _vec2
-from ..mechanism.geometry import perp, rotation, safe_angle, safe_norm
+from ..mechanism.geometry import dot2, perp, safe_angle, safe_norm
 from . import smoothing
 from .archard import SLIP_RATE_WIDTH, ArchardWear
 from .friction import CoulombFriction
@@ -113,16 +113,15 @@ class ClearanceJoint(AbstractForceElement):
     # ----------------------------------------------------------------- physics
     def kinematics(self, frames: Frames) -> PinKinematics:
         """Pin offset and its rate in the bushing frame."""
-        xj, vj = frames.pose(self.bushing_body), frames.velocity(self.bushing_body)
+        vj = frames.velocity(self.bushing_body)
         e = frames.point(self.pin_body, self.pin_point) - frames.point(self.bushing_body,
                                                                         self.bushing_point)
         e_dot = (frames.point_velocity(self.pin_body, self.pin_point)
                  - frames.point_velocity(self.bushing_body, self.bushing_point))
-        a_t = rotation(xj[2]).T
         omega = frames.velocity(self.pin_body)[2] - vj[2]
         return PinKinematics(
-            offset=a_t @ e,
-            offset_rate=a_t @ (e_dot - vj[2] * perp(e)),
+            offset=frames.to_body(self.bushing_body, e),
+            offset_rate=frames.to_body(self.bushing_body, e_dot - vj[2] * perp(e)),
             omega=omega,
             pin_radius=self.pin_radius,
             bushing_radius=self.bushing_radius,
@@ -139,8 +138,7 @@ class ClearanceJoint(AbstractForceElement):
 
     def forces(self, frames, aux, t):
         kin, res = self.contact(frames, aux)
-        a_j = rotation(frames.pose(self.bushing_body)[2])
-        force = a_j @ res.force
+        force = frames.to_global(self.bushing_body, res.force)
         at = frames.point(self.pin_body, self.pin_point)
         q = frames.wrench(self.pin_body, force, at=at, torque=res.torque)
         q = q + frames.wrench(self.bushing_body, -force, at=at, torque=-res.torque)
@@ -242,11 +240,9 @@ def contact_history(mech: Mechanism, joint: str, ys: Float[Array, "T s"]) -> Con
         q, qd, aux = mech.split(y)
         frames = mech.frames(q, qd)
         kin, res = element.contact(frames, aux[aux_slice])
-        a_j = rotation(frames.pose(element.bushing_body)[2])
-        theta = element.profile.theta
-        gap = (jnp.cos(theta) * kin.offset[0] + jnp.sin(theta) * kin.offset[1]
-               - element.profile.clearance)
+        gap = dot2(element.profile.normals, kin.offset) - element.profile.clearance
         angle = jnp.mod(safe_angle(kin.offset), 2 * jnp.pi)
-        return -(a_j @ res.force), res.normal_load, kin.offset, jnp.max(gap), angle, res.pressure
+        force = -frames.to_global(element.bushing_body, res.force)
+        return force, res.normal_load, kin.offset, jnp.max(gap), angle, res.pressure
 
     return ContactHistory(*jax.vmap(one)(ys))

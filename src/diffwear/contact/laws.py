@@ -16,7 +16,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .._checks import check_positive, check_range
-from ..mechanism.geometry import perp
+from ..mechanism.geometry import dot2, perp
 from . import smoothing
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
@@ -275,25 +275,22 @@ class ElasticFoundation(AbstractContactLaw):
         return self.stiffness * radius * self.depth * jnp.pi / 2.0
 
     def pressure(self, kin: PinKinematics, profile: BushingProfile) -> Float[Array, " n"]:
-        theta = profile.theta
-        u = jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)
+        u = profile.normals
         w = self.penetration_width
-        delta = u @ kin.offset - profile.clearance
-        rate = u @ kin.offset_rate
+        delta = dot2(u, kin.offset) - profile.clearance
+        rate = dot2(u, kin.offset_rate)
         p = self.stiffness * (smoothing.ramp(delta, w)
                               + self.damping_time * rate * smoothing.step(delta, w))
         return smoothing.ramp(p, self.stiffness * w)
 
     def evaluate(self, kin, memory, profile, friction):
-        theta = profile.theta
-        u = jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)
-        t = jnp.stack([-jnp.sin(theta), jnp.cos(theta)], axis=-1)
+        u, t = profile.normals, profile.tangents
         p = self.pressure(kin, profile)
         area = kin.bushing_radius * self.depth * profile.dtheta  # per grid point [m^2]
         load = p * area
-        slip = t @ kin.offset_rate + kin.pin_radius * kin.omega
+        slip = dot2(t, kin.offset_rate) + kin.pin_radius * kin.omega
         f_t = -friction.factor(slip) * load
-        force = -(load @ u) + f_t @ t
+        force = jnp.sum(f_t[:, None] * t - load[:, None] * u, axis=0)
         torque = kin.pin_radius * jnp.sum(f_t)
         return ContactResult(
             force=force,

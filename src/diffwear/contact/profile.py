@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from .._checks import check_positive, concrete
 from ..errors import InputError
-from ..mechanism.geometry import grid_angles
+from ..mechanism.geometry import grid_angles, grid_directions
 
 
 class BushingProfile(eqx.Module):
@@ -48,6 +49,19 @@ class BushingProfile(eqx.Module):
     @property
     def theta(self) -> Float[Array, " n"]:
         return grid_angles(self.n)
+
+    @property
+    def normals(self) -> Float[np.ndarray, "n 2"]:
+        """u_k = (cos theta_k, sin theta_k): the unit vectors from the bushing
+        centre to its grid points (constants, see `grid_directions`)."""
+        return grid_directions(self.n)
+
+    @property
+    def tangents(self) -> Float[np.ndarray, "n 2"]:
+        """t_k = k x u_k = (-sin theta_k, cos theta_k): the counter-clockwise
+        unit tangents at the grid points."""
+        u = grid_directions(self.n)
+        return np.stack([-u[:, 1], u[:, 0]], axis=-1)
 
     @property
     def dtheta(self) -> float:

@@ -18,7 +18,7 @@ from jaxtyping import Array, Float
 from .._checks import check_finite, concrete
 from ..errors import InputError
 from .frames import Frames
-from .geometry import perp, rotation
+from .geometry import dot2, perp
 
 
 def _vec2(what: str, value) -> Float[Array, "2"]:
@@ -108,9 +108,9 @@ class TranslationalJoint(AbstractConstraint):
 
     def residual(self, frames, t):
         d = frames.point(self.body_i, self.point_i) - frames.point(self.body_j, self.point_j)
-        normal = rotation(frames.pose(self.body_j)[2]) @ perp(self.axis_j)
+        normal = frames.to_global(self.body_j, perp(self.axis_j))
         rel = frames.pose(self.body_i)[2] - frames.pose(self.body_j)[2] - self.angle
-        return jnp.stack([normal @ d, rel])
+        return jnp.stack([dot2(normal, d), rel])
 
 
 class Driver(AbstractConstraint):

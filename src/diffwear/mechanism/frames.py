@@ -14,7 +14,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .body import GROUND
-from .geometry import cross, perp, rotation
+from .geometry import cross, perp
 
 
 class Frames:
@@ -31,6 +31,9 @@ class Frames:
         self.n_bodies = q.shape[0] // 3
         self.q = jnp.concatenate([q.reshape(-1, 3), zero])
         self.qd = jnp.concatenate([qd.reshape(-1, 3), zero])
+        # cos and sin of every body angle, once per evaluation: every rotation
+        # of a point, force or offset reads them (the ground's row: identity)
+        self._cos, self._sin = jnp.cos(self.q[:, 2]), jnp.sin(self.q[:, 2])
 
     def row(self, name: str) -> int:
         return -1 if name == GROUND else self._index[name]
@@ -41,14 +44,26 @@ class Frames:
     def velocity(self, name: str) -> Float[Array, "3"]:
         return self.qd[self.row(name)]
 
+    def to_global(self, name: str, s: Float[Array, "2"]) -> Float[Array, "2"]:
+        """A(phi) s: the body-frame vector ``s`` of body ``name`` in the global
+        frame (written out, not a 2 x 2 matrix product: see `geometry.dot2`)."""
+        r = self.row(name)
+        c, sn = self._cos[r], self._sin[r]
+        return jnp.stack([c * s[0] - sn * s[1], sn * s[0] + c * s[1]])
+
+    def to_body(self, name: str, v: Float[Array, "2"]) -> Float[Array, "2"]:
+        """A(phi)^T v: the global vector ``v`` in the frame of body ``name``."""
+        r = self.row(name)
+        c, sn = self._cos[r], self._sin[r]
+        return jnp.stack([c * v[0] + sn * v[1], c * v[1] - sn * v[0]])
+
     def point(self, name: str, s: Float[Array, "2"]) -> Float[Array, "2"]:
         """Global position of the body-fixed point ``s`` (body frame)."""
-        x = self.pose(name)
-        return x[:2] + rotation(x[2]) @ s
+        return self.pose(name)[:2] + self.to_global(name, s)
 
     def point_velocity(self, name: str, s: Float[Array, "2"]) -> Float[Array, "2"]:
-        x, v = self.pose(name), self.velocity(name)
-        return v[:2] + v[2] * perp(rotation(x[2]) @ s)
+        v = self.velocity(name)
+        return v[:2] + v[2] * perp(self.to_global(name, s))
 
     def zero_forces(self) -> Float[Array, "nb1 3"]:
         return jnp.zeros_like(self.q)

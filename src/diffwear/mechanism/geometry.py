@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 
@@ -13,10 +16,34 @@ def grid_angles(n: int) -> Float[Array, " n"]:
     return 2.0 * jnp.pi * jnp.arange(n) / n
 
 
+@lru_cache(maxsize=None)
+def grid_directions(n: int) -> np.ndarray:
+    """(cos theta_k, sin theta_k) on the grid of `grid_angles`, shape (n, 2).
+
+    A NumPy array on purpose: under ``jit`` it enters the program as a
+    constant.  ``jnp.cos`` of the grid would be evaluated at run time, because
+    XLA does not fold constants built from ``iota``: on the EFM contact's
+    grid that was most of a right-hand side's cost (the unit vectors were
+    recomputed in every fused kernel that used them).  Read-only.
+    """
+    theta = 2.0 * np.pi * np.arange(n) / n
+    out = np.stack([np.cos(theta), np.sin(theta)], axis=-1)
+    out.flags.writeable = False
+    return out
+
+
 def rotation(phi: Float[Array, ""]) -> Float[Array, "2 2"]:
     """A(phi): body-frame vectors to the global frame."""
     c, s = jnp.cos(phi), jnp.sin(phi)
     return jnp.array([[c, -s], [s, c]])
+
+
+def dot2(a: Float[Array, "... 2"], b: Float[Array, "... 2"]) -> Float[Array, "..."]:
+    """a . b over the last axis of length 2, written out: elementwise arithmetic
+    that XLA fuses with its neighbours, where ``a @ b`` on such small operands
+    is a kernel launch of its own on CPU (the right-hand side's small products
+    cost more in launches than in arithmetic)."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
 
 
 def perp(v: Float[Array, "2"]) -> Float[Array, "2"]:

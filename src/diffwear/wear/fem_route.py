@@ -176,8 +176,7 @@ def joint_samples(mech: Mechanism, joint: str, ys: Float[Array, "T s"], force: s
     """Evaluate the clearance joint ``joint`` at every saved state ``ys``."""
     index, el = clearance_element(mech, joint)
     sl = mech.aux_slice(joint)
-    theta = el.profile.theta
-    u = jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)
+    u = el.profile.normals
 
     def one(y):
         q, qd, aux = mech.split(y)

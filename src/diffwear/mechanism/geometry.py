@@ -38,7 +38,8 @@ def rotation(phi: Float[Array, ""]) -> Float[Array, "2 2"]:
     return jnp.array([[c, -s], [s, c]])
 
 
-def dot2(a: Float[Array, "... 2"], b: Float[Array, "... 2"]) -> Float[Array, "..."]:
+def dot2(a: Float[Array | np.ndarray, "... 2"],
+         b: Float[Array | np.ndarray, "... 2"]) -> Float[Array | np.ndarray, "..."]:
     """a . b over the last axis of length 2, written out: elementwise arithmetic
     that XLA fuses with its neighbours, where ``a @ b`` on such small operands
     is a kernel launch of its own on CPU (the right-hand side's small products

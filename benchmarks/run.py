@@ -157,7 +157,7 @@ def rig_21400(repeats: int, integrator: str = "tsit5") -> dict:
 
 def rig_cycle_integrators(repeats: int) -> dict:
     """One rig wear cycle (after the warm-up) on each wear-cycle integrator at
-    its tolerance (Tsit5 rtol 1e-6, ROS3P 1e-4: `wear.cycle.CYCLE_INTEGRATORS`)
+    its tolerance (Tsit5 rtol 1e-6, Rodas4 1e-4: `wear.cycle.CYCLE_INTEGRATORS`)
     against Tsit5 at rtol = atol = 1e-10: steps, time per cycle and per step,
     and the errors of the end state (q, qd; relative to the largest entry) and
     of the cycle's wear increment (relative to its peak).  The evolution's
@@ -199,7 +199,6 @@ def rig_cycle_integrators(repeats: int) -> dict:
     out.update({"compile_s": out["rodas4_compile_s"], "run_s": out["rodas4_run_s"],
                 "run_s_per_cycle": out["rodas4_run_s"], "integrator_steps": out["rodas4_steps"],
                 "us_per_step": out["rodas4_us_per_step"],
-                "speedup_ros3p_over_tsit5": out["tsit5_run_s"] / out["ros3p_run_s"],
                 "speedup_rodas4_over_tsit5": out["tsit5_run_s"] / out["rodas4_run_s"],
                 "repeats": repeats})
     return out
@@ -957,11 +956,9 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig-21400 (constant A)": rig_21400,
     "rig-21400 FEM vs EFM route": rig_21400_fem_route,
     "vmap sweep 64 points vs 64 single runs": vmap_sweep,
-    "rig cycle, Tsit5, ROS3P and Rodas4": rig_cycle_integrators,
-    "rig-21400 (ROS3P)": lambda r: rig_21400(r, "ros3p"),
+    "rig cycle, Tsit5 and Rodas4": rig_cycle_integrators,
     "rig-21400 (Rodas4)": lambda r: rig_21400(r, "rodas4"),
     "rig-21400 gradient (4 parameters)": rig_gradient,
-    "rig-21400 gradient (4 parameters, ROS3P)": lambda r: rig_gradient(r, "ros3p"),
     "rig-21400 gradient (4 parameters, Rodas4)": lambda r: rig_gradient(r, "rodas4"),
     "rig-21400 gradient (4 parameters, Rodas4 at rtol 1e-6)":
         lambda r: rig_gradient(r, "rodas4", 1e-6),

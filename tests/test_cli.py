@@ -213,13 +213,13 @@ def test_integrator_option_is_checked(interrupted_dir, tmp_path, capsys):
     """--integrator: a resumed run keeps the integrator it started with, the
     quasi-static model has none, and a study without dynamic cycles takes none."""
     out = _copy(interrupted_dir, tmp_path / "run")
-    assert main(["study", WEAR, "--integrator", "ros3p", "--resume", str(out), "--quiet"]) == 2
+    assert main(["study", WEAR, "--integrator", "rodas4", "--resume", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert "integrator = 'tsit5'" in err and "integrator = 'ros3p'" in err
-    assert main(["study", WEAR, "--model", "quasi-static", "--integrator", "ros3p", "--out",
+    assert "integrator = 'tsit5'" in err and "integrator = 'rodas4'" in err
+    assert main(["study", WEAR, "--model", "quasi-static", "--integrator", "rodas4", "--out",
                  str(tmp_path / "qs"), "--quiet"]) == 2
-    assert "--integrator ros3p belongs to the dynamic model" in capsys.readouterr().err
-    assert main(["study", STUDY, "--integrator", "ros3p", "--out", str(tmp_path / "x")]) == 2
+    assert "--integrator rodas4 belongs to the dynamic model" in capsys.readouterr().err
+    assert main(["study", STUDY, "--integrator", "rodas4", "--out", str(tmp_path / "x")]) == 2
     assert "does not take --integrator" in capsys.readouterr().err
     assert not (tmp_path / "qs").exists() and not (tmp_path / "x").exists()
 

@@ -13,7 +13,7 @@ WEAR_CONTACTS = ("efm", "fem")
 # The wear model (--model): the dynamic reference or the quasi-static joint.
 WEAR_MODELS = ("dynamic", "quasi-static")
 # The dynamic cycles' integrator (--integrator; `diffwear.wear.cycle.CYCLE_INTEGRATORS`).
-WEAR_INTEGRATORS = ("tsit5", "ros3p", "rodas4")
+WEAR_INTEGRATORS = ("tsit5", "rodas4")
 
 
 def check_wear_model(model: str, dynamic_only: Iterable[tuple[bool, str]] = ()) -> None:

@@ -307,9 +307,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="number of real crank cycles (wear studies)")
     p.add_argument("--integrator", choices=WEAR_INTEGRATORS,
                    help="integrator of the dynamic cycles (wear studies): tsit5 (default; "
-                        "explicit, rtol 1e-6), ros3p or rodas4 (linearly implicit, rtol 1e-4: "
+                        "explicit, rtol 1e-6) or rodas4 (linearly implicit, L-stable, rtol 1e-4: "
                         "several times faster on a stiff contact such as the rig's; wear within "
-                        "2e-4 (ros3p) and 4e-3 (rodas4) of tsit5 on the thesis studies)")
+                        "4e-3 of tsit5 on the thesis studies)")
     p.add_argument("--resume", metavar="DIR",
                    help="continue the interrupted wear study whose checkpoint.npz is in DIR "
                         "(same study and options); results are written into DIR")

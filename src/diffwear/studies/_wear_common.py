@@ -173,8 +173,8 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
     ``contact="fem"``: the wear pressure from the FE ring (`wear.fem_route`;
     ``fem`` a `FemWearModel`, default `default_model(design)`); the EFM route is
     run first (one jit, not checkpointed) so that the report compares both.
-    ``integrator``: the dynamic cycles' integrator ("tsit5", "ros3p" or
-    "rodas4", `wear.cycle.CYCLE_INTEGRATORS`).
+    ``integrator``: the dynamic cycles' integrator ("tsit5" or "rodas4",
+    `wear.cycle.CYCLE_INTEGRATORS`).
 
     ``thesis_cycles``: the cycle count the ``thesis`` values are for; a run of
     another length is not compared with them (report, plots and summary say

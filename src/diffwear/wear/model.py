@@ -51,8 +51,8 @@ class Dynamic(AbstractWearModel):
     limit (the life's accuracy knob; error ~ 1 / steps); ``scheme``:
     "implicit" (linearly implicit profile update) or "euler";
     ``cycle_rtol``/``cycle_atol``: tolerances of each dynamic cycle;
-    ``cycle_solver``: its integrator (default Tsit5; ``ROS3P()`` or
-    ``Rodas4()`` with tolerances 1e-4 is several times faster, see
+    ``cycle_solver``: its integrator (default Tsit5; ``Rodas4()`` with
+    tolerances 1e-4 is several times faster, see
     `diffwear.wear.cycle.CYCLE_INTEGRATORS`; for derivatives on a stiff
     contact use ``Rodas4()`` at 1e-6: the tangents are not error-controlled,
     see the guide "Which derivatives to trust");

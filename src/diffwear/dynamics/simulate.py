@@ -26,6 +26,7 @@ from .._checks import require_float64
 from ..errors import SolverError
 from ..mechanism import Mechanism
 from .equations import Baumgarte, vector_field
+from .projection import ConstraintProjection, replace_inner
 from .rosenbrock import AbstractRosenbrock
 
 
@@ -109,18 +110,28 @@ def simulate(
     ``ts``: times at which to save (default: only ``t1``).  The defaults are
     Tsit5, a PID controller with rtol = atol = 1e-8 on the whole state, and
     recursive-checkpoint reverse-mode adjoints.  A Rosenbrock ``solver``
-    (`ROS3P`, `ROS34PW2`) without ``jacobian_states`` gets the mechanism's
-    `Mechanism.feedback_states` as its Jacobian structure and integrates
-    `Mechanism.for_state_jacobian` (same values, cheaper Jacobians).
+    (`Rodas4`, `ROS3P`, `ROS34PW2`) without ``jacobian_states`` gets the
+    mechanism's `Mechanism.feedback_states` as its Jacobian structure and
+    integrates `Mechanism.for_state_jacobian` (same values, cheaper
+    Jacobians).  ``solver=ConstraintProjection(diffrax.Tsit5())`` with
+    ``baumgarte=Baumgarte(0.0, 0.0)`` replaces Baumgarte's stabilisation by a
+    projection after every step (post-stabilisation: the same motion in far
+    fewer steps where the Baumgarte modes set the step, e.g. an ideal
+    mechanism; `diffwear.dynamics.projection`).
     """
     require_float64("simulate")
     baumgarte = Baumgarte() if baumgarte is None else baumgarte
     solver = diffrax.Tsit5() if solver is None else solver
-    if isinstance(solver, AbstractRosenbrock):
-        if solver.jacobian_states is None:
-            solver = dataclasses.replace(solver, jacobian_states=mech.feedback_states)
-        if ts is None:  # only t1 is saved: an end value of a step
-            solver = dataclasses.replace(solver, dense_output=False)
+    stepper = solver.solver if isinstance(solver, ConstraintProjection) else solver
+    if isinstance(stepper, AbstractRosenbrock):
+        def configure(ros):
+            if ros.jacobian_states is None:
+                ros = dataclasses.replace(ros, jacobian_states=mech.feedback_states)
+            if ts is None:  # only t1 is saved: an end value of a step
+                ros = dataclasses.replace(ros, dense_output=False)
+            return ros
+
+        solver = replace_inner(solver, configure)
         mech = mech.for_state_jacobian()  # same forces, cheaper Jacobian columns
     if stepsize_controller is None:
         stepsize_controller = diffrax.PIDController(rtol=1e-8, atol=1e-8, pcoeff=0.3, icoeff=0.4)

@@ -449,10 +449,18 @@ def rig_profile(repeats: int) -> dict:
     el = mech.element(common.JOINT)
     k_c = float(el.law.contact_stiffness(el.bushing_radius))
     m_rod = float(next(b.mass for b in mech.bodies if b.name == "rod"))
+    q, qd, _ = mech.split(traj.y_final)
+    us_rhs_ideal = rhs_us(mech0, mech0.join(q, qd))
+    us_loop = loop_us_per_step(traj.y_final.size, steps)
     return {
         "simulated_s": PERIOD, **m, "integrator_steps": steps, "accepted_steps": acc,
         "rejected_steps": rej, "us_per_step": m["run_s"] / steps * 1e6,
         "us_per_rhs": us_rhs, "rhs_share": 6 * steps * us_rhs * 1e-6 / m["run_s"],
+        "us_per_rhs_ideal_mechanism": us_rhs_ideal,
+        "us_per_rhs_contact_and_wear": us_rhs - us_rhs_ideal,
+        "us_per_step_loop_only": us_loop,
+        "xla_rhs": hlo_kernels(mech, traj.y_final),
+        "xla_rhs_ideal_mechanism": hlo_kernels(mech0, mech0.join(q, qd)),
         "contact_stiffness_N_per_m": k_c,
         "contact_frequency_Hz": math.sqrt(k_c / m_rod) / (2 * math.pi),
         "dt_stable_contact_s": EXPLICIT_STABILITY_RADIUS / math.sqrt(k_c / m_rod),
@@ -493,6 +501,47 @@ def rhs_us(mech, y, t=0.3, n: int = 2000, reps: int = 5) -> float:
 
     _, m = time_jitted(loop, (jnp.asarray(y),), reps)
     return m["run_s"] / n * 1e6
+
+
+def loop_us_per_step(size: int, steps: int, reps: int = 5) -> float:
+    """Microseconds per step of diffrax's loop alone: Tsit5 with the wear
+    cycles' PID controller (rtol = atol = 1e-6) on a trivial right-hand side
+    (-y) of ``size`` states, run for ``steps`` steps (the rest of a real step
+    is its six right-hand-side calls)."""
+    import diffrax
+    import jax
+    import jax.numpy as jnp
+
+    term = diffrax.ODETerm(lambda t, y, args: -y)
+    ctrl = diffrax.PIDController(rtol=1e-6, atol=1e-6, pcoeff=0.3, icoeff=0.4,
+                                 dtmin=1e-12, dtmax=1e-3)
+    # dt fixed at dtmax by a tiny horizon per step: steps steps of 1e-3 s
+    fn = jax.jit(lambda y: diffrax.diffeqsolve(term, diffrax.Tsit5(), 0.0, steps * 1e-3, 1e-3,
+                                               y, stepsize_controller=ctrl,
+                                               max_steps=steps + 16))
+    sol, m = time_jitted(fn, (jnp.ones(size),), reps)
+    return m["run_s"] / int(sol.stats["num_steps"]) * 1e6
+
+
+def hlo_kernels(mech, y, t: float = 0.3) -> dict:
+    """The optimised XLA program of one `vector_field` call: its kernels (the
+    entry computation's fusions, dots and library calls, each one dispatch
+    of the CPU runtime) and all its instructions (fused ones included)."""
+    import re
+
+    import jax
+    import jax.numpy as jnp
+
+    from diffwear.dynamics.equations import Baumgarte, vector_field
+
+    text = jax.jit(vector_field).lower(jnp.asarray(t), jnp.asarray(y),
+                                       (mech, Baumgarte())).compile().as_text()
+    entry = next(c for c in re.split(r"\n(?=\S)", text) if c.startswith("ENTRY"))
+    ops = re.findall(r"= \S+ ([a-z][\w-]*)\(", entry)
+    free = {"parameter", "constant", "get-tuple-element", "tuple", "bitcast"}
+    return {"kernels": sum(op not in free for op in ops),
+            "library_calls": ops.count("custom-call"),
+            "instructions": sum(" = " in line for line in text.splitlines())}
 
 
 SCIPY_DYNAMIC = 10  # wear cycles of the full evolution cross-check (A = 21,400 / 10)

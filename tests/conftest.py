@@ -8,13 +8,14 @@ import diffwear  # noqa: E402,F401
 
 def pytest_addoption(parser):
     parser.addoption("--long", action="store_true",
-                     help="also run the tests marked long (minutes each)")
+                     help="also run the tests marked slow or long (study reproductions, "
+                          "notebooks, tight-tolerance gradient checks: minutes each)")
 
 
 def pytest_collection_modifyitems(config, items):
     if config.getoption("--long"):
         return
-    skip = pytest.mark.skip(reason="long: runs with pytest --long")
+    skip = pytest.mark.skip(reason="slow: runs with pytest --long")
     for item in items:
-        if "long" in item.keywords:
+        if "long" in item.keywords or "slow" in item.keywords:
             item.add_marker(skip)

@@ -291,6 +291,7 @@ def test_calibrate_refuses_too_few_dynamic_cycles_in_the_users_words(tmp_path, c
     assert not out.exists()
 
 
+@pytest.mark.slow  # a real process; the in-process interrupt tests above run by default
 def test_sigint_to_a_real_run_then_resume(tmp_path):
     """A real process, a real SIGINT after its first checkpoint: exit 130 and one
     line naming the resume command, which then finishes the run."""

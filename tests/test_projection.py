@@ -156,9 +156,10 @@ def test_a_rosenbrock_solver_inside_is_configured_as_simulate_does(slider):
     """`simulate` gives a wrapped Rosenbrock solver its Jacobian structure:
     Rodas4 inside the projection follows the kinematics too."""
     mech, q_guess, y0 = slider
-    run = jax.jit(lambda m, y: _projected(m, y, 2.0, 1e-8, ts=TS, solver=Rodas4()))(mech, y0)
+    ts = TS[:26]  # a quarter revolution
+    run = jax.jit(lambda m, y: _projected(m, y, ts[-1], 1e-8, ts=ts, solver=Rodas4()))(mech, y0)
     run.raise_if_failed("projected Rodas4")
-    qk, _, _ = kinematic_analysis(mech, TS, q_guess)
+    qk, _, _ = kinematic_analysis(mech, ts, q_guess)
     np.testing.assert_allclose(jax.vmap(mech.split)(run.ys)[0], qk, atol=1e-7)
 
 

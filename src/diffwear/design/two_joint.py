@@ -160,7 +160,10 @@ class TwoJointLife(eqx.Module):
                                model=self.wear_model)
 
     def __call__(self, x: Float[Array, "4"]) -> Float[Array, "2"]:
-        return self.evaluate(x).cycles
+        # compiled as one program even when called eagerly (op by op, a life
+        # is hundreds of small compilations); inside jit / vmap / jacfwd the
+        # inner jit is inlined
+        return _evaluate(self, x).cycles
 
     def life(self, x) -> np.ndarray:
         """[cyc1, cyc2] at a concrete design, as NumPy; `SolverError` on failure."""

@@ -285,6 +285,7 @@ def _rotor_normal_load(clearance, modulus, solver, adjoint, steps=2000):
     return jnp.mean(contact_history(mech, "pivot", traj.ys).normal_load)
 
 
+@pytest.mark.slow  # Rodas4's step derivative rule is checked against autodiff by default
 def test_gradients_match_finite_differences():
     """Forward mode, reverse mode and central differences of the mean normal
     load in clearance and modulus, through ROS3P (which differentiates its

@@ -450,7 +450,8 @@ def rig_profile(repeats: int) -> dict:
     k_c = float(el.law.contact_stiffness(el.bushing_radius))
     m_rod = float(next(b.mass for b in mech.bodies if b.name == "rod"))
     q, qd, _ = mech.split(traj.y_final)
-    us_rhs_ideal = rhs_us(mech0, mech0.join(q, qd))
+    y_ideal = mech0.join(q, qd)  # the same motion without the clearance joint
+    us_rhs_ideal = rhs_us(mech0, y_ideal)
     us_loop = loop_us_per_step(traj.y_final.size, steps)
     return {
         "simulated_s": PERIOD, **m, "integrator_steps": steps, "accepted_steps": acc,
@@ -460,7 +461,7 @@ def rig_profile(repeats: int) -> dict:
         "us_per_rhs_contact_and_wear": us_rhs - us_rhs_ideal,
         "us_per_step_loop_only": us_loop,
         "xla_rhs": hlo_kernels(mech, traj.y_final),
-        "xla_rhs_ideal_mechanism": hlo_kernels(mech0, mech0.join(q, qd)),
+        "xla_rhs_ideal_mechanism": hlo_kernels(mech0, y_ideal),
         "contact_stiffness_N_per_m": k_c,
         "contact_frequency_Hz": math.sqrt(k_c / m_rod) / (2 * math.pi),
         "dt_stable_contact_s": EXPLICIT_STABILITY_RADIUS / math.sqrt(k_c / m_rod),
@@ -515,7 +516,8 @@ def loop_us_per_step(size: int, steps: int, reps: int = 5) -> float:
     term = diffrax.ODETerm(lambda t, y, args: -y)
     ctrl = diffrax.PIDController(rtol=1e-6, atol=1e-6, pcoeff=0.3, icoeff=0.4,
                                  dtmin=1e-12, dtmax=1e-3)
-    # dt fixed at dtmax by a tiny horizon per step: steps steps of 1e-3 s
+    # -y is smooth: the controller's step grows to dtmax and stays there, so
+    # the run takes ``steps`` steps of 1e-3 s
     fn = jax.jit(lambda y: diffrax.diffeqsolve(term, diffrax.Tsit5(), 0.0, steps * 1e-3, 1e-3,
                                                y, stepsize_controller=ctrl,
                                                max_steps=steps + 16))
@@ -751,7 +753,11 @@ def exudyn_peer(repeats: int) -> dict:
     ref_traj.raise_if_failed("benchmark exudyn-peer reference")
     ref = _slider_crank_outputs(mech, ref_traj)
     every = int(round(EXUDYN_SAMPLE / (duration / (n_save - 1))))
-    ref_sampled = tuple(a[::every] for a in ref)
+
+    def sampled(outputs):  # on Exudyn's times
+        return tuple(np.asarray(a)[::every] for a in outputs)
+
+    t_sampled, ref_sampled = sampled((ts,))[0], sampled(ref)
 
     routes: dict = {}
     for stabilisation, tol in EXUDYN_DIFFWEAR_ROUTES:
@@ -772,8 +778,7 @@ def exudyn_peer(repeats: int) -> dict:
             raise RuntimeError(f"exudyn peer failed: {proc.stdout[-2000:]}{proc.stderr[-2000:]}")
         d = json.loads(proc.stdout)
         te = np.asarray(d["t"])
-        if te.shape != np.asarray(ts)[::every].shape or np.abs(
-                te - np.asarray(ts)[::every]).max() > 1e-9:
+        if te.shape != t_sampled.shape or np.abs(te - t_sampled).max() > 1e-9:
             raise RuntimeError(f"exudyn peer sampled at other times ({te.size} samples)")
         ex = tuple(np.asarray(d[k]) for k in ("slider_x", "joint_force", "driver_torque"))
         against_ref = _output_errors(ref_sampled, ex)
@@ -783,7 +788,7 @@ def exudyn_peer(repeats: int) -> dict:
             "exudyn_newton_iterations": d["newton_iterations"],
             "exudyn_spectral_radius": d["spectral_radius"], "exudyn_version": d["exudyn"],
             "exudyn_driver": d["driver"],
-            **_output_errors(tuple(a[::every] for a in study["outputs"]), ex),
+            **_output_errors(sampled(study["outputs"]), ex),
             **{f"exudyn_{k}_vs_reference": v for k, v in against_ref.items()},
             "exudyn_peak_joint_force_N": float(ex[1].max()),
         }

@@ -104,9 +104,14 @@ class ConstraintProjection(diffrax.AbstractAdaptiveSolver, diffrax.AbstractWrapp
         return project_to_constraints(args[0], y1, t1), y_error, dense_info, solver_state, result
 
 
+def stepping_solver(solver):
+    """The solver that takes the steps: the one inside a `ConstraintProjection`."""
+    return solver.solver if isinstance(solver, ConstraintProjection) else solver
+
+
 def replace_inner(solver, fn):
-    """``fn(solver)``, applied inside a `ConstraintProjection` when ``solver``
-    is one (so that `simulate` configures the solver that steps)."""
+    """``solver`` with its `stepping_solver` replaced by ``fn`` of it (so that
+    `simulate` configures the solver that steps)."""
     if isinstance(solver, ConstraintProjection):
         return eqx.tree_at(lambda s: s.solver, solver, fn(solver.solver))
     return fn(solver)

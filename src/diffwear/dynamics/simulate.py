@@ -26,7 +26,7 @@ from .._checks import require_float64
 from ..errors import SolverError
 from ..mechanism import Mechanism
 from .equations import Baumgarte, vector_field
-from .projection import ConstraintProjection, replace_inner
+from .projection import replace_inner, stepping_solver
 from .rosenbrock import AbstractRosenbrock
 
 
@@ -122,8 +122,7 @@ def simulate(
     require_float64("simulate")
     baumgarte = Baumgarte() if baumgarte is None else baumgarte
     solver = diffrax.Tsit5() if solver is None else solver
-    stepper = solver.solver if isinstance(solver, ConstraintProjection) else solver
-    if isinstance(stepper, AbstractRosenbrock):
+    if isinstance(stepping_solver(solver), AbstractRosenbrock):
         def configure(ros):
             if ros.jacobian_states is None:
                 ros = dataclasses.replace(ros, jacobian_states=mech.feedback_states)

@@ -329,8 +329,9 @@ def _fresh_step_jvp(primals, tangents):
     Jacobian's change along the tangent applied to u_i as one second-order
     directional derivative (and likewise for f_t), instead of differentiating
     the formation of all of J's columns.  The factorised W serves the
-    tangents.  A Jacobian held at the unperturbed run drops the dJ terms, and
-    then each stage's f and its tangent come from one evaluation."""
+    tangents.  Each stage's f is evaluated once for its value and its
+    tangents (linearised where (dJ) u_i needs every stage first).  A Jacobian
+    held at the unperturbed run drops the dJ terms."""
     solver, terms, args, t0, h, y0 = primals
     _, _, t_args, t_t0, t_h, t_y0 = tangents
     if t_t0 is not None or t_h is not None:  # step times depend on the parameters
@@ -346,10 +347,23 @@ def _fresh_step_jvp(primals, tangents):
         return eqx.filter_jvp(lambda z, a: terms.vf(t, z, a), (y, args), (dy, t_args))
 
     if solver.differentiate_jacobian:
-        # the stages first: d/de [f_t, J u_1 .. J u_s] at (y0 + e dy0, args +
-        # e dargs) is one batched derivative, J over the Jacobian states only
-        # (the others' columns are taken as zero)
-        _, _, us = solver._stages(terms, args, t0, h, y0, lin)
+        # the stages first, each linearised: d/de [f_t, J u_1 .. J u_s] at
+        # (y0 + e dy0, args + e dargs) is one batched derivative, J over the
+        # Jacobian states only (the others' columns are taken as zero)
+        # the args' leaves with a tangent are the linear maps' inputs
+        t_full = jax.tree_util.tree_map(lambda _: None, args) if t_args is None else t_args
+        has_tangent = jax.tree_util.tree_map(lambda t: t is not None, t_full,
+                                             is_leaf=lambda t: t is None)
+        d_args, const_args = eqx.partition(args, has_tangent)
+        d_args_tangent = eqx.filter(t_full, has_tangent)
+        us, f_lins = [], []
+        for i in range(len(tab.m)):
+            f_stage, f_lin = jax.linearize(
+                lambda z, a, t=t0 + tab.alpha[i] * h: terms.vf(t, z, eqx.combine(a, const_args)),
+                y0 + _combine(tab.a[i], us, y0), d_args)
+            f_lins.append(f_lin)
+            us.append(w_solve(solver._stage_rhs(i, lin.f0 if i == 0 else f_stage, us, h,
+                                                lin.columns[0])))
         inner_t = jnp.zeros(len(us) + 1, y0.dtype).at[0].set(1.0)
         inner_y = jnp.stack([jnp.zeros_like(y0)] + [
             jnp.zeros_like(u).at[stiff].set(u[stiff]) for u in us])
@@ -363,16 +377,18 @@ def _fresh_step_jvp(primals, tangents):
         us = []  # each stage with its tangent: one evaluation of f serves both
     dus: list[jax.Array] = []
     for i in range(len(tab.m)):
-        f_stage, df_stage = f_jvp(t0 + tab.alpha[i] * h, y0 + _combine(tab.a[i], us, y0),
-                                  dy0 + _combine(tab.a[i], dus, y0))
-        if i == 0:
-            df0 = df_stage
+        dy_stage = dy0 + _combine(tab.a[i], dus, y0)
         if solver.differentiate_jacobian:  # d_lin = [d f_t, (dJ) u_1, ..]
+            df_stage = f_lins[i](dy_stage, d_args_tangent)
             dus.append(w_solve(solver._stage_rhs(i, df_stage + d_lin[1 + i], dus, h, d_lin[0])))
         else:
+            f_stage, df_stage = f_jvp(t0 + tab.alpha[i] * h, y0 + _combine(tab.a[i], us, y0),
+                                      dy_stage)
             us.append(w_solve(solver._stage_rhs(i, lin.f0 if i == 0 else f_stage, us, h,
                                                 lin.columns[0])))
             dus.append(w_solve(solver._stage_rhs(i, df_stage, dus, h, 0.0)))
+        if i == 0:
+            df0 = df_stage
     y1, y_error = solver._solution(y0, us)
     dy1, d_error = solver._solution(dy0, dus)
     return (y1, y_error, lin.f0), (dy1, d_error, df0)

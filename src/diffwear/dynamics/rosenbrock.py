@@ -448,7 +448,7 @@ class Rodas4(AbstractRosenbrock):
     second derivatives, one evaluation per stage for the value and its
     tangents; the tangents are then first order in the step (Rodas4 is not a
     W-method), 4e-6 off the exact ones on a settled rig cycle at rtol 1e-6,
-    for 2.5 forward runs per 4-parameter Jacobian instead of 4.7."""
+    for ~2.6 forward runs per 4-parameter Jacobian instead of ~4."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
     differentiate_jacobian: bool = eqx.field(static=True, default=True)

@@ -349,13 +349,13 @@ def _fresh_step_jvp(primals, tangents):
     if solver.differentiate_jacobian:
         # the stages first, each linearised: d/de [f_t, J u_1 .. J u_s] at
         # (y0 + e dy0, args + e dargs) is one batched derivative, J over the
-        # Jacobian states only (the others' columns are taken as zero)
-        # the args' leaves with a tangent are the linear maps' inputs
-        t_full = jax.tree_util.tree_map(lambda _: None, args) if t_args is None else t_args
-        has_tangent = jax.tree_util.tree_map(lambda t: t is not None, t_full,
+        # Jacobian states only (the others' columns are taken as zero).  The
+        # args' leaves with a tangent are the linear maps' inputs.
+        d_args_tangent = jax.tree_util.tree_map(lambda _: None, args) if t_args is None \
+            else t_args
+        has_tangent = jax.tree_util.tree_map(lambda t: t is not None, d_args_tangent,
                                              is_leaf=lambda t: t is None)
         d_args, const_args = eqx.partition(args, has_tangent)
-        d_args_tangent = eqx.filter(t_full, has_tangent)
         us, f_lins = [], []
         for i in range(len(tab.m)):
             f_stage, f_lin = jax.linearize(

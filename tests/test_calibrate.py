@@ -220,6 +220,7 @@ def test_score_statistic_is_the_chi2_drop_of_a_linear_model():
             assert scores[eff.name].p_value == pytest.approx(min(1.0, grid * p1), rel=1e-9)
 
 
+@pytest.mark.slow  # the CLI calibration below identifies the effect by default
 def test_refit_recovers_strength_and_shape_from_noise_free_data(small_dataset):
     """Data made by the model itself at a known truth (the rig off its stated
     k and spring, run-in 2.0 with a 300-cycle time scale): the refit from the

@@ -384,6 +384,7 @@ def test_penetration_through_the_bushing_is_fatal():
     assert fatal and "40 mm" in msg and "421% of the pin radius" in msg
 
 
+@pytest.mark.slow  # minutes; the other mechanism-file wear tests run by default
 def test_four_bar_mechanism_file_wears_from_the_cli_and_from_python(tmp_path):
     """A four-bar file with a worn coupler-rocker joint: the wear study and the
     life to a depth limit from the CLI; from Python, the evolution run to the

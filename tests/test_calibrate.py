@@ -145,6 +145,7 @@ def small_dataset(tmp_path_factory):
     return folder
 
 
+@pytest.mark.slow  # an equivalence of two compiled models: minutes
 def test_zero_strength_model_equals_the_sweep_rig_model():
     """With every strength 0 (and the law's default contact band, as the sweep
     model) the calibration model is `sweep.RigWear`: same worn volume."""

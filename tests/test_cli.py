@@ -461,7 +461,8 @@ def test_a_depth_limit_beyond_the_wall_is_refused(tmp_path, capsys):
     assert not out.exists()
 
 
-@pytest.mark.parametrize("model", ["dynamic", "quasi-static"])
+@pytest.mark.parametrize("model", [
+    "dynamic", pytest.param("quasi-static", marks=pytest.mark.slow)])  # the same report; minutes
 def test_a_run_stopped_at_the_wall_reports_what_it_reached(tmp_path, capsys, model):
     """Asked for 1e8 cycles, the wear-5000 joint wears through its wall long
     before: stdout, report and summary give the same cycles (fewer than asked)

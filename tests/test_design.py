@@ -136,6 +136,7 @@ def test_design_two_joint_quick(tmp_path):
     assert main(["design", "two-joint", "--quick", "--quiet", "--out", str(out)]) == 2
 
 
+@pytest.mark.slow  # minutes; test_design_two_joint_quick runs the command by default
 def test_design_two_joint_small_case(tmp_path):
     """The CLI on a small case (coarse models: 10 quasi-static and 2 dynamic
     wear steps, 36 profile nodes, equal life only, 2 x 2 maps): optimised on

@@ -90,6 +90,7 @@ def _sensitivity_errors(solver):
             for n in (16, 32, 64)]
 
 
+@pytest.mark.slow  # the step rules themselves are checked against autodiff by default
 def test_derivatives_keep_the_order_where_the_method_allows():
     """d y(2) / d p of a two-state problem on fixed steps.  ROS3P
     differentiates its Jacobian (its default) and keeps order 3; holding it

@@ -18,6 +18,7 @@ from linkages import seated_rotor
 from diffwear.contact import ArchardWear, BushingProfile, PinKinematics
 from diffwear.contact.linearised import LinearisedLaw
 from diffwear.dynamics import ROS3P, ROS34PW2, Baumgarte, Rodas4, simulate, vector_field
+from diffwear.dynamics.simulate import _args_for_state_jacobian
 from diffwear.errors import InputError
 from diffwear.presets import clearance_slider_crank
 from diffwear.wear.cycle import CYCLE_INTEGRATORS, cycle_integrator
@@ -136,8 +137,9 @@ def test_feedback_states_are_the_only_nonzero_jacobian_columns(mechanisms, law):
 
 @pytest.mark.parametrize("law", ["ln", "efm"])
 def test_structured_step_is_the_dense_step(mechanisms, law):
-    """One ROS3P step with the Jacobian over the feedback states and the
-    linearised law equals one with the dense Jacobian of the plain law."""
+    """One ROS3P step with the Jacobian over the feedback states, formed on
+    the linearised law (as `simulate` sets it up), equals one with the dense
+    Jacobian of the plain law."""
     mech, y = mechanisms[law]
     term = diffrax.ODETerm(vector_field)
 
@@ -146,7 +148,8 @@ def test_structured_step_is_the_dense_step(mechanisms, law):
         return solver.step(term, 0.3, 0.3 + 2e-4, y, (m, Baumgarte()), None, False)[0]
 
     dense = step(ROS3P(), mech)
-    structured = step(ROS3P(jacobian_states=mech.feedback_states), mech.for_state_jacobian())
+    structured = step(ROS3P(jacobian_states=mech.feedback_states,
+                            jacobian_args=_args_for_state_jacobian), mech)
     np.testing.assert_allclose(np.asarray(structured), np.asarray(dense), rtol=1e-11,
                                atol=1e-11 * float(jnp.abs(dense).max()))
 
@@ -161,11 +164,13 @@ def test_step_derivative_rule_is_autodiff_of_the_step(mechanisms, law, solver):
     along the state and along a contact parameter (the clearance profile).
     With the Jacobian held (ROS34PW2's default), autodiff of the step with the
     Jacobian's columns held; the rule then takes each stage's value and
-    tangent from one evaluation."""
+    tangent from one evaluation.  The Jacobian is formed on the linearised
+    law and the stages run on the plain one, as in `simulate`."""
     from diffwear.dynamics.rosenbrock import _fresh_step, _plain_fresh_step
 
     mech, y = mechanisms[law]
-    solver = dataclasses.replace(solver, jacobian_states=mech.feedback_states)
+    solver = dataclasses.replace(solver, jacobian_states=mech.feedback_states,
+                                 jacobian_args=_args_for_state_jacobian)
     i = [f.name for f in mech.forces].index("crank_rod")
     term, t0, h = diffrax.ODETerm(vector_field), jnp.asarray(0.3), jnp.asarray(2e-4)
     dy = jax.random.normal(jax.random.PRNGKey(1), y.shape) * jnp.abs(y).max() * 1e-3
@@ -173,7 +178,7 @@ def test_step_derivative_rule_is_autodiff_of_the_step(mechanisms, law, solver):
     def step(fn, s):
         m = eqx.tree_at(lambda m: m.forces[i].profile.clearance, mech,
                         mech.forces[i].profile.clearance * (1.0 + s))
-        return fn(solver, term, (m.for_state_jacobian(), Baumgarte()), t0, h, y + s * dy)
+        return fn(solver, term, (m, Baumgarte()), t0, h, y + s * dy)
 
     rule, plain = (jax.jit(lambda: jax.jvp(lambda s: step(fn, s), (0.0,), (1.0,))[1])()
                    for fn in (_fresh_step, _plain_fresh_step))

@@ -10,8 +10,8 @@ once per evaluation and maps each direction through it: one small matrix
 product per direction.  Directions in the law's parameters, the radii, the
 bushing profile or the friction (design derivatives) are pushed through the
 law itself.  For a few directions (a gradient in 1-4 design parameters) the
-plain law is cheaper, so only the Rosenbrock solvers' simulations use it
-(`Mechanism.for_state_jacobian`).
+plain law is cheaper, so only the Rosenbrock solvers' linearisations use it
+(`Mechanism.for_state_jacobian`); their stages and tangents use the plain law.
 """
 
 from __future__ import annotations

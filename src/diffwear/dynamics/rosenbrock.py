@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import ClassVar, NamedTuple
+from typing import Any, ClassVar, NamedTuple
 
 import diffrax
 import equinox as eqx
@@ -176,9 +176,19 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
     ``dense_output``: the cubic Hermite interpolant between steps (one more
     evaluation per step); without it, the chord (`simulate` drops it when
     only the end state is saved: the end values are exact either way).
+    ``jacobian_args``: a map of the vector field's ``args`` to args with the
+    same values that are cheaper to form the Jacobian's columns with (many
+    directions at once), used for the linearisation only; the stages and
+    their tangents (a few directions) evaluate the vector field with
+    ``args`` themselves.  `simulate` passes `Mechanism.for_state_jacobian`
+    (contact laws differentiated once in the pin's motion): a stage's
+    4-parameter tangent on the rig costs a third less through the plain law.
+    Give a module-level function: the solver is a static part of the
+    compiled integration, so a new lambda per call recompiles.
     """
 
     jacobian_states: eqx.AbstractVar[tuple[int, ...] | None]
+    jacobian_args: eqx.AbstractVar[Callable[[Any], Any] | None]
     differentiate_jacobian: eqx.AbstractVar[bool]
     dense_output: eqx.AbstractVar[bool]
     tableau: eqx.AbstractClassVar[RosenbrockTableau]
@@ -221,8 +231,12 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
             return slice(0, js.size), slice(js.size, n)
         return js, np.setdiff1d(np.arange(n), js)
 
+    def _args_for_jacobian(self, args):
+        return args if self.jacobian_args is None else self.jacobian_args(args)
+
     def _linearise(self, terms, t0, y0, args) -> Linearisation:
         stiff, _ = self._blocks(y0)
+        args = self._args_for_jacobian(args)
         index, dtype = np.arange(y0.shape[0])[stiff], y0.dtype
         k = index.size
         f0, linear = jax.linearize(lambda t, y: terms.vf(t, y, args), jnp.asarray(t0, dtype), y0)
@@ -403,6 +417,7 @@ def _exact_tangents(solver, terms, args, t0, h, y0, lin, w_solve, dy0, t_args):
         jnp.zeros_like(u).at[stiff].set(u[stiff]) for u in us])
 
     def directional(z, a):
+        a = solver._args_for_jacobian(a)
         return jax.vmap(lambda dt, dz: jax.jvp(lambda s, x: terms.vf(s, x, a), (t0, z),
                                                (dt, dz))[1])(inner_t, inner_y)
 
@@ -446,6 +461,7 @@ class ROS3P(AbstractRosenbrock):
     equations with the factorised step matrix."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
+    jacobian_args: Callable[[Any], Any] | None = eqx.field(static=True, default=None)
     differentiate_jacobian: bool = eqx.field(static=True, default=True)
     dense_output: bool = eqx.field(static=True, default=True)
     tableau: ClassVar[RosenbrockTableau] = ROS3P_TABLEAU
@@ -460,6 +476,7 @@ class ROS34PW2(AbstractRosenbrock):
     stale Jacobian as a smaller step."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
+    jacobian_args: Callable[[Any], Any] | None = eqx.field(static=True, default=None)
     differentiate_jacobian: bool = eqx.field(static=True, default=False)
     dense_output: bool = eqx.field(static=True, default=True)
     jacobian_every: int = eqx.field(static=True, default=1)
@@ -493,6 +510,7 @@ class Rodas4(AbstractRosenbrock):
     for ~2.6 forward runs per 4-parameter Jacobian instead of ~4."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
+    jacobian_args: Callable[[Any], Any] | None = eqx.field(static=True, default=None)
     differentiate_jacobian: bool = eqx.field(static=True, default=True)
     dense_output: bool = eqx.field(static=True, default=True)
     tableau: ClassVar[RosenbrockTableau] = RODAS4_TABLEAU

@@ -91,6 +91,13 @@ class Trajectory(eqx.Module):
         )
 
 
+def _args_for_state_jacobian(args):
+    """A Rosenbrock solver's Jacobian args: the mechanism with each force
+    element's `for_state_jacobian` (same forces, cheaper Jacobian columns)."""
+    mech, baumgarte = args
+    return mech.for_state_jacobian(), baumgarte
+
+
 def simulate(
     mech: Mechanism,
     y0: Float[Array, " s"],
@@ -112,8 +119,8 @@ def simulate(
     recursive-checkpoint reverse-mode adjoints.  A Rosenbrock ``solver``
     (`Rodas4`, `ROS3P`, `ROS34PW2`) without ``jacobian_states`` gets the
     mechanism's `Mechanism.feedback_states` as its Jacobian structure and
-    integrates `Mechanism.for_state_jacobian` (same values, cheaper
-    Jacobians).  ``solver=ConstraintProjection(diffrax.Tsit5())`` with
+    forms the Jacobian on `Mechanism.for_state_jacobian` (same values,
+    cheaper columns).  ``solver=ConstraintProjection(diffrax.Tsit5())`` with
     ``baumgarte=Baumgarte(0.0, 0.0)`` replaces Baumgarte's stabilisation by a
     projection after every step (post-stabilisation: the same motion in far
     fewer steps where the Baumgarte modes set the step, e.g. an ideal
@@ -126,12 +133,13 @@ def simulate(
         def configure(ros):
             if ros.jacobian_states is None:
                 ros = dataclasses.replace(ros, jacobian_states=mech.feedback_states)
+            if ros.jacobian_args is None:
+                ros = dataclasses.replace(ros, jacobian_args=_args_for_state_jacobian)
             if ts is None:  # only t1 is saved: an end value of a step
                 ros = dataclasses.replace(ros, dense_output=False)
             return ros
 
         solver = replace_inner(solver, configure)
-        mech = mech.for_state_jacobian()  # same forces, cheaper Jacobian columns
     if stepsize_controller is None:
         stepsize_controller = diffrax.PIDController(rtol=1e-8, atol=1e-8, pcoeff=0.3, icoeff=0.4)
     adjoint = diffrax.RecursiveCheckpointAdjoint() if adjoint is None else adjoint

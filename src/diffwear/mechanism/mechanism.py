@@ -89,7 +89,7 @@ class Mechanism(eqx.Module):
     def for_state_jacobian(self) -> "Mechanism":
         """The same mechanism with each force element's `for_state_jacobian`
         (same right-hand side; cheaper full Jacobians, dearer single
-        tangents).  The Rosenbrock solvers' simulations use it."""
+        tangents).  The Rosenbrock solvers form their Jacobians on it."""
         return eqx.tree_at(lambda m: m.forces, self,
                            tuple(f.for_state_jacobian() for f in self.forces))
 

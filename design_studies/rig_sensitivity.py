@@ -81,7 +81,9 @@ def main() -> None:
                        xlabel=f"cycles to {LIFE_LIMIT_MM} mm")
     print(prop.stats)
     out.json("summary.json", {
-        "settings": vars(a) | {"out": str(a.out)}, "point": point,
+        # the computation's settings; where the files went is the caller's business
+        "settings": {k: v for k, v in vars(a).items() if k not in ("out", "overwrite")},
+        "point": point,
         "outputs": ad.outputs, "elasticity_ad": ad.elasticities(),
         "elasticity_fd": fd.elasticities(), "ad_vs_fd_rel_diff": rel,
         "scatter": prop.summary(), "wall_s": {"ad": t_ad, "fd": t_fd, "propagation": t_uq},

@@ -308,8 +308,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--integrator", choices=WEAR_INTEGRATORS,
                    help="integrator of the dynamic cycles (wear studies): tsit5 (default; "
                         "explicit, rtol 1e-6) or rodas4 (linearly implicit, L-stable, rtol 1e-4: "
-                        "several times faster on a stiff contact such as the rig's; wear within "
-                        "4e-3 of tsit5 on the thesis studies)")
+                        "several times faster where the pin stays pressed into the bushing, "
+                        "as on the rig; slower than tsit5 at equal accuracy where it flies and "
+                        "impacts; wear within 4e-3 of tsit5 on the thesis studies)")
     p.add_argument("--resume", metavar="DIR",
                    help="continue the interrupted wear study whose checkpoint.npz is in DIR "
                         "(same study and options); results are written into DIR")

@@ -32,11 +32,13 @@ DEFAULT_STEPS = (1e-2, 1e-3, 1e-4)
 
 @dataclass
 class GradCheck:
-    """Result of `gradcheck`: ``autodiff`` (m, n) Jacobian, ``differences``
+    """Result of `gradcheck`: ``value`` (m,) the output at x (flattened, the
+    Jacobians' rows), ``autodiff`` (m, n) Jacobian, ``differences``
     {relative step: (m, n) Jacobian}, ``error`` {step: autodiff vs that
     step's differences}, ``spread`` (largest disagreement between the steps'
     differences), ``verdict`` and a one-line ``message``."""
 
+    value: np.ndarray
     autodiff: np.ndarray
     differences: dict
     error: dict
@@ -79,8 +81,12 @@ def gradcheck(f, x, *, steps=DEFAULT_STEPS, rtol: float = 1e-4, mode: str = "aut
     step x |x_i|, or by the step itself where x_i = 0).  ``f`` maps an array
     (or scalar) to an array (or scalar).  ``mode``: "forward" (`jax.jacfwd`),
     "reverse" (`jax.jacrev`) or "auto" (forward, reverse where ``f`` holds a
-    reverse-only rule, e.g. diffrax's default checkpointed adjoint).  See the
-    module notes for the verdicts."""
+    reverse-only rule, e.g. diffrax's default checkpointed adjoint).
+    ``jit``: compile ``f`` and its Jacobian as one program each (a new
+    compilation of the whole of ``f``); with False they are called as given,
+    which reuses the compiled programs of an ``f`` that compiles itself, as
+    the diffwear models do (`TwoJointLife`).  See the module
+    notes for the verdicts; the result holds ``f(x)`` as ``value``."""
     if mode not in ("auto", "forward", "reverse"):
         raise ValueError(f"mode must be 'auto', 'forward' or 'reverse', got {mode!r}")
     x = jnp.asarray(x, dtype=float)
@@ -105,7 +111,7 @@ def gradcheck(f, x, *, steps=DEFAULT_STEPS, rtol: float = 1e-4, mode: str = "aut
             jac = jacobian(jax.jacrev)
     y0 = np.asarray(value(flat))
     if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(y0))):
-        return GradCheck(jac, {}, {}, float("nan"), "nan", rtol)
+        return GradCheck(y0, jac, {}, {}, float("nan"), "nan", rtol)
     differences, error = {}, {}
     base = np.abs(np.asarray(flat))
     for step in steps:
@@ -128,4 +134,4 @@ def gradcheck(f, x, *, steps=DEFAULT_STEPS, rtol: float = 1e-4, mode: str = "aut
         verdict = "rough"
     else:
         verdict = "mismatch"
-    return GradCheck(jac, differences, error, spread, verdict, rtol)
+    return GradCheck(y0, jac, differences, error, spread, verdict, rtol)

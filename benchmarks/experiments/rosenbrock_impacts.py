@@ -21,10 +21,6 @@ setting) and Rodas4 at 1e-4 (its wear-cycle preset), 1e-5 and 1e-6.
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import platform
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -36,6 +32,8 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
+
+from _record import write_record  # noqa: E402
 
 SOLVERS = (("Tsit5", 1e-6), ("Rodas4", 1e-4), ("Rodas4", 1e-5), ("Rodas4", 1e-6))
 
@@ -103,12 +101,7 @@ def main(argv=None):
         print(f"| {r['law'].upper()} | {r['clearance_mm']:g} | {r['solver']} | {r['rtol']:g} | "
               f"{r['steps']} ({r['accepted']}) | {r['s_per_cycle']:.3f} | {r['err_state']:.1e} |")
     if args.json:
-        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                                capture_output=True, text=True).stdout.strip()
-        meta = {"date": time.strftime("%Y-%m-%d"), "commit": commit, "jax": jax.__version__,
-                "python": platform.python_version(), "device": str(jax.devices()[0]),
-                "cpu_count": os.cpu_count(), "load_average_1min": os.getloadavg()[0]}
-        Path(args.json).write_text(json.dumps({"meta": meta, "rows": rows}, indent=1))
+        write_record(args.json, rows=rows)
 
 
 if __name__ == "__main__":

@@ -25,7 +25,6 @@ relative to its peak) against Tsit5 at rtol 1e-10.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
@@ -38,6 +37,8 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
+
+from _record import write_record  # noqa: E402
 
 
 def cycle_on(rtol, period, solver=None):
@@ -167,18 +168,7 @@ def main(argv=None):
         print(f"| {r['solver']} rtol {r['rtol']:g} | {r['depth_mm']:.5f} | {r['volume_mm3']:.4f} | "
               f"{r['depth_rel']:+.2e} | {r['volume_rel']:+.2e} | {r['s']:.1f} |")
     if args.json:
-        import os
-        import platform
-        import subprocess
-
-        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                                capture_output=True, text=True).stdout.strip()
-        meta = {"date": time.strftime("%Y-%m-%d"), "commit": commit, "jax": jax.__version__,
-                "python": platform.python_version(), "device": str(jax.devices()[0]),
-                "cpu_count": os.cpu_count(), "load_average_1min": os.getloadavg()[0]}
-        Path(args.json).write_text(json.dumps({"meta": meta, "rows": rows,
-                                               "evolutions": evolutions},
-                                              indent=1))
+        write_record(args.json, rows=rows, evolutions=evolutions)
 
 
 if __name__ == "__main__":

@@ -118,12 +118,14 @@ def test_design_cli_lists_and_rejects():
 
 
 @pytest.mark.slow
-@pytest.mark.long  # ~10 min on 2 cores
+@pytest.mark.long
 def test_design_two_joint_quick(tmp_path):
-    """The CLI on the coarse model: equal life within 0.5 % on a fresh rerun,
-    the thesis's trend, and every summary field."""
+    """The CLI on the coarse model with the longest common life chosen too:
+    equal life and the longest common life within 0.5 %, the thesis's
+    trend, and every summary field."""
     out = tmp_path / "design"
-    assert main(["design", "two-joint", "--quick", "--quiet", "--out", str(out)]) == 0
+    assert main(["design", "two-joint", "--quick", "--problems", "longest-common-life",
+                 "--quiet", "--out", str(out)]) == 0
     s = json.loads((out / "summary.json").read_text())
     for key in ("d1_mm", "d2_mm", "h1_mm", "h2_mm", "cyc1", "cyc2", "rel_gap", "iterations",
                 "model_evaluations", "wall_time_s"):

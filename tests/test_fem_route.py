@@ -148,8 +148,12 @@ def test_refresh_interval_agrees_with_every_cycle_rebuild():
     the unworn ring; wear enters only through the gap) over 3 wear cycles of
     A = 3,000 (0.24 mm of wear on the rig's thick ring, half the full run's
     depth): measured relative differences 1.9e-4 (max depth) and 2.6e-4
-    (volume), tolerance 2e-3.  Also the volume bookkeeping of the evolution: worn volume
-    = k x A-weighted sum of (FE normal load x sliding), tolerance 3e-3."""
+    (volume), tolerance 2e-3.  Also the volume bookkeeping of the evolution: the
+    worn volume in the FE's own quadrature (the unworn ring's tributary lengths:
+    Simpson weights) = k x A-weighted sum of (FE normal load x sliding) to
+    round-off; the rectangle rule of `worn_volume` differs from it by the
+    quadrature of a contact pressure on 72 nodes (measured 7.7e-3 here, -7.7e-3
+    after 900 cycles, 2.8e-3 with A = 300), tolerance 1e-2."""
     mech0, q_guess = rig_slider_crank(TABLE_7_1)
     mech = with_wear_joint(mech0, RIG_JOINT, n_theta=N)
     y0 = common.initial_state(mech0, q_guess, mech)
@@ -169,7 +173,10 @@ def test_refresh_interval_agrees_with_every_cycle_rebuild():
         res.check("FEM route test")
         vol = float(worn_volume(res.depth, el.bushing_radius, el.law.depth))
         out[m] = (float(res.depth.max()), vol)
-        assert abs(vol / float(el.wear.coefficient * res.load_sliding) - 1) < 3e-3
+        archard = float(el.wear.coefficient * res.load_sliding)
+        w0 = fr.unworn_tributary(base, el.bushing_radius, N)
+        assert float(el.law.depth * jnp.sum(res.depth * w0)) / archard == pytest.approx(1, abs=1e-9)
+        assert abs(vol / archard - 1) < 1e-2
     assert out[1.0][0] > 2e-4  # real wear: > 0.2 mm (measured 0.241 mm)
     assert abs(out[3.0][0] / out[1.0][0] - 1) < 2e-3
     assert abs(out[3.0][1] / out[1.0][1] - 1) < 2e-3

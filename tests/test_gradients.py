@@ -67,14 +67,15 @@ def test_gradcheck_verdicts():
     steps); nan where autodiff is NaN."""
     from diffwear import gradcheck
 
-    smooth = gradcheck(lambda x: jnp.stack([jnp.sin(x[0]) * x[1], x[0] ** 3]),
-                       jnp.array([0.7, 1.3]), rtol=1e-6)
+    def f(x):
+        return jnp.stack([jnp.sin(x[0]) * x[1], x[0] ** 3])
+
+    smooth = gradcheck(f, jnp.array([0.7, 1.3]), rtol=1e-6)
     assert smooth.ok, smooth.message
     np.testing.assert_allclose(smooth.autodiff, [[np.cos(0.7) * 1.3, np.sin(0.7)],
                                                  [3 * 0.7**2, 0.0]], rtol=1e-12)
     np.testing.assert_allclose(smooth.value, [np.sin(0.7) * 1.3, 0.7**3], rtol=1e-15)
-    eager = gradcheck(lambda x: jnp.stack([jnp.sin(x[0]) * x[1], x[0] ** 3]),
-                      jnp.array([0.7, 1.3]), rtol=1e-6, jit=False)
+    eager = gradcheck(f, jnp.array([0.7, 1.3]), rtol=1e-6, jit=False)
     np.testing.assert_allclose(eager.autodiff, smooth.autodiff, rtol=1e-15)
 
     @jax.custom_jvp

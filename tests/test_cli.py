@@ -224,6 +224,28 @@ def test_integrator_option_is_checked(interrupted_dir, tmp_path, capsys):
     assert not (tmp_path / "qs").exists() and not (tmp_path / "x").exists()
 
 
+def test_a_checkpoint_without_an_integrator_resumes_on_tsit5(interrupted_dir, tmp_path):
+    """Checkpoints written before the integrator was recorded ran on Tsit5:
+    --resume reads them so, whatever the study's own integrator is now."""
+    import argparse
+
+    from diffwear.cli.command import _options_from_checkpoint
+    from diffwear.wear.evolution import load_checkpoint, save_checkpoint
+
+    out = _copy(interrupted_dir, tmp_path / "run")
+    ckpt, meta = load_checkpoint(out / "checkpoint.npz")
+    del meta["integrator"]
+    save_checkpoint(out / "checkpoint.npz", ckpt, meta)
+    names = ("cycles", "method", "contact", "model", "integrator")
+    args = argparse.Namespace(resume=str(out), **dict.fromkeys(names))
+    _options_from_checkpoint(args)
+    assert args.integrator == "tsit5" and args.cycles == 3
+    args = argparse.Namespace(resume=str(out), **dict.fromkeys(names))
+    args.integrator = "rodas4"  # given explicitly: kept, the study then checks it
+    _options_from_checkpoint(args)
+    assert args.integrator == "rodas4"
+
+
 def test_resume_needs_a_checkpoint_and_a_wear_study(tmp_path, capsys):
     assert main(["study", WEAR, "--resume", str(tmp_path), "--quiet"]) == 2
     assert "no checkpoint.npz" in capsys.readouterr().err

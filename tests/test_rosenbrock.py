@@ -387,6 +387,35 @@ def test_wear_studies_on_rosenbrock_keep_the_recorded_wear(tmp_path, integrator,
                                              rel=max(2.0 * MEASURED[integrator, study], 5e-4))
 
 
+class _Chosen(Exception):
+    """Raised by a stand-in evolution: carries the integrator it was given."""
+
+
+@pytest.mark.parametrize("study, given, chosen", [
+    ("rig-21400", None, "rodas4"), ("rig-21400", "tsit5", "tsit5"),
+    ("wear-5000", None, "tsit5"), ("wear-5000", "rodas4", "rodas4")])
+def test_each_wear_study_runs_its_own_integrator_unless_told(tmp_path, monkeypatch, study,
+                                                             given, chosen):
+    """The rig's settled contact runs on Rodas4, wear-5000 on Tsit5; an
+    explicit integrator wins; the quasi-static model takes none."""
+    from diffwear.io import OutputDir
+    from diffwear.studies import STUDIES
+    from diffwear.studies import _wear_common as common
+
+    def evolution(*args, integrator, **kwargs):
+        raise _Chosen(integrator)
+
+    monkeypatch.setattr(common, "run_evolution", evolution)
+    kw = {} if given is None else {"integrator": given}
+    with pytest.raises(_Chosen) as info:
+        STUDIES[study].run(OutputDir(tmp_path / "dyn"), log=lambda *a: None, **kw)
+    assert info.value.args == (chosen,)
+    if given is not None:
+        with pytest.raises(InputError, match=f"--integrator {given} belongs to the dynamic"):
+            STUDIES[study].run(OutputDir(tmp_path / "qs"), model="quasi-static",
+                               log=lambda *a: None, **kw)
+
+
 def test_bad_settings_are_refused():
     with pytest.raises(InputError, match="jacobian_states"):
         ROS3P(jacobian_states=(0, 0))

@@ -99,7 +99,12 @@ def _options_from_checkpoint(args: argparse.Namespace, origin: str = "") -> None
     path = Path(args.resume) / CHECKPOINT
     if not path.is_file():
         raise InputError(f"--resume {args.resume}: no {CHECKPOINT} there to resume from{origin}")
+    from ..studies._wear_common import META_DEFAULTS
+
     _, meta = load_checkpoint(path)
+    # a key added later: what the checkpoints written without it meant
+    meta = {**{k: v for k, v in META_DEFAULTS.items() if hasattr(args, _RESUMED_OPTIONS[k])},
+            **meta}
     for key, option in _RESUMED_OPTIONS.items():
         if getattr(args, option, None) is None and key in meta:
             value = meta[key]
@@ -306,11 +311,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cycles", type=int, default=None,
                    help="number of real crank cycles (wear studies)")
     p.add_argument("--integrator", choices=WEAR_INTEGRATORS,
-                   help="integrator of the dynamic cycles (wear studies): tsit5 (default; "
-                        "explicit, rtol 1e-6) or rodas4 (linearly implicit, L-stable, rtol 1e-4: "
-                        "several times faster where the pin stays pressed into the bushing, "
-                        "as on the rig; slower than tsit5 at equal accuracy where it flies and "
-                        "impacts; wear within 4e-3 of tsit5 on the thesis studies)")
+                   help="integrator of the dynamic cycles (wear studies): tsit5 (explicit, "
+                        "rtol 1e-6; the default of wear-5000) or rodas4 (linearly implicit, "
+                        "L-stable, rtol 1e-4; the default of rig-21400: several times faster "
+                        "where the pin stays pressed into the bushing, as on the rig; slower "
+                        "than tsit5 at equal accuracy where it flies and impacts; wear within "
+                        "4e-3 of tsit5 on the thesis studies)")
     p.add_argument("--resume", metavar="DIR",
                    help="continue the interrupted wear study whose checkpoint.npz is in DIR "
                         "(same study and options); results are written into DIR")

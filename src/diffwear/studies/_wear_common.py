@@ -163,7 +163,7 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
                    extrapolation, target_dynamic, n_theta, thesis: dict, description: str, log,
                    resume=False, progress=False, extra_summary=None, extra_report=(),
                    contact="efm", fem=None, model="dynamic", thesis_cycles=None,
-                   integrator="tsit5") -> dict:
+                   integrator=None, study_integrator="tsit5") -> dict:
     """The body of a wear study: ``design``'s wear joint swapped into ``mech0``
     (differentiable in k, clearance, depth, diameter), the evolution over
     ``cycles`` (constant A = cycles / ``target_dynamic`` unless ``extrapolation``
@@ -174,7 +174,9 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
     ``fem`` a `FemWearModel`, default `default_model(design)`); the EFM route is
     run first (one jit, not checkpointed) so that the report compares both.
     ``integrator``: the dynamic cycles' integrator ("tsit5" or "rodas4",
-    `wear.cycle.CYCLE_INTEGRATORS`).
+    `wear.cycle.CYCLE_INTEGRATORS`); None: ``study_integrator``, the one the
+    study chose for its contact (given to the quasi-static model, an
+    integrator is an error: it has no dynamic cycles).
 
     ``thesis_cycles``: the cycle count the ``thesis`` values are for; a run of
     another length is not compared with them (report, plots and summary say
@@ -188,8 +190,9 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
         thesis = {}
     check_wear_model(model, ((method != "constant", f"--method {method}"),
                              (contact != "efm", f"--contact {contact}"),
-                             (integrator != "tsit5", f"--integrator {integrator}"),
+                             (integrator is not None, f"--integrator {integrator}"),
                              (resume, "--resume")))
+    integrator = study_integrator if integrator is None else integrator
     cycle_integrator(integrator)  # a bad name fails before any work
     if model == "quasi-static":
         from . import _quasi_static_study

@@ -26,6 +26,10 @@ DESCRIPTION = "Ch. 5/6: Table 2-1 slider-crank, EFM crank-rod joint wear over 5,
 
 N_THETA = 180
 TARGET_DYNAMIC = 50  # constant A = cycles / 50 (A = 100 for 5,000 cycles)
+# The dynamic cycles' integrator (`wear.cycle.CYCLE_INTEGRATORS`): Tsit5, the
+# reference.  Rodas4 halves the study's time here but moves its volume by
+# +3.4e-3 (the performance docs), too close to the 0.5 % the results keep.
+INTEGRATOR = "tsit5"
 
 THESIS = {  # Table 6-4
     "FEM (Table 6-4)": {"max_wear_depth_mm": 0.34, "wear_volume_mm3": 231.42, "time_min": 162},
@@ -36,7 +40,7 @@ THESIS = {  # Table 6-4
 def run(out: OutputDir, *, cycles: int = WEAR_5000_CYCLES, method: str = "constant",
         extrapolation: float | None = None, log=print, resume: bool = False,
         progress: bool = False, contact: str = "efm", model: str = "dynamic",
-        integrator: str = "tsit5") -> dict:
+        integrator: str | None = None) -> dict:
     mech0, q_guess = slider_crank(TABLE_2_1)
     y0 = common.initial_state(mech0, q_guess, with_wear_joint(mech0, WEAR_5000, n_theta=N_THETA))
     return common.run_wear_study(
@@ -44,6 +48,7 @@ def run(out: OutputDir, *, cycles: int = WEAR_5000_CYCLES, method: str = "consta
         period=2 * math.pi / THESIS_CRANK_SPEED, method=method, extrapolation=extrapolation,
         target_dynamic=TARGET_DYNAMIC, n_theta=N_THETA, thesis=THESIS, log=log, resume=resume,
         progress=progress, contact=contact, model=model, integrator=integrator,
+        study_integrator=INTEGRATOR,
         thesis_cycles=WEAR_5000_CYCLES,
         description=(
             "Table 2-1 slider-crank (half-lengths 1 m / 1.75 m), gravity -y, crank-rod EFM "

@@ -391,13 +391,14 @@ class _Chosen(Exception):
     """Raised by a stand-in evolution: carries the integrator it was given."""
 
 
-@pytest.mark.parametrize("study, given, chosen", [
-    ("rig-21400", None, "rodas4"), ("rig-21400", "tsit5", "tsit5"),
-    ("wear-5000", None, "tsit5"), ("wear-5000", "rodas4", "rodas4")])
+@pytest.mark.parametrize("study, contact, given, chosen", [
+    ("rig-21400", "efm", None, "rodas4"), ("rig-21400", "efm", "tsit5", "tsit5"),
+    ("rig-21400", "fem", None, "tsit5"),
+    ("wear-5000", "efm", None, "tsit5"), ("wear-5000", "efm", "rodas4", "rodas4")])
 def test_each_wear_study_runs_its_own_integrator_unless_told(tmp_path, monkeypatch, study,
-                                                             given, chosen):
-    """The rig's settled contact runs on Rodas4, wear-5000 on Tsit5; an
-    explicit integrator wins; the quasi-static model takes none."""
+                                                             contact, given, chosen):
+    """The rig's settled contact runs on Rodas4, wear-5000 and every FEM route
+    on Tsit5; an explicit integrator wins; the quasi-static model takes none."""
     from diffwear.io import OutputDir
     from diffwear.studies import STUDIES
     from diffwear.studies import _wear_common as common
@@ -408,8 +409,13 @@ def test_each_wear_study_runs_its_own_integrator_unless_told(tmp_path, monkeypat
     monkeypatch.setattr(common, "run_evolution", evolution)
     kw = {} if given is None else {"integrator": given}
     with pytest.raises(_Chosen) as info:
-        STUDIES[study].run(OutputDir(tmp_path / "dyn"), log=lambda *a: None, **kw)
+        STUDIES[study].run(OutputDir(tmp_path / "dyn"), contact=contact, log=lambda *a: None,
+                           **kw)
     assert info.value.args == (chosen,)
+    if contact == "efm" and given == "rodas4":
+        with pytest.raises(InputError, match="--contact fem runs its dynamic cycles on tsit5"):
+            STUDIES[study].run(OutputDir(tmp_path / "fem"), contact="fem", log=lambda *a: None,
+                               **kw)
     if given is not None:
         with pytest.raises(InputError, match=f"--integrator {given} belongs to the dynamic"):
             STUDIES[study].run(OutputDir(tmp_path / "qs"), model="quasi-static",

@@ -312,8 +312,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="number of real crank cycles (wear studies)")
     p.add_argument("--integrator", choices=WEAR_INTEGRATORS,
                    help="integrator of the dynamic cycles (wear studies): tsit5 (explicit, "
-                        "rtol 1e-6; the default of wear-5000) or rodas4 (linearly implicit, "
-                        "L-stable, rtol 1e-4; the default of rig-21400: several times faster "
+                        "rtol 1e-6; the default of wear-5000 and the only one of --contact "
+                        "fem) or rodas4 (linearly implicit, L-stable, rtol 1e-4; the default "
+                        "of rig-21400: several times faster "
                         "where the pin stays pressed into the bushing, as on the rig; slower "
                         "than tsit5 at equal accuracy where it flies and impacts; wear within "
                         "4e-3 of tsit5 on the thesis studies)")

@@ -44,7 +44,7 @@ TARGET_VOLUME_MM3 = 106.7  # Table 7-4: FEM 106.71, EFM 106.68 mm^3
 # (~210 at rtol 1e-4).  Measured over the whole study (docs/notes/
 # rosenbrock-rig-cycle.md): max depth and volume within 7e-5 of Tsit5 at rtol
 # 1e-8, in ~1/8 of the time of Tsit5 at rtol 1e-6.  `--integrator tsit5` runs
-# the explicit reference.
+# the explicit reference; the FEM route (`--contact fem`) always does.
 INTEGRATOR = "rodas4"
 
 THESIS = {  # Tables 7-4..7-6

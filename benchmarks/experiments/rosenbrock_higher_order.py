@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -40,7 +39,7 @@ import numpy as np  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 
 from _record import write_record  # noqa: E402
-from rosenbrock_rig_cycle import cycle_on  # noqa: E402
+from rosenbrock_rig_cycle import RigCycleReference, print_rows  # noqa: E402
 
 from diffwear.dynamics import Rodas4  # noqa: E402
 from diffwear.dynamics.rosenbrock import AbstractRosenbrock, RosenbrockTableau  # noqa: E402
@@ -103,44 +102,15 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
-    from diffwear.studies.rig_21400 import PERIOD, _setup
-
     orders = {name: observed_orders(s) for name, s in (("Rodas4", Rodas4()),
                                                         ("Rodas5P", Rodas5P()))}
     for name, o in orders.items():
         print(f"{name}: observed orders {', '.join(f'{x:.2f}' for x in o)} (10 -> 20 -> 40 steps)")
-
-    _, mech, y0 = _setup()
-    n_stiff = 2 * mech.n_coords
-    ys = cycle_on(1e-8, PERIOD)(mech, y0, 0.0).y_final
-    y_ref = np.asarray(cycle_on(1e-10, PERIOD)(mech, ys, PERIOD).y_final)
-    dwear_ref = y_ref[n_stiff:] - np.asarray(ys)[n_stiff:]
-
-    rows = []
-    for name, solver in (("Rodas4", Rodas4()), ("Rodas5P", Rodas5P())):
-        for rtol in (1e-4, 3e-4, 1e-3):
-            fn = cycle_on(rtol, PERIOD, solver)
-            out = jax.block_until_ready(fn(mech, ys, PERIOD))
-            times = []
-            for _ in range(3):
-                t0 = time.perf_counter()
-                out = jax.block_until_ready(fn(mech, ys, PERIOD))
-                times.append(time.perf_counter() - t0)
-            y1 = np.asarray(out.y_final)
-            err_state = np.max(np.abs(y1[:n_stiff] - y_ref[:n_stiff])) / np.max(
-                np.abs(y_ref[:n_stiff]))
-            dw = y1[n_stiff:] - np.asarray(ys)[n_stiff:]
-            err_wear = np.max(np.abs(dw - dwear_ref)) / np.max(np.abs(dwear_ref))
-            rows.append(dict(solver=name, rtol=rtol, steps=int(out.num_steps),
-                             accepted=int(out.num_accepted_steps),
-                             s_per_cycle=float(np.median(times)), err_state=float(err_state),
-                             err_wear=float(err_wear)))
-    print("| solver | rtol | steps (accepted) | s per cycle | error of q, qd / max | "
-          "error of the wear increment / peak |")
-    print("|---|---:|---:|---:|---:|---:|")
-    for r in rows:
-        print(f"| {r['solver']} | {r['rtol']:g} | {r['steps']} ({r['accepted']}) | "
-              f"{r['s_per_cycle']:.3f} | {r['err_state']:.2e} | {r['err_wear']:.2e} |")
+    ref = RigCycleReference()
+    rows = [ref.row(name, rtol, solver) for name, solver in (("Rodas4", Rodas4()),
+                                                             ("Rodas5P", Rodas5P()))
+            for rtol in (1e-4, 3e-4, 1e-3)]
+    print_rows(rows)
     if args.json:
         write_record(args.json, observed_orders=orders, rows=rows)
 

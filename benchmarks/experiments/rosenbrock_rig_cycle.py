@@ -107,58 +107,74 @@ def evolution_errors(mech, ys, cycles=21_400.0, a=428.0):
     return out
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--json", default=None)
-    args = ap.parse_args(argv)
-    from diffwear.dynamics import ROS3P, ROS34PW2, Rodas4
-    from diffwear.studies.rig_21400 import PERIOD, _setup
+def timed(fn, *args):
+    """(fn(*args), median wall time of 3 runs after a compiling one)."""
+    out = jax.block_until_ready(fn(*args))
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(fn(*args))
+        times.append(time.perf_counter() - t0)
+    return out, float(np.median(times))
 
-    mech0, mech, y0 = _setup()
-    n_stiff = 2 * mech.n_coords
 
-    ys = cycle_on(1e-8, PERIOD)(mech, y0, 0.0).y_final
-    ref = cycle_on(1e-10, PERIOD)(mech, ys, PERIOD)
-    y_ref = np.asarray(ref.y_final)
-    dwear_ref = y_ref[n_stiff:] - np.asarray(ys)[n_stiff:]
+class RigCycleReference:
+    """The rig after a warm-up cycle (Tsit5 at rtol 1e-8) and its next cycle
+    on Tsit5 at rtol 1e-10, against which `row` measures a solver's cycle."""
 
-    def errors(y1):
-        y1 = np.asarray(y1)
-        dq = np.max(np.abs(y1[:n_stiff] - y_ref[:n_stiff])) / np.max(np.abs(y_ref[:n_stiff]))
-        dw = y1[n_stiff:] - np.asarray(ys)[n_stiff:]
+    def __init__(self):
+        from diffwear.studies.rig_21400 import PERIOD, _setup
+
+        _, self.mech, y0 = _setup()
+        self.period, self.n_stiff = PERIOD, 2 * self.mech.n_coords
+        self.ys = cycle_on(1e-8, PERIOD)(self.mech, y0, 0.0).y_final
+        self.y_ref = np.asarray(cycle_on(1e-10, PERIOD)(self.mech, self.ys, PERIOD).y_final)
+
+    def errors(self, y1) -> tuple[float, float]:
+        """(max error of q, qd / their largest entry, max error of the cycle's
+        wear increment / its peak)."""
+        n, y1, ys = self.n_stiff, np.asarray(y1), np.asarray(self.ys)
+        dq = np.max(np.abs(y1[:n] - self.y_ref[:n])) / np.max(np.abs(self.y_ref[:n]))
+        dwear_ref = self.y_ref[n:] - ys[n:]
+        dw = y1[n:] - ys[n:]
         return float(dq), float(np.max(np.abs(dw - dwear_ref)) / np.max(np.abs(dwear_ref)))
 
-    def timed(fn, *a):
-        out = jax.block_until_ready(fn(*a))
-        times = []
-        for _ in range(3):
-            t0 = time.perf_counter()
-            out = jax.block_until_ready(fn(*a))
-            times.append(time.perf_counter() - t0)
-        return out, float(np.median(times))
+    def row(self, name: str, rtol: float, solver=None) -> dict:
+        """One cycle on ``solver`` (None: Tsit5) at rtol = atol = ``rtol``:
+        steps, median time, errors."""
+        out, s = timed(cycle_on(rtol, self.period, solver), self.mech, self.ys, self.period)
+        err_state, err_wear = self.errors(out.y_final)
+        return dict(solver=name, rtol=rtol, steps=int(out.num_steps),
+                    accepted=int(out.num_accepted_steps), s_per_cycle=s,
+                    err_state=err_state, err_wear=err_wear)
 
-    rows = []
-    for rtol in (1e-4, 1e-5, 1e-6, 1e-8):
-        out, s = timed(cycle_on(rtol, PERIOD), mech, ys, PERIOD)
-        rows.append(dict(solver="Tsit5", rtol=rtol, steps=int(out.num_steps),
-                         accepted=int(out.num_accepted_steps), s_per_cycle=s,
-                         **dict(zip(("err_state", "err_wear"), errors(out.y_final)))))
-    rosenbrocks = [("ROS3P", ROS3P(), rtol) for rtol in (1e-4, 3e-5, 1e-5, 1e-6)]
-    rosenbrocks += [("Rodas4", Rodas4(), rtol) for rtol in (2e-4, 1e-4, 5e-5, 1e-5)]
-    rosenbrocks += [("ROS34PW2, fresh Jacobian", ROS34PW2(), 1e-4),
-                    ("ROS34PW2, Jacobian every 5 steps", ROS34PW2(jacobian_every=5), 1e-4),
-                    ("ROS34PW2, Jacobian every 20 steps", ROS34PW2(jacobian_every=20), 1e-4)]
-    for name, solver, rtol in rosenbrocks:
-        out, s = timed(cycle_on(rtol, PERIOD, solver), mech, ys, PERIOD)
-        rows.append(dict(solver=name, rtol=rtol, steps=int(out.num_steps),
-                         accepted=int(out.num_accepted_steps), s_per_cycle=s,
-                         **dict(zip(("err_state", "err_wear"), errors(out.y_final)))))
+
+def print_rows(rows) -> None:
+    """The rows of `RigCycleReference.row` as a markdown table."""
     print("| solver | rtol | steps (accepted) | s per cycle | max error, q qd / max |q qd| | "
           "max error, wear increment / peak |")
     print("|---|---:|---:|---:|---:|---:|")
     for r in rows:
         print(f"| {r['solver']} | {r['rtol']:g} | {r['steps']} ({r['accepted']}) | "
               f"{r['s_per_cycle']:.3f} | {r['err_state']:.2e} | {r['err_wear']:.2e} |")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", default=None)
+    args = ap.parse_args(argv)
+    from diffwear.dynamics import ROS3P, ROS34PW2, Rodas4
+
+    ref = RigCycleReference()
+    runs = [("Tsit5", rtol, None) for rtol in (1e-4, 1e-5, 1e-6, 1e-8)]
+    runs += [("ROS3P", rtol, ROS3P()) for rtol in (1e-4, 3e-5, 1e-5, 1e-6)]
+    runs += [("Rodas4", rtol, Rodas4()) for rtol in (2e-4, 1e-4, 5e-5, 1e-5)]
+    runs += [("ROS34PW2, fresh Jacobian", 1e-4, ROS34PW2()),
+             ("ROS34PW2, Jacobian every 5 steps", 1e-4, ROS34PW2(jacobian_every=5)),
+             ("ROS34PW2, Jacobian every 20 steps", 1e-4, ROS34PW2(jacobian_every=20))]
+    rows = [ref.row(name, rtol, solver) for name, rtol, solver in runs]
+    print_rows(rows)
+    mech, ys = ref.mech, ref.ys
     evolutions = evolution_errors(mech, ys)
     print()
     print("| 21,400 cycles, A = 428 (50 wear cycles) | max depth [mm] | volume [mm^3] | "

@@ -193,6 +193,19 @@ def test_bad_fem_route_input(kwargs, match):
         fr.default_model(RIG_JOINT, **kwargs)
 
 
+def test_fem_route_refuses_a_linearly_implicit_cycle_solver():
+    """The route samples the joint force at fixed times, between Rodas4's long
+    steps: refused before anything is compiled; Tsit5 (None) is taken."""
+    from diffwear.dynamics import Rodas4
+
+    mech0, _ = rig_slider_crank(TABLE_7_1)
+    mech = with_wear_joint(mech0, RIG_JOINT, n_theta=N)
+    model = fr.default_model(RIG_JOINT)
+    with pytest.raises(InputError, match="Tsit5 only .*got Rodas4"):
+        fr.FemEvolver(mech, JOINT, 100, fem=model, period=PERIOD, cycle_solver=Rodas4())
+    assert fr.FemEvolver(mech, JOINT, 100, fem=model, period=PERIOD).fem is model
+
+
 def test_bad_contact_option(tmp_path, capsys):
     """--contact takes efm or fem (argparse: exit 2 naming the option and the
     choices); the study API names the option too; fem needs method constant."""

@@ -413,7 +413,7 @@ def test_each_wear_study_runs_its_own_integrator_unless_told(tmp_path, monkeypat
                            **kw)
     assert info.value.args == (chosen,)
     if contact == "efm" and given == "rodas4":
-        with pytest.raises(InputError, match="--contact fem runs its dynamic cycles on tsit5"):
+        with pytest.raises(InputError, match="FEM wear route runs its dynamic cycles on Tsit5"):
             STUDIES[study].run(OutputDir(tmp_path / "fem"), contact="fem", log=lambda *a: None,
                                **kw)
     if given is not None:

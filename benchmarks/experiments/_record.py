@@ -1,6 +1,8 @@
-"""Write an experiment's record: its results with the provenance the
-benchmark harness records (`benchmarks/run.py` `metadata`: date, commit,
-versions, device, CPU count, load)."""
+"""The experiments' link to the benchmark harness (`benchmarks/run.py`,
+importable as ``run`` once this module is imported): its timing
+(`run.time_jitted`) and `write_record`, an experiment's results with the
+provenance the harness records (`run.metadata`: date, commit, versions,
+device, CPU count, load)."""
 
 from __future__ import annotations
 
@@ -9,12 +11,12 @@ import sys
 from pathlib import Path
 
 BENCHMARKS = Path(__file__).resolve().parents[1]
+if str(BENCHMARKS) not in sys.path:
+    sys.path.insert(0, str(BENCHMARKS))
 
 
 def write_record(path: str | Path, **results) -> None:
     """``{"meta": provenance, **results}`` as JSON at ``path``."""
-    if str(BENCHMARKS) not in sys.path:
-        sys.path.insert(0, str(BENCHMARKS))
     from run import metadata
 
     meta = {k: v for k, v in metadata(quick=False).items() if k != "quick"}  # no repeats here

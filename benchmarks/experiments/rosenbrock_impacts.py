@@ -32,8 +32,8 @@ import numpy as np  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
-from _record import write_record  # noqa: E402
-from rosenbrock_rig_cycle import timed  # noqa: E402
+from _record import write_record  # noqa: E402  (puts the harness on sys.path)
+from run import time_jitted  # noqa: E402
 
 SOLVERS = (("Tsit5", 1e-6), ("Rodas4", 1e-4), ("Rodas4", 1e-5), ("Rodas4", 1e-6))
 
@@ -78,13 +78,13 @@ def main(argv=None):
             ys = start.y_final
             ref = np.asarray(fn("Tsit5", 1e-10, law)(mech, ys, PERIOD).y_final)
             for name, tol in SOLVERS:
-                out, seconds = timed(fn(name, tol, law), mech, ys, PERIOD)
+                out, times = time_jitted(fn(name, tol, law), (mech, ys, PERIOD), repeats=3)
                 out.raise_if_failed(f"{name} {law} {c_mm} mm", mech)
                 y1 = np.asarray(out.y_final)
                 rows.append(dict(
                     law=law, clearance_mm=c_mm, solver=name, rtol=tol,
                     steps=int(out.num_steps), accepted=int(out.num_accepted_steps),
-                    s_per_cycle=seconds,
+                    s_per_cycle=times["run_s"],
                     err_state=float(np.abs(y1[:n] - ref[:n]).max() / np.abs(ref[:n]).max())))
                 print(rows[-1], flush=True)
     print()

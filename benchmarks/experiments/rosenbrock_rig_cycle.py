@@ -38,7 +38,8 @@ import numpy as np  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
-from _record import write_record  # noqa: E402
+from _record import write_record  # noqa: E402  (puts the harness on sys.path)
+from run import time_jitted  # noqa: E402
 
 
 def cycle_on(rtol, period, solver=None):
@@ -107,17 +108,6 @@ def evolution_errors(mech, ys, cycles=21_400.0, a=428.0):
     return out
 
 
-def timed(fn, *args):
-    """(fn(*args), median wall time of 3 runs after a compiling one)."""
-    out = jax.block_until_ready(fn(*args))
-    times = []
-    for _ in range(3):
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(fn(*args))
-        times.append(time.perf_counter() - t0)
-    return out, float(np.median(times))
-
-
 class RigCycleReference:
     """The rig after a warm-up cycle (Tsit5 at rtol 1e-8) and its next cycle
     on Tsit5 at rtol 1e-10, against which `row` measures a solver's cycle."""
@@ -142,10 +132,11 @@ class RigCycleReference:
     def row(self, name: str, rtol: float, solver=None) -> dict:
         """One cycle on ``solver`` (None: Tsit5) at rtol = atol = ``rtol``:
         steps, median time, errors."""
-        out, s = timed(cycle_on(rtol, self.period, solver), self.mech, self.ys, self.period)
+        out, times = time_jitted(cycle_on(rtol, self.period, solver),
+                                 (self.mech, self.ys, self.period), repeats=3)
         err_state, err_wear = self.errors(out.y_final)
         return dict(solver=name, rtol=rtol, steps=int(out.num_steps),
-                    accepted=int(out.num_accepted_steps), s_per_cycle=s,
+                    accepted=int(out.num_accepted_steps), s_per_cycle=times["run_s"],
                     err_state=err_state, err_wear=err_wear)
 
 
@@ -174,8 +165,7 @@ def main(argv=None):
              ("ROS34PW2, Jacobian every 20 steps", 1e-4, ROS34PW2(jacobian_every=20))]
     rows = [ref.row(name, rtol, solver) for name, rtol, solver in runs]
     print_rows(rows)
-    mech, ys = ref.mech, ref.ys
-    evolutions = evolution_errors(mech, ys)
+    evolutions = evolution_errors(ref.mech, ref.ys)
     print()
     print("| 21,400 cycles, A = 428 (50 wear cycles) | max depth [mm] | volume [mm^3] | "
           "depth vs reference | volume vs reference | s |")

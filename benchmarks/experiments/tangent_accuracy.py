@@ -20,7 +20,6 @@ Rodas4 at rtol 1e-7 (the reference tangent).
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -32,6 +31,8 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
+
+from _record import write_record  # noqa: E402
 
 CLEARANCE = 1  # index of the clearance in the rig's design parameters
 FD_STEPS = (1e-2, 1e-3)
@@ -95,7 +96,7 @@ def main(argv=None):
         print(f"| {r['quantity']} | {r['solver']} | {r['rtol']:g} | {r['tangent_vs_reference']:.2e}"
               f" | {r['fd_0.01_vs_reference']:.2e}, {r['fd_0.001_vs_reference']:.2e} |")
     if args.json:
-        Path(args.json).write_text(json.dumps({"jax": jax.__version__, "rows": rows}, indent=1))
+        write_record(args.json, rows=rows)
 
 
 if __name__ == "__main__":

@@ -48,14 +48,12 @@ class Frames:
         """A(phi) s: the body-frame vector ``s`` of body ``name`` in the global
         frame (written out, not a 2 x 2 matrix product: see `geometry.dot2`)."""
         r = self.row(name)
-        c, sn = self._cos[r], self._sin[r]
-        return jnp.stack([c * s[0] - sn * s[1], sn * s[0] + c * s[1]])
+        return self._cos[r] * s + self._sin[r] * perp(s)
 
     def to_body(self, name: str, v: Float[Array, "2"]) -> Float[Array, "2"]:
         """A(phi)^T v: the global vector ``v`` in the frame of body ``name``."""
         r = self.row(name)
-        c, sn = self._cos[r], self._sin[r]
-        return jnp.stack([c * v[0] + sn * v[1], c * v[1] - sn * v[0]])
+        return self._cos[r] * v - self._sin[r] * perp(v)
 
     def point(self, name: str, s: Float[Array, "2"]) -> Float[Array, "2"]:
         """Global position of the body-fixed point ``s`` (body frame)."""

@@ -47,9 +47,15 @@ def dot2(a: Float[Array | np.ndarray, "... 2"],
     return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
 
 
-def perp(v: Float[Array, "2"]) -> Float[Array, "2"]:
-    """k x v: the vector rotated by +90 degrees."""
-    return jnp.array([-v[1], v[0]])
+_PERP_SIGNS = np.array([-1.0, 1.0])
+
+
+def perp(v: Float[Array, "... 2"]) -> Float[Array, "... 2"]:
+    """k x v: the vector rotated by +90 degrees, (-v_y, v_x).  Written as a
+    reversal times signs, not a stack of the two entries: elementwise, so
+    XLA fuses it with its neighbours (a stack is a concatenation, on CPU
+    often a kernel of its own, and more so in batched derivatives)."""
+    return v[..., ::-1] * _PERP_SIGNS
 
 
 def cross(a: Float[Array, "2"], b: Float[Array, "2"]) -> Float[Array, ""]:

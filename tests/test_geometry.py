@@ -1,0 +1,79 @@
+"""The planar rotations and the saddle-point solve, written out elementwise
+for speed, against their textbook forms (a rotation matrix; the dense KKT
+system solved by NumPy)."""
+
+import os
+import subprocess
+import sys
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from diffwear.dynamics.equations import schur_solve
+from diffwear.mechanism.frames import Frames
+from diffwear.mechanism.geometry import perp
+
+jax.config.update("jax_enable_x64", True)
+
+
+def _rotation(phi):
+    c, s = np.cos(phi), np.sin(phi)
+    return np.array([[c, -s], [s, c]])
+
+
+def test_perp_is_a_quarter_turn_on_any_batch():
+    rng = np.random.default_rng(0)
+    v = rng.normal(size=(5, 3, 2))
+    want = v @ _rotation(np.pi / 2).T
+    np.testing.assert_allclose(np.asarray(perp(jnp.asarray(v))), want, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(np.asarray(perp(jnp.array([1.0, 2.0]))), [-2.0, 1.0])
+
+
+def test_frames_rotate_with_the_rotation_matrix():
+    rng = np.random.default_rng(1)
+    angles = np.array([0.3, -2.1, 4.0])
+    q = np.column_stack([rng.normal(size=3), rng.normal(size=3), angles]).reshape(-1)
+    frames = Frames({"a": 0, "b": 1, "c": 2}, jnp.ones(3), jnp.asarray(q), jnp.zeros(9))
+    s = rng.normal(size=2)
+    for name, phi in zip("abc", angles):
+        a = _rotation(phi)
+        np.testing.assert_allclose(np.asarray(frames.to_global(name, jnp.asarray(s))), a @ s,
+                                   rtol=0, atol=1e-15)
+        np.testing.assert_allclose(np.asarray(frames.to_body(name, jnp.asarray(s))), a.T @ s,
+                                   rtol=0, atol=1e-15)
+    # the ground's frame is the identity
+    np.testing.assert_array_equal(np.asarray(frames.to_global("ground", jnp.asarray(s))), s)
+
+
+def test_schur_solve_equals_the_dense_saddle_point_solve():
+    rng = np.random.default_rng(2)
+    m, n = 4, 9
+    jac = rng.normal(size=(m, n))
+    minv = 1.0 / rng.uniform(0.5, 3.0, size=n)
+    force, rhs = rng.normal(size=n), rng.normal(size=m)
+    kkt = np.block([[np.diag(1.0 / minv), jac.T], [jac, np.zeros((m, m))]])
+    want = np.linalg.solve(kkt, np.concatenate([force, rhs]))
+    qdd, lam = schur_solve(*(jnp.asarray(x) for x in (jac, minv, force, rhs)))
+    np.testing.assert_allclose(np.asarray(qdd), want[:n], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(np.asarray(lam), want[n:], rtol=1e-12, atol=1e-12)
+
+
+def test_presets_built_on_import_keep_float64_when_x64_comes_later():
+    """The ``diffwear`` command imports the package (and builds its presets)
+    before it switches on ``jax_enable_x64``; the presets must not have been
+    rounded to float32 on import."""
+    code = (
+        "import jax, numpy as np\n"
+        "import diffwear.presets as p, diffwear.contact as c\n"
+        "jax.config.update('jax_enable_x64', True)\n"
+        "leaves = jax.tree_util.tree_leaves((p.RIG_JOINT, p.WEAR_5000, c.STEEL, c.PTFE))\n"
+        "print(sorted({str(np.asarray(x).dtype) for x in leaves}))\n"
+        "print(repr(float(p.RIG_JOINT.clearance)))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=300, env={**os.environ, "JAX_ENABLE_X64": "0"})
+    assert out.returncode == 0, out.stderr
+    dtypes, clearance = out.stdout.split("\n")[:2]
+    assert dtypes == "['float64']"
+    assert float(clearance) == (9.533 - 9.500) * 1e-3  # Table 7-1, to the last bit

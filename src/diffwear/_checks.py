@@ -11,6 +11,7 @@ import math
 from typing import Any
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from .errors import InputError
@@ -21,6 +22,18 @@ def concrete(value: Any) -> np.ndarray | None:
     if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(value)):
         return None
     return np.asarray(value, dtype=float)
+
+
+def float_leaf(value: Any) -> np.ndarray | jax.Array:
+    """``value`` as a float64 parameter of a model.  A Python or NumPy number
+    stays a NumPy float64 array: an object built before the caller switches
+    on ``jax_enable_x64`` (a preset built on import, before the ``diffwear``
+    command switches it on) keeps its float64 values, where ``jnp.asarray``
+    would have rounded them to float32 for good.  Anything else (a JAX array,
+    a tracer) becomes a JAX array of JAX's float type."""
+    if isinstance(value, (int, float, np.ndarray, np.generic)) and not isinstance(value, bool):
+        return np.asarray(value, dtype=np.float64)
+    return jnp.asarray(value, dtype=float)
 
 
 def _numbers(what: str, value: Any) -> np.ndarray | None:

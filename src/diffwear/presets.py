@@ -21,6 +21,7 @@ import math
 import equinox as eqx
 import jax.numpy as jnp
 
+from ._checks import float_leaf
 from .mechanism import (
     Body,
     Driver,
@@ -194,7 +195,7 @@ class WearJointDesign(eqx.Module):
     restitution: jnp.ndarray
 
     def __init__(self, k, clearance, depth, diameter, wall, mu=0.13, restitution=0.8):
-        f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731
+        f = float_leaf
         self.k, self.clearance, self.depth = f(k), f(clearance), f(depth)
         self.diameter, self.wall, self.mu, self.restitution = (
             f(diameter), f(wall), f(mu), f(restitution))

@@ -6,7 +6,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .._checks import check_positive, check_range
+from .._checks import check_positive, check_range, float_leaf
 
 
 class Material(eqx.Module):
@@ -19,8 +19,8 @@ class Material(eqx.Module):
         check_positive(f"{name}: Young's modulus E [Pa]", youngs_modulus)
         check_range(f"{name}: Poisson ratio nu", poisson_ratio, -1.0, 0.5,
                     low_open=True, high_open=True)
-        self.youngs_modulus = jnp.asarray(youngs_modulus, dtype=float)
-        self.poisson_ratio = jnp.asarray(poisson_ratio, dtype=float)
+        self.youngs_modulus = float_leaf(youngs_modulus)
+        self.poisson_ratio = float_leaf(poisson_ratio)
 
     @property
     def compliance_h(self) -> Float[Array, ""]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from .._checks import check_positive, check_range, float_leaf
@@ -12,8 +13,8 @@ from .._checks import check_positive, check_range, float_leaf
 class Material(eqx.Module):
     """Isotropic linear-elastic material: Young's modulus E [Pa], Poisson's ratio nu."""
 
-    youngs_modulus: Float[Array, ""]
-    poisson_ratio: Float[Array, ""]
+    youngs_modulus: Float[Array | np.ndarray, ""]  # NumPy float64 when given numbers
+    poisson_ratio: Float[Array | np.ndarray, ""]
 
     def __init__(self, youngs_modulus, poisson_ratio, name: str = "material"):
         check_positive(f"{name}: Young's modulus E [Pa]", youngs_modulus)
@@ -23,13 +24,13 @@ class Material(eqx.Module):
         self.poisson_ratio = float_leaf(poisson_ratio)
 
     @property
-    def compliance_h(self) -> Float[Array, ""]:
+    def compliance_h(self) -> Float[Array | np.ndarray, ""]:
         """h = (1 - nu^2) / (pi E) [1/Pa] (thesis Eq. 3-4)."""
         nu = self.poisson_ratio
         return (1.0 - nu * nu) / (jnp.pi * self.youngs_modulus)
 
     @property
-    def foundation_modulus(self) -> Float[Array, ""]:
+    def foundation_modulus(self) -> Float[Array | np.ndarray, ""]:
         """E_W = (1 - nu) E / ((1 + nu)(1 - 2 nu)) [Pa]: the constrained (oedometric)
         modulus of a thin layer (thesis Eq. 6-3)."""
         nu = self.poisson_ratio

@@ -103,18 +103,12 @@ class DotRodas4(Rodas4):
 
 
 def _rig(n_theta=None):
-    """(mechanism, state after a warm-up cycle) of the rig study."""
-    from diffwear.studies import rig_21400
+    """(mechanism, state after a warm-up cycle) of the rig study, on its
+    bushing grid or on ``n_theta`` nodes."""
+    from diffwear.studies.rig_21400 import N_THETA, PERIOD, _setup
 
-    if n_theta is None:
-        _, mech, y0 = rig_21400._setup()
-    else:
-        saved, rig_21400.N_THETA = rig_21400.N_THETA, n_theta
-        try:
-            _, mech, y0 = rig_21400._setup()
-        finally:
-            rig_21400.N_THETA = saved
-    return mech, cycle_on(1e-6, rig_21400.PERIOD)(mech, y0, 0.0).y_final
+    _, mech, y0 = _setup(n_theta=N_THETA if n_theta is None else n_theta)
+    return mech, cycle_on(1e-6, PERIOD)(mech, y0, 0.0).y_final
 
 
 def linearisation_share(mech, ys, period, steps=400, rounds=11) -> dict:

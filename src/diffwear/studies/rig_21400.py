@@ -55,9 +55,9 @@ THESIS = {  # Tables 7-4..7-6
 }
 
 
-def _setup(p=TABLE_7_1, free_length=None):
+def _setup(p=TABLE_7_1, free_length=None, n_theta=N_THETA):
     mech0, q_guess = rig_slider_crank(p, free_length=free_length)
-    mech = with_wear_joint(mech0, RIG_JOINT, n_theta=N_THETA)
+    mech = with_wear_joint(mech0, RIG_JOINT, n_theta=n_theta)
     y0 = common.initial_state(mech0, q_guess, mech)
     return mech0, mech, y0
 

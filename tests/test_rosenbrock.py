@@ -201,6 +201,30 @@ def test_jacobian_states_anywhere_in_the_state():
         np.testing.assert_allclose(np.asarray(structured), np.asarray(dense), rtol=1e-13)
 
 
+@pytest.mark.parametrize("states", [(0, 1, 2, 3), (1, 3, 4, 5)], ids=["leading", "scattered"])
+def test_step_matrix_solve_is_the_dense_solve(states):
+    """x = W^-1 r with W = I / (h gamma) - J (J zero in the non-Jacobian
+    columns) equals NumPy's dense solve, on a stiff block that is a cyclic
+    permutation: zero on the diagonal, so elimination without row exchanges
+    breaks down at the first pivot."""
+    from diffwear.dynamics.rosenbrock import Linearisation
+
+    n, k, h = 6, len(states), 1e-3
+    solver = Rodas4(jacobian_states=states)
+    hg = h * solver.tableau.gamma
+    rng = np.random.default_rng(3)
+    jac = rng.normal(size=(n, n)) * 50.0
+    stiff = np.asarray(states)
+    jac[np.ix_(stiff, stiff)] = np.eye(k) / hg - np.roll(np.eye(k), 1, axis=1)
+    columns = np.vstack([np.zeros(n), jac[:, stiff].T])  # rows: f_t, then J's columns
+    lin = Linearisation(jnp.zeros(n), jnp.asarray(columns), jnp.zeros((), jnp.int32))
+    rhs = rng.normal(size=n)
+    x = solver._w_solve(lin, jnp.asarray(h), jnp.zeros(n))(jnp.asarray(rhs))
+    w = np.eye(n) / hg
+    w[:, stiff] -= jac[:, stiff]
+    np.testing.assert_allclose(np.asarray(x), np.linalg.solve(w, rhs), rtol=1e-12, atol=1e-15)
+
+
 def test_dense_output():
     """Between steps the Hermite cubic is third-order accurate, the chord
     (``dense_output=False``: no end-slope evaluation) only second; the step

@@ -290,12 +290,12 @@ class ElasticFoundation(AbstractContactLaw):
         load = p * area
         slip = dot2(t, kin.offset_rate) + kin.pin_radius * kin.omega
         f_t = -friction.factor(slip) * load
-        force = jnp.sum(f_t[:, None] * t - load[:, None] * u, axis=0)
-        torque = kin.pin_radius * jnp.sum(f_t)
+        # the four sums over the grid as one product with [t, u, 1]
+        sums = jnp.stack([f_t, load]) @ jnp.concatenate([t, u, jnp.ones_like(t[:, :1])], axis=1)
         return ContactResult(
-            force=force,
-            torque=torque,
-            normal_load=jnp.sum(load),
+            force=sums[0, :2] - sums[1, 2:4],
+            torque=kin.pin_radius * sums[0, 4],
+            normal_load=sums[1, 4],
             pressure=p,
             memory_rate=jnp.zeros(0),
         )

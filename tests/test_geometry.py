@@ -42,8 +42,36 @@ def test_frames_rotate_with_the_rotation_matrix():
                                    rtol=0, atol=1e-15)
         np.testing.assert_allclose(np.asarray(frames.to_body(name, jnp.asarray(s))), a.T @ s,
                                    rtol=0, atol=1e-15)
-    # the ground's frame is the identity
+    # the ground is the fixed frame: identity rotation, zero pose and velocity,
+    # and a force on it is no generalised force of the mechanism
     np.testing.assert_array_equal(np.asarray(frames.to_global("ground", jnp.asarray(s))), s)
+    np.testing.assert_array_equal(np.asarray(frames.to_body("ground", jnp.asarray(s))), s)
+    np.testing.assert_array_equal(np.asarray(frames.point("ground", jnp.asarray(s))), s)
+    np.testing.assert_array_equal(np.asarray(frames.point_velocity("ground", jnp.asarray(s))),
+                                  [0.0, 0.0])
+    np.testing.assert_array_equal(np.asarray(frames.pose("ground")), [0.0, 0.0, 0.0])
+    on_ground = frames.wrench("ground", jnp.array([3.0, -1.0]), at=jnp.asarray(s), torque=2.0)
+    np.testing.assert_array_equal(np.asarray(on_ground), np.zeros((3, 3)))
+
+
+def test_spring_to_the_ground_gives_the_hand_computed_wrench():
+    """A spring from a ground point to a point of body b: tension k (L - L0)
+    along the spring, on b's row only, with the moment r x F about b's COM."""
+    from diffwear.mechanism import LinearSpring
+
+    q = np.array([0.0, 0.0, 0.0, 0.4, 0.1, 0.7, 0.0, 0.0, 0.0])
+    frames = Frames({"a": 0, "b": 1, "c": 2}, jnp.ones(3), jnp.asarray(q), jnp.zeros(9))
+    k, free, anchor, s_b = 200.0, 0.1, np.array([-0.2, 0.3]), np.array([0.05, -0.02])
+    spring = LinearSpring("s", "ground", anchor, "b", s_b, stiffness=k, free_length=free)
+    got, _ = spring.forces(frames, jnp.zeros(0), 0.0)
+    point = q[3:5] + _rotation(q[5]) @ s_b
+    d = point - anchor
+    length = np.hypot(*d)
+    f_b = -k * (length - free) * d / length  # pulls b's point towards the anchor
+    arm = point - q[3:5]
+    want = np.zeros((3, 3))
+    want[1] = [f_b[0], f_b[1], arm[0] * f_b[1] - arm[1] * f_b[0]]
+    np.testing.assert_allclose(np.asarray(got), want, rtol=1e-12, atol=1e-12)
 
 
 def test_schur_solve_equals_the_dense_saddle_point_solve():

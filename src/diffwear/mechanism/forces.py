@@ -1,7 +1,7 @@
 """Applied-force elements: gravity and linear springs.
 
 A force element maps the state to generalised forces (one row of
-(Fx, Fy, moment about COM) per body, plus the ground row that `Frames` appends).
+(Fx, Fy, moment about COM) per body: a force on the ground is dropped).
 Elements may carry auxiliary ODE states (``n_aux``), e.g. the impact-velocity
 memory of a contact law or the wear accumulators of a clearance joint; their
 derivatives are returned next to the forces.
@@ -60,8 +60,8 @@ class AbstractForceElement(eqx.Module):
     @abc.abstractmethod
     def forces(
         self, frames: Frames, aux: Float[Array, " n_aux"], t: Float[Array, ""]
-    ) -> tuple[Float[Array, "nb1 3"], Float[Array, " n_aux"]]:
-        """(generalised forces incl. ground row, d aux / dt)."""
+    ) -> tuple[Float[Array, "nb 3"], Float[Array, " n_aux"]]:
+        """(generalised forces, one row per body; d aux / dt)."""
 
 
 class Gravity(AbstractForceElement):

@@ -196,7 +196,7 @@ class Mechanism(eqx.Module):
             total = total + qf
             daux.append(da)
         daux = jnp.concatenate(daux) if daux else jnp.zeros(0, dtype=q.dtype)
-        return total[:-1].reshape(-1), daux
+        return total.reshape(-1), daux
 
     def initial_aux(self, q, qd) -> Float[Array, " a"]:
         frames = self.frames(q, qd)

@@ -6,8 +6,9 @@ memory).  The wear accumulators of a clearance joint are integrals of the
 contact: they never feed back into the right-hand side within a cycle, so their
 Jacobian columns are exactly zero.  These solvers form the Jacobian only over
 the states that feed back (``jacobian_states``; `simulate` fills them in from
-`Mechanism.feedback_states`), which makes the step matrix one small LU (18 x 18
-on the three-body rig) plus a back-substitution for the other rows.
+`Mechanism.feedback_states`), which makes the step matrix one small QR
+factorisation (18 x 18 on the three-body rig) plus a back-substitution for
+the other rows.
 
 Methods, each with an embedded solution one order lower for the step
 controller:
@@ -472,8 +473,8 @@ def _held_tangents(solver, terms, args, t0, h, y0, lin, w_solve, dy0, t_args):
 class ROS3P(AbstractRosenbrock):
     """ROS3P (Lang and Verwer 2001): three stages, third order, A-stable, an
     exact Jacobian at every step.  Cost per step: one linearisation (the
-    vector field and len(jacobian_states) + 1 tangents, batched), one LU of
-    that size, two more evaluations and one at the step's end (dense output).
+    vector field and len(jacobian_states) + 1 tangents, batched), one QR factorisation
+    of that size, two more evaluations and one at the step's end (dense output).
     Derivatives (forward and reverse, diffrax's adjoints) are exact for the
     discrete solution: the step's rule solves the differentiated stage
     equations with the factorised step matrix."""
@@ -490,7 +491,7 @@ class ROS34PW2(AbstractRosenbrock):
     stiffly accurate, and a W-method: its order holds with any Jacobian, so a
     linearisation serves ``jacobian_every`` steps (1: fresh at every step).
     Between linearisations a step costs four evaluations of the vector field
-    and an LU of the Jacobian block; the step controller sees the price of a
+    and a QR factorisation of the Jacobian block; the step controller sees the price of a
     stale Jacobian as a smaller step."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
@@ -514,7 +515,7 @@ class Rodas4(AbstractRosenbrock):
     """RODAS4 (Hairer and Wanner, Solving ODEs II, Sec. VI.4): six stages,
     fourth order with a third-order embedded solution, L-stable and stiffly
     accurate, an exact Jacobian at every step.  A step costs one
-    linearisation, one LU and five more evaluations (six with dense output);
+    linearisation, one QR factorisation and five more evaluations (six with dense output);
     at the loose tolerances of a wear cycle it takes about a third of ROS3P's
     steps on the rig (the performance docs give the counts).  A step's
     derivative is exact for the discrete solution, as for `ROS3P`.  The

@@ -7,7 +7,7 @@ the 199 states); the 181 wear and contact states of the clearance joint never
 feed back within a cycle (their Jacobian columns are exactly zero, checked
 by tests/test_rosenbrock.py).  So the exact Jacobian is d f / d(q, qd), 18
 forward-mode tangents, and the step matrix (I / (h gamma) - J) factorises as
-one 18 x 18 QR factorisation plus a back-substitution for the wear rows.
+one 18 x 18 LU plus a back-substitution for the wear rows.
 
 Methods: `diffwear.dynamics.ROS3P` (Lang and Verwer 2001), `Rodas4`
 (Hairer and Wanner's RODAS, fourth order, L-stable) and the W-method

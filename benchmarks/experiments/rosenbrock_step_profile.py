@@ -4,16 +4,16 @@ cheaper variants of the solver's own work pay.
 Rodas4 takes ~210 steps a rig wear cycle at its preset rtol 1e-4 (the step is
 set by accuracy: `rosenbrock_rig_cycle.py`, `rosenbrock_higher_order.py`), so
 a faster cycle needs a cheaper step.  A step is one linearisation (the right-
-hand side and its 19 Jacobian columns), one QR of the 18 x 18 step matrix,
+hand side and its 19 Jacobian columns), one LU of the 18 x 18 step matrix,
 five more right-hand sides, six back-substitutions and the step controller.
 This measures:
 
 1. **The pieces of a step**: a fixed-step loop of 400 Rodas4 steps with a
    fresh linearisation at every step, against the same loop with the
    linearisation held at its first value (the step size varies by 1e-9 per
-   step, so XLA cannot hoist the QR out of the loop; the difference is the
+   step, so XLA cannot hoist the LU out of the loop; the difference is the
    linearisation), the held loop on a trivial right-hand side (the solver's
-   own work: QR, back-substitutions, combinations) and a loop of the
+   own work: LU, back-substitutions, combinations) and a loop of the
    right-hand side alone.
 2. **XLA kernels** of the compiled right-hand side and of the linearisation
    (fusions, library calls, dots, loops): at this size a kernel costs more in

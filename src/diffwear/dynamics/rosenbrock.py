@@ -6,9 +6,8 @@ memory).  The wear accumulators of a clearance joint are integrals of the
 contact: they never feed back into the right-hand side within a cycle, so their
 Jacobian columns are exactly zero.  These solvers form the Jacobian only over
 the states that feed back (``jacobian_states``; `simulate` fills them in from
-`Mechanism.feedback_states`), which makes the step matrix one small QR
-factorisation (18 x 18 on the three-body rig) plus a back-substitution for
-the other rows.
+`Mechanism.feedback_states`), which makes the step matrix one small LU (18 x 18
+on the three-body rig) plus a back-substitution for the other rows.
 
 Methods, each with an embedded solution one order lower for the step
 controller:
@@ -259,17 +258,12 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
         stiff, free = self._blocks(y0)
         jac = lin.columns[1:].T
         hg = h * self.tableau.gamma
-        # Householder QR, not a pivoted LU: on the CPU, JAX turns LU's pivots
-        # into a permutation with a loop of one iteration per row (18 on the
-        # rig, ~9 kernels each: a third of a step's kernels); QR has no
-        # pivots, is backward stable without them, and each solve is one
-        # product and one triangular solve instead of two.
-        q, r = jnp.linalg.qr(jnp.eye(jac.shape[1], dtype=y0.dtype) / hg - jac[stiff])
+        lu = jsl.lu_factor(jnp.eye(jac.shape[1], dtype=y0.dtype) / hg - jac[stiff])
         j_free = jac[free]
 
         def w_solve(rhs):
             # W = [[I/hg - J_ss, 0], [-J_fs, I/hg]] in (stiff, free) order
-            top = jsl.solve_triangular(r, _t_times(q, rhs[stiff]), lower=False)
+            top = jsl.lu_solve(lu, rhs[stiff])
             rest = hg * (rhs[free] + j_free @ top)
             if isinstance(stiff, slice):
                 return jnp.concatenate([top, rest])
@@ -363,11 +357,6 @@ def _weighted(weights, stacked):
     (a rig cycle on Rodas4 took 0.95-1.00 of the time with the sums; same
     values to the last bit; `benchmarks/experiments/rosenbrock_step_profile.py`)."""
     return jnp.sum(weights[:, None] * stacked, axis=0)
-
-
-def _t_times(a, x):
-    """a^T @ x for a small matrix, as an elementwise sum (fused, as `_weighted`)."""
-    return jnp.sum(a * x[:, None], axis=0)
 
 
 def _combine(coeffs, vectors, like):
@@ -473,8 +462,8 @@ def _held_tangents(solver, terms, args, t0, h, y0, lin, w_solve, dy0, t_args):
 class ROS3P(AbstractRosenbrock):
     """ROS3P (Lang and Verwer 2001): three stages, third order, A-stable, an
     exact Jacobian at every step.  Cost per step: one linearisation (the
-    vector field and len(jacobian_states) + 1 tangents, batched), one QR factorisation
-    of that size, two more evaluations and one at the step's end (dense output).
+    vector field and len(jacobian_states) + 1 tangents, batched), one LU of
+    that size, two more evaluations and one at the step's end (dense output).
     Derivatives (forward and reverse, diffrax's adjoints) are exact for the
     discrete solution: the step's rule solves the differentiated stage
     equations with the factorised step matrix."""
@@ -491,7 +480,7 @@ class ROS34PW2(AbstractRosenbrock):
     stiffly accurate, and a W-method: its order holds with any Jacobian, so a
     linearisation serves ``jacobian_every`` steps (1: fresh at every step).
     Between linearisations a step costs four evaluations of the vector field
-    and a QR factorisation of the Jacobian block; the step controller sees the price of a
+    and an LU of the Jacobian block; the step controller sees the price of a
     stale Jacobian as a smaller step."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
@@ -515,7 +504,7 @@ class Rodas4(AbstractRosenbrock):
     """RODAS4 (Hairer and Wanner, Solving ODEs II, Sec. VI.4): six stages,
     fourth order with a third-order embedded solution, L-stable and stiffly
     accurate, an exact Jacobian at every step.  A step costs one
-    linearisation, one QR factorisation and five more evaluations (six with dense output);
+    linearisation, one LU and five more evaluations (six with dense output);
     at the loose tolerances of a wear cycle it takes about a third of ROS3P's
     steps on the rig (the performance docs give the counts).  A step's
     derivative is exact for the discrete solution, as for `ROS3P`.  The

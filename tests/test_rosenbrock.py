@@ -109,6 +109,42 @@ def test_derivatives_keep_the_order_where_the_method_allows():
         _sensitivity_errors(Rodas4(differentiate_jacobian=False))))
 
 
+@pytest.mark.parametrize("solver", [Rodas4(sensitivity="ros2"), ROS34PW2(sensitivity="ros2")],
+                         ids=["Rodas4", "ROS34PW2"])
+def test_ros2_sensitivity_is_second_order_and_transposes(solver):
+    """The "ros2" tangents (the sensitivity equation stepped by ROS2 along
+    each step) are second order in the step, whatever the method; reverse
+    mode (the rule transposed) gives the same derivative as forward mode."""
+    assert all(1.7 < o < 2.4 for o in _orders(_sensitivity_errors(solver)))
+
+    def final(p, adjoint):
+        term = diffrax.ODETerm(lambda t, y, a: -a * y ** 2 + jnp.sin(t) * y[::-1])
+        return jnp.sum(_fixed(solver, term, 1.0, jnp.array([1.0, 0.5]), 24, args=p,
+                              adjoint=adjoint))
+
+    fwd = jax.jacfwd(lambda p: final(p, diffrax.ForwardMode()))(1.3)
+    rev = jax.grad(lambda p: final(p, None))(1.3)
+    assert float(rev) == pytest.approx(float(fwd), rel=1e-12)
+
+
+def test_ros2_sensitivity_damps_stiff_tangents():
+    """y' = lambda (y - p) with z = h lambda = -1e8: after one step y = p and
+    dy/dp = 1 - e^z = 1 to 1e-8.  ROS2 is L-stable, so its tangent is there
+    too.  ROS3P's own step is y1 = R(z) y0 + (1 - R(z)) p with R(-inf) =
+    1 - sqrt(3): its discrete derivative is sqrt(3), with the Jacobian
+    differentiated or held (a linear f has a constant one)."""
+    term = diffrax.ODETerm(lambda t, y, p: -1e8 * (y - p))
+
+    def tangent(solver):
+        return float(jax.jacfwd(lambda p: _fixed(solver, term, 1.0, jnp.zeros(1), 1, args=p,
+                                                 adjoint=diffrax.ForwardMode())[0])(0.5))
+
+    assert tangent(ROS3P(sensitivity="ros2")) == pytest.approx(1.0, abs=1e-7)
+    assert tangent(Rodas4(sensitivity="ros2")) == pytest.approx(1.0, abs=1e-7)
+    assert tangent(ROS3P()) == pytest.approx(math.sqrt(3.0), abs=1e-7)
+    assert tangent(ROS3P(differentiate_jacobian=False)) == pytest.approx(math.sqrt(3.0), abs=1e-7)
+
+
 @pytest.fixture(scope="module")
 def mechanisms():
     """(mechanism, state in contact) for the LN law (one memory state) and
@@ -451,6 +487,8 @@ def test_bad_settings_are_refused():
         ROS3P(jacobian_states=(0, 0))
     with pytest.raises(InputError, match="jacobian_every"):
         ROS34PW2(jacobian_every=0)
+    with pytest.raises(InputError, match="sensitivity must be one of 'discrete', 'ros2', got 'adjoint'"):
+        Rodas4(sensitivity="adjoint")
     with pytest.raises(InputError, match="outside the state"):
         ROS3P(jacobian_states=(5,)).step(diffrax.ODETerm(lambda t, y, a: -y), 0.0, 0.1,
                                          jnp.ones(2), None, None, False)

@@ -185,7 +185,8 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
     solution by ROS2 (second order with any Jacobian, L-stable), the step's
     linearisation in its step matrix: two evaluations of f with their
     tangents per step whatever the number of stages, the Jacobian never
-    differentiated (``differentiate_jacobian`` has no effect).  The tangents
+    differentiated (``differentiate_jacobian`` has no effect; a solver that
+    reuses a linearisation over several steps refuses it).  The tangents
     are then second order in the step and not error-controlled, like the
     held route's (first order); the performance docs give both on the rig.
     ``dense_output``: the cubic Hermite interpolant between steps (one more
@@ -549,6 +550,10 @@ class ROS34PW2(AbstractRosenbrock):
         if not (isinstance(self.jacobian_every, int) and self.jacobian_every >= 1):
             raise InputError(f"ROS34PW2: jacobian_every must be an integer >= 1, got "
                              f"{self.jacobian_every!r}")
+        if self.sensitivity == "ros2" and self.jacobian_every != 1:
+            raise InputError("ROS34PW2: sensitivity='ros2' takes its step matrix from each "
+                             "step's own linearisation, so it needs jacobian_every=1, got "
+                             f"{self.jacobian_every}")
 
     @property
     def reuse(self) -> int:

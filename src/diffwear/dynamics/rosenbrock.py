@@ -578,7 +578,7 @@ class Rodas4(AbstractRosenbrock):
     for ~3 forward runs per 4-parameter Jacobian instead of ~7.
     ``Rodas4(sensitivity="ros2")`` is the cheapest: two evaluations with
     tangents a step instead of six, second-order tangents, 6e-6 off the exact
-    ones there, for ~1.6 forward runs."""
+    ones there, for 1.6-2.0 forward runs."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
     jacobian_args: Callable[[Any], Any] | None = eqx.field(static=True, default=None)

@@ -188,7 +188,11 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
     differentiated (``differentiate_jacobian`` has no effect; a solver that
     reuses a linearisation over several steps refuses it).  The tangents
     are then second order in the step and not error-controlled, like the
-    held route's (first order); the performance docs give both on the rig.
+    held route's (first order).  For settled contact only: where a pin
+    impacts, steps that resolve the solution's stiff modes in part leave
+    second-order tangents tens of percent off (the performance docs give
+    the three routes on the rig and on an impacting slider-crank); check
+    with `diffwear.gradcheck`.
     ``dense_output``: the cubic Hermite interpolant between steps (one more
     evaluation per step); without it, the chord (`simulate` drops it when
     only the end state is saved: the end values are exact either way).
@@ -578,7 +582,8 @@ class Rodas4(AbstractRosenbrock):
     for ~3 forward runs per 4-parameter Jacobian instead of ~7.
     ``Rodas4(sensitivity="ros2")`` is the cheapest: two evaluations with
     tangents a step instead of six, second-order tangents, 6e-6 off the exact
-    ones there, for 1.6-2.0 forward runs."""
+    ones there, for 1.6-2.0 forward runs; on settled contact only (through
+    impacts they can be tens of percent off)."""
 
     jacobian_states: tuple[int, ...] | None = eqx.field(static=True, default=None)
     jacobian_args: Callable[[Any], Any] | None = eqx.field(static=True, default=None)

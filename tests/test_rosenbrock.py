@@ -531,7 +531,8 @@ def test_bad_settings_are_refused():
         ROS3P(jacobian_states=(0, 0))
     with pytest.raises(InputError, match="jacobian_every"):
         ROS34PW2(jacobian_every=0)
-    with pytest.raises(InputError, match="sensitivity must be one of 'discrete', 'ros2', got 'adjoint'"):
+    with pytest.raises(InputError,
+                       match="sensitivity must be one of 'discrete', 'ros2', got 'adjoint'"):
         Rodas4(sensitivity="adjoint")
     with pytest.raises(InputError, match="needs jacobian_every=1, got 5"):
         ROS34PW2(sensitivity="ros2", jacobian_every=5)

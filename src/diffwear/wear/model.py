@@ -54,9 +54,9 @@ class Dynamic(AbstractWearModel):
     ``cycle_solver``: its integrator (default Tsit5; ``Rodas4()`` with
     tolerances 1e-4 is several times faster, see
     `diffwear.wear.cycle.CYCLE_INTEGRATORS`; for derivatives on a stiff
-    contact use ``Rodas4()`` at 1e-6, or ``Rodas4(sensitivity="ros2")``
-    at a quarter of the cost: the tangents are not error-controlled, see
-    the guide "Which derivatives to trust");
+    contact use ``Rodas4()`` at 1e-6, or, while the pin stays in contact,
+    ``Rodas4(sensitivity="ros2")`` at a quarter of the cost: the tangents
+    are not error-controlled, see the guide "Which derivatives to trust");
     ``forward_mode``: differentiate with diffrax's `ForwardMode` (for
     `jax.jacfwd`) instead of checkpointed reverse mode; ``warmup_cycles``
     dynamic cycles run first with their wear discarded.

@@ -24,6 +24,7 @@ from jaxtyping import Array, Float
 
 from .._checks import check_positive
 from ..mechanism import Mechanism
+from .fused import t_times, times
 
 
 class Baumgarte(eqx.Module):
@@ -63,25 +64,12 @@ def accelerations(
 
 
 def _schur_solve(jac, minv, force, rhs):
-    # The small products (m, n <= a few dozen) as elementwise sums: XLA fuses
-    # them with their neighbours, where each ``@`` was a library call of its
-    # own (on the rig the right-hand side went from 42 to 37 kernels, its
-    # Jacobian from 110 to 96; the performance docs give the times).
+    # the small products (m, n <= a few dozen) as elementwise sums (`fused`)
     jm = jac * minv
     factor = jax.scipy.linalg.cho_factor(jnp.sum(jm[:, None, :] * jac[None, :, :], axis=-1))
-    lam = jax.scipy.linalg.cho_solve(factor, _times(jm, force) - rhs)
-    qdd = minv * (force - _t_times(jac, lam))
+    lam = jax.scipy.linalg.cho_solve(factor, times(jm, force) - rhs)
+    qdd = minv * (force - t_times(jac, lam))
     return qdd, lam, factor
-
-
-def _times(a, x):
-    """a @ x for a small matrix and a vector, as an elementwise sum."""
-    return jnp.sum(a * x, axis=-1)
-
-
-def _t_times(a, x):
-    """a^T @ x, likewise."""
-    return jnp.sum(a * x[:, None], axis=0)
 
 
 @jax.custom_jvp
@@ -110,10 +98,10 @@ def _schur_solve_jvp(primals, tangents):
     jac, minv, force, rhs = primals
     djac, dminv, dforce, drhs = (_tangent(t, p) for t, p in zip(tangents, primals))
     qdd, lam, factor = _schur_solve(jac, minv, force, rhs)
-    g = force - _t_times(jac, lam)
-    a = dminv * g + minv * (dforce - _t_times(djac, lam))
-    dlam = jax.scipy.linalg.cho_solve(factor, _times(djac, qdd) + _times(jac, a) - drhs)
-    dqdd = a - minv * _t_times(jac, dlam)
+    g = force - t_times(jac, lam)
+    a = dminv * g + minv * (dforce - t_times(djac, lam))
+    dlam = jax.scipy.linalg.cho_solve(factor, times(djac, qdd) + times(jac, a) - drhs)
+    dqdd = a - minv * t_times(jac, dlam)
     return (qdd, lam), (dqdd, dlam)
 
 

@@ -46,6 +46,7 @@ import jax.scipy.linalg as jsl
 import numpy as np
 
 from ..errors import InputError
+from .fused import t_times
 
 
 class RosenbrockTableau(NamedTuple):
@@ -317,8 +318,8 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
         f_t = lin.columns[0]
 
         def stage(us, i):
-            f_stage = terms.vf(t0 + co.alpha[i] * h, y0 + _weighted(co.a[i], us), args)
-            u = w_solve(f_stage + _weighted(co.c[i], us) / h + co.gammas[i] * h * f_t)
+            f_stage = terms.vf(t0 + co.alpha[i] * h, y0 + t_times(us, co.a[i]), args)
+            u = w_solve(f_stage + t_times(us, co.c[i]) / h + co.gammas[i] * h * f_t)
             return us.at[i].set(u), None
 
         # stage 0 evaluates f at (t0, y0): the linearisation's f0
@@ -373,15 +374,7 @@ class _Coefficients(NamedTuple):
 
     def solution(self, y0, us):
         """(y1, error estimate) from the stacked stage increments."""
-        return y0 + _weighted(self.m, us), _weighted(self.error_weights, us)
-
-
-def _weighted(weights, stacked):
-    """sum_i weights[i] stacked[i] as an elementwise sum: XLA fuses it with
-    its neighbours, where ``weights @ stacked`` is a library call of its own
-    (a rig cycle on Rodas4 took 0.95-1.00 of the time with the sums; same
-    values to the last bit; `benchmarks/experiments/rosenbrock_step_profile.py`)."""
-    return jnp.sum(weights[:, None] * stacked, axis=0)
+        return y0 + t_times(us, self.m), t_times(us, self.error_weights)
 
 
 def _combine(coeffs, vectors, like):

@@ -145,6 +145,21 @@ def test_ros2_sensitivity_damps_stiff_tangents():
     assert tangent(ROS3P(differentiate_jacobian=False)) == pytest.approx(math.sqrt(3.0), abs=1e-7)
 
 
+@pytest.mark.parametrize("solver", [Rodas4(), Rodas4(differentiate_jacobian=False),
+                                    Rodas4(sensitivity="ros2")], ids=["exact", "held", "ros2"])
+def test_tangents_of_a_vector_field_that_reads_neither_state_nor_args(solver):
+    """y' = cos t: y(1) = y(0) + sin 1, so dy(1)/dy(0) = 1 and dy(1)/dp = 0
+    on every derivative route (autodiff gives no tangent for f there)."""
+    term = diffrax.ODETerm(lambda t, y, p: jnp.cos(t) * jnp.ones_like(y))
+
+    def final(y0, p):
+        return _fixed(solver, term, 1.0, y0, 4, args=p, adjoint=diffrax.ForwardMode())[0]
+
+    d_y0, d_p = jax.jacfwd(final, argnums=(0, 1))(jnp.zeros(1), 0.5)
+    assert float(d_y0[0]) == pytest.approx(1.0, abs=1e-14)
+    assert float(d_p) == 0.0
+
+
 @pytest.fixture(scope="module")
 def mechanisms():
     """(mechanism, state in contact) for the LN law (one memory state) and

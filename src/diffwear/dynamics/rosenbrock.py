@@ -420,6 +420,19 @@ def _fresh_step_jvp(primals, tangents):
     return (*co.solution(y0, jnp.stack(us)), lin.f0), (*co.solution(dy0, jnp.stack(dus)), df0)
 
 
+def _jvp(fn, primals, tangents):
+    """`eqx.filter_jvp`, with the output's tangent as zeros where it depends on
+    none of the tangents' inputs (filter_jvp gives None there: a vector field
+    that reads neither the state nor the args, or a linear one's Jacobian)."""
+    out, t_out = eqx.filter_jvp(fn, primals, tangents)
+    return out, jnp.zeros_like(out) if t_out is None else t_out
+
+
+def _vf_jvp(terms, t, y, args, dy, t_args):
+    """(f(t, y), its tangent along (dy, t_args))."""
+    return _jvp(lambda z, a: terms.vf(t, z, a), (y, args), (dy, t_args))
+
+
 def _exact_tangents(solver, terms, args, t0, h, y0, lin, w_solve, dy0, t_args):
     """(stage increments u_i, their tangents, d f(t0, y0)).  The stages
     first, each linearised: d/de [f_t, J u_1 .. J u_s] at (y0 + e dy0,
@@ -451,9 +464,7 @@ def _exact_tangents(solver, terms, args, t0, h, y0, lin, w_solve, dy0, t_args):
         return jax.vmap(lambda dt, dz: jax.jvp(lambda s, x: terms.vf(s, x, a), (t0, z),
                                                (dt, dz))[1])(inner_t, inner_y)
 
-    d_lin = eqx.filter_jvp(directional, (y0, args), (dy0, t_args))[1]  # [d f_t, (dJ) u_1, ..]
-    if d_lin is None:  # J and f_t do not depend on the state or the args (a linear f)
-        d_lin = jnp.zeros_like(inner_y)
+    d_lin = _jvp(directional, (y0, args), (dy0, t_args))[1]  # [d f_t, (dJ) u_1, ..]
     dus: list[jax.Array] = []
     for i in range(len(tab.m)):
         df_stage = f_lins[i](dy0 + _combine(tab.a[i], dus, y0), d_args_tangent)
@@ -472,9 +483,8 @@ def _held_tangents(solver, terms, args, t0, h, y0, lin, w_solve, dy0, t_args):
     us: list[jax.Array] = []
     dus: list[jax.Array] = []
     for i in range(len(tab.m)):
-        f_stage, df_stage = eqx.filter_jvp(
-            lambda z, a, t=t0 + tab.alpha[i] * h: terms.vf(t, z, a),
-            (y0 + _combine(tab.a[i], us, y0), args), (dy0 + _combine(tab.a[i], dus, y0), t_args))
+        f_stage, df_stage = _vf_jvp(terms, t0 + tab.alpha[i] * h, y0 + _combine(tab.a[i], us, y0),
+                                    args, dy0 + _combine(tab.a[i], dus, y0), t_args)
         us.append(w_solve(solver._stage_rhs(i, lin.f0 if i == 0 else f_stage, us, h,
                                             lin.columns[0])))
         dus.append(w_solve(solver._stage_rhs(i, df_stage, dus, h, 0.0)))
@@ -498,15 +508,11 @@ def _ros2_tangent(solver, terms, args, t0, h, y0, y1, lin, dy0, t_args):
     step, whatever the method's number of stages."""
     gamma = _ROS2_GAMMA
     w_solve = solver._w_solve(lin, h, y0, gamma)  # W = I / (h gamma) - J
-
-    def slope(t, y, dy):
-        return eqx.filter_jvp(lambda z, a: terms.vf(t, z, a), (y, args), (dy, t_args))[1]
-
     # increments K_i = h k_i of (I - gamma h J) k_1 = F(t0, S0),
     # (I - gamma h J) k_2 = F(t0 + h, S0 + h k_1) - 2 k_1, S1 = S0 + 3/2 K_1 + 1/2 K_2
-    df0 = slope(t0, y0, dy0)
+    df0 = _vf_jvp(terms, t0, y0, args, dy0, t_args)[1]
     k1 = w_solve(df0) / gamma
-    k2 = w_solve(slope(t0 + h, y1, dy0 + k1) - 2.0 * k1 / h) / gamma
+    k2 = w_solve(_vf_jvp(terms, t0 + h, y1, args, dy0 + k1, t_args)[1] - 2.0 * k1 / h) / gamma
     return dy0 + 1.5 * k1 + 0.5 * k2, df0
 
 

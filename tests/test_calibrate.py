@@ -402,3 +402,160 @@ def test_mechanism_file_parameters_map_exactly_onto_the_model(tmp_path):
     assert float(law.stiffness) == pytest.approx(k0 / 2, rel=1e-9)
     with pytest.raises(InputError, match="no \\[\\[bodies\\]\\] named 'rodd'"):
         FileParameterMap.build(doc, ["bodies.rodd.mass"], "rig.toml", study)
+
+
+# --------------------------------------------------------------- discrepancy
+def test_discrepancy_bases_closed_forms():
+    """The angle basis carries a lobed k exactly; the cycle basis is Legendre's;
+    zero coefficients are a factor of exactly 1."""
+    from diffwear.calibrate import discrepancy as disc
+
+    theta = np.linspace(0.0, 2 * np.pi, 37)
+    c = np.zeros(disc.SIZE)
+    m, a, peak = 3, 0.6, math.radians(23.0)
+    c[disc.SLICES["angle"]][2 * (m - 1)] = a * math.cos(m * peak)
+    c[disc.SLICES["angle"]][2 * (m - 1) + 1] = a * math.sin(m * peak)
+    np.testing.assert_allclose(np.asarray(disc.factor(jnp.asarray(c), "angle", theta)),
+                               1 + a * np.cos(m * (theta - peak)), rtol=1e-13)
+    phi = np.asarray(disc.basis("cycles", jnp.array([0.0, 500.0, 1000.0]), 1000.0))
+    np.testing.assert_allclose(phi, [[-1, 1, -1], [0, -0.5, 0], [1, 1, 1]], atol=1e-15)
+    # log-scaled pressure: xi = tanh(1) one decade above 1 MPa; xi = -1 at zero pressure
+    phi = np.asarray(disc.basis("pressure", jnp.array([1e7, 0.0])))
+    np.testing.assert_allclose(phi[0], np.tanh(1.0) ** np.arange(1, 4), rtol=1e-13)
+    np.testing.assert_allclose(phi[1], [-1.0, 1.0, -1.0])
+    for v in disc.VARIABLES:
+        x = jnp.linspace(0.0, 1.0, 5)
+        assert np.all(np.asarray(disc.factor(jnp.zeros(disc.SIZE), v, x, 2.0)) == 1.0)
+
+
+def test_discrepancy_is_described_by_its_shape():
+    from diffwear.calibrate import discrepancy as disc
+    from diffwear.calibrate.learned import describe
+
+    c = np.zeros(disc.SIZES["angle"])
+    c[4], c[5] = 0.6 * math.cos(3 * math.radians(23)), 0.6 * math.sin(3 * math.radians(23))
+    d = describe("angle", c, np.eye(c.size) * 1e-4, None)
+    assert d["lobes"] == 3
+    np.testing.assert_allclose(d["peaks_deg"], [23, 143, 263], atol=1.0)
+    assert d["amplitude"] == pytest.approx(0.6, rel=1e-3)
+    assert d["shape"] == "3 lobes, peaks at 23, 143 and 263 deg, amplitude +-60 %"
+    data = SimpleNamespace(max_cycles=1000.0, series=[])
+    d = describe("cycles", np.array([0.3, 0.0, 0.0]), np.eye(3) * 1e-4, data)
+    assert d["shape"] == "rises from -30 % at 0 cycles to +30 % at 1e+03 cycles"
+
+
+def test_detection_limit_is_three_sigma_of_the_joint_least_squares():
+    """On a linear model the detection limit is 3 x the strength's standard
+    deviation in the joint least-squares fit (the efficient information)."""
+    from diffwear.calibrate.scores import detection_limits
+
+    rng = np.random.default_rng(1)
+    n = 80
+    jb = rng.normal(size=(n, 2))
+    je = rng.normal(size=(n, len(EFFECTS)))
+    r = rng.normal(size=n)
+    fitter = SimpleNamespace(
+        problem=SimpleNamespace(holdout=np.zeros(n, bool)),
+        parameter_jacobian=lambda x, names=(): (jb, np.zeros((n, 0)), r),
+        effect_jacobian=lambda x, log_shape: je)
+    base = FitResult(None, {}, {}, 0.0, 0.0, float(r @ r), n, 0.0, 0, r, r, 0, 0.0,
+                     notes={"x": [0.0, 0.0]})
+    limits = detection_limits(score_tests(fitter, base, np.full(n, "profile")))
+    for k, eff in enumerate(EFFECTS):
+        a = np.column_stack([jb, je[:, k]])
+        std = math.sqrt(np.linalg.inv(a.T @ a)[-1, -1])
+        assert limits[eff.name]["strength"] == pytest.approx(3 * std, rel=1e-9)
+
+
+@pytest.mark.slow
+def test_refit_recovers_two_effects_and_an_angle_discrepancy(small_dataset):
+    """Data made by the model at a known truth with two effects and a
+    two-lobed k: the joint fit returns both strengths, and the discrepancy fit
+    returns the lobes (its prior shrinks them by well under a per cent)."""
+    import dataclasses
+
+    from diffwear.calibrate import discrepancy as disc
+
+    data = load_dataset(small_dataset)
+    p = Problem.from_dataset(data, SMALL)
+    truth = EffectValues.of(run_in=2.0, run_in_cycles=300.0, pressure_exponent=0.5)
+    y = np.asarray(jax.jit(p.predict)(np.zeros(p.n_base), truth))
+    f = Fitter(dataclasses.replace(p, y=y))
+    res = f.fit(("run_in", "pressure_exponent"), s0={"run_in": 1.0})
+    assert res.strengths["run_in"] == pytest.approx(2.0, rel=0.03)
+    assert res.strengths["pressure_exponent"] == pytest.approx(0.5, rel=0.03)
+    assert res.shapes["run_in"] == pytest.approx(300.0, rel=0.05)
+    coef = np.zeros(disc.SIZES["angle"])
+    coef[2], coef[3] = 0.3, -0.2
+    y = np.asarray(jax.jit(p.predict)(np.zeros(p.n_base),
+                                      EffectValues.zero().with_discrepancy("angle", coef)))
+    res = Fitter(dataclasses.replace(p, y=y)).fit(None, discrepancy="angle")
+    np.testing.assert_allclose(res.discrepancy_coefficients, coef, atol=0.01)
+    assert res.chi2_fit < 0.1
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["--discrepancy", "temperature"], "temperature"),
+    (["--discrepancy", "angle"], "profiles over the bushing angle"),
+])
+def test_calibrate_cli_refuses_a_discrepancy_the_data_cannot_show(args, fragment, tmp_path,
+                                                                  capsys):
+    out = tmp_path / "out"
+    rc = main(["calibrate", str(SHIPPED / "thesis_rig"), "--out", str(out), *args])
+    assert rc == 2
+    assert fragment in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_calibrate_cli_refuses_a_campaign_too_short_to_fit(tmp_path, capsys):
+    import shutil
+
+    folder = tmp_path / "short"
+    shutil.copytree(SHIPPED / "thesis_rig", folder)
+    text = (folder / "dataset.toml").read_text()
+    text = text[:text.index('[[series]]\nkind = "max_depth"')]
+    (folder / "dataset.toml").write_text(text)
+    (folder / "max_depth.csv").unlink()
+    out = tmp_path / "out"
+    assert main(["calibrate", str(folder), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "1 fit point(s) for 1 fitted parameter(s)" in err and "too few" in err
+    assert not out.exists()
+
+
+@pytest.mark.long  # each campaign takes one to three minutes
+@pytest.mark.parametrize("name", ["campaign_pressure_exponent", "campaign_run_in_and_pressure",
+                                  "campaign_run_in_weak_pressure", "campaign_two_lobe_k",
+                                  "campaign_three_lobe_k", "campaign_hidden_film"])
+def test_calibration_names_what_the_data_show(name, tmp_path):
+    """The campaigns of several effects, of an effect below its detection
+    limit, of an angle-dependent k and of an effect these inspections cannot
+    show (truth recorded only in the generator, `EXPECT`)."""
+    make = _make_datasets()
+    effects, *_ = make.DATASETS[name]
+    expect = make.EXPECT.get(name, {"effects": (NAMES[int(np.argmax(
+        np.abs(np.asarray(effects.strength))))],)})
+    out = tmp_path / "out"
+    assert main(["calibrate", str(SHIPPED / name), "--out", str(out), "--quiet"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    named = [e["name"] for e in s["effects_identified"]]
+    assert sorted(named) == sorted(expect["effects"]), s["effects_identified"]
+    assert s["effect_identified"] == (named[0] if named else "none")
+    for e in s["effects_identified"]:
+        truth = float(effects[e["name"]])
+        form = e.get("identified_form")
+        if form is None:  # the strength is what is reported: within 2 sigma
+            assert abs(e["strength"] - truth) <= 2 * e["strength_std"], e
+    for e in expect.get("below_limit", ()):
+        assert s["detection_limits"][e]["strength"] > float(effects[e])
+    assert set(s["detection_limits"]) == set(NAMES) - set(named)
+    if "discrepancy" in expect:
+        variable, lobes, peaks = expect["discrepancy"]
+        d = s["discrepancy"]
+        assert d["variable"] == variable and d["lobes"] == lobes
+        for want, got in zip(peaks, d["peaks_deg"]):
+            assert abs((got - want + 180) % 360 - 180) < 10.0
+        assert d["heldout_rmse_after"] < 1.3 < d["heldout_rmse_before"]
+        assert (out / "discrepancy.png").is_file()
+    else:
+        assert s["discrepancy"] is None or s["discrepancy"]["variable"] is None

@@ -38,6 +38,7 @@ jax.config.update("jax_enable_x64", True)
 from diffwear.calibrate.effects import EffectValues  # noqa: E402
 from diffwear.calibrate.fit import ModelSettings  # noqa: E402
 from diffwear.calibrate.model import rig_defaults  # noqa: E402
+from diffwear.calibrate.discrepancy import SIZES  # noqa: E402
 from diffwear.calibrate.synthetic import CAMPAIGN_21400, Plan, synthesize  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -45,6 +46,18 @@ _D = rig_defaults()
 TRUTH = {"k": 1.2 * _D["k"], "free_length": _D["free_length"] + 0.010}
 SHORT = ModelSettings(model="dynamic", dynamic_cycles=80)
 LONG = ModelSettings(model="dynamic", dynamic_cycles=214)
+
+
+def lobed_k(lobes: int, peak_deg: float, amplitude: float = 0.6) -> EffectValues:
+    """Outside the library: a wear coefficient that varies with the bushing
+    angle, k (1 + a cos(m (theta - theta_peak))) (``lobes`` = m peaks, e.g. an
+    anisotropic fibre lay or the seam of a wrapped bushing), written in the
+    learned discrepancy's angle basis (cos / sin of order m)."""
+    c = np.zeros(SIZES["angle"])
+    phase = lobes * np.radians(peak_deg)
+    c[2 * (lobes - 1)] = amplitude * np.cos(phase)
+    c[2 * (lobes - 1) + 1] = amplitude * np.sin(phase)
+    return EffectValues.zero().with_discrepancy("angle", c)
 
 
 def oval_bore(theta, cycles, amplitude=4e-6, angle=0.3):
@@ -86,6 +99,41 @@ DATASETS = {
     "campaign_long_crank": (None, CAMPAIGN_21400, LONG,
                             {**TRUTH, "crank_length": 1.5 * _D["crank_length"]}, None, 24,
                             "21,400-cycle rig campaign J (synthetic)"),
+    # a pressure-dependent wear law (wear ~ p^2); run-in is the tempting
+    # alternative (an early excess of wear also steepens the first inspections)
+    "campaign_pressure_exponent": (EffectValues.of(pressure_exponent=1.0), CAMPAIGN_21400, LONG,
+                                   TRUTH, None, 25, "21,400-cycle rig campaign K (synthetic)"),
+    # two effects at once, each strong enough for these inspections
+    "campaign_run_in_and_pressure": (
+        EffectValues.of(run_in=2.5, run_in_cycles=2000.0, pressure_exponent=0.6),
+        CAMPAIGN_21400, LONG, TRUTH, None, 26, "21,400-cycle rig campaign L (synthetic)"),
+    # the same run-in with a pressure exponent below what these data can detect
+    "campaign_run_in_weak_pressure": (
+        EffectValues.of(run_in=2.5, run_in_cycles=2000.0, pressure_exponent=0.02),
+        CAMPAIGN_21400, LONG, TRUTH, None, 27, "21,400-cycle rig campaign M (synthetic)"),
+    # outside the library: k varies with the bushing angle (two and three lobes)
+    "campaign_two_lobe_k": (lobed_k(2, 40.0), CAMPAIGN_21400, LONG, TRUTH, None, 28,
+                            "21,400-cycle rig campaign N (synthetic)"),
+    "campaign_three_lobe_k": (lobed_k(3, 23.0), CAMPAIGN_21400, LONG, TRUTH, None, 29,
+                              "21,400-cycle rig campaign O (synthetic)"),
+    # a transfer film formed within the first 0.2 um of wear: a lower k from the
+    # start, which these inspections cannot tell from k itself
+    "campaign_hidden_film": (EffectValues.of(transfer_film=0.3, film_depth=2e-7), CAMPAIGN_21400,
+                             LONG, TRUTH, None, 31, "21,400-cycle rig campaign P (synthetic)"),
+}
+
+# What the calibration must answer on each campaign whose answer is not the
+# single strongest effect of its truth (tests/test_calibrate.py, long):
+# "effects": the effects to be named; "below_limit": effects present but
+# below what these data detect (named nowhere, their detection limit above
+# the truth); "discrepancy": the learned discrepancy's variable and lobes.
+EXPECT = {
+    "campaign_run_in_and_pressure": {"effects": ("run_in", "pressure_exponent")},
+    "campaign_run_in_weak_pressure": {"effects": ("run_in",),
+                                      "below_limit": ("pressure_exponent",)},
+    "campaign_two_lobe_k": {"effects": (), "discrepancy": ("angle", 2, (40.0, 220.0))},
+    "campaign_three_lobe_k": {"effects": (), "discrepancy": ("angle", 3, (23.0, 143.0, 263.0))},
+    "campaign_hidden_film": {"effects": (), "below_limit": ()},
 }
 
 

@@ -54,6 +54,7 @@ from jaxtyping import Array, Float
 
 from ..contact import smoothing
 from ..contact.archard import ArchardWear
+from . import discrepancy as _discrepancy
 
 # Run-in length: PTFE surfaces run in over the first ~10^2-10^3 cycles
 # (Blanchet & Kennedy, Wear 153 (1992) 229); 500 cycles sits in that range and
@@ -129,16 +130,30 @@ SHAPED = tuple(e.shape is not None for e in EFFECTS)
 
 
 class EffectValues(eqx.Module):
-    """Strength of every effect (`NAMES` order; zeros: the base model) and the
+    """Strength of every effect (`NAMES` order; zeros: the base model), the
     logarithm of each shape over its default (zeros: the defaults; ignored
-    for effects without a shape)."""
+    for effects without a shape) and the coefficients of the learned
+    discrepancy of k (`discrepancy`; zeros: none)."""
 
     strength: Float[Array, " E"]
     log_shape: Float[Array, " E"]
+    discrepancy: Float[Array, " D"]
+
+    def __init__(self, strength, log_shape, discrepancy=None):
+        self.strength = jnp.asarray(strength, dtype=float)
+        self.log_shape = jnp.asarray(log_shape, dtype=float)
+        self.discrepancy = (jnp.zeros(_discrepancy.SIZE) if discrepancy is None
+                            else jnp.asarray(discrepancy, dtype=float))
 
     @classmethod
     def zero(cls) -> "EffectValues":
         return cls(jnp.zeros(len(NAMES)), jnp.zeros(len(NAMES)))
+
+    def with_discrepancy(self, variable: str, coefficients) -> "EffectValues":
+        """These values with ``variable``'s discrepancy coefficients set."""
+        d = self.discrepancy.at[_discrepancy.SLICES[variable]].set(
+            jnp.asarray(coefficients, dtype=float))
+        return EffectValues(self.strength, self.log_shape, d)
 
     @classmethod
     def of(cls, **strengths) -> "EffectValues":
@@ -175,12 +190,15 @@ class ModifiedArchardWear(ArchardWear):
     exponent: jnp.ndarray
     pv_strength: jnp.ndarray
     pv_threshold: jnp.ndarray
+    discrepancy: jnp.ndarray | None
 
-    def __init__(self, coefficient, exponent=0.0, pv_strength=0.0, pv_threshold=PV_THRESHOLD):
+    def __init__(self, coefficient, exponent=0.0, pv_strength=0.0, pv_threshold=PV_THRESHOLD,
+                 discrepancy=None):
         super().__init__(coefficient)
         self.exponent = jnp.asarray(exponent, dtype=float)
         self.pv_strength = jnp.asarray(pv_strength, dtype=float)
         self.pv_threshold = jnp.asarray(pv_threshold, dtype=float)
+        self.discrepancy = None if discrepancy is None else jnp.asarray(discrepancy, dtype=float)
 
     def depth_rate(self, pressure, sliding_rate):
         base = self.coefficient * pressure * sliding_rate
@@ -189,12 +207,18 @@ class ModifiedArchardWear(ArchardWear):
         power = jnp.where(loaded, jnp.exp(self.exponent * jnp.log(safe / P_REF)), 1.0)
         excess = smoothing.ramp(pressure * sliding_rate - self.pv_threshold, PV_BAND)
         pv = 1.0 + self.pv_strength * excess / PV_REF
-        return base * power * pv
+        rate = base * power * pv
+        if self.discrepancy is None:
+            return rate
+        # the learned discrepancy's pressure and sliding-speed factors (exactly
+        # 1.0 at zero coefficients)
+        return (rate * _discrepancy.factor(self.discrepancy, "pressure", pressure)
+                * _discrepancy.factor(self.discrepancy, "sliding_speed", jnp.abs(sliding_rate)))
 
 
 def wear_law(k, effects: EffectValues) -> ModifiedArchardWear:
     return ModifiedArchardWear(k, effects["pressure_exponent"], effects["pv_wear"],
-                               effects.shape("pv_wear"))
+                               effects.shape("pv_wear"), effects.discrepancy)
 
 
 def run_in_factor(strength, n_start, span, cycles=RUN_IN_CYCLES):
@@ -204,13 +228,23 @@ def run_in_factor(strength, n_start, span, cycles=RUN_IN_CYCLES):
     return 1.0 + strength * mean_decay
 
 
-def rate_factor(effects: EffectValues, depth, volume, n_start, span):
+def rate_factor(effects: EffectValues, depth, volume, n_start, span, theta=None,
+                total_cycles: float = 1.0):
     """Multiplier of the wear rate per profile node over the real cycles
     [n_start, n_start + span] at wear ``depth`` [m] (n,) and worn volume
-    ``volume`` [m^3] (module notes)."""
+    ``volume`` [m^3] (module notes); with the node angles ``theta`` (n,) and
+    the campaign's length ``total_cycles``, the learned discrepancy's angle,
+    cycle-count (at the span's middle) and depth factors as well."""
     run_in = run_in_factor(effects["run_in"], n_start, span, effects.shape("run_in"))
     film = 1.0 - effects["transfer_film"] * (
         1.0 - jnp.exp(-depth / effects.shape("transfer_film")))
     debris = 1.0 + effects["third_body"] * (
         1.0 - jnp.exp(-volume / effects.shape("third_body")))
-    return run_in * debris * film
+    g = run_in * debris * film
+    if theta is None:
+        return g
+    d = effects.discrepancy
+    middle = n_start + 0.5 * span
+    return (g * _discrepancy.factor(d, "angle", theta)
+            * _discrepancy.factor(d, "cycles", middle, total_cycles)
+            * _discrepancy.factor(d, "depth", depth))

@@ -37,6 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import InputError, SolverError
+from . import discrepancy as disc
 from .dataset import Dataset
 from .effects import EFFECTS, NAMES, SHAPED, EffectValues
 from .model import BASE_NAMES, MAX_EXTRAPOLATION, Observation, RigHistory, rig_defaults
@@ -48,6 +49,10 @@ DEFAULT_LOG_SCALE = 0.1  # tau of a fitted parameter without a stated std
 # give (a film formed at once is a change of k)
 SHAPE_PRIOR_SIGMAS = 4.0
 MODELS = ("quasi-static", "dynamic")
+# Cycle counts at which the model's worn volume is reported beside the
+# residuals (`Problem.probe_cycles`): fractions of the campaign, geometric
+# from 1/50 (where a run-in shows) to the end
+PROBE_FRACTIONS = tuple(float(f) for f in np.geomspace(0.02, 1.0, 12))
 
 
 @dataclass(frozen=True)
@@ -107,6 +112,9 @@ class Problem:
     suspects: tuple = ()
 
     names: tuple = BASE_NAMES
+    # worn volume (mass basis) reported at these cycle counts beside the
+    # residuals (`outputs`): every inspection and `PROBE_FRACTIONS` of the run
+    probe_cycles: tuple = ()
 
     @classmethod
     def from_dataset(cls, data: Dataset, settings: ModelSettings = ModelSettings()):
@@ -151,10 +159,13 @@ class Problem:
             tau.append(abs(p.std / base0[name]) if p.std else DEFAULT_LOG_SCALE)
         suspects = tuple(n for n in names if n not in data.fit_names
                          and (n not in data.parameters or data.parameters[n].suspect))
+        end = float(data.max_cycles)
+        probes = tuple(sorted({*(float(c) for c in _checkpoints(data)),
+                               *(f * end for f in PROBE_FRACTIONS)}))
         return cls(model, tuple(obs), np.concatenate(ys), np.concatenate(sig),
                    np.concatenate(hold), np.concatenate(which), tuple(data.fit_names),
                    {k: jnp.asarray(v, dtype=float) for k, v in base0.items()},
-                   np.asarray(tau, dtype=float), suspects, names)
+                   np.asarray(tau, dtype=float), suspects, names, probes)
 
     def with_model(self, model) -> "Problem":
         return dataclasses.replace(self, model=model)
@@ -182,18 +193,32 @@ class Problem:
     def residual(self, x, effects: EffectValues, log_multipliers=None):
         return (self.predict(x, effects, log_multipliers) - self.y) / self.sigma
 
+    def outputs(self, x, effects: EffectValues, log_multipliers=None):
+        """(residuals, worn volume [m^3, mass basis] at `probe_cycles`) from one
+        model run."""
+        h = self.model(self.base(x, log_multipliers), effects)
+        pred = jnp.concatenate([o(h) for o in self.observations])
+        volume = Observation("volume", np.asarray(self.probe_cycles, float))(h) \
+            if self.probe_cycles else jnp.zeros(0)
+        pred = jnp.where(h.ok, pred, jnp.nan)
+        return (pred - self.y) / self.sigma, jnp.where(h.ok, volume, jnp.nan)
+
 
 SCALES = np.array([e.scale for e in EFFECTS])
 LOG_STD = np.array([e.shape.log_std if e.shape else 0.0 for e in EFFECTS])
-HAS_SHAPE = np.array(SHAPED, dtype=float)
 
 
 @dataclass
 class FitResult:
-    """One fit: ``effect`` (None: the base model), parameter values (SI) and
-    1-sigma uncertainties, the strength and its uncertainty, the effect's shape
-    (SI; None without one) and its 1-sigma interval, chi-square of the fit
-    points and of the held-out points, normalised residuals of all points."""
+    """One fit: ``effect`` (None: the base model; several effects: their names
+    joined by " + "), parameter values (SI) and 1-sigma uncertainties, the
+    strength and its uncertainty, the effect's shape (SI; None without one)
+    and its 1-sigma interval, chi-square of the fit points and of the
+    held-out points, normalised residuals of all points.  The single-effect
+    fields describe the first of ``effects``; every effect's numbers are in
+    ``strengths``, ``strengths_std``, ``shapes`` and ``shape_intervals``, the
+    learned discrepancy (if fitted) in ``discrepancy`` (variable) and
+    ``discrepancy_coefficients`` / ``discrepancy_cov``."""
 
     effect: str | None
     params: dict
@@ -211,21 +236,47 @@ class FitResult:
     shape: float | None = None
     shape_interval: tuple | None = None
     notes: dict = field(default_factory=dict)
+    effects: tuple = ()
+    strengths: dict = field(default_factory=dict)
+    strengths_std: dict = field(default_factory=dict)
+    shapes: dict = field(default_factory=dict)
+    shape_intervals: dict = field(default_factory=dict)
+    discrepancy: str | None = None
+    discrepancy_coefficients: np.ndarray | None = None
+    discrepancy_cov: np.ndarray | None = None
+    prior_chi2: float = 0.0
+
+    def __post_init__(self):
+        if self.effect is not None and not self.effects:
+            self.effects = (self.effect,)
+            self.strengths = self.strengths or {self.effect: self.strength}
+            self.strengths_std = self.strengths_std or {self.effect: self.strength_std}
+            if self.shape is not None:
+                self.shapes = self.shapes or {self.effect: self.shape}
+                self.shape_intervals = self.shape_intervals or {self.effect: self.shape_interval}
 
     def effect_values(self) -> EffectValues:
-        """The fitted effect as `EffectValues` (zeros for the base model)."""
-        if self.effect is None:
-            return EffectValues.zero()
-        values = {self.effect: self.strength}
-        shape = EFFECTS[NAMES.index(self.effect)].shape
-        if self.shape is not None and shape is not None:
-            values[shape.name] = self.shape
-        return EffectValues.of(**values)
+        """The fitted effects (and discrepancy) as `EffectValues` (zeros for
+        the base model)."""
+        values: dict = {}
+        for name in self.effects:
+            values[name] = self.strengths[name]
+            shape = EFFECTS[NAMES.index(name)].shape
+            if self.shapes.get(name) is not None and shape is not None:
+                values[shape.name] = self.shapes[name]
+        out = EffectValues.of(**values)
+        if self.discrepancy is not None:
+            out = out.with_discrepancy(self.discrepancy, self.discrepancy_coefficients)
+        return out
 
     @property
     def n_effect(self) -> int:
-        """Fitted numbers of the effect: 0 (base), 1 (strength), 2 (+ shape)."""
-        return 0 if self.effect is None else 1 + (self.shape is not None)
+        """Fitted numbers of the effects: 1 per strength, 1 per shape."""
+        return len(self.effects) + len(self.shapes)
+
+    @property
+    def n_discrepancy(self) -> int:
+        return 0 if self.discrepancy_coefficients is None else len(self.discrepancy_coefficients)
 
     @property
     def dof(self) -> int:
@@ -241,6 +292,18 @@ class FitResult:
         return math.sqrt(self.chi2_fit / self.n_fit)
 
 
+@dataclass
+class Linearisation:
+    """The model at one packed point: residuals ``r`` (all points), their
+    directional derivatives ``jac`` (points x tangents), the worn volume at
+    `Problem.probe_cycles` and its derivatives."""
+
+    r: np.ndarray
+    jac: np.ndarray
+    volume: np.ndarray
+    volume_jac: np.ndarray
+
+
 class Fitter:
     """Compiled pieces shared by all fits of one problem, and the
     Levenberg-Marquardt iteration (Marquardt's diagonal scaling).
@@ -250,11 +313,12 @@ class Fitter:
     scale, and its ratio test keeps shrinking the region); the plain Marquardt
     loop below accepts a Gauss-Newton-like step in 3-6 iterations on either
     model.  Each iteration is one forward-mode pass giving r and J together
-    (`jax.jacfwd` with ``has_aux``), compiled once for the base fit and every
-    refit (the effect is selected by a one-hot vector passed as data).
-    Unknowns z are in units of each parameter's stated spread (tau), of an
-    effect's scale and of a shape's prior spread, so the step tolerance
-    ``xtol`` reads "1 % of a spread".
+    (`jax.jvp` over a batch of tangents), compiled once for the base fit and
+    every refit: which effects (and which discrepancy variable) a fit frees
+    is data (the tangents), not structure.  Unknowns z are in units of each
+    parameter's stated spread (tau), of an effect's scale, of a shape's prior
+    spread and of a discrepancy coefficient's prior spread, so the step
+    tolerance ``xtol`` reads "1 % of a spread".
     """
 
     def __init__(self, problem: Problem, *, xtol=1e-2, ftol=1e-4, max_steps=30):
@@ -262,73 +326,70 @@ class Fitter:
         self.xtol, self.ftol, self.max_steps = xtol, ftol, max_steps
         nb, ne = problem.n_base, len(NAMES)
         # every unknown the loop differentiates by, packed: v = (fitted x,
-        # strengths, ln shapes, ln multipliers of every rig parameter)
+        # strengths, ln shapes, ln multipliers of every rig parameter,
+        # discrepancy coefficients)
         nu = len(problem.names)
         self._slices = (slice(0, nb), slice(nb, nb + ne), slice(nb + ne, nb + 2 * ne),
                         slice(nb + 2 * ne, nb + 2 * ne + nu))
-        self.n_packed = nb + 2 * ne + nu
-        # directional derivatives per call: the fit's own unknowns (x, strength,
-        # shape); the score tests' columns come in batches of this size, so
-        # one compiled program serves the fits, the score tests and the
-        # suspects (compiling one per use cost ~4x the whole loop's run time)
+        self._disc = slice(nb + 2 * ne + nu, nb + 2 * ne + nu + disc.SIZE)
+        self.n_packed = self._disc.stop
+        # directional derivatives per call: the one-effect fit's unknowns (x,
+        # strength, shape); more come in batches of this size, so one compiled
+        # program serves every fit, the score tests and the suspects
+        # (compiling one per use cost ~4x the whole loop's run time)
         self.width = nb + 2
         sx, ss, sg, su = self._slices
+        sd = self._disc
 
-        def residual(v):
-            return problem.residual(v[sx], EffectValues(v[ss], v[sg]), v[su])
+        def outputs(v):
+            return problem.outputs(v[sx], EffectValues(v[ss], v[sg], v[sd]), v[su])
 
         def columns(v, tangents):
-            """(r, dr/dv . t for each row t of ``tangents``) at packed ``v``."""
-            r, jac = jax.vmap(lambda t: jax.jvp(residual, (v,), (t,)), out_axes=(None, 1))(
-                tangents)
-            return r, jac
+            """(outputs, d outputs / dv . t for each row t of ``tangents``)."""
+            return jax.vmap(lambda t: jax.jvp(outputs, (v,), (t,)),
+                            out_axes=((None, None), (1, 1)))(tangents)
 
         self._columns = jax.jit(columns)
         self.evaluations = 0
 
-    def _pack(self, x, strength=None, log_shape=None, u=None) -> np.ndarray:
+    def _pack(self, x, strength=None, log_shape=None, u=None, discrepancy=None) -> np.ndarray:
         v = np.zeros(self.n_packed)
         sx, ss, sg, su = self._slices
         v[sx] = x
-        for sl, part in ((ss, strength), (sg, log_shape), (su, u)):
+        for sl, part in ((ss, strength), (sg, log_shape), (su, u), (self._disc, discrepancy)):
             if part is not None:
                 v[sl] = part
         return v
 
-    def _directional(self, v, tangents) -> tuple[np.ndarray, np.ndarray]:
-        """(r, J T^T) for any number of tangent rows, in batches of ``width``."""
+    def linearise(self, v, tangents) -> Linearisation:
+        """The model and its derivatives along any number of tangent rows, in
+        batches of ``width``."""
         tangents = np.atleast_2d(tangents)
-        r, cols = None, []
-        for i in range(0, tangents.shape[0], self.width):
+        cols, vcols = [], []
+        r = vol = None
+        for i in range(0, max(tangents.shape[0], 1), self.width):
             batch = tangents[i:i + self.width]
             pad = np.zeros((self.width - batch.shape[0], self.n_packed))
-            r, jac = self._columns(jnp.asarray(v), jnp.asarray(np.vstack([batch, pad])))
+            (r, vol), (jac, vjac) = self._columns(jnp.asarray(v),
+                                                  jnp.asarray(np.vstack([batch, pad])))
             self.evaluations += 1
             cols.append(np.asarray(jac)[:, :batch.shape[0]])
-        return np.asarray(r), np.concatenate(cols, axis=1)
+            vcols.append(np.asarray(vjac)[:, :batch.shape[0]])
+        return Linearisation(np.asarray(r), np.concatenate(cols, axis=1), np.asarray(vol),
+                             np.concatenate(vcols, axis=1))
+
+    def _directional(self, v, tangents) -> tuple[np.ndarray, np.ndarray]:
+        """(r, J T^T) for any number of tangent rows."""
+        lin = self.linearise(v, tangents)
+        return lin.r, lin.jac
 
     def _unit(self, part: int, index) -> np.ndarray:
-        """Tangent rows: unit vectors of ``index`` within packed part ``part``."""
-        start = self._slices[part].start
+        """Tangent rows: unit vectors of ``index`` within packed part ``part``
+        (0 x, 1 strengths, 2 ln shapes, 3 ln multipliers, 4 discrepancy)."""
+        start = (*self._slices, self._disc)[part].start
         t = np.zeros((len(index), self.n_packed))
         t[np.arange(len(index)), start + np.asarray(index, dtype=int)] = 1.0
         return t
-
-    def _evaluate(self, z, onehot):
-        """At z = (x_base, s / scale, ln-shape / log_std), ``onehot`` selecting
-        the effect (zeros: the base model): residuals of all points and the
-        Jacobian of the fit rows (fit points and the prior row)."""
-        nb = self.problem.n_base
-        onehot = np.asarray(onehot)
-        v = self._pack(z[:nb], onehot * SCALES * z[nb], onehot * LOG_STD * z[nb + 1])
-        t = np.zeros((nb + 2, self.n_packed))
-        t[:nb] = self._unit(0, range(nb))
-        t[nb, self._slices[1]] = onehot * SCALES
-        t[nb + 1, self._slices[2]] = onehot * LOG_STD
-        r_all, jac = self._directional(v, t)
-        prior = np.zeros((1, nb + 2))
-        prior[0, nb + 1] = float(onehot @ HAS_SHAPE)
-        return r_all, np.vstack([jac[~self.problem.holdout], prior])
 
     def _levenberg_marquardt(self, z, evaluate, rows, free, what, bounds=None):
         """(z, steps, fit-row Jacobian, all residuals) at the accepted minimum.
@@ -369,10 +430,18 @@ class Fitter:
         raise SolverError(f"calibration of the {what}: Levenberg-Marquardt did not converge in "
                           f"{self.max_steps} steps (chi2 {chi2:.6g})")
 
-    def effect_jacobian(self, x, log_shape) -> np.ndarray:
-        """dr/ds of every effect (columns, `NAMES` order) at zero strength and
-        the log-shapes ``log_shape`` (ln of shape / default)."""
-        v = self._pack(x, log_shape=log_shape)
+    def effect_jacobian(self, x, log_shape, v=None) -> np.ndarray:
+        """dr/ds of every effect (columns, `NAMES` order) at the log-shapes
+        ``log_shape`` (ln of shape / default) and zero strength, or at the
+        packed point ``v`` (a fitted model) with its ln shapes replaced by
+        ``log_shape`` for the effects it has at zero strength."""
+        if v is None:
+            v = self._pack(x, log_shape=log_shape)
+        else:
+            v = np.array(v, dtype=float)
+            _, ss, sg, _ = self._slices
+            off = v[ss] == 0.0
+            v[sg] = np.where(off, log_shape, v[sg])
         return self._directional(v, self._unit(1, range(len(NAMES))))[1]
 
     def parameter_jacobian(self, x, u=None, names=None):
@@ -420,72 +489,180 @@ class Fitter:
             residual=r, prediction=r * p.sigma + p.y, iterations=steps,
             wall_time_s=time.perf_counter() - t0, notes={"x": z[:nb].tolist()})
 
-    def fit(self, effect: str | None = None, x0=None, s0: float = 0.0,
-            log_shape0: float = 0.0) -> FitResult:
+    def layout(self, effects=(), discrepancy: str | None = None) -> "Layout":
+        return Layout.of(self, tuple(effects), discrepancy)
+
+    def fit(self, effect: str | tuple | None = None, x0=None, s0=0.0, log_shape0=0.0, *,
+            discrepancy: str | None = None, start: "FitResult | None" = None) -> FitResult:
+        """Fit the base parameters with ``effect`` (a name, a tuple of names or
+        None) and the learned discrepancy over ``discrepancy`` (a variable of
+        `discrepancy.VARIABLES`, or None).  Starting point: ``x0`` (fitted
+        unknowns), ``s0`` / ``log_shape0`` (a number for a single effect, a
+        dict by name for several), or ``start``, an earlier fit whose numbers
+        are reused where it shares the effects."""
         p = self.problem
-        nb = p.n_base
-        onehot = np.zeros(len(NAMES))
-        k = None if effect is None else NAMES.index(effect)
-        if k is not None:
-            onehot[k] = 1.0
-        shaped = k is not None and SHAPED[k]
-        x0 = np.zeros(nb) if x0 is None else np.asarray(x0, dtype=float)
-        scale = SCALES[k] if k is not None else 1.0
-        log_std = LOG_STD[k] if shaped else 1.0
-        z0 = np.concatenate([x0, [s0 / scale, log_shape0 / log_std if shaped else 0.0]])
-        free = np.ones(nb + 2, bool)
-        free[nb] = k is not None
-        free[nb + 1] = shaped
-        what = "base model" if effect is None else f"base model + {effect}"
+        effects = () if effect is None else (effect,) if isinstance(effect, str) else tuple(effect)
+        lay = self.layout(effects, discrepancy)
+        z0 = lay.start(x0, s0, log_shape0, start)
+        what = "base model" + "".join(f" + {e}" for e in effects) \
+            + (f" + discrepancy in {discrepancy}" if discrepancy else "")
         fit_rows = ~p.holdout
 
         def rows(r_all, z):
-            return np.concatenate([r_all[fit_rows], [z[-1] if shaped else 0.0]])
+            return np.concatenate([r_all[fit_rows], lay.prior_rows(z)])
+
+        def evaluate(z):
+            lin = self.linearise(lay.pack(z), lay.tangents)
+            return lin.r, np.vstack([lin.jac[fit_rows], lay.prior_jacobian])
 
         t0 = time.perf_counter()
-        lower = np.full(nb + 2, -np.inf)
-        upper = np.full(nb + 2, np.inf)
-        if k is not None:
-            lower[nb] = EFFECTS[k].lower / scale
-            lower[nb + 1], upper[nb + 1] = -SHAPE_PRIOR_SIGMAS, SHAPE_PRIOR_SIGMAS
-        z0 = np.clip(z0, lower, upper)
+        z0 = np.clip(z0, lay.lower, lay.upper)
         z, steps, jz, r = self._levenberg_marquardt(
-            z0, lambda z: self._evaluate(z, onehot), rows, free, what, (lower, upper))
+            z0, evaluate, rows, np.ones(lay.size, bool), what, (lay.lower, lay.upper))
         wall = time.perf_counter() - t0
-        x = z[:nb]
         if not np.all(np.isfinite(r)):  # a held-out point the model could not reach
             raise SolverError(f"calibration of the {what}: the model failed at the solution "
                               "(non-finite predictions)")
-        # Gauss-Newton covariance of z from the last Jacobian (fit rows)
-        cov = np.linalg.pinv(jz[:, free].T @ jz[:, free])
-        std_z = np.zeros(nb + 2)
-        std_z[free] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-        # the strength's spread at the fitted shape (the shape held): a shape
-        # trades off against the strength, so this, not the marginal spread,
-        # says whether the effect is there at all
-        given = free.copy()
-        given[nb + 1] = False
-        std_given = (math.sqrt(max(np.linalg.pinv(jz[:, given].T @ jz[:, given])[-1, -1], 0.0))
-                     * scale if k is not None else 0.0)
+        # Gauss-Newton covariance of z from the last Jacobian (fit and prior rows)
+        cov = np.linalg.pinv(jz.T @ jz)
+        return lay.result(z, cov, jz[:int(fit_rows.sum())], r, steps, wall,
+                          float(np.sum(lay.prior_rows(z) ** 2)))
+
+
+@dataclass
+class Layout:
+    """Where each fitted number sits in the fit's unknowns z and in the packed
+    point v of the model: the base parameters, then each effect's strength,
+    then each shaped effect's ln shape, then the discrepancy's coefficients
+    (each in units of its spread), with their bounds and prior rows."""
+
+    fitter: Fitter
+    effects: tuple
+    shaped: tuple
+    discrepancy: str | None
+    size: int
+    tangents: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    prior_index: np.ndarray      # z entries with a unit Gaussian prior row
+    prior_jacobian: np.ndarray
+
+    @classmethod
+    def of(cls, fitter: Fitter, effects: tuple, discrepancy: str | None) -> "Layout":
+        for e in effects:
+            if e not in NAMES:
+                raise InputError(f"unknown effect {e!r}; allowed: {', '.join(NAMES)}")
+        if discrepancy is not None and discrepancy not in disc.VARIABLES:
+            raise InputError(f"unknown discrepancy variable {discrepancy!r}; allowed: "
+                             f"{', '.join(disc.VARIABLES)}")
+        nb = fitter.problem.n_base
+        shaped = tuple(e for e in effects if SHAPED[NAMES.index(e)])
+        nd = disc.SIZES[discrepancy] if discrepancy else 0
+        size = nb + len(effects) + len(shaped) + nd
+        t = np.zeros((size, fitter.n_packed))
+        t[:nb] = fitter._unit(0, range(nb))
+        lower, upper = np.full(size, -np.inf), np.full(size, np.inf)
+        for i, e in enumerate(effects):
+            k = NAMES.index(e)
+            t[nb + i] = fitter._unit(1, [k])[0] * SCALES[k]
+            lower[nb + i] = EFFECTS[k].lower / SCALES[k]
+        o = nb + len(effects)
+        for i, e in enumerate(shaped):
+            k = NAMES.index(e)
+            t[o + i] = fitter._unit(2, [k])[0] * LOG_STD[k]
+            lower[o + i], upper[o + i] = -SHAPE_PRIOR_SIGMAS, SHAPE_PRIOR_SIGMAS
+        o += len(shaped)
+        if discrepancy:
+            sl = disc.SLICES[discrepancy]
+            t[o:] = fitter._unit(4, range(sl.start, sl.stop)) \
+                * disc.prior_std(discrepancy)[:, None]
+        prior = np.arange(nb + len(effects), size)
+        pj = np.zeros((prior.size, size))
+        pj[np.arange(prior.size), prior] = 1.0
+        return cls(fitter, effects, shaped, discrepancy, size, t, lower, upper, prior, pj)
+
+    @property
+    def n_base(self) -> int:
+        return self.fitter.problem.n_base
+
+    def pack(self, z) -> np.ndarray:
+        """The packed model point v at unknowns z (v = T^T z: every tangent
+        row is the unit step of its unknown)."""
+        return self.tangents.T @ z
+
+    def prior_rows(self, z) -> np.ndarray:
+        return z[self.prior_index]
+
+    def start(self, x0, s0, log_shape0, start: FitResult | None) -> np.ndarray:
+        nb = self.n_base
+        z = np.zeros(self.size)
+        if start is not None:
+            x0 = start.notes["x"] if x0 is None else x0
+            s0 = {**start.strengths, **(s0 if isinstance(s0, dict) else {})}
+            log_shape0 = {**{e: math.log(v / EFFECTS[NAMES.index(e)].shape.default)
+                             for e, v in start.shapes.items() if v is not None},
+                          **(log_shape0 if isinstance(log_shape0, dict) else {})}
+            if start.discrepancy == self.discrepancy and start.discrepancy is not None:
+                z[-disc.SIZES[self.discrepancy]:] = (np.asarray(start.discrepancy_coefficients)
+                                                    / disc.prior_std(self.discrepancy))
+        if x0 is not None:
+            z[:nb] = np.asarray(x0, dtype=float)
+        one = len(self.effects) == 1
+        for i, e in enumerate(self.effects):
+            k = NAMES.index(e)
+            s = s0 if one and not isinstance(s0, dict) else (
+                s0.get(e, 0.0) if isinstance(s0, dict) else 0.0)
+            z[nb + i] = float(s) / SCALES[k]
+        o = nb + len(self.effects)
+        for i, e in enumerate(self.shaped):
+            k = NAMES.index(e)
+            g = log_shape0 if one and not isinstance(log_shape0, dict) else (
+                log_shape0.get(e, 0.0) if isinstance(log_shape0, dict) else 0.0)
+            z[o + i] = float(g) / LOG_STD[k]
+        return z
+
+    def result(self, z, cov, jac_fit, r, steps, wall, prior_chi2) -> FitResult:
+        p = self.fitter.problem
+        nb = self.n_base
+        fit_rows = ~p.holdout
+        std_z = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        x = z[:nb]
         base = p.base(jnp.asarray(x))
         params = {n: float(base[n]) for n in p.fit_names}
         params_std = {n: float(params[n] * p.tau[i] * std_z[i])
                       for i, n in enumerate(p.fit_names)}
-        pred = r * p.sigma + p.y
-        shape = interval = None
-        effect_shape = EFFECTS[k].shape if k is not None else None
-        if shaped and effect_shape is not None:
-            default = effect_shape.default
-            ln = z[nb + 1] * log_std
-            shape = float(default * math.exp(ln))
-            half = std_z[nb + 1] * log_std
-            interval = (float(default * math.exp(ln - half)), float(default * math.exp(ln + half)))
+        strengths, strengths_std, shapes, intervals = {}, {}, {}, {}
+        for i, e in enumerate(self.effects):
+            k = NAMES.index(e)
+            strengths[e] = float(z[nb + i] * SCALES[k])
+            strengths_std[e] = float(std_z[nb + i] * SCALES[k])
+        o = nb + len(self.effects)
+        for i, e in enumerate(self.shaped):
+            k = NAMES.index(e)
+            default = EFFECTS[k].shape.default  # type: ignore[union-attr]
+            ln, half = z[o + i] * LOG_STD[k], std_z[o + i] * LOG_STD[k]
+            shapes[e] = float(default * math.exp(ln))
+            intervals[e] = (float(default * math.exp(ln - half)),
+                            float(default * math.exp(ln + half)))
+        o += len(self.shaped)
+        coef = cov_d = None
+        if self.discrepancy:
+            scale = disc.prior_std(self.discrepancy)
+            coef = z[o:] * scale
+            cov_d = cov[o:, o:] * np.outer(scale, scale)
+        first = self.effects[0] if self.effects else None
         return FitResult(
-            effect=effect, params=params, params_std=params_std,
-            strength=float(z[nb] * scale) if k is not None else 0.0,
-            strength_std=float(std_z[nb] * scale) if k is not None else 0.0,
+            effect=" + ".join(self.effects) if self.effects else None,
+            params=params, params_std=params_std,
+            strength=strengths.get(first, 0.0) if first else 0.0,
+            strength_std=strengths_std.get(first, 0.0) if first else 0.0,
             chi2_fit=float(np.sum(r[fit_rows] ** 2)), n_fit=int(fit_rows.sum()),
             chi2_holdout=float(np.sum(r[p.holdout] ** 2)), n_holdout=int(p.holdout.sum()),
-            residual=r, prediction=pred, iterations=steps, wall_time_s=wall,
-            shape=shape, shape_interval=interval,
-            notes={"x": x.tolist(), "jacobian": jz[:-1], "strength_std_given_shape": std_given})
+            residual=r, prediction=r * p.sigma + p.y, iterations=steps, wall_time_s=wall,
+            shape=shapes.get(first) if first else None,
+            shape_interval=intervals.get(first) if first else None,
+            notes={"x": x.tolist(), "z": z, "cov": cov, "jacobian": jac_fit,
+                   "v": self.pack(z), "layout": self},
+            effects=self.effects, strengths=strengths, strengths_std=strengths_std,
+            shapes=shapes, shape_intervals=intervals, discrepancy=self.discrepancy,
+            discrepancy_coefficients=coef, discrepancy_cov=cov_d, prior_chi2=prior_chi2)

@@ -1,78 +1,87 @@
-"""Find the effect the base model lacks: score tests, refits, a decision;
-and, when no wear effect explains the data, the mechanism parameter that does.
+"""Find the effects the base model lacks: score tests, forward selection with
+identifiability, ambiguity and detection limits; a learned discrepancy when
+the library has nothing; and the mechanism parameter that explains the data
+when no wear effect does.
 
 1. Fit the base model (the dataset's fitted parameters, every effect at zero).
-2. Score (Lagrange-multiplier) test of each candidate at zero strength, from
-   the base fit's residual r and Jacobian (fit points only): with
-   g = J_e^T r and the efficient information I = J_e^T J_e - J_e^T J_b
-   (J_b^T J_b)^-1 J_b^T J_e, the statistic S_e = g^2 / I is chi-square(1)
-   under "no effect"; it is the chi-square drop a first Gauss-Newton step in
-   s_e would give, i.e. how much of the residual the effect explains to first
-   order.  An effect whose strength is bounded below by zero scores 0 when the
-   residual asks for a negative strength.  An effect with a shape is scored at
-   `SHAPE_GRID` points of its prior (the shape is not identified at zero
-   strength): its statistic is the largest, its p-value Bonferroni-corrected
-   for the grid, and its refit starts from that shape.
-3. Refit the base parameters together with each of the ``top`` best
-   candidates (strength, and shape where it has one).  A candidate qualifies
-   when its fit-set chi-square falls by more than the chi-square critical
-   value at p = 0.001 for its number of fitted numbers (`LR_CRITICAL`), its
-   strength is `STRENGTH_SIGMAS` standard deviations (at the fitted shape)
-   from zero on the allowed side, and (with held-out data) its held-out chi-square is lower than the
-   base model's.  Among qualifying candidates the penalised criterion
-   chi2_fit + chi2_holdout + ln(n_fit) per fitted number (BIC) decides.
-4. Goodness of fit: the chosen model must leave fit-point residuals
-   consistent with the stated noise, chi2 <= dof + `GOF_SIGMAS` sqrt(2 dof).
-   Otherwise nothing in the library explains the data: ``effect_identified``
-   is "none" and ``residual_unexplained`` is true (the best partial candidate
-   is reported, not adopted).
-5. Mechanism suspects: when no effect is identified, every rig parameter the
-   dataset neither fits nor excludes (``suspect = false``) is scored the same
-   way (its column: the derivative in ln of the parameter).  When the residual
-   is unexplained and the best score passes p = 0.001 corrected for the number
-   of suspects, that parameter is refitted to say how far it would have to
-   move and whether that explains the data ("the force trace asks for a 2x
+2. Forward selection (`select`): at each stage every effect not yet in the
+   model is scored at the current model (`scores`) and **every** candidate
+   with a positive score is refitted on top of it (a failed refit is
+   retried from other starts and, if it still fails, named with its reason).
+   Each refit is judged in its identified form (`selection`): a shape the
+   data do not determine is not counted, and what is reported (the
+   strength, or the extra worn volume of the identified form) must stand
+   `STRENGTH_SIGMAS` from zero at its reported uncertainty.  The best
+   qualifying candidate by the penalised criterion joins the model, unless
+   the next is within `AMBIGUITY` of it (then the answer is "A or B", with
+   the measurement that would separate them); the effects already in the
+   model are then re-judged in the joint fit and dropped if they no longer
+   qualify.  The loop stops when nothing qualifies.
+3. Goodness of fit: the chosen model must leave fit-point residuals
+   consistent with the stated noise, chi2 <= dof + `GOF_SIGMAS` sqrt(2 dof);
+   otherwise ``residual_unexplained`` is true.
+4. Mechanism suspects: when no effect is identified, every rig parameter the
+   dataset neither fits nor excludes (``suspect = false``) is scored; when the
+   residual is unexplained and the best score passes p = 0.001 corrected for
+   the number of suspects, it is refitted ("the force trace asks for a 2x
    longer crank").
+5. Discrepancy (`learned`): when the residual is still unexplained (no
+   suspect explains it), k (1 + delta(x)) is fitted over each variable; the
+   one that cuts the held-out error is named with delta's shape in words.
+6. Detection limits: at the final model, the smallest strength of each
+   effect not named that these data would have detected (`scores`).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..errors import SolverError
+from ..errors import InputError, SolverError
+from . import learned
 from .dataset import Dataset
-from .effects import EFFECTS, NAMES, SHAPED, EffectValues
-from .fit import LOG_STD, FitResult, Fitter, ModelSettings, Problem
+from .discrepancy import VARIABLES
+from .effects import EFFECTS, NAMES, EffectValues
+from .fit import SCALES, FitResult, Fitter, ModelSettings, Problem
 from .parameters import RIG_PARAMETERS
+from .scores import (
+    SHAPE_GRID,
+    Score,
+    chi2_isf,
+    detection_limits,
+    score_suspects,
+    score_tests,
+)
+from .selection import (
+    AMBIGUITY,
+    LR_CRITICAL,
+    STRENGTH_SIGMAS,
+    Assessment,
+    assess,
+    criterion,
+    determined_numbers,
+    separating_measurement,
+)
 
-# chi-square critical values at p = 0.001 for 1 and 2 fitted numbers
-LR_CRITICAL = {1: 10.83, 2: 13.82}
-STRENGTH_SIGMAS = 3.0  # |s| / std(s) of an adopted effect
 GOF_SIGMAS = 4.0       # chi2 above dof + 4 sqrt(2 dof): residual not noise
-DEFAULT_TOP = 3
 # An effect is refitted only if the fit points leave degrees of freedom after
 # it: with none, any candidate fits exactly and nothing can be told apart.
 MIN_DOF_FOR_EFFECT = 2
-# Shapes at which a shaped effect is scored: ln(shape / default) in units of
-# its prior spread (+-1.5 sigma: a factor 32 either way for a decade prior)
-SHAPE_GRID = (-1.5, -0.75, 0.0, 0.75, 1.5)
+MAX_EFFECTS = 3        # effects adopted at most (forward-selection stages)
+# Forward-selection paths: one from each of the best few qualifying single
+# effects (a greedy path from the single best can be trapped by an effect
+# that mimics a pair of others)
+PATHS = 3
+DEFAULT_TOP = 3        # accepted for compatibility; every candidate is refitted
 
-
-@dataclass
-class Score:
-    effect: str
-    statistic: float     # S_e (chi-square(1) under "no effect")
-    first_step: float    # the Gauss-Newton strength step -g / I
-    p_value: float
-    log_shape: float = 0.0   # ln(shape / default) where the statistic was largest
-    by_kind: dict = field(default_factory=dict)  # share of g per series kind
+__all__ = ["AMBIGUITY", "GOF_SIGMAS", "LR_CRITICAL", "SHAPE_GRID", "STRENGTH_SIGMAS",
+           "Calibration", "Score", "Suspect", "calibrate", "score_tests"]
 
 
 @dataclass
@@ -113,75 +122,6 @@ class Suspect:
                 f"({self.name}: {self.value0:.4g} -> {self.value0 * f:.4g} SI)")
 
 
-@dataclass
-class Calibration:
-    dataset: Dataset
-    problem: Problem
-    base: FitResult
-    scores: list[Score]
-    refits: dict[str, FitResult]
-    qualifying: list[str]
-    chosen: FitResult
-    effect_identified: str
-    residual_unexplained: bool
-    gof: dict
-    wall_time_s: float
-    suspects: list[Suspect] = field(default_factory=list)
-    check: dict | None = None   # the chosen model's fit on the reference (dynamic) model
-    notes: dict = field(default_factory=dict)
-
-    def summary(self) -> dict:
-        c = self.chosen
-        identified = self.effect_identified != "none"
-        final = c if identified else self.base
-        m = self.problem.model
-        out = {
-            "dataset": self.dataset.name,
-            "model": m.name,
-            "effect_identified": self.effect_identified,
-            "effect_strength": c.strength if identified else 0.0,
-            "effect_strength_std": c.strength_std if identified else 0.0,
-            "effect_shape": c.shape if identified else None,
-            "effect_shape_interval": list(c.shape_interval) if identified and c.shape_interval
-            else None,
-            "residual_unexplained": self.residual_unexplained,
-            "heldout_rmse_before": self.base.rmse_holdout,
-            "heldout_rmse_after": final.rmse_holdout,
-            "heldout_rmse_units": "stated 1-sigma measurement noise",
-            "fit_rmse_before": self.base.rmse_fit,
-            "fit_rmse_after": final.rmse_fit,
-            "chi2_fit": final.chi2_fit,
-            "parameters": final.params,
-            "parameters_std": final.params_std,
-            "candidates": [_candidate(s, self.refits.get(s.effect), s.effect in self.qualifying,
-                                      self.notes.get("failed_refits", {}).get(s.effect))
-                           for s in self.scores],
-            "goodness_of_fit": self.gof,
-            "suspects": [_suspect(s) for s in self.suspects],
-            "suspect": (self.suspects[0].sentence()
-                        if self.suspects and self.suspects[0].refit is not None else None),
-            "model_check": self.check,
-            "model_settings": {"description": m.describe(), "n_theta": m.n_theta},
-            "wall_time_s": self.wall_time_s,
-        }
-        return out
-
-
-def _candidate(s: Score, refit: FitResult | None, qualifies: bool,
-               failure: str | None = None) -> dict:
-    out = {"name": s.effect, "score": s.statistic, "p_value": s.p_value,
-           "first_step": s.first_step}
-    if failure:
-        out["refit_failed"] = failure
-    shape = EFFECTS[NAMES.index(s.effect)].shape
-    if shape is not None:
-        out["scored_shape"] = shape.default * math.exp(s.log_shape)
-    if refit is not None:
-        out.update(refit_strength=refit.strength, refit_strength_std=refit.strength_std,
-                   refit_shape=refit.shape, refit_chi2_fit=refit.chi2_fit,
-                   refit_heldout_rmse=refit.rmse_holdout, qualifies=qualifies)
-    return out
-
 
 def _suspect(s: Suspect) -> dict:
     out = {"name": s.name, "score": s.score.statistic, "p_value": s.score.p_value,
@@ -194,71 +134,6 @@ def _suspect(s: Suspect) -> dict:
     return out
 
 
-def _chi2_sf(x: float) -> float:
-    """P(chi-square(1) > x) = erfc(sqrt(x / 2))."""
-    return math.erfc(math.sqrt(max(x, 0.0) / 2.0))
-
-
-def _chi2_isf(p: float) -> float:
-    """x with P(chi-square(1) > x) = p (bisection on `_chi2_sf`)."""
-    lo, hi = 0.0, 200.0
-    for _ in range(100):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if _chi2_sf(mid) > p else (lo, mid)
-    return 0.5 * (lo + hi)
-
-
-def _score(name, j, jb, r, lower, kinds) -> Score:
-    """The efficient score test of column ``j`` against the fitted columns ``jb``."""
-    g = float(j @ r)
-    cross = jb.T @ j
-    info = float(j @ j - cross @ np.linalg.solve(jb.T @ jb, cross)) if jb.size else float(j @ j)
-    if not np.isfinite(info) or info <= 1e-12 * max(float(j @ j), 1e-300):
-        return Score(name, 0.0, 0.0, 1.0)  # not identifiable from these data
-    step = -g / info
-    stat = g * g / info
-    if step < 0 and lower >= 0:  # the residual asks for a forbidden sign
-        stat = 0.0
-    share = {}
-    for kind in np.unique(kinds):
-        m = kinds == kind
-        share[str(kind)] = abs(float(j[m] @ r[m]))
-    return Score(name, stat, step, _chi2_sf(stat), by_kind=share)
-
-
-def score_tests(fitter: Fitter, base: FitResult, kinds) -> list[Score]:
-    p = fitter.problem
-    rows = ~p.holdout
-    x = np.asarray(base.notes["x"])
-    jb, _, _ = fitter.parameter_jacobian(x, names=())
-    jb, r = jb[rows], base.residual[rows]
-    best: dict[str, Score] = {}
-    for g in SHAPE_GRID:
-        je = fitter.effect_jacobian(x, LOG_STD * g)[rows]
-        for k, eff in enumerate(EFFECTS):
-            if not SHAPED[k] and g != 0.0:
-                continue
-            s = _score(eff.name, je[:, k], jb, r, eff.lower, kinds[rows])
-            s.log_shape = float(LOG_STD[k] * g)
-            if eff.name not in best or s.statistic > best[eff.name].statistic:
-                best[eff.name] = s
-    for k, eff in enumerate(EFFECTS):
-        if SHAPED[k]:  # the largest of the grid's statistics: Bonferroni
-            s = best[eff.name]
-            s.p_value = min(1.0, len(SHAPE_GRID) * s.p_value)
-    return sorted(best.values(), key=lambda s: -s.statistic)
-
-
-def score_suspects(fitter: Fitter, base: FitResult, kinds) -> list[Score]:
-    """Score tests of the problem's suspects (rig parameters on a log scale)."""
-    p = fitter.problem
-    rows = ~p.holdout
-    jb, ju, _ = fitter.parameter_jacobian(np.asarray(base.notes["x"]), names=p.suspects)
-    r = base.residual[rows]
-    out = [_score(n, ju[rows, k], jb[rows], r, -math.inf, kinds[rows])
-           for k, n in enumerate(p.suspects)]
-    return sorted(out, key=lambda s: -s.statistic)
-
 
 def _gof(fit: FitResult) -> dict:
     """Goodness of fit on the fit points.  (Held-out residuals also carry the
@@ -268,9 +143,6 @@ def _gof(fit: FitResult) -> dict:
     limit = dof + GOF_SIGMAS * math.sqrt(2 * dof)
     return {"chi2": chi2, "dof": dof, "limit": limit, "consistent_with_noise": chi2 <= limit}
 
-
-def _criterion(fit: FitResult) -> float:
-    return fit.chi2_fit + fit.chi2_holdout + fit.n_effect * math.log(fit.n_fit)
 
 
 def compile_check(data: Dataset, problem: Problem, settings: ModelSettings):
@@ -301,94 +173,484 @@ def model_check(problem: Problem, fit: FitResult, prepared) -> dict:
             "wall_time_s": time.perf_counter() - t0}
 
 
+@dataclass
+class Stage:
+    """One forward-selection stage: the scores at the model so far, every
+    candidate refitted on top of it, and what was decided."""
+
+    scores: list
+    assessed: dict                     # effect -> Assessment
+    failed: dict                       # effect -> why its refit failed
+    added: str | None = None
+    dropped: list = field(default_factory=list)
+    ambiguous: tuple | None = None     # (Path, Path): two equally good models
+
+
+@dataclass
+class Selection:
+    model: FitResult                   # the chosen model (base + the adopted effects)
+    adopted: list                      # Assessment of each adopted effect, in the joint fit
+    stages: list
+    ambiguous: tuple | None = None     # (Path, Path)
+    separation: dict | None = None
+
+
+def _starts(score: Score, effect: str):
+    """Starting (strength, ln shape) pairs of a refit: the score's first step,
+    then the effect's scale at the default shape and at the grid's ends."""
+    k = NAMES.index(effect)
+    eff = EFFECTS[k]
+    first = float(np.clip(score.first_step, eff.lower, None))
+    out = [(first, score.log_shape), (float(SCALES[k]), 0.0)]
+    if eff.shape is not None:
+        out += [(float(SCALES[k]), eff.shape.log_std * g) for g in (SHAPE_GRID[0], SHAPE_GRID[-1])]
+    return out
+
+
+def refit(fitter: Fitter, current: FitResult, effect: str, score: Score, log):
+    """``current`` + ``effect``, retried from other starts on failure; (fit,
+    None) or (None, the reasons)."""
+    errors = []
+    for s0, g0 in _starts(score, effect):
+        strengths = {**current.strengths, effect: s0}
+        shapes = {e: math.log(v / EFFECTS[NAMES.index(e)].shape.default)
+                  for e, v in current.shapes.items()}
+        shapes[effect] = g0
+        try:
+            return fitter.fit((*current.effects, effect), x0=current.notes["x"],
+                              s0=strengths, log_shape0=shapes), None
+        except SolverError as err:
+            errors.append(str(err))
+    reason = "; ".join(dict.fromkeys(errors))
+    log(f"refit + {effect} failed from {len(errors)} starts: {reason}")
+    return None, reason
+
+
+def _judge_members(fitter, model: FitResult, inspections, log, always: bool = False):
+    """Each effect of ``model`` judged in the joint fit against the model
+    without it (its discrepancy kept); returns (assessments, the weakest
+    that fails or None).  A single effect is judged only when ``always``."""
+    out, weakest = {}, None
+    if len(model.effects) == 1 and not always:
+        return out, None
+    for e in model.effects:
+        rest = tuple(x for x in model.effects if x != e)
+        try:
+            without = fitter.fit(rest, start=model, discrepancy=model.discrepancy)
+        except SolverError as err:
+            log(f"refit without {e} failed: {err}")
+            continue
+        a = assess(fitter, e, model, without, inspections)
+        out[e] = a
+        if not a.qualifies and (weakest is None or a.criterion < weakest[1].criterion):
+            weakest = (e, without)
+    return out, weakest
+
+
+def prune(fitter: Fitter, model: FitResult, inspections, log, always: bool = False):
+    """Drop the effects of ``model`` that no longer qualify beside the others
+    (and its discrepancy), weakest first; (model, {effect: Assessment}, dropped)."""
+    judged, weakest = _judge_members(fitter, model, inspections, log, always)
+    dropped = []
+    while weakest is not None:
+        e, model = weakest
+        dropped.append(e)
+        judged.pop(e, None)
+        log(f"dropped: {e} (no longer qualifies beside the rest of the model)")
+        judged, weakest = _judge_members(fitter, model, inspections, log, always)
+    return model, judged, dropped
+
+
+def _stage(fitter: Fitter, current: FitResult, kinds, inspections, log,
+           exclude=()) -> Stage:
+    """Score every effect not in ``current`` (nor ``exclude``) and refit each
+    with a positive score on top of it."""
+    scores = score_tests(fitter, current, kinds, exclude)
+    log(("scores" if not current.effects else f"scores beside {' + '.join(current.effects)}")
+        + ": " + ", ".join(f"{s.effect} {s.statistic:.3g}" for s in scores))
+    stage = Stage(scores, {}, {})
+    for s in scores:
+        if s.statistic <= 0.0:
+            continue
+        f, failure = refit(fitter, current, s.effect, s, log)
+        if f is None:
+            stage.failed[s.effect] = failure
+            continue
+        a = assess(fitter, s.effect, f, current, inspections)
+        stage.assessed[s.effect] = a
+        log(f"refit + {s.effect}: {_words(a)}")
+    return stage
+
+
+@dataclass
+class Path:
+    """One forward-selection path: the model it ends on and its effects'
+    assessments in that model."""
+
+    model: FitResult
+    adopted: dict
+    stages: list
+
+    @property
+    def criterion(self) -> float:
+        return criterion(self.model)
+
+    @property
+    def numbers(self) -> float:
+        return determined_numbers(self.model)
+
+    @property
+    def name(self) -> str:
+        return " + ".join(self.model.effects) or "none"
+
+
+def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log) -> Path:
+    """Greedy forward selection from the one-effect model ``first``: the best
+    qualifying addition by the criterion at each stage, then the effects
+    already in the model re-judged beside it; an effect dropped is not
+    offered again on this path."""
+    current = first.fit
+    adopted = {first.effect: first}
+    stages: list = []
+    excluded: set = set()
+    while len(current.effects) < MAX_EFFECTS:
+        stage = _stage(fitter, current, kinds, inspections, log, tuple(excluded))
+        stages.append(stage)
+        ranked = sorted((a for a in stage.assessed.values() if a.qualifies),
+                        key=lambda a: a.criterion)
+        if not ranked or ranked[0].criterion >= criterion(current):
+            break
+        best = ranked[0]
+        stage.added = best.effect
+        log(f"adopted beside {' + '.join(current.effects)}: {best.effect}")
+        current, judged, stage.dropped = prune(fitter, best.fit, inspections, log)
+        adopted[best.effect] = best
+        for e in stage.dropped:
+            adopted.pop(e, None)
+            excluded.add(e)
+        adopted.update(judged)
+        if best.effect in stage.dropped:
+            break
+    return Path(current, {e: adopted[e] for e in current.effects if e in adopted}, stages)
+
+
+def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log) -> Selection:
+    """Forward selection along `PATHS` paths (module notes): each starts from
+    one of the best qualifying single effects and grows greedily; the paths'
+    final models are compared by the criterion, within Occam's window."""
+    stage1 = _stage(fitter, base, kinds, inspections, log)
+    ranked = sorted((a for a in stage1.assessed.values() if a.qualifies),
+                    key=lambda a: a.criterion)
+    ranked = [a for a in ranked if a.criterion < criterion(base)]
+    if not ranked:
+        return Selection(base, [], [stage1])
+    paths: dict[tuple, Path] = {}
+    for a in ranked[:PATHS]:
+        path = _grow(fitter, a, kinds, inspections, log)
+        paths.setdefault(tuple(sorted(path.model.effects)), path)
+    order = sorted(paths.values(), key=lambda p: p.criterion)
+    window = [p for p in order if p.criterion - order[0].criterion < AMBIGUITY]
+    simplest = min(p.numbers for p in window)
+    window = [p for p in window if p.numbers == simplest]  # Occam's window
+    best = window[0]
+    stage1.added = best.model.effects[0] if best.model.effects else None
+    stages = [stage1, *best.stages]
+    if len(window) > 1:
+        other = window[1]
+        sep = separating_measurement(fitter, best.model, other.model, data)
+        log(f"{best.name} or {other.name}: these data cannot tell them apart (criteria "
+            f"{best.criterion:.1f} and {other.criterion:.1f}); {sep['sentence']}")
+        stage1.ambiguous = (best, other)
+        return Selection(base, [], stages, (best, other), sep)
+    log(f"selected: {best.name} (criterion {best.criterion:.1f}; other paths: "
+        + ", ".join(f"{p.name} {p.criterion:.1f}" for p in order if p is not best) + ")")
+    return Selection(best.model, list(best.adopted.values()), stages)
+
+
+def _words(a: Assessment) -> str:
+    f = a.fit
+    shape = "" if f.shapes.get(a.effect) is None else f", shape {f.shapes[a.effect]:.3g}" + (
+        "" if a.shape_determined else " (not determined)")
+    form = f"; {a.form.sentence(a.effect)}" if a.form is not None else ""
+    return (f"strength {f.strengths[a.effect]:.4g} +- {f.strengths_std[a.effect]:.2g}{shape}, "
+            f"chi2 {f.chi2_fit:.1f}, held-out RMSE {f.rmse_holdout:.3g} sigma{form}"
+            + (" (qualifies)" if a.qualifies else f" ({'; '.join(a.reasons)})"))
+
+
+@dataclass
+class Calibration:
+    dataset: Dataset
+    problem: Problem
+    base: FitResult
+    scores: list[Score]
+    refits: dict[str, FitResult]
+    qualifying: list[str]
+    chosen: FitResult
+    effect_identified: str
+    residual_unexplained: bool
+    gof: dict
+    wall_time_s: float
+    suspects: list[Suspect] = field(default_factory=list)
+    check: dict | None = None   # the chosen model's fit on the reference (dynamic) model
+    notes: dict = field(default_factory=dict)
+    selection: Selection | None = None
+    discrepancy: learned.Search | None = None
+    limits: dict = field(default_factory=dict)
+    final: FitResult | None = None   # the adopted effects (+ the named discrepancy)
+    adopted: list = field(default_factory=list)   # Assessment of each named effect
+    partial: list = field(default_factory=list)   # adopted, but leaving the residual
+
+    def summary(self) -> dict:
+        final = self.final or self.chosen
+        m = self.problem.model
+        sel = self.selection
+        effects = [a.entry() for a in self.adopted]
+        if sel is not None and sel.ambiguous is not None:
+            a, b = sel.ambiguous
+            sentence = f"{a.name} or {b.name}: these data cannot tell them apart"
+            if sel.separation:
+                sentence += "; " + sel.separation["sentence"]
+            effects.append({
+                "name": f"{a.name} or {b.name}", "ambiguous": True,
+                "alternatives": [{"name": p.name, "criterion": p.criterion,
+                                  "effects": [x.entry() for x in p.adopted.values()]}
+                                 for p in (a, b)],
+                "separating_measurement": sel.separation, "sentence": sentence})
+        first = effects[0] if effects else None
+        out = {
+            "dataset": self.dataset.name,
+            "model": m.name,
+            "effect_identified": self.effect_identified,
+            "effects_identified": effects,
+            "effects_partial": [a.entry() for a in self.partial],
+            "effect_strength": first["strength"] if first and not first.get("ambiguous")
+            else 0.0,
+            "effect_strength_std": first["strength_std"] if first and not first.get("ambiguous")
+            else 0.0,
+            "effect_shape": first.get("shape") if first else None,
+            "effect_shape_interval": first.get("shape_interval") if first else None,
+            "residual_unexplained": self.residual_unexplained,
+            "heldout_rmse_before": self.base.rmse_holdout,
+            "heldout_rmse_after": final.rmse_holdout,
+            "heldout_rmse_units": "stated 1-sigma measurement noise",
+            "fit_rmse_before": self.base.rmse_fit,
+            "fit_rmse_after": final.rmse_fit,
+            "chi2_fit": final.chi2_fit,
+            "parameters": final.params,
+            "parameters_std": final.params_std,
+            "candidates": [_candidate(s, self.refits.get(s.effect), s.effect in self.qualifying,
+                                      self.notes.get("failed_refits", {}).get(s.effect))
+                           for s in self.scores],
+            "stages": [_stage_summary(st) for st in (sel.stages if sel else [])],
+            "detection_limits": self.limits,
+            "discrepancy": _discrepancy(self),
+            "goodness_of_fit": self.gof,
+            "suspects": [_suspect(s) for s in self.suspects],
+            "suspect": (self.suspects[0].sentence()
+                        if self.suspects and self.suspects[0].refit is not None else None),
+            "model_check": self.check,
+            "model_settings": {"description": m.describe(), "n_theta": m.n_theta},
+            "wall_time_s": self.wall_time_s,
+        }
+        return out
+
+
+def _stage_summary(st: Stage) -> dict:
+    return {"added": st.added, "dropped": st.dropped,
+            "ambiguous": [p.name for p in st.ambiguous] if st.ambiguous else None,
+            "candidates": {e: {"criterion": a.criterion, "qualifies": a.qualifies,
+                               "reasons": a.reasons, "z": a.z,
+                               "likelihood_ratio": a.likelihood_ratio}
+                           for e, a in st.assessed.items()},
+            "failed": st.failed}
+
+
+def _discrepancy(c: Calibration) -> dict | None:
+    d = c.discrepancy
+    if d is None:
+        return None
+    trials = {t.variable: ({"failed": t.failure} if t.fit is None else
+                           {"heldout_rmse": t.fit.rmse_holdout, "chi2_fit": t.fit.chi2_fit,
+                            "criterion": t.criterion, "cuts_heldout_error": t.cuts})
+              for t in d.trials}
+    before = d.reference.rmse_holdout
+    if d.chosen is None:
+        tried = [t.variable for t in d.trials]
+        return {"variable": None, "heldout_rmse_before": before, "heldout_rmse_after": before,
+                "tried": trials, "skipped": d.skipped,
+                "shape": "unexplained; no discrepancy in " + _or_list(tried)
+                         + " cuts the held-out error"}
+    f = d.chosen.fit
+    out = learned.describe(d.chosen.variable, f.discrepancy_coefficients, f.discrepancy_cov,
+                           c.dataset)
+    out.update(heldout_rmse_before=before, heldout_rmse_after=f.rmse_holdout,
+               effective_coefficients=f.notes.get("discrepancy_edf"), tried=trials,
+               skipped=d.skipped)
+    return out
+
+
+def _or_list(items) -> str:
+    words = [i.replace("_", " ") for i in items]
+    if len(words) <= 1:
+        return "".join(words) or "any variable"
+    return ", ".join(words[:-1]) + " or " + words[-1]
+
+
+def _candidate(s: Score, refit: FitResult | None, qualifies: bool,
+               failure: str | None = None) -> dict:
+    out = {"name": s.effect, "score": s.statistic, "p_value": s.p_value,
+           "first_step": s.first_step}
+    if failure:
+        out["refit_failed"] = failure
+    shape = EFFECTS[NAMES.index(s.effect)].shape
+    if shape is not None:
+        out["scored_shape"] = shape.default * math.exp(s.log_shape)
+    if refit is not None:
+        e = s.effect
+        out.update(refit_strength=refit.strengths.get(e, refit.strength),
+                   refit_strength_std=refit.strengths_std.get(e, refit.strength_std),
+                   refit_shape=refit.shapes.get(e), refit_chi2_fit=refit.chi2_fit,
+                   refit_heldout_rmse=refit.rmse_holdout, qualifies=qualifies)
+    return out
+
+
+def _inspections(data: Dataset, problem: Problem) -> list:
+    """Cycle counts of the fitted wear measurements (profiles, volumes, depths)."""
+    out = set()
+    for s in data.series:
+        if s.kind == "force":
+            continue
+        counts = np.broadcast_to(np.asarray(s.cycle_counts, float), s.holdout.shape)
+        out.update(float(c) for c in np.unique(counts[~s.holdout]))
+    return sorted(c for c in out if c > 0)
+
+
+def require_fit_points(data: Dataset, n_fitted: int | None = None) -> None:
+    """Refuse (InputError) a dataset with no more fit points than fitted
+    parameters: nothing can be fitted from it."""
+    n = sum(int(np.sum(~np.asarray(s.holdout, bool))) for s in data.series)
+    k = len(data.fit_names) if n_fitted is None else n_fitted
+    if n <= k:
+        raise InputError(
+            f"{data.path}: {n} fit point(s) for {k} fitted parameter(s) "
+            f"({', '.join(data.fit_names)}): too few to fit anything; add measurements "
+            "(or measurements before holdout_from_cycles) or fit fewer parameters")
+
+
+def discrepancy_variables(data: Dataset, spec: str) -> tuple:
+    """The ``--discrepancy`` option: 'all' (every variable the data can show),
+    'none', or comma-separated names, each checked against the data."""
+    text = str(spec).strip().lower()
+    if text == "all":
+        return VARIABLES
+    if text == "none":
+        return ()
+    names = tuple(v.strip() for v in text.split(",") if v.strip())
+    if not names:
+        raise InputError(f"--discrepancy {spec!r}: allowed 'all', 'none' or names from "
+                         f"{', '.join(VARIABLES)}")
+    for v in names:
+        if v not in VARIABLES:
+            raise InputError(f"--discrepancy {v!r}: unknown variable; allowed "
+                             f"{', '.join(VARIABLES)}, 'all' or 'none'")
+    learned.check_variables(data, names)
+    return names
+
+
 def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
-              top: int = DEFAULT_TOP, check: bool = True, log=print) -> Calibration:
-    """The whole loop on one dataset (module notes); ``check``: evaluate the
-    chosen fit on the dynamic model too (when the fit ran on another)."""
+              top: int = DEFAULT_TOP, check: bool = True, discrepancy=VARIABLES,
+              log=print) -> Calibration:
+    """The whole loop on one dataset (module notes).  ``check``: evaluate the
+    chosen fit on the dynamic model too (when the fit ran on another);
+    ``discrepancy``: the variables a learned discrepancy is searched over
+    (empty: none).  ``top`` is kept for compatibility: every candidate is
+    refitted."""
+    del top
     t0 = time.perf_counter()
+    discrepancy = tuple(discrepancy)
     problem = Problem.from_dataset(data, settings)
+    if discrepancy != VARIABLES:  # asked for by name: refuse what the data cannot show
+        learned.check_variables(data, discrepancy)
+    require_fit_points(data, problem.n_base)
     fitter = Fitter(problem)
     check = check and problem.model.name != "dynamic" and data.mechanism is None
     pool = ThreadPoolExecutor(max_workers=1)  # its thread starts on the first submit
     prepared = pool.submit(compile_check, data, problem, settings) if check else None
-    speculated: dict = {}
     kinds = np.array([data.series[k].kind for k in problem.series_of_point])
+    inspections = _inspections(data, problem)
     log(f"{problem.model.describe()}; fitting {', '.join(problem.fit_names)}")
     base = fitter.fit(None)
     log(f"base fit: chi2 {base.chi2_fit:.1f} on {base.n_fit} points, held-out RMSE "
         f"{base.rmse_holdout:.3g} sigma ({base.iterations} steps, {base.wall_time_s:.1f} s)")
-    scores = score_tests(fitter, base, kinds)
-    log("scores: " + ", ".join(f"{s.effect} {s.statistic:.3g}" for s in scores))
-    refits, qualifying, failed = {}, [], {}
-    x0 = np.asarray(base.notes["x"])
     too_few = base.n_fit - problem.n_base - 2 < MIN_DOF_FOR_EFFECT
     if too_few:
         log(f"{base.n_fit} fit points for {problem.n_base} parameters: too few to fit an effect "
             "as well; candidates are scored, not refitted")
-    for s in ([] if too_few else scores[:top]):
-        if s.statistic <= 0.0:
-            continue
-        eff = EFFECTS[NAMES.index(s.effect)]
-        try:
-            f = fitter.fit(s.effect, x0=x0, s0=float(np.clip(s.first_step, eff.lower, None)),
-                           log_shape0=s.log_shape)
-        except SolverError as err:  # this candidate cannot be fitted: it does not qualify
-            failed[s.effect] = str(err)
-            log(f"refit + {s.effect}: {err}")
-            continue
-        refits[s.effect] = f
-        lr = base.chi2_fit - f.chi2_fit
-        spread = f.notes["strength_std_given_shape"]
-        z = f.strength / spread if spread > 0 else math.inf
-        ok = (lr > LR_CRITICAL[f.n_effect] and abs(z) >= STRENGTH_SIGMAS
-              and f.strength >= eff.lower
-              and (f.n_holdout == 0 or f.chi2_holdout < base.chi2_holdout))
-        f.notes.update(likelihood_ratio=lr, z=z, criterion=_criterion(f))
-        if ok:
-            qualifying.append(s.effect)
-            if prepared is not None and not speculated:
-                # the first qualifying refit is usually the one chosen: its
-                # dynamic check runs beside the remaining refits
-                # (the compiled check is awaited in the pool's thread, not here)
-                def check_refit(f: FitResult = f, compiled: Future = prepared) -> dict:
-                    return model_check(problem, f, compiled.result())
-
-                speculated[s.effect] = (f, pool.submit(check_refit))
-        shape = "" if f.shape is None else f", shape {f.shape:.3g}"
-        log(f"refit + {s.effect}: strength {f.strength:.4g} +- {f.strength_std:.2g}{shape}, "
-            f"chi2 {f.chi2_fit:.1f}, held-out RMSE {f.rmse_holdout:.3g} sigma"
-            f"{' (qualifies)' if ok else ''}")
-    best = min((refits[e] for e in qualifying), key=_criterion, default=None)
-    chosen = best if best is not None and _criterion(best) < _criterion(base) else base
-    gof = _gof(chosen)
-    if chosen.effect is not None and gof["consistent_with_noise"]:
-        identified, unexplained = chosen.effect, False
+        sel = Selection(base, [], [])
+        scores = score_tests(fitter, base, kinds)
     else:
-        identified, unexplained = "none", not gof["consistent_with_noise"]
-    log(f"identified: {identified}" + (" (the residual stays unexplained)" if unexplained else ""))
+        sel = select(fitter, base, kinds, inspections, data, log)
+        scores = sel.stages[0].scores
+    first = sel.stages[0] if sel.stages else None
+    refits = {e: a.fit for e, a in first.assessed.items()} if first else {}
+    qualifying = [e for e, a in first.assessed.items() if a.qualifies] if first else []
+    failed = dict(first.failed) if first else {}
+    chosen = sel.model
+    gof = _gof(chosen)
+    unexplained = not gof["consistent_with_noise"]
+    if sel.ambiguous is not None:  # either alternative stands for the model's fit
+        unexplained = not _gof(sel.ambiguous[0].model)["consistent_with_noise"]
+    log(f"selected: {', '.join(chosen.effects) or 'no effect'}"
+        + (" (the residual stays unexplained)" if unexplained else ""))
     suspects = []
-    if identified == "none" and problem.suspects and not too_few:
+    suspect_explains = False
+    if (not chosen.effects or unexplained) and sel.ambiguous is None and problem.suspects \
+            and not too_few:
         ranked = score_suspects(fitter, base, kinds)
         suspects = [Suspect(s.effect, float(problem.base0[s.effect]), s) for s in ranked]
         # named only when something is left to explain, at p = 0.001 over all suspects
-        critical = _chi2_isf(0.001 / len(ranked))
+        critical = chi2_isf(0.001 / len(ranked))
         if unexplained and ranked and ranked[0].statistic > critical:
             lead = suspects[0]
             try:
-                lead.refit = fitter.fit_suspect(lead.name, x0, lead.score.first_step)
+                lead.refit = fitter.fit_suspect(lead.name, np.asarray(base.notes["x"]),
+                                                lead.score.first_step)
+                suspect_explains = _gof(lead.refit)["consistent_with_noise"]
             except SolverError as err:  # a suspect that cannot be fitted is still named
                 log(f"refit with {lead.name} free failed: {err}")
             log(f"suspect: {lead.sentence()}")
-    final = chosen if identified != "none" else base
+    search = None
+    if unexplained and not suspect_explains and discrepancy and not too_few:
+        search = learned.search(fitter, chosen, data, discrepancy, log)
+        if search.chosen is not None:
+            log(f"discrepancy named: {search.chosen.variable}")
+        else:
+            log("no discrepancy cuts the held-out error")
+    final, adopted = chosen, list(sel.adopted)
+    if sel.ambiguous is not None and not chosen.effects:
+        final = sel.ambiguous[0].model  # either alternative stands for the fitted model
+    if search is not None and search.chosen is not None:
+        # the library's effects must still qualify beside the learned discrepancy
+        final, judged, dropped = prune(fitter, search.chosen.fit, inspections, log, always=True)
+        search.chosen.fit = final
+        adopted = [judged[e] for e in final.effects if e in judged]
+    explained = _gof(final)["consistent_with_noise"]
+    partial = [] if explained else adopted
+    adopted = adopted if explained else []
+    if sel.ambiguous is not None and not adopted:
+        identified = "ambiguous"
+    else:
+        identified = adopted[0].effect if adopted else "none"
+    limits = detection_limits(score_tests(fitter, final, kinds)) if not too_few else {}
     result = Calibration(data, problem, base, scores, refits, qualifying, chosen, identified,
-                         unexplained, gof, 0.0, suspects, notes={"failed_refits": failed})
+                         unexplained, gof, 0.0, suspects, notes={"failed_refits": failed},
+                         selection=sel, discrepancy=search, limits=limits, final=final,
+                         adopted=adopted, partial=partial)
     if prepared is not None:
-        ahead = speculated.get(final.effect)
-        result.check = (ahead[1].result() if ahead is not None and ahead[0] is final
-                        else model_check(problem, final, prepared.result()))
+        result.check = model_check(problem, result.final, prepared.result())
         c = result.check
         log(f"check on the {c['model']} model: chi2 {c['chi2_fit']} on the fit points "
-            f"(fitted model {final.chi2_fit:.1f}), held out {c['chi2_holdout']}")
+            f"(fitted model {result.final.chi2_fit:.1f}), held out {c['chi2_holdout']}")
     pool.shutdown()
     result.wall_time_s = time.perf_counter() - t0
     return result

@@ -207,7 +207,8 @@ class RigHistory(eqx.Module):
             worn = worn_mechanism(mech, JOINT, h + delta)
             r = wear_cycle(worn, JOINT, y, t, period, n_save=self.force_samples, **kw)
             volume = worn_volume(h, el.bushing_radius, el.law.depth)
-            dh = a * rate_factor(effects, h, volume, j * a, a) * r.depth_increment
+            dh = a * rate_factor(effects, h, volume, j * a, a, el.profile.theta,
+                                 self.cycles) * r.depth_increment
             force = contact_history(worn, JOINT, r.ys).force_magnitude
             ok = ok & r.ok
             h = jnp.where(ok, h + dh, h)

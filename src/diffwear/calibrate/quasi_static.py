@@ -125,7 +125,7 @@ class QuasiStaticRigHistory(eqx.Module):
             dw, _, eq = joint.cycle_wear(grow * h, lo, guess)
             a = joint.wear_response(grow * h, lo, eq)
             volume = worn_volume(h, el.bushing_radius, el.law.depth)
-            g = rate_factor(effects, h, volume, n0, dn)
+            g = rate_factor(effects, h, volume, n0, dn, el.profile.theta, self.cycles)
             dh = jnp.linalg.solve(eye + dn * grow * g[:, None] * a, dn * g * dw)
             ok = ok & eq.ok & jnp.all(jnp.isfinite(dh))
             h = jnp.where(ok, h + dh, h)

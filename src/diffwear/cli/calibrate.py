@@ -16,7 +16,9 @@ from typing import Any
 
 import numpy as np  # noqa: E402
 
+from ..calibrate import learned
 from ..calibrate.dataset import PARAMETERS, Dataset  # noqa: E402
+from ..calibrate.discrepancy import VARIABLES
 from ..calibrate.effects import EFFECTS  # noqa: E402
 from ..calibrate.fit import ModelSettings  # noqa: E402
 from ..calibrate.frame_check import frame_check  # noqa: E402
@@ -107,6 +109,7 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
     """The calibration's figures (`plots.calibration`) from its numbers."""
     p = c.problem
     which = p.series_of_point
+    final = c.final or c.base
     fits = []
     for k, s in enumerate(c.dataset.series):
         m = which == k
@@ -114,8 +117,8 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
         fits.append(plots_calibration.SeriesFit(
             name=s.name, kind=s.kind, unit=unit, xlabel=xlabel, scale=scale, x=s.x, y=s.y,
             sigma=s.sigma, holdout=s.holdout, base=c.base.prediction[m],
-            chosen=None if c.chosen is c.base else c.chosen.prediction[m],
-            chosen_label=f"with {c.chosen.effect}", cycles=s.cycles))
+            chosen=None if final is c.base else final.prediction[m],
+            chosen_label=_final_label(final), cycles=s.cycles))
     files = [plots_calibration.series_fit(out.file(f"fit_{f.name}.png"), f).name for f in fits]
     cycles = [s.cycle_counts for s in c.dataset.series]
     residuals = [c.base.residual[which == k] for k in range(len(c.dataset.series))]
@@ -125,7 +128,24 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
     files.append(plots_calibration.candidates(
         out.file("candidates.png"), [s.effect for s in c.scores],
         [s.statistic for s in c.scores], LR_CRITICAL[1]).name)
+    d = c.discrepancy.chosen if c.discrepancy is not None else None
+    if d is not None:
+        f = d.fit
+        span = learned.span(d.variable, c.dataset)
+        x, delta, band = learned.curve(d.variable, f.discrepancy_coefficients,
+                                       f.discrepancy_cov, span)
+        label = {"angle": "bushing angle [deg]", "pressure": "contact pressure [MPa]",
+                 "sliding_speed": "sliding speed [mm/s]", "cycles": "cycles",
+                 "depth": "wear depth [mm]"}[d.variable]
+        files.append(plots_calibration.discrepancy(
+            out.file("discrepancy.png"), x, delta, band, label,
+            f"learned discrepancy of k over {d.variable.replace('_', ' ')}").name)
     return files
+
+
+def _final_label(f) -> str:
+    parts = [*f.effects] + ([f"discrepancy in {f.discrepancy}"] if f.discrepancy else [])
+    return "with " + " + ".join(parts) if parts else "base model"
 
 
 def _fmt(v, digits=4):
@@ -149,18 +169,14 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
                       "freedom: enough to calibrate, not to tell candidate effects apart (a "
                       "score test needs residual structure: profiles at several cycle counts, "
                       "a mass history or a force trace).")
-    ident = summary["effect_identified"]
-    final = c.chosen if ident != "none" else c.base
+    final = c.final or c.base
     blocks.append(Section("Result", [
-        Bullets([
-            f"effect identified: **{ident}**"
-            + (f", strength {_fmt(summary['effect_strength'])} +- "
-               f"{_fmt(summary['effect_strength_std'], 2)} (1 sigma)" if ident != "none"
-               else "")
-            + (f", {_shape_text(ident, summary)}" if summary.get("effect_shape") else ""),
-            f"residual unexplained: {'**yes**' if summary['residual_unexplained'] else 'no'}"
-            f" (chi2 {c.gof['chi2']:.1f} on {c.gof['dof']} dof; noise allows "
-            f"{c.gof['limit']:.1f})"]),
+        Bullets([*_effect_lines(summary),
+                 f"residual unexplained by the library: "
+                 f"{'**yes**' if summary['residual_unexplained'] else 'no'}"
+                 f" (chi2 {c.gof['chi2']:.1f} on {c.gof['dof']} dof; noise allows "
+                 f"{c.gof['limit']:.1f})",
+                 *_discrepancy_lines(summary)]),
         Bullets([f"mechanism suspect: **{summary['suspect']}**"
                  + _suspect_verdict(summary["suspects"][0])] if summary.get("suspect") else []),
         Table(("", "base model", "final model"), [
@@ -207,6 +223,15 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
             Table(("parameter", "score", "p", "stated", "first-step factor"),
                   [(sp["name"], _fmt(sp["score"]), _fmt(sp["p_value"], 2), _fmt(sp["value"]),
                     _fmt(sp["factor"], 3)) for sp in summary["suspects"][:6]])]))
+    limits = summary.get("detection_limits") or {}
+    if limits:
+        blocks.append(Section("Detection limits", [
+            "The smallest strength of each effect not named that these data would have "
+            f"detected ({STRENGTH_SIGMAS:g} sigma from zero at the final model, at the shape "
+            "where the data are most sensitive to it): \"none\" reads \"none above these\".",
+            Table(("effect", "detection limit (strength)", "at shape"),
+                  [(name, _fmt(v["strength"], 3), _fmt(v["shape"], 3) if v["shape"] else "")
+                   for name, v in limits.items()])]))
     check = summary.get("model_check")
     if check:
         blocks.append(Section("Check on the dynamic model", [
@@ -255,12 +280,53 @@ def frame_warnings(c: Calibration) -> list[dict]:
     return found
 
 
-def _shape_text(effect: str, summary: dict) -> str:
-    shape = next(e.shape for e in EFFECTS if e.name == effect)
+def _shape_text(entry: dict) -> str:
+    shape = next(e.shape for e in EFFECTS if e.name == entry["name"])
     assert shape is not None  # called for effects with a fitted shape only
-    lo, hi = summary["effect_shape_interval"] or (math.nan, math.nan)
-    return (f"{shape.name.replace('_', ' ')} {_fmt(summary['effect_shape'], 3)} {shape.unit} "
+    lo, hi = entry["shape_interval"] or (math.nan, math.nan)
+    return (f"{shape.name.replace('_', ' ')} {_fmt(entry['shape'], 3)} {shape.unit} "
             f"(1 sigma: {_fmt(lo, 3)}..{_fmt(hi, 3)})")
+
+
+def _effect_text(entry: dict) -> str:
+    if "identified_form" in entry:
+        return entry["identified_form"]["sentence"]
+    text = (f"**{entry['name']}**, strength {_fmt(entry['strength'])} +- "
+            f"{_fmt(entry['strength_std'], 2)} (1 sigma)")
+    if entry.get("shape") is not None:
+        text += f", {_shape_text(entry)}"
+    return text
+
+
+def _effect_lines(summary: dict) -> list[str]:
+    """The named effects (or the ambiguity) in words."""
+    effects = summary["effects_identified"]
+    lines = [f"effect identified: **{summary['effect_identified']}**"]
+    for e in effects:
+        if e.get("ambiguous"):
+            lines.append(f"**{e['name']}**: these data cannot tell them apart; "
+                         + "; ".join(f"{a['name']}: "
+                                     + ", ".join(_effect_text(x) for x in a["effects"])
+                                     for a in e["alternatives"])
+                         + (f"; {e['separating_measurement']['sentence']}"
+                            if e.get("separating_measurement") else ""))
+        else:
+            lines.append(_effect_text(e))
+    for e in summary.get("effects_partial", []):
+        lines.append(f"partial candidate (leaves the residual above the noise): "
+                     f"{_effect_text(e)}")
+    return lines
+
+
+def _discrepancy_lines(summary: dict) -> list[str]:
+    d = summary.get("discrepancy")
+    if not d:
+        return []
+    if d.get("variable") is None:
+        return [f"discrepancy: {d['shape']}"]
+    return [f"learned discrepancy of k over **{d['variable'].replace('_', ' ')}**: {d['shape']}"
+            f"; held-out RMSE {_fmt(d['heldout_rmse_before'], 3)} -> "
+            f"{_fmt(d['heldout_rmse_after'], 3)} sigma (`discrepancy.png`)"]
 
 
 def _suspect_verdict(s: dict) -> str:
@@ -282,20 +348,19 @@ def series_rms(c: Calibration, final) -> dict:
 
 
 def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSettings(),
-        top: int = 3, check: bool = True, log=print) -> dict:
+        top: int = 3, check: bool = True, discrepancy=VARIABLES, log=print) -> dict:
     """The loop on a loaded dataset (`load_dataset`: bad input is found before
     ``out`` exists), writing the outputs listed in the module notes."""
-    c = calibrate(data, settings, top=top, check=check, log=log)
+    c = calibrate(data, settings, top=top, check=check, discrepancy=discrepancy, log=log)
     summary = c.summary()
-    final_fit = c.chosen if summary["effect_identified"] != "none" else c.base
-    summary["series_rms"] = series_rms(c, final_fit)
+    final = c.final or c.base
+    summary["series_rms"] = series_rms(c, final)
     summary["residual_words"] = describe_residuals(c, residual_structure(c))
     summary["frame_warnings"] = frame_warnings(c)
     for w in summary["frame_warnings"]:
         log(f"warning: {w['message']}")
     files = _plots(out, c)
     p = c.problem
-    final = c.chosen if summary["effect_identified"] != "none" else c.base
     names = [s.name for s in data.series]
     out.csv("residuals.csv", {
         "series": p.series_of_point, "x": np.concatenate([s.x for s in data.series]),

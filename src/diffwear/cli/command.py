@@ -238,10 +238,13 @@ def _life(args: argparse.Namespace) -> int:
 def _calibrate(args: argparse.Namespace) -> int:
     from ..calibrate import load_dataset
     from ..calibrate.fit import ModelSettings
+    from ..calibrate.identify import discrepancy_variables, require_fit_points
     from ..io import OutputDir
     from .calibrate import run
 
     data = load_dataset(args.data)  # every input check happens before --out is touched
+    require_fit_points(data)
+    variables = discrepancy_variables(data, args.discrepancy)
     check_int_option("--top", args.top, 1, 5)
     if args.dynamic_cycles is not None:
         check_int_option("--dynamic-cycles", args.dynamic_cycles, 1, 2000)
@@ -254,7 +257,8 @@ def _calibrate(args: argparse.Namespace) -> int:
         settings.with_model("dynamic").build(data.max_cycles)
     out = OutputDir(args.out, overwrite=args.overwrite)
     log = _log(args)
-    run(data, out, settings=settings, top=args.top, check=not args.no_dynamic_check, log=log)
+    run(data, out, settings=settings, top=args.top, check=not args.no_dynamic_check,
+        discrepancy=variables, log=log)
     return 0
 
 
@@ -417,17 +421,24 @@ def build_parser() -> argparse.ArgumentParser:
                        "a missing effect (see the docs, 'Calibration')",
                        description="Fit the dataset's uncertain parameters through the rig "
                        "model (quasi-static by default: exact forward-mode Jacobians; "
-                       "Levenberg-Marquardt), rank the candidate effects by score tests, refit "
-                       "the best with their shapes, name the mechanism parameter the data ask "
-                       "for when no effect explains them, check the result on the dynamic "
-                       "model, and report the held-out error before and after: report.md, "
-                       "summary.json, residuals.csv, plots.",
+                       "Levenberg-Marquardt), select the effects the data show by forward "
+                       "selection (every candidate refitted in the form the data determine; "
+                       "two equally good candidates reported as such), name the mechanism "
+                       "parameter the data ask for when no effect explains them, learn and "
+                       "name a discrepancy of the wear coefficient when nothing in the "
+                       "library does, state each effect's detection limit, check the result "
+                       "on the dynamic model, and report the held-out error before and after: "
+                       "report.md, summary.json, residuals.csv, plots.",
                        epilog="Exit codes: 0 success, 2 bad input, 3 solver failure.")
     p.add_argument("data", help="dataset folder (dataset.toml + CSV files), e.g. "
                    "design_studies/calibration/synthetic_run_in")
     _output_options(p, required=True)
     p.add_argument("--top", type=int, default=3,
-                   help="candidates refitted after the score test (default 3)")
+                   help="kept for compatibility: every candidate is refitted at each stage")
+    p.add_argument("--discrepancy", default="all", metavar="VARIABLES",
+                   help="variables a learned discrepancy of k is searched over when the "
+                        "library leaves the residual unexplained: comma-separated from angle, "
+                        "pressure, sliding_speed, cycles, depth; 'all' (default) or 'none'")
     p.add_argument("--model", choices=("quasi-static", "dynamic"), default="quasi-static",
                    help="the forward model fitted (default quasi-static; dynamic: the "
                         "reference, minutes per fit step on a long campaign)")

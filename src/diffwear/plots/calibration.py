@@ -91,6 +91,24 @@ def candidates(path: Path, effects: Sequence[str], statistics: Sequence[float],
     return _save(fig, path)
 
 
+def discrepancy(path: Path, x, delta, band, xlabel: str, title: str) -> Path:
+    """The learned discrepancy delta(x) of the wear coefficient, in per cent,
+    with its 1-sigma band."""
+    fig, ax = plt.subplots(figsize=(6.4, 3.4))
+    x, d, b = np.asarray(x), 100 * np.asarray(delta), 100 * np.asarray(band)
+    ax.fill_between(x, d - b, d + b, alpha=0.3, label="1 sigma")
+    ax.plot(x, d, label="delta")
+    ax.axhline(0.0, color="k", lw=0.6)
+    ax.set(xlabel=xlabel, ylabel="k (1 + delta): delta [%]", title=title)
+    if xlabel.endswith("[MPa]") or xlabel.endswith("[mm/s]"):
+        ax.set_xscale("log")
+    if xlabel.startswith("bushing angle"):
+        ax.set_xticks(np.arange(0, 361, 45))
+        ax.set_xlim(0, 360)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return _save(fig, path)
+
+
 def _save(fig, path: Path) -> Path:
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -1,0 +1,186 @@
+"""Learn the discrepancy the library lacks, then name it by its shape.
+
+When the chosen model still leaves a residual above the noise, the fit is
+repeated with the learned discrepancy k (1 + delta(x)) (`discrepancy`) over
+each candidate variable x in turn, the model's effects refitted with it.  A
+variable *cuts the held-out error* when its held-out chi-square falls by
+more than `LR_CRITICAL` [1] (with held-out data) and the penalised criterion
+(`selection.criterion`, the discrepancy counted by its effective number of
+coefficients) falls too; among those, the lowest criterion names the
+variable.  Its delta is then described in words (`describe`): lobes and peak
+angles for the bushing angle, the trend and its range for the others.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import InputError, SolverError
+from . import discrepancy as disc
+from .fit import FitResult, Fitter
+from .selection import LR_CRITICAL, criterion
+
+
+def unsupported(data, variable: str) -> str | None:
+    """Why ``data`` cannot show a discrepancy in ``variable`` (None: they can)."""
+    if variable not in disc.VARIABLES:
+        return f"unknown variable; allowed: {', '.join(disc.VARIABLES)}"
+    wear = [s for s in data.series if s.kind != "force"]
+    if not wear:
+        return "the dataset has no wear measurement (profile, volume or depth)"
+    if variable == "angle":
+        angles = sum(s.x.size for s in data.series if s.kind == "profile")
+        if angles < 2 * disc.SIZES["angle"]:
+            return ("it needs worn profiles over the bushing angle (at least "
+                    f"{2 * disc.SIZES['angle']} points); the dataset has {angles}")
+    if variable == "cycles":
+        counts = {float(c) for s in wear for c in np.unique(s.cycle_counts)}
+        if len(counts) < 2:
+            return "it needs wear measured at two or more cycle counts"
+    return None
+
+
+def effective_coefficients(fit: FitResult) -> float:
+    """Effective number of the discrepancy's coefficients: sum of l / (1 + l)
+    over the eigenvalues l of the data's information on them in prior units."""
+    lay = fit.notes["layout"]
+    nd = fit.n_discrepancy
+    j = fit.notes["jacobian"][:, lay.size - nd:]
+    lam = np.linalg.eigvalsh(j.T @ j)
+    return float(np.sum(lam / (1.0 + np.clip(lam, 0.0, None))))
+
+
+@dataclass
+class Trial:
+    variable: str
+    fit: FitResult | None
+    criterion: float = math.inf
+    cuts: bool = False
+    failure: str | None = None
+
+
+@dataclass
+class Search:
+    """The discrepancy search at ``reference`` (the chosen model)."""
+
+    reference: FitResult
+    trials: list = field(default_factory=list)
+    chosen: Trial | None = None
+    skipped: dict = field(default_factory=dict)   # variable -> why the data cannot show it
+
+
+def search(fitter: Fitter, reference: FitResult, data, variables, log=print) -> Search:
+    """Fit the discrepancy over each of ``variables`` (module notes)."""
+    out = Search(reference)
+    base_crit = criterion(reference)
+    for v in variables:
+        why = unsupported(data, v)
+        if why is not None:
+            out.skipped[v] = why
+            continue
+        try:
+            f = fitter.fit(reference.effects, start=reference, discrepancy=v)
+        except SolverError as err:
+            out.trials.append(Trial(v, None, failure=str(err)))
+            log(f"discrepancy in {v}: {err}")
+            continue
+        f.notes["discrepancy_edf"] = effective_coefficients(f)
+        crit = criterion(f)
+        held = (reference.n_holdout == 0
+                or reference.chi2_holdout - f.chi2_holdout > LR_CRITICAL[1])
+        cuts = held and crit < base_crit - LR_CRITICAL[1]
+        out.trials.append(Trial(v, f, crit, cuts))
+        log(f"discrepancy in {v}: chi2 {f.chi2_fit:.1f}, held-out RMSE "
+            f"{f.rmse_holdout:.3g} sigma, {f.notes['discrepancy_edf']:.2g} effective "
+            f"coefficients{' (cuts the error)' if cuts else ''}")
+    cutting = [t for t in out.trials if t.cuts]
+    out.chosen = min(cutting, key=lambda t: t.criterion, default=None)
+    return out
+
+
+def curve(variable: str, coefficients, cov, span: tuple):
+    """(x in report units, delta, 1-sigma band) over ``span`` (SI)."""
+    lo, hi = span
+    if variable in ("pressure", "sliding_speed"):
+        x = np.geomspace(lo, hi, 200)
+    else:
+        x = np.linspace(lo, hi, 361 if variable == "angle" else 200)
+    total = hi if variable == "cycles" else 1.0
+    phi = np.asarray(disc.basis(variable, jnp.asarray(x), total))
+    d = phi @ np.asarray(coefficients)
+    band = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", phi, cov, phi), 0.0, None))
+    scale = {"angle": 180.0 / math.pi, "pressure": 1e-6, "sliding_speed": 1e3,
+             "cycles": 1.0, "depth": 1e3}[variable]
+    return x * scale, d, band
+
+
+def span(variable: str, data) -> tuple:
+    """The range (SI) over which ``variable``'s delta is drawn and described."""
+    if variable == "angle":
+        return (0.0, 2 * math.pi)
+    if variable == "pressure":
+        return (1e5, 1e7)        # 0.1-10 MPa around the 1 MPa reference
+    if variable == "sliding_speed":
+        return (3e-3, 3e-1)      # 3-300 mm/s around the 30 mm/s reference
+    if variable == "cycles":
+        return (0.0, float(data.max_cycles))
+    deepest = max((float(np.max(s.y)) for s in data.series if s.kind == "profile"),
+                  default=disc.H_REF)
+    return (0.0, max(deepest, 1e-6))
+
+
+def _peaks(x, d):
+    """Indices of the circular local maxima of ``d`` in its upper half."""
+    hi, lo = float(np.max(d)), float(np.min(d))
+    up = (d >= np.roll(d, 1)) & (d > np.roll(d, -1)) & (d >= hi - 0.5 * (hi - lo))
+    return np.flatnonzero(up)
+
+
+def describe(variable: str, coefficients, cov, data) -> dict:
+    """The discrepancy's shape in words and numbers."""
+    c = np.asarray(coefficients)
+    x, d, band = curve(variable, c, cov, span(variable, data))
+    unit = disc.UNITS[variable]
+    out: dict = {"variable": variable, "coefficients": c.tolist(),
+                 "coefficients_std": np.sqrt(np.clip(np.diag(cov), 0.0, None)).tolist()}
+    if variable == "angle":
+        x, d = x[:-1], d[:-1]  # 360 deg is 0 deg
+        amp = np.hypot(c[0::2], c[1::2])
+        lobes = int(np.argmax(amp)) + 1
+        peaks = _peaks(x, d)
+        angles = sorted(float(x[i]) for i in peaks)
+        a = float(np.max(np.abs(d)))
+        listed = ", ".join(f"{v:.0f}" for v in angles[:-1]) + \
+            (f" and {angles[-1]:.0f}" if len(angles) > 1 else f"{angles[-1]:.0f}")
+        out.update(lobes=lobes, peaks_deg=angles, amplitude=a,
+                   shape=f"{lobes} lobe{'s' if lobes > 1 else ''}, peak"
+                         f"{'s' if len(angles) > 1 else ''} at {listed} deg, "
+                         f"amplitude +-{100 * a:.0f} %")
+        return out
+    i_max, i_min = int(np.argmax(d)), int(np.argmin(d))
+    rising = d[-1] > d[0]
+    interior = 0 < (i_max if rising else i_min) < len(d) - 1 and \
+        abs(d[i_max] - max(d[0], d[-1])) > 0.25 * (np.max(d) - np.min(d))
+
+    def fmt(v):
+        return f"{v:.3g} {unit}"
+
+    if interior:
+        words = f"peaks at {fmt(x[i_max])} ({100 * d[i_max]:+.0f} %)"
+    else:
+        words = (f"{'rises' if rising else 'falls'} from {100 * d[0]:+.0f} % at {fmt(x[0])} "
+                 f"to {100 * d[-1]:+.0f} % at {fmt(x[-1])}")
+    out.update(shape=words, amplitude=float(np.max(np.abs(d))))
+    return out
+
+
+def check_variables(data, variables) -> None:
+    """Refuse (InputError) a requested variable the dataset cannot show."""
+    for v in variables:
+        why = unsupported(data, v)
+        if why is not None:
+            raise InputError(f"{data.path}: discrepancy variable {v!r}: {why}")

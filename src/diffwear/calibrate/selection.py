@@ -1,0 +1,239 @@
+"""Which effects the data show: identifiability, adoption, ambiguity and the
+measurement that would separate two explanations.
+
+**Identifiability.**  A fitted shape (a run-in's time scale, a film's depth)
+is *determined* when the data shrink its prior: its posterior standard
+deviation, in units of the prior's, is below `SHAPE_DETERMINED` (the data's
+information on it at least the prior's).  When it is not, only a
+combination of strength and shape is measured, and the candidate is stated
+in that identified form: the extra worn volume the effect adds by an
+inspection (`IdentifiedForm`; a run-in's by the first inspection: its
+bedding-in), with the 1-sigma of that volume from the fit's covariance
+(delta method through the model's exact derivatives).
+
+**Adoption.**  A candidate qualifies when (a) its fit-set chi-square falls by
+more than the chi-square critical value at p = 0.001 for the numbers it
+determines (`LR_CRITICAL`), (b) *what is reported* (the strength, or the
+identified form) stands `STRENGTH_SIGMAS` standard deviations from zero on
+the allowed side, at the uncertainty that is reported, and (c) with held-out
+data, its held-out chi-square is lower than the model's without it.  The
+penalised criterion chi2_fit + chi2_holdout + ln(n_fit) per determined
+number (BIC) ranks qualifying candidates.
+
+**Ambiguity.**  The qualifying candidates whose criteria lie within
+`AMBIGUITY` of the best (2 ln B < 6, below "strong" evidence on Kass and
+Raftery's scale, J. Am. Stat. Assoc. 90 (1995) 773) form the window of
+comparable explanations; within it the simplest ones (fewest determined
+numbers) stay, as in Occam's window (Madigan and Raftery, J. Am. Stat.
+Assoc. 89 (1994) 1535).  One left is the answer; two or more are an answer
+of their own: "A or B", with both fits and the measurement that would
+separate them, found from the two models' worn-volume predictions
+(`separating_measurement`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .effects import EFFECTS, NAMES
+from .fit import FitResult, Fitter
+
+# chi-square critical values at p = 0.001 for 1 and 2 fitted numbers
+LR_CRITICAL = {1: 10.83, 2: 13.82}
+STRENGTH_SIGMAS = 3.0   # |reported value| / its std of an adopted effect
+SHAPE_DETERMINED = 0.7  # posterior / prior std of a shape the data determine
+AMBIGUITY = 6.0         # criterion difference of two equally good candidates
+SEPARATION_SIGMAS = 3.0  # a measurement separates two models at this many sigma
+# Effects stated, when their shape is not determined, by the extra volume
+# worn before the first inspection (an early effect); the others by the
+# extra volume at the last fitted inspection.
+EARLY = ("run_in",)
+
+
+@dataclass
+class IdentifiedForm:
+    """What the data determine of an effect whose shape they do not: the
+    extra worn volume [m^3] it adds by ``cycles``, and its 1-sigma."""
+
+    volume: float
+    std: float
+    cycles: float
+    early: bool
+
+    def sentence(self, effect: str) -> str:
+        what = "bedding-in" if effect == "run_in" else effect.replace("_", " ")
+        when = (f"before the first inspection ({self.cycles:g} cycles)" if self.early
+                else f"by {self.cycles:g} cycles")
+        shape = EFFECTS[NAMES.index(effect)].shape
+        unit = shape.name.replace("_", " ") if shape else "shape"
+        return (f"{what}: {self.volume * 1e9:+.3g} +- {self.std * 1e9:.2g} mm^3 of extra wear "
+                f"{when}; its {unit} cannot be measured from these data")
+
+
+@dataclass
+class Assessment:
+    """One candidate effect refitted on top of a reference model."""
+
+    effect: str
+    fit: FitResult
+    reference: FitResult
+    likelihood_ratio: float
+    shape_determined: bool | None      # None: the effect has no shape
+    value: float                       # what is reported: strength, or extra volume [m^3]
+    std: float
+    form: IdentifiedForm | None
+    held_out_better: bool
+    qualifies: bool
+    reasons: list = field(default_factory=list)
+    criterion: float = math.inf
+
+    @property
+    def numbers(self) -> int:
+        """Numbers the effect adds that the data determine (1, or 2 with a
+        determined shape)."""
+        return 1 + (self.shape_determined is True)
+
+    @property
+    def z(self) -> float:
+        return self.value / self.std if self.std > 0 else math.inf
+
+    def entry(self) -> dict:
+        """The effect as `summary.json` lists it."""
+        f, e = self.fit, self.effect
+        out = {"name": e, "strength": f.strengths[e], "strength_std": f.strengths_std[e],
+               "shape": f.shapes.get(e), "shape_interval":
+               list(f.shape_intervals[e]) if e in f.shape_intervals else None,
+               "shape_determined": self.shape_determined, "z": self.z}
+        if self.form is not None:
+            out["identified_form"] = {
+                "quantity": "extra worn volume", "value_mm3": self.form.volume * 1e9,
+                "std_mm3": self.form.std * 1e9, "cycles": self.form.cycles,
+                "sentence": self.form.sentence(e)}
+        return out
+
+
+def shape_determined(fit: FitResult, effect: str) -> bool | None:
+    """Whether the data determine ``effect``'s shape in ``fit`` (module notes)."""
+    lay = fit.notes["layout"]
+    if effect not in lay.shaped:
+        return None
+    i = lay.n_base + len(lay.effects) + lay.shaped.index(effect)
+    return math.sqrt(max(float(fit.notes["cov"][i, i]), 0.0)) < SHAPE_DETERMINED
+
+
+def determined_numbers(fit: FitResult) -> float:
+    """Numbers the data determine in ``fit`` beyond the base parameters: one
+    per strength, one per determined shape, the effective number of a
+    discrepancy's coefficients (the trace of its data-over-posterior
+    information)."""
+    n = float(len(fit.effects))
+    n += sum(bool(shape_determined(fit, e)) for e in fit.effects)
+    if fit.discrepancy is not None:
+        n += fit.notes.get("discrepancy_edf", float(fit.n_discrepancy))
+    return n
+
+
+def criterion(fit: FitResult) -> float:
+    """chi2_fit + chi2_holdout + ln(n_fit) per determined number (BIC)."""
+    return fit.chi2_fit + fit.chi2_holdout + determined_numbers(fit) * math.log(fit.n_fit)
+
+
+def volumes(fitter: Fitter, fit: FitResult, zero: str | None = None):
+    """(worn volume at the probe cycle counts, its derivative by the fit's
+    unknowns), with ``zero``'s strength set to zero when given."""
+    lay = fit.notes["layout"]
+    z = np.array(fit.notes["z"], dtype=float)
+    if zero is not None:
+        z[lay.n_base + lay.effects.index(zero)] = 0.0
+    lin = fitter.linearise(lay.pack(z), lay.tangents)
+    jac = lin.volume_jac.copy()
+    if zero is not None:
+        jac[:, lay.n_base + lay.effects.index(zero)] = 0.0
+    return lin.volume, jac
+
+
+def identified_form(fitter: Fitter, fit: FitResult, effect: str,
+                    inspections: list) -> IdentifiedForm | None:
+    """The extra worn volume ``effect`` adds (module notes), or None without
+    an inspection to state it at."""
+    if not inspections:
+        return None
+    probes = list(fitter.problem.probe_cycles)
+    early = effect in EARLY
+    cycles = min(inspections) if early else max(inspections)
+    k = int(np.argmin(np.abs(np.asarray(probes) - cycles)))
+    v1, j1 = volumes(fitter, fit, None)
+    v0, j0 = volumes(fitter, fit, effect)
+    g = j1[k] - j0[k]
+    var = float(g @ fit.notes["cov"] @ g)
+    return IdentifiedForm(float(v1[k] - v0[k]), math.sqrt(max(var, 0.0)), float(probes[k]),
+                          early)
+
+
+def assess(fitter: Fitter, effect: str, fit: FitResult, reference: FitResult,
+           inspections: list) -> Assessment:
+    """Whether ``effect`` (fitted in ``fit`` on top of ``reference``) qualifies
+    (module notes)."""
+    eff = EFFECTS[NAMES.index(effect)]
+    lr = reference.chi2_fit - fit.chi2_fit
+    determined = shape_determined(fit, effect)
+    form = None
+    value, std = fit.strengths[effect], fit.strengths_std[effect]
+    if determined is False:
+        form = identified_form(fitter, fit, effect, inspections)
+        if form is not None:
+            value, std = form.volume, form.std
+    numbers = 1 + (determined is True)
+    held = fit.n_holdout == 0 or fit.chi2_holdout < reference.chi2_holdout
+    reasons = []
+    if not lr > LR_CRITICAL[numbers]:
+        reasons.append(f"chi2 drop {lr:.3g} <= {LR_CRITICAL[numbers]}")
+    z = value / std if std > 0 else math.inf
+    if abs(z) < STRENGTH_SIGMAS:
+        what = "extra volume" if form is not None else "strength"
+        reasons.append(f"{what} {abs(z):.2g} sigma from zero (< {STRENGTH_SIGMAS:g})")
+    if fit.strengths[effect] < eff.lower:
+        reasons.append("strength outside its allowed range")
+    if not held:
+        reasons.append("held-out error not lower")
+    return Assessment(effect, fit, reference, lr, determined, value, std, form, held,
+                      not reasons, reasons, criterion(fit))
+
+
+def separating_measurement(fitter: Fitter, a: FitResult, b: FitResult, data) -> dict:
+    """Where the worn volumes predicted by fits ``a`` and ``b`` differ most in
+    units of the dataset's weighing precision (or, without a weighing, in
+    mm^3): the inspection that would tell the two apart."""
+    probes = np.asarray(fitter.problem.probe_cycles, float)
+    va, _ = volumes(fitter, a)
+    vb, _ = volumes(fitter, b)
+    weighings = [s.sigma for s in data.series if s.kind == "volume"]
+    sigma = min(weighings) if weighings else None
+    diff = np.abs(va - vb)
+    score = diff / sigma if sigma else diff
+    k = int(np.argmax(score))
+    out = {"cycles": float(probes[k]), "volume_a_mm3": float(va[k] * 1e9),
+           "volume_b_mm3": float(vb[k] * 1e9), "difference_mm3": float(diff[k] * 1e9),
+           "sigma_mm3": sigma * 1e9 if sigma else None}
+    measured = sorted({float(c) for s in data.series if s.kind != "force"
+                       for c in np.unique(s.cycle_counts)})
+    first = measured[0] if measured else math.inf
+    when = (f"an inspection earlier than the first ({first:g} cycles), at about "
+            f"{probes[k]:.0f} cycles" if probes[k] < first else
+            f"an inspection or weighing at about {probes[k]:.0f} cycles")
+    if sigma:
+        sep = float(score[k])
+        out["separation_sigma"] = sep
+        enough = sep >= SEPARATION_SIGMAS
+        out["sentence"] = (
+            f"{when} would separate them: the two models predict {va[k] * 1e9:.3g} and "
+            f"{vb[k] * 1e9:.3g} mm^3 there ({sep:.2g} sigma of the stated weighing)"
+            + ("" if enough else f"; a weighing {SEPARATION_SIGMAS / max(sep, 1e-9):.2g}x "
+               "more precise is needed"))
+    else:
+        out["sentence"] = (f"{when} would separate them best: the two models' worn volumes "
+                           f"differ most there ({diff[k] * 1e9:.3g} mm^3); weigh the bushing")
+    return out

@@ -524,8 +524,8 @@ def test_calibrate_cli_refuses_a_campaign_too_short_to_fit(tmp_path, capsys):
 
 
 @pytest.mark.long  # each campaign takes one to three minutes
-@pytest.mark.parametrize("name", ["campaign_pressure_exponent", "campaign_run_in_and_pressure",
-                                  "campaign_run_in_weak_pressure", "campaign_two_lobe_k",
+@pytest.mark.parametrize("name", ["campaign_pressure_exponent", "campaign_run_in_and_creep",
+                                  "campaign_run_in_weak_creep", "campaign_two_lobe_k",
                                   "campaign_three_lobe_k", "campaign_hidden_film"])
 def test_calibration_names_what_the_data_show(name, tmp_path):
     """The campaigns of several effects, of an effect below its detection

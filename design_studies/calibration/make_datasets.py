@@ -103,13 +103,16 @@ DATASETS = {
     # alternative (an early excess of wear also steepens the first inspections)
     "campaign_pressure_exponent": (EffectValues.of(pressure_exponent=1.0), CAMPAIGN_21400, LONG,
                                    TRUTH, None, 25, "21,400-cycle rig campaign K (synthetic)"),
-    # two effects at once, each strong enough for these inspections
-    "campaign_run_in_and_pressure": (
-        EffectValues.of(run_in=2.5, run_in_cycles=2000.0, pressure_exponent=0.6),
+    # two effects at once, each strong enough for these inspections: a run-in
+    # and a creeping bushing (the profile grows 15 % more than the mass says).
+    # (A pressure exponent of 0.6 beside this run-in is not: the run-in's
+    # time scale absorbs it, score 1.2 at the run-in fit.)
+    "campaign_run_in_and_creep": (
+        EffectValues.of(run_in=2.5, run_in_cycles=2000.0, creep=0.15),
         CAMPAIGN_21400, LONG, TRUTH, None, 26, "21,400-cycle rig campaign L (synthetic)"),
-    # the same run-in with a pressure exponent below what these data can detect
-    "campaign_run_in_weak_pressure": (
-        EffectValues.of(run_in=2.5, run_in_cycles=2000.0, pressure_exponent=0.02),
+    # the same run-in with creep below what these data can detect
+    "campaign_run_in_weak_creep": (
+        EffectValues.of(run_in=2.5, run_in_cycles=2000.0, creep=0.002),
         CAMPAIGN_21400, LONG, TRUTH, None, 27, "21,400-cycle rig campaign M (synthetic)"),
     # outside the library: k varies with the bushing angle (two and three lobes)
     "campaign_two_lobe_k": (lobed_k(2, 40.0), CAMPAIGN_21400, LONG, TRUTH, None, 28,
@@ -128,9 +131,8 @@ DATASETS = {
 # below what these data detect (named nowhere, their detection limit above
 # the truth); "discrepancy": the learned discrepancy's variable and lobes.
 EXPECT = {
-    "campaign_run_in_and_pressure": {"effects": ("run_in", "pressure_exponent")},
-    "campaign_run_in_weak_pressure": {"effects": ("run_in",),
-                                      "below_limit": ("pressure_exponent",)},
+    "campaign_run_in_and_creep": {"effects": ("run_in", "creep")},
+    "campaign_run_in_weak_creep": {"effects": ("run_in",), "below_limit": ("creep",)},
     "campaign_two_lobe_k": {"effects": (), "discrepancy": ("angle", 2, (40.0, 220.0))},
     "campaign_three_lobe_k": {"effects": (), "discrepancy": ("angle", 3, (23.0, 143.0, 263.0))},
     "campaign_hidden_film": {"effects": (), "below_limit": ()},

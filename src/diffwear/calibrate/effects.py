@@ -129,6 +129,14 @@ INDEX = {n: i for i, n in enumerate(NAMES)}
 SHAPED = tuple(e.shape is not None for e in EFFECTS)
 
 
+def log_shape(name: str, value: float) -> float:
+    """ln(value / default) of effect ``name``'s shape (SI ``value``)."""
+    shape = EFFECTS[INDEX[name]].shape
+    if shape is None:
+        raise KeyError(f"effect {name!r} has no shape parameter")
+    return math.log(value / shape.default)
+
+
 class EffectValues(eqx.Module):
     """Strength of every effect (`NAMES` order; zeros: the base model), the
     logarithm of each shape over its default (zeros: the defaults; ignored

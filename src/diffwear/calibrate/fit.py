@@ -39,7 +39,7 @@ import numpy as np
 from ..errors import InputError, SolverError
 from . import discrepancy as disc
 from .dataset import Dataset
-from .effects import EFFECTS, NAMES, SHAPED, EffectValues
+from .effects import EFFECTS, NAMES, SHAPED, EffectValues, log_shape
 from .model import BASE_NAMES, MAX_EXTRAPOLATION, Observation, RigHistory, rig_defaults
 from .quasi_static import DEFAULT_STEPS, QuasiStaticRigHistory
 
@@ -599,12 +599,13 @@ class Layout:
         if start is not None:
             x0 = start.notes["x"] if x0 is None else x0
             s0 = {**start.strengths, **(s0 if isinstance(s0, dict) else {})}
-            log_shape0 = {**{e: math.log(v / EFFECTS[NAMES.index(e)].shape.default)
-                             for e, v in start.shapes.items() if v is not None},
+            log_shape0 = {**{e: log_shape(e, v) for e, v in start.shapes.items()
+                             if v is not None},
                           **(log_shape0 if isinstance(log_shape0, dict) else {})}
-            if start.discrepancy == self.discrepancy and start.discrepancy is not None:
-                z[-disc.SIZES[self.discrepancy]:] = (np.asarray(start.discrepancy_coefficients)
-                                                    / disc.prior_std(self.discrepancy))
+            variable = self.discrepancy
+            if variable is not None and start.discrepancy == variable:
+                z[-disc.SIZES[variable]:] = (np.asarray(start.discrepancy_coefficients)
+                                            / disc.prior_std(variable))
         if x0 is not None:
             z[:nb] = np.asarray(x0, dtype=float)
         one = len(self.effects) == 1

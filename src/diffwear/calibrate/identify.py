@@ -47,7 +47,7 @@ from ..errors import InputError, SolverError
 from . import learned
 from .dataset import Dataset
 from .discrepancy import VARIABLES
-from .effects import EFFECTS, NAMES, EffectValues
+from .effects import EFFECTS, NAMES, EffectValues, log_shape
 from .fit import SCALES, FitResult, Fitter, ModelSettings, Problem
 from .parameters import RIG_PARAMETERS
 from .scores import (
@@ -76,8 +76,14 @@ MIN_DOF_FOR_EFFECT = 2
 MAX_EFFECTS = 3        # effects adopted at most (forward-selection stages)
 # Forward-selection paths: one from each of the best few qualifying single
 # effects (a greedy path from the single best can be trapped by an effect
-# that mimics a pair of others)
+# that mimics a pair of others), each explaining at least PATH_SHARE of the
+# criterion drop the best single effect gives
 PATHS = 3
+PATH_SHARE = 0.9
+# A refit's first start: the score test's Gauss-Newton step, at most this
+# many of the effect's scales (the step is linear; the model is not)
+FIRST_STEP_SCALES = 5.0
+REFIT_THREADS = 2      # candidate refits run side by side
 DEFAULT_TOP = 3        # accepted for compatibility; every candidate is refitted
 
 __all__ = ["AMBIGUITY", "GOF_SIGMAS", "LR_CRITICAL", "SHAPE_GRID", "STRENGTH_SIGMAS",
@@ -196,31 +202,44 @@ class Selection:
 
 
 def _starts(score: Score, effect: str):
-    """Starting (strength, ln shape) pairs of a refit: the score's first step,
-    then the effect's scale at the default shape and at the grid's ends."""
+    """Starting (strength, ln shape) pairs of a refit: the score's first step
+    (at most `FIRST_STEP_SCALES` of the effect's scale), a tenth of the scale
+    in its direction, then the scale at the default shape and at the shape
+    grid's ends."""
     k = NAMES.index(effect)
-    eff = EFFECTS[k]
-    first = float(np.clip(score.first_step, eff.lower, None))
-    out = [(first, score.log_shape), (float(SCALES[k]), 0.0)]
+    eff, scale = EFFECTS[k], float(SCALES[k])
+    sign = 1.0 if score.first_step >= 0 or eff.lower >= 0 else -1.0
+    first = float(np.clip(score.first_step, max(eff.lower, -FIRST_STEP_SCALES * scale),
+                          FIRST_STEP_SCALES * scale))
+    out = [(first, score.log_shape), (0.1 * sign * scale, score.log_shape), (scale, 0.0)]
     if eff.shape is not None:
-        out += [(float(SCALES[k]), eff.shape.log_std * g) for g in (SHAPE_GRID[0], SHAPE_GRID[-1])]
+        out += [(scale, eff.shape.log_std * g) for g in (SHAPE_GRID[0], SHAPE_GRID[-1])]
     return out
 
 
 def refit(fitter: Fitter, current: FitResult, effect: str, score: Score, log):
-    """``current`` + ``effect``, retried from other starts on failure; (fit,
-    None) or (None, the reasons)."""
-    errors = []
+    """``current`` + ``effect`` from the starts of `_starts`, in turn until a
+    fit ends no worse than ``current`` (a start far down a non-linear
+    direction can end in a poorer minimum); (the best fit, None) or (None,
+    the reasons every start failed)."""
+    errors, best = [], None
     for s0, g0 in _starts(score, effect):
         strengths = {**current.strengths, effect: s0}
-        shapes = {e: math.log(v / EFFECTS[NAMES.index(e)].shape.default)
-                  for e, v in current.shapes.items()}
+        shapes = {e: log_shape(e, v) for e, v in current.shapes.items()}
         shapes[effect] = g0
         try:
-            return fitter.fit((*current.effects, effect), x0=current.notes["x"],
-                              s0=strengths, log_shape0=shapes), None
+            f = fitter.fit((*current.effects, effect), x0=current.notes["x"],
+                           s0=strengths, log_shape0=shapes,
+                           discrepancy=current.discrepancy)
         except SolverError as err:
             errors.append(str(err))
+            continue
+        if best is None or f.chi2_fit < best.chi2_fit:
+            best = f
+        if f.chi2_fit <= current.chi2_fit + 1e-6 * current.chi2_fit:
+            return f, None
+    if best is not None:
+        return best, None
     reason = "; ".join(dict.fromkeys(errors))
     log(f"refit + {effect} failed from {len(errors)} starts: {reason}")
     return None, reason
@@ -230,7 +249,8 @@ def _judge_members(fitter, model: FitResult, inspections, log, always: bool = Fa
     """Each effect of ``model`` judged in the joint fit against the model
     without it (its discrepancy kept); returns (assessments, the weakest
     that fails or None).  A single effect is judged only when ``always``."""
-    out, weakest = {}, None
+    out: dict = {}
+    weakest = None
     if len(model.effects) == 1 and not always:
         return out, None
     for e in model.effects:
@@ -269,10 +289,16 @@ def _stage(fitter: Fitter, current: FitResult, kinds, inspections, log,
     log(("scores" if not current.effects else f"scores beside {' + '.join(current.effects)}")
         + ": " + ", ".join(f"{s.effect} {s.statistic:.3g}" for s in scores))
     stage = Stage(scores, {}, {})
-    for s in scores:
-        if s.statistic <= 0.0:
-            continue
-        f, failure = refit(fitter, current, s.effect, s, log)
+    todo = [s for s in scores if s.statistic > 0.0]
+
+    def one(s: Score):
+        return s, refit(fitter, current, s.effect, s, log)
+
+    # the refits are independent: two at a time keep both cores busy (XLA
+    # runs one small program on about one core)
+    with ThreadPoolExecutor(max_workers=REFIT_THREADS) as pool:
+        done = list(pool.map(one, todo))
+    for s, (f, failure) in done:
         if f is None:
             stage.failed[s.effect] = failure
             continue
@@ -344,8 +370,13 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log) -> Se
     ranked = [a for a in ranked if a.criterion < criterion(base)]
     if not ranked:
         return Selection(base, [], [stage1])
+    # a path starts from a single effect that explains most of what the best
+    # one explains (a far poorer start cannot be rescued by one more effect)
+    gain = criterion(base) - ranked[0].criterion
+    starts = [a for a in ranked[:PATHS]
+              if a.criterion - ranked[0].criterion <= (1.0 - PATH_SHARE) * gain]
     paths: dict[tuple, Path] = {}
-    for a in ranked[:PATHS]:
+    for a in starts:
         path = _grow(fitter, a, kinds, inspections, log)
         paths.setdefault(tuple(sorted(path.model.effects)), path)
     order = sorted(paths.values(), key=lambda p: p.criterion)
@@ -480,7 +511,7 @@ def _discrepancy(c: Calibration) -> dict | None:
                 "tried": trials, "skipped": d.skipped,
                 "shape": "unexplained; no discrepancy in " + _or_list(tried)
                          + " cuts the held-out error"}
-    f = d.chosen.fit
+    f = d.chosen.model
     out = learned.describe(d.chosen.variable, f.discrepancy_coefficients, f.discrepancy_cov,
                            c.dataset)
     out.update(heldout_rmse_before=before, heldout_rmse_after=f.rmse_holdout,
@@ -516,7 +547,7 @@ def _candidate(s: Score, refit: FitResult | None, qualifies: bool,
 
 def _inspections(data: Dataset, problem: Problem) -> list:
     """Cycle counts of the fitted wear measurements (profiles, volumes, depths)."""
-    out = set()
+    out: set = set()
     for s in data.series:
         if s.kind == "force":
             continue
@@ -631,7 +662,8 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
         final = sel.ambiguous[0].model  # either alternative stands for the fitted model
     if search is not None and search.chosen is not None:
         # the library's effects must still qualify beside the learned discrepancy
-        final, judged, dropped = prune(fitter, search.chosen.fit, inspections, log, always=True)
+        final, judged, dropped = prune(fitter, search.chosen.model, inspections, log,
+                                       always=True)
         search.chosen.fit = final
         adopted = [judged[e] for e in final.effects if e in judged]
     explained = _gof(final)["consistent_with_noise"]
@@ -647,10 +679,10 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
                          selection=sel, discrepancy=search, limits=limits, final=final,
                          adopted=adopted, partial=partial)
     if prepared is not None:
-        result.check = model_check(problem, result.final, prepared.result())
+        result.check = model_check(problem, final, prepared.result())
         c = result.check
         log(f"check on the {c['model']} model: chi2 {c['chi2_fit']} on the fit points "
-            f"(fitted model {result.final.chi2_fit:.1f}), held out {c['chi2_holdout']}")
+            f"(fitted model {final.chi2_fit:.1f}), held out {c['chi2_holdout']}")
     pool.shutdown()
     result.wall_time_s = time.perf_counter() - t0
     return result

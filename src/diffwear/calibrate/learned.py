@@ -62,6 +62,12 @@ class Trial:
     cuts: bool = False
     failure: str | None = None
 
+    @property
+    def model(self) -> FitResult:
+        """The fit (a trial that cuts the error always has one)."""
+        assert self.fit is not None, f"discrepancy in {self.variable}: {self.failure}"
+        return self.fit
+
 
 @dataclass
 class Search:

@@ -130,7 +130,7 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
         [s.statistic for s in c.scores], LR_CRITICAL[1]).name)
     d = c.discrepancy.chosen if c.discrepancy is not None else None
     if d is not None:
-        f = d.fit
+        f = d.model
         span = learned.span(d.variable, c.dataset)
         x, delta, band = learned.curve(d.variable, f.discrepancy_coefficients,
                                        f.discrepancy_cov, span)
@@ -141,6 +141,22 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
             out.file("discrepancy.png"), x, delta, band, label,
             f"learned discrepancy of k over {d.variable.replace('_', ' ')}").name)
     return files
+
+
+def _stage_line(k: int, st: dict) -> str:
+    """One forward-selection stage in words."""
+    qualified = [e for e, c in st["candidates"].items() if c["qualifies"]]
+    text = (f"stage {k + 1}: {len(st['candidates'])} refitted, qualifying: "
+            f"{', '.join(qualified) or 'none'}")
+    if st.get("added"):
+        text += f"; added **{st['added']}**"
+    if st.get("dropped"):
+        text += f"; dropped {', '.join(st['dropped'])} (no longer qualifying beside the rest)"
+    if st.get("ambiguous"):
+        text += f"; **{' or '.join(st['ambiguous'])}**: too close to tell apart"
+    if st.get("failed"):
+        text += "; refit failed: " + "; ".join(f"{e} ({why})" for e, why in st["failed"].items())
+    return text
 
 
 def _final_label(f) -> str:
@@ -201,14 +217,18 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
             ("yes" if cand.get("qualifies") else "no") if refitted else ""))
     blocks.append(Section("Candidates", [
         "Score test at zero strength from the base fit (module "
-        "`diffwear.calibrate.identify`; an effect with a shape is scored over its "
-        "prior and its p-value corrected for that); the best few refitted with their "
-        "shape.  A candidate qualifies with a likelihood-ratio drop above the "
-        f"chi-square critical value at p = 0.001 ({LR_CRITICAL[1]} for a strength, "
-        f"{LR_CRITICAL[2]} with a shape), |s| >= {STRENGTH_SIGMAS} sigma on "
-        "the allowed side and a lower held-out chi2; the penalised criterion (BIC: "
-        "ln n per fitted number) chooses among them, and the result must leave "
-        f"noise-sized residuals (chi2 <= dof + {GOF_SIGMAS} sqrt(2 dof)).",
+        "`diffwear.calibrate.scores`; an effect with a shape is scored over its "
+        "prior and its p-value corrected for that); every candidate with a positive score "
+        "refitted with its shape.  A candidate qualifies with a likelihood-ratio drop above "
+        f"the chi-square critical value at p = 0.001 ({LR_CRITICAL[1]} for a strength, "
+        f"{LR_CRITICAL[2]} with a shape the data determine), what is reported (the "
+        f"strength, or the extra worn volume when the shape is not determined) >= "
+        f"{STRENGTH_SIGMAS:g} sigma from zero on the allowed side, and a lower held-out "
+        "chi2; the penalised criterion (BIC: ln n per determined number) ranks them, "
+        "forward selection adds one at a time (module `diffwear.calibrate.identify`), "
+        f"and the result must leave noise-sized residuals (chi2 <= dof + {GOF_SIGMAS} "
+        "sqrt(2 dof)).",
+        Bullets([_stage_line(k, st) for k, st in enumerate(summary.get("stages", []))]),
         Table(("effect", "score", "p", "refit strength", "refit shape", "held-out RMSE",
                "qualifies"), candidates),
         "Library: " + "; ".join(f"`{e.name}`: {e.description}"

@@ -204,6 +204,28 @@ def _calibration_table() -> str:
         "a campaign alone.")
 
 
+# Stored calibration runs whose figures the calibration guide shows (served
+# under calibration/<run>/ from design_studies/calibration/results/<run>/)
+CALIBRATION_FIGURES = {
+    "campaign_three_lobe_k": ("discrepancy.png", "fit_profile_16050.png"),
+    "campaign_run_in_and_creep": ("fit_worn_volume.png",),
+    "campaign_pressure_exponent": ("candidates.png",),
+}
+
+
+def on_files(files, config):
+    """Add the stored runs' figures (`CALIBRATION_FIGURES`) to the site."""
+    from mkdocs.structure.files import File
+
+    results = ROOT / "design_studies" / "calibration" / "results"
+    for run, names in CALIBRATION_FIGURES.items():
+        for name in names:
+            if (results / run / name).is_file():
+                files.append(File.generated(config, f"calibration/{run}/{name}",
+                                            abs_src_path=str(results / run / name)))
+    return files
+
+
 def on_page_markdown(markdown: str, page, config, files) -> str:
     for key, make in (("CLI_REFERENCE", _cli_reference),
                       ("QUASI_STATIC_TABLE", _quasi_static_table),

@@ -351,6 +351,9 @@ class Fitter:
 
         self._columns = jax.jit(columns)
         self.evaluations = 0
+        # fits kept by the caller, by (effects, discrepancy): a model reached
+        # on two selection paths is fitted once
+        self.fits: dict = {}
 
     def _pack(self, x, strength=None, log_shape=None, u=None, discrepancy=None) -> np.ndarray:
         v = np.zeros(self.n_packed)

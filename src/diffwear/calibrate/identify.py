@@ -83,7 +83,6 @@ PATH_SHARE = 0.9
 # A refit's first start: the score test's Gauss-Newton step, at most this
 # many of the effect's scales (the step is linear; the model is not)
 FIRST_STEP_SCALES = 5.0
-REFIT_THREADS = 2      # candidate refits run side by side
 DEFAULT_TOP = 3        # accepted for compatibility; every candidate is refitted
 
 __all__ = ["AMBIGUITY", "GOF_SIGMAS", "LR_CRITICAL", "SHAPE_GRID", "STRENGTH_SIGMAS",
@@ -222,8 +221,13 @@ def refit(fitter: Fitter, current: FitResult, effect: str, score: Score, log):
     fit ends no worse than ``current`` (a start far down a non-linear
     direction can end in a poorer minimum); (the best fit, None) or (None,
     the reasons every start failed)."""
+    key = (frozenset((*current.effects, effect)), current.discrepancy)
+    cache = fitter.fits
+    if key in cache:  # the same model reached on another path
+        return cache[key], None
     errors, best = [], None
-    for s0, g0 in _starts(score, effect):
+    t0 = time.perf_counter()
+    for tried, (s0, g0) in enumerate(_starts(score, effect), 1):
         strengths = {**current.strengths, effect: s0}
         shapes = {e: log_shape(e, v) for e, v in current.shapes.items()}
         shapes[effect] = g0
@@ -237,8 +241,10 @@ def refit(fitter: Fitter, current: FitResult, effect: str, score: Score, log):
         if best is None or f.chi2_fit < best.chi2_fit:
             best = f
         if f.chi2_fit <= current.chi2_fit + 1e-6 * current.chi2_fit:
-            return f, None
+            break
     if best is not None:
+        best.notes.update(starts=tried, refit_s=time.perf_counter() - t0)
+        cache[key] = best
         return best, None
     reason = "; ".join(dict.fromkeys(errors))
     log(f"refit + {effect} failed from {len(errors)} starts: {reason}")
@@ -255,11 +261,16 @@ def _judge_members(fitter, model: FitResult, inspections, log, always: bool = Fa
         return out, None
     for e in model.effects:
         rest = tuple(x for x in model.effects if x != e)
-        try:
-            without = fitter.fit(rest, start=model, discrepancy=model.discrepancy)
-        except SolverError as err:
-            log(f"refit without {e} failed: {err}")
-            continue
+        key = (frozenset(rest), model.discrepancy)
+        cache = fitter.fits
+        without = cache.get(key)
+        if without is None:
+            try:
+                without = cache[key] = fitter.fit(rest, start=model,
+                                                  discrepancy=model.discrepancy)
+            except SolverError as err:
+                log(f"refit without {e} failed: {err}")
+                continue
         a = assess(fitter, e, model, without, inspections)
         out[e] = a
         if not a.qualifies and (weakest is None or a.criterion < weakest[1].criterion):
@@ -290,14 +301,7 @@ def _stage(fitter: Fitter, current: FitResult, kinds, inspections, log,
         + ": " + ", ".join(f"{s.effect} {s.statistic:.3g}" for s in scores))
     stage = Stage(scores, {}, {})
     todo = [s for s in scores if s.statistic > 0.0]
-
-    def one(s: Score):
-        return s, refit(fitter, current, s.effect, s, log)
-
-    # the refits are independent: two at a time keep both cores busy (XLA
-    # runs one small program on about one core)
-    with ThreadPoolExecutor(max_workers=REFIT_THREADS) as pool:
-        done = list(pool.map(one, todo))
+    done = [(s, refit(fitter, current, s.effect, s, log)) for s in todo]
     for s, (f, failure) in done:
         if f is None:
             stage.failed[s.effect] = failure
@@ -405,7 +409,9 @@ def _words(a: Assessment) -> str:
     form = f"; {a.form.sentence(a.effect)}" if a.form is not None else ""
     return (f"strength {f.strengths[a.effect]:.4g} +- {f.strengths_std[a.effect]:.2g}{shape}, "
             f"chi2 {f.chi2_fit:.1f}, held-out RMSE {f.rmse_holdout:.3g} sigma{form}"
-            + (" (qualifies)" if a.qualifies else f" ({'; '.join(a.reasons)})"))
+            + (" (qualifies)" if a.qualifies else f" ({'; '.join(a.reasons)})")
+            + f" [{f.notes.get('starts', 1)} start(s), {f.iterations} steps, "
+              f"{f.notes.get('refit_s', f.wall_time_s):.1f} s]")
 
 
 @dataclass

@@ -4,7 +4,8 @@ measurement that would separate two explanations.
 **Identifiability.**  A fitted shape (a run-in's time scale, a film's depth)
 is *determined* when the data shrink its prior: its posterior standard
 deviation, in units of the prior's, is below `SHAPE_DETERMINED` (the data's
-information on it at least the prior's).  When it is not, only a
+information on it about ten times the prior's; a strength and a shape that
+trade off against each other leave the shape's posterior near its prior).  When it is not, only a
 combination of strength and shape is measured, and the candidate is stated
 in that identified form: the extra worn volume the effect adds by an
 inspection (`IdentifiedForm`; a run-in's by the first inspection: its
@@ -44,7 +45,10 @@ from .fit import FitResult, Fitter
 # chi-square critical values at p = 0.001 for 1 and 2 fitted numbers
 LR_CRITICAL = {1: 10.83, 2: 13.82}
 STRENGTH_SIGMAS = 3.0   # |reported value| / its std of an adopted effect
-SHAPE_DETERMINED = 0.7  # posterior / prior std of a shape the data determine
+# posterior / prior std of a shape the data determine: the data hold at
+# least ~10 times the prior's information on it (shapes fitted where the
+# data see them come out at 0.01-0.07)
+SHAPE_DETERMINED = 0.3
 AMBIGUITY = 6.0         # criterion difference of two equally good candidates
 SEPARATION_SIGMAS = 3.0  # a measurement separates two models at this many sigma
 # Effects stated, when their shape is not determined, by the extra volume

@@ -4,10 +4,11 @@ measurement that would separate two explanations.
 **Identifiability.**  A fitted shape (a run-in's time scale, a film's depth)
 is *determined* when the data shrink its prior: its posterior standard
 deviation, in units of the prior's, is below `SHAPE_DETERMINED` (the data's
-information on it about ten times the prior's; a strength and a shape that
-trade off against each other leave the shape's posterior near its prior).  When it is not, only a
-combination of strength and shape is measured, and the candidate is stated
-in that identified form: the extra worn volume the effect adds by an
+information on it about ten times the prior's).  When it is not, or when
+it is but the strength then does not stand `STRENGTH_SIGMAS` from zero on
+its own (strength and shape determined only together), only a combination
+of the two is measured, and the candidate is stated in that identified
+form: the extra worn volume the effect adds by an
 inspection (`IdentifiedForm`; a run-in's by the first inspection: its
 bedding-in), with the 1-sigma of that volume from the fit's covariance
 (delta method through the model's exact derivatives).
@@ -66,6 +67,7 @@ class IdentifiedForm:
     std: float
     cycles: float
     early: bool
+    shape_determined: bool = False   # the shape is, but not apart from the strength
 
     def sentence(self, effect: str) -> str:
         what = "bedding-in" if effect == "run_in" else effect.replace("_", " ")
@@ -73,8 +75,11 @@ class IdentifiedForm:
                 else f"by {self.cycles:g} cycles")
         shape = EFFECTS[NAMES.index(effect)].shape
         unit = shape.name.replace("_", " ") if shape else "shape"
+        known = (f"its strength and {unit} are not determined apart from each other"
+                 if self.shape_determined else
+                 f"its {unit} cannot be measured from these data")
         return (f"{what}: {self.volume * 1e9:+.3g} +- {self.std * 1e9:.2g} mm^3 of extra wear "
-                f"{when}; its {unit} cannot be measured from these data")
+                f"{when}; {known}")
 
 
 @dataclass
@@ -97,8 +102,8 @@ class Assessment:
     @property
     def numbers(self) -> int:
         """Numbers the effect adds that the data determine (1, or 2 with a
-        determined shape)."""
-        return 1 + (self.shape_determined is True)
+        shape determined apart from the strength)."""
+        return 1 + (self.shape_determined is True and self.form is None)
 
     @property
     def z(self) -> float:
@@ -130,14 +135,20 @@ def shape_determined(fit: FitResult, effect: str) -> bool | None:
 
 def determined_numbers(fit: FitResult) -> float:
     """Numbers the data determine in ``fit`` beyond the base parameters: one
-    per strength, one per determined shape, the effective number of a
-    discrepancy's coefficients (the trace of its data-over-posterior
-    information)."""
+    per strength, one per shape determined apart from its strength, the
+    effective number of a discrepancy's coefficients (the trace of its
+    data-over-posterior information)."""
     n = float(len(fit.effects))
-    n += sum(bool(shape_determined(fit, e)) for e in fit.effects)
+    n += sum(bool(shape_determined(fit, e)) and _apart(fit, e) for e in fit.effects)
     if fit.discrepancy is not None:
         n += fit.notes.get("discrepancy_edf", float(fit.n_discrepancy))
     return n
+
+
+def _apart(fit: FitResult, effect: str) -> bool:
+    """Whether ``effect``'s strength stands `STRENGTH_SIGMAS` from zero on its own."""
+    std = fit.strengths_std[effect]
+    return std > 0 and abs(fit.strengths[effect] / std) >= STRENGTH_SIGMAS
 
 
 def criterion(fit: FitResult) -> float:
@@ -186,11 +197,15 @@ def assess(fitter: Fitter, effect: str, fit: FitResult, reference: FitResult,
     determined = shape_determined(fit, effect)
     form = None
     value, std = fit.strengths[effect], fit.strengths_std[effect]
-    if determined is False:
+    apart = std > 0 and abs(value / std) >= STRENGTH_SIGMAS
+    if determined is False or (determined is True and not apart):
+        # a direction of (strength, shape) the data do not determine: the
+        # effect is stated by the combination they do
         form = identified_form(fitter, fit, effect, inspections)
         if form is not None:
+            form.shape_determined = bool(determined)
             value, std = form.volume, form.std
-    numbers = 1 + (determined is True)
+    numbers = 1 + (determined is True and form is None)
     held = fit.n_holdout == 0 or fit.chi2_holdout < reference.chi2_holdout
     reasons = []
     if not lr > LR_CRITICAL[numbers]:

@@ -103,16 +103,19 @@ DATASETS = {
     # alternative (an early excess of wear also steepens the first inspections)
     "campaign_pressure_exponent": (EffectValues.of(pressure_exponent=1.0), CAMPAIGN_21400, LONG,
                                    TRUTH, None, 25, "21,400-cycle rig campaign K (synthetic)"),
-    # two effects at once, each strong enough for these inspections: a run-in
-    # and a creeping bushing (the profile grows 15 % more than the mass says).
-    # (A pressure exponent of 0.6 beside this run-in is not: the run-in's
-    # time scale absorbs it, score 1.2 at the run-in fit.)
+    # two effects at once, each strong enough for these inspections: the slow
+    # run-in of campaign G and a creeping bushing (the profile grows 15 % more
+    # than the mass says).  (A pressure exponent of 0.6 beside a run-in of 2.5
+    # over 2,000 cycles is not: the run-in's time scale absorbs it, score 1.2
+    # at the run-in fit; and on that faster run-in the quasi-static model's
+    # own error favours a transfer film with an exponent, which the dynamic
+    # check then fits at 6 times the chi-square.)
     "campaign_run_in_and_creep": (
-        EffectValues.of(run_in=2.5, run_in_cycles=2000.0, creep=0.15),
+        EffectValues.of(run_in=1.5, run_in_cycles=3000.0, creep=0.15),
         CAMPAIGN_21400, LONG, TRUTH, None, 26, "21,400-cycle rig campaign L (synthetic)"),
     # the same run-in with creep below what these data can detect
     "campaign_run_in_weak_creep": (
-        EffectValues.of(run_in=2.5, run_in_cycles=2000.0, creep=0.002),
+        EffectValues.of(run_in=1.5, run_in_cycles=3000.0, creep=0.002),
         CAMPAIGN_21400, LONG, TRUTH, None, 27, "21,400-cycle rig campaign M (synthetic)"),
     # outside the library: k varies with the bushing angle (two and three lobes)
     "campaign_two_lobe_k": (lobed_k(2, 40.0), CAMPAIGN_21400, LONG, TRUTH, None, 28,

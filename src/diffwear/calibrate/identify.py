@@ -170,8 +170,14 @@ def model_check(problem: Problem, fit: FitResult, prepared) -> dict:
     r = np.asarray(residual(jnp.asarray(fit.notes["x"]), fit.effect_values()))
     rows = ~problem.holdout
     ok = bool(np.all(np.isfinite(r)))
+    chi2 = float(np.sum(r[rows] ** 2)) if ok else math.inf
+    # the fit carries over when the reference model leaves noise-sized
+    # residuals too (the goodness-of-fit limit of the fitted model's points)
+    dof = max(fit.dof, 1)
+    carries = chi2 <= dof + GOF_SIGMAS * math.sqrt(2 * dof) or chi2 <= 1.5 * fit.chi2_fit
     return {"model": reference.name, "description": reference.describe(), "ok": ok,
-            "chi2_fit": float(np.sum(r[rows] ** 2)) if ok else None,
+            "carries_over": bool(ok and carries),
+            "chi2_fit": chi2 if ok else None,
             "chi2_holdout": float(np.sum(r[~rows] ** 2)) if ok else None,
             "chi2_fit_model": fit.chi2_fit, "chi2_holdout_model": fit.chi2_holdout,
             "n_fit": int(rows.sum()), "n_holdout": int((~rows).sum()),
@@ -689,6 +695,9 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
         c = result.check
         log(f"check on the {c['model']} model: chi2 {c['chi2_fit']} on the fit points "
             f"(fitted model {final.chi2_fit:.1f}), held out {c['chi2_holdout']}")
+        if not c["carries_over"]:
+            log("warning: the fit does not carry over to the dynamic model; the quasi-static "
+                "model's own error may have chosen the effects (refit with --model dynamic)")
     pool.shutdown()
     result.wall_time_s = time.perf_counter() - t0
     return result

@@ -260,7 +260,12 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
                 (f"chi2, {check['n_fit']} fit points", _fmt(check["chi2_fit_model"]),
                  _fmt(check["chi2_fit"])),
                 (f"chi2, {check['n_holdout']} held-out points",
-                 _fmt(check["chi2_holdout_model"]), _fmt(check["chi2_holdout"]))])]))
+                 _fmt(check["chi2_holdout_model"]), _fmt(check["chi2_holdout"]))]),
+            *([] if check.get("carries_over", True) else [
+                f"**Warning:** the fit does not carry over to the dynamic model (chi2 "
+                f"{_fmt(check['chi2_fit'])} against {_fmt(check['chi2_fit_model'])}): the "
+                "quasi-static model's own error may have chosen the effects; refit with "
+                "`--model dynamic` before trusting them."])]))
     structure = []
     for key, value in residual_structure(c).items():
         if isinstance(value, dict):

@@ -189,6 +189,19 @@ def test_fit_jacobian_is_exact_against_central_differences(small_dataset):
 
 
 # --------------------------------------------------------------- score test
+def _linear_fitter(jb, je, r):
+    """A stand-in `Fitter` of a linear model (parameter columns ``jb``, effect
+    columns ``je``, residual ``r`` at the base fit) and its base `FitResult`."""
+    n = r.size
+    fitter = SimpleNamespace(
+        problem=SimpleNamespace(holdout=np.zeros(n, bool)),
+        parameter_jacobian=lambda x, names=(): (jb, np.zeros((n, 0)), r),
+        effect_jacobian=lambda x, log_shape: je)
+    base = FitResult(None, {}, {}, 0.0, 0.0, float(r @ r), n, 0.0, 0, r, r, 0, 0.0,
+                     notes={"x": [0.0, 0.0]})
+    return fitter, base
+
+
 def test_score_statistic_is_the_chi2_drop_of_a_linear_model():
     rng = np.random.default_rng(0)
     n = 60
@@ -199,12 +212,7 @@ def test_score_statistic_is_the_chi2_drop_of_a_linear_model():
     # base fit of the linear model r(x) = jb x - r_data
     xb, *_ = np.linalg.lstsq(jb, r_data, rcond=None)
     r = jb @ xb - r_data
-    fitter = SimpleNamespace(
-        problem=SimpleNamespace(holdout=np.zeros(n, bool)),
-        parameter_jacobian=lambda x, names=(): (jb, np.zeros((n, 0)), r),
-        effect_jacobian=lambda x, log_shape: je)
-    base = FitResult(None, {}, {}, 0.0, 0.0, float(r @ r), n, 0.0, 0, r, r, 0, 0.0,
-                     notes={"x": [0.0, 0.0]})
+    fitter, base = _linear_fitter(jb, je, r)
     scores = {s.effect: s for s in score_tests(fitter, base, np.full(n, "profile"))}
     for k, eff in enumerate(EFFECTS):
         a = np.column_stack([jb, je[:, k]])
@@ -454,12 +462,7 @@ def test_detection_limit_is_three_sigma_of_the_joint_least_squares():
     jb = rng.normal(size=(n, 2))
     je = rng.normal(size=(n, len(EFFECTS)))
     r = rng.normal(size=n)
-    fitter = SimpleNamespace(
-        problem=SimpleNamespace(holdout=np.zeros(n, bool)),
-        parameter_jacobian=lambda x, names=(): (jb, np.zeros((n, 0)), r),
-        effect_jacobian=lambda x, log_shape: je)
-    base = FitResult(None, {}, {}, 0.0, 0.0, float(r @ r), n, 0.0, 0, r, r, 0, 0.0,
-                     notes={"x": [0.0, 0.0]})
+    fitter, base = _linear_fitter(jb, je, r)
     limits = detection_limits(score_tests(fitter, base, np.full(n, "profile")))
     for k, eff in enumerate(EFFECTS):
         a = np.column_stack([jb, je[:, k]])

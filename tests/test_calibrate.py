@@ -562,3 +562,16 @@ def test_calibration_names_what_the_data_show(name, tmp_path):
         assert (out / "discrepancy.png").is_file()
     else:
         assert s["discrepancy"] is None or s["discrepancy"]["variable"] is None
+
+
+def test_suspect_sentence_survives_a_refit_that_runs_off():
+    """A suspect whose refit ran off to zero is stated at the words' bound,
+    never divided by zero."""
+    from diffwear.calibrate.identify import Score, Suspect
+
+    refit = FitResult(None, {"crank_length": 0.0}, {"crank_length": 0.0}, 0.0, 0.0, 1.0, 10,
+                      0.0, 0, np.zeros(10), np.zeros(10), 1, 0.0)
+    s = Suspect("crank_length", 0.0381, Score("crank_length", 50.0, -3.0, 1e-6,
+                                              by_kind={"force": 1.0}), refit)
+    assert s.factor == 1e-6
+    assert "1e+06x shorter" in s.sentence()

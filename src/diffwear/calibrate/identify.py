@@ -103,7 +103,10 @@ class Suspect:
     def factor(self) -> float:
         """Refitted (else first-step) value over the stated one."""
         if self.refit is not None:
-            return self.refit.params[self.name] / self.value0
+            f = self.refit.params[self.name] / self.value0
+            # a refit that ran off to a vanishing or unbounded value is stated
+            # at the bounds of the words (1e-6..1e6), not divided by zero
+            return float(np.clip(f, 1e-6, 1e6)) if math.isfinite(f) else 1e6
         return math.exp(float(np.clip(self.score.first_step, -20.0, 20.0)))
 
     def sentence(self) -> str:

@@ -667,7 +667,9 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
             log(f"suspect: {lead.sentence()}")
     search = None
     if unexplained and not suspect_explains and discrepancy and not too_few:
-        search = learned.search(fitter, chosen, data, discrepancy, log)
+        # against the base model: effects adopted while the residual stays
+        # unexplained may stand in for what the library lacks
+        search = learned.search(fitter, base, data, discrepancy, log)
         if search.chosen is not None:
             log(f"discrepancy named: {search.chosen.variable}")
         else:

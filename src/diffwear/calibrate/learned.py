@@ -139,11 +139,70 @@ def span(variable: str, data) -> tuple:
     return (0.0, max(deepest, 1e-6))
 
 
-def _peaks(x, d):
-    """Indices of the circular local maxima of ``d`` in its upper half."""
-    hi, lo = float(np.max(d)), float(np.min(d))
-    up = (d >= np.roll(d, 1)) & (d > np.roll(d, -1)) & (d >= hi - 0.5 * (hi - lo))
-    return np.flatnonzero(up)
+def worn_arc(data) -> tuple | None:
+    """(first, last) bushing angle [deg] where the deepest measured profile
+    stands 3 sigma above zero: where the data see the wear coefficient at
+    all (None without profiles).  The arc may wrap through 0 deg."""
+    prof = [s for s in data.series if s.kind == "profile"] if data is not None else []
+    if not prof:
+        return None
+    deepest = max(prof, key=lambda s: float(np.max(s.y)))
+    theta = np.degrees(np.mod(deepest.x, 2 * math.pi))
+    order = np.argsort(theta)
+    theta, worn = theta[order], (deepest.y > 3 * deepest.sigma)[order]
+    if not worn.any():
+        return None
+    if worn.all():
+        return (0.0, 360.0)
+    # the longest run of worn angles around the circle
+    start = int(np.flatnonzero(~worn)[0])
+    rolled = np.roll(worn, -start)
+    best, run, end = 0, 0, 0
+    for i, w in enumerate(rolled):
+        run = run + 1 if w else 0
+        if run > best:
+            best, end = run, i
+    first = theta[(start + end - best + 1) % theta.size]
+    last = theta[(start + end) % theta.size]
+    return (float(first), float(last))
+
+
+def _extrema(d):
+    """(maxima, minima): indices of the interior local extrema of ``d``."""
+    up = (d[1:-1] > d[:-2]) & (d[1:-1] >= d[2:])
+    down = (d[1:-1] < d[:-2]) & (d[1:-1] <= d[2:])
+    return np.flatnonzero(up) + 1, np.flatnonzero(down) + 1
+
+
+def _angle_shape(c, data) -> dict:
+    """Lobes and peak angles of an angle discrepancy, read where the data see
+    it: over the worn arc (`worn_arc`) the spacing of delta's extrema gives
+    the period (adjacent extrema of opposite kind are half a period apart);
+    the highest peak inside the arc, repeated at that period, gives the
+    peaks round the bushing."""
+    lo, hi = worn_arc(data) or (0.0, 360.0)
+    if hi < lo:
+        hi += 360.0
+    x = np.linspace(lo, hi, max(int(4 * (hi - lo)), 16))
+    d = np.asarray(disc.basis("angle", jnp.asarray(np.radians(x)))) @ c
+    maxima, minima = _extrema(d)
+    extrema = sorted([(x[i], 1) for i in maxima] + [(x[i], -1) for i in minima])
+    gaps = [b[0] - a[0] for a, b in zip(extrema, extrema[1:]) if a[1] != b[1]]
+    if gaps:
+        lobes = max(1, int(round(360.0 / (2.0 * float(np.median(gaps))))))
+    else:  # no turn inside the arc: the largest harmonic
+        lobes = int(np.argmax(np.hypot(c[0::2], c[1::2]))) + 1
+    top = float(x[maxima[int(np.argmax(d[maxima]))]]) if maxima.size else float(x[np.argmax(d)])
+    peaks = sorted((top + k * 360.0 / lobes) % 360.0 for k in range(lobes))
+    a = float(np.max(np.abs(d)))
+    listed = ", ".join(f"{v:.0f}" for v in peaks[:-1]) + \
+        (f" and {peaks[-1]:.0f}" if len(peaks) > 1 else f"{peaks[-1]:.0f}")
+    where = ("the whole bore" if hi - lo >= 360.0 else
+             f"the worn arc {lo % 360:.0f}-{hi % 360:.0f} deg")
+    return {"worn_arc_deg": [lo, hi], "lobes": lobes, "peaks_deg": peaks, "amplitude": a,
+            "shape": f"{lobes} lobe{'s' if lobes > 1 else ''}, peak"
+                     f"{'s' if len(peaks) > 1 else ''} at {listed} deg, amplitude "
+                     f"+-{100 * a:.0f} % (read over {where})"}
 
 
 def describe(variable: str, coefficients, cov, data) -> dict:
@@ -154,18 +213,7 @@ def describe(variable: str, coefficients, cov, data) -> dict:
     out: dict = {"variable": variable, "coefficients": c.tolist(),
                  "coefficients_std": np.sqrt(np.clip(np.diag(cov), 0.0, None)).tolist()}
     if variable == "angle":
-        x, d = x[:-1], d[:-1]  # 360 deg is 0 deg
-        amp = np.hypot(c[0::2], c[1::2])
-        lobes = int(np.argmax(amp)) + 1
-        peaks = _peaks(x, d)
-        angles = sorted(float(x[i]) for i in peaks)
-        a = float(np.max(np.abs(d)))
-        listed = ", ".join(f"{v:.0f}" for v in angles[:-1]) + \
-            (f" and {angles[-1]:.0f}" if len(angles) > 1 else f"{angles[-1]:.0f}")
-        out.update(lobes=lobes, peaks_deg=angles, amplitude=a,
-                   shape=f"{lobes} lobe{'s' if lobes > 1 else ''}, peak"
-                         f"{'s' if len(angles) > 1 else ''} at {listed} deg, "
-                         f"amplitude +-{100 * a:.0f} %")
+        out.update(_angle_shape(c, data))
         return out
     i_max, i_min = int(np.argmax(d)), int(np.argmin(d))
     rising = d[-1] > d[0]

@@ -548,7 +548,7 @@ def test_calibrate_cli_refuses_a_campaign_too_short_to_fit(tmp_path, capsys):
 @pytest.mark.long  # each campaign takes one to three minutes
 @pytest.mark.parametrize("name", ["campaign_pressure_exponent", "campaign_run_in_and_creep",
                                   "campaign_run_in_weak_creep", "campaign_two_lobe_k",
-                                  "campaign_three_lobe_k", "campaign_hidden_film"])
+                                  "campaign_three_lobe_k", "campaign_unseen_run_in"])
 def test_calibration_names_what_the_data_show(name, tmp_path):
     """The campaigns of several effects, of an effect below its detection
     limit, of an angle-dependent k and of an effect these inspections cannot

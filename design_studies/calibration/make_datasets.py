@@ -122,10 +122,11 @@ DATASETS = {
                             "21,400-cycle rig campaign N (synthetic)"),
     "campaign_three_lobe_k": (lobed_k(3, 23.0), CAMPAIGN_21400, LONG, TRUTH, None, 29,
                               "21,400-cycle rig campaign O (synthetic)"),
-    # a transfer film formed within the first 0.2 um of wear: a lower k from the
-    # start, which these inspections cannot tell from k itself
-    "campaign_hidden_film": (EffectValues.of(transfer_film=0.3, film_depth=2e-7), CAMPAIGN_21400,
-                             LONG, TRUTH, None, 31, "21,400-cycle rig campaign P (synthetic)"),
+    # a run-in over the first 30 cycles, half as strong again as the base
+    # rate: about 0.07 mm^3 of extra wear, under 2 sigma of a weighing, long
+    # before the first inspection: these inspections cannot show it
+    "campaign_unseen_run_in": (EffectValues.of(run_in=0.5, run_in_cycles=30.0), CAMPAIGN_21400,
+                               LONG, TRUTH, None, 31, "21,400-cycle rig campaign P (synthetic)"),
 }
 
 # What the calibration must answer on each campaign whose answer is not the
@@ -138,7 +139,7 @@ EXPECT = {
     "campaign_run_in_weak_creep": {"effects": ("run_in",), "below_limit": ("creep",)},
     "campaign_two_lobe_k": {"effects": (), "discrepancy": ("angle", 2, (40.0, 220.0))},
     "campaign_three_lobe_k": {"effects": (), "discrepancy": ("angle", 3, (23.0, 143.0, 263.0))},
-    "campaign_hidden_film": {"effects": (), "below_limit": ()},
+    "campaign_unseen_run_in": {"effects": ()},
 }
 
 

@@ -4,7 +4,8 @@ When the chosen model still leaves a residual above the noise, the fit is
 repeated with the learned discrepancy k (1 + delta(x)) (`discrepancy`) over
 each candidate variable x in turn, the model's effects refitted with it.  A
 variable *cuts the held-out error* when its held-out chi-square falls by
-more than `LR_CRITICAL` [1] (with held-out data) and the penalised criterion
+more than `LR_CRITICAL` [1] and its held-out RMSE by at least `HELDOUT_CUT`
+(with held-out data), and the penalised criterion
 (`selection.criterion`, the discrepancy counted by its effective number of
 coefficients) falls too; among those, the lowest criterion names the
 variable.  Its delta is then described in words (`describe`): lobes and peak
@@ -23,6 +24,10 @@ from ..errors import InputError, SolverError
 from . import discrepancy as disc
 from .fit import FitResult, Fitter
 from .selection import LR_CRITICAL, criterion
+
+# A discrepancy names the missing variable only when it cuts the held-out
+# RMSE by at least this share (a few per cent is a flexible fit, not a cause)
+HELDOUT_CUT = 0.25
 
 
 def unsupported(data, variable: str) -> str | None:
@@ -97,7 +102,8 @@ def search(fitter: Fitter, reference: FitResult, data, variables, log=print) -> 
         f.notes["discrepancy_edf"] = effective_coefficients(f)
         crit = criterion(f)
         held = (reference.n_holdout == 0
-                or reference.chi2_holdout - f.chi2_holdout > LR_CRITICAL[1])
+                or (reference.chi2_holdout - f.chi2_holdout > LR_CRITICAL[1]
+                    and f.rmse_holdout <= (1.0 - HELDOUT_CUT) * reference.rmse_holdout))
         cuts = held and crit < base_crit - LR_CRITICAL[1]
         out.trials.append(Trial(v, f, crit, cuts))
         log(f"discrepancy in {v}: chi2 {f.chi2_fit:.1f}, held-out RMSE "

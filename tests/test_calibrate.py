@@ -389,6 +389,21 @@ bushing_density = "2250 kg/m^3"
     assert res.params["joints.crank_rod.wear.coefficient"] == pytest.approx(6.06e-13, rel=0.03)
     assert res.params["forces.slider_spring.free_length"] == pytest.approx(0.5579, abs=1e-3)
     assert p.suspects == ("bodies.slider.mass",)
+    # the route carries the whole loop's model: an effect and the learned
+    # discrepancy reach the file's wear law, exactly nothing at zero
+    from diffwear.calibrate import discrepancy as disc
+
+    f = Fitter(p)
+    x = np.asarray(res.notes["x"])
+    lay = f.layout(("run_in",), "angle")
+    z = lay.start(x, 0.0, 0.0, None)
+    zero = f.linearise(lay.pack(z), lay.tangents)
+    np.testing.assert_array_equal(zero.r, res.residual)
+    norms = np.linalg.norm(zero.jac[~p.holdout], axis=0)
+    shape = p.n_base + 1  # the run-in's time scale acts only through its strength
+    assert norms[shape] == 0.0 and np.all(np.delete(norms, shape) > 0)
+    assert zero.volume.shape == (len(p.probe_cycles),) and np.all(np.diff(zero.volume) > 0)
+    assert disc.SIZES["angle"] + p.n_base + 2 == lay.size
 
 
 def test_mechanism_file_parameters_map_exactly_onto_the_model(tmp_path):

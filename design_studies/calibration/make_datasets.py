@@ -12,7 +12,9 @@ switched on, sampled by a campaign plan plus Gaussian noise:
 * ``campaign_*`` (21,400 cycles, `synthetic.CAMPAIGN_21400`, the thesis's own
   Ch. 7 test): four inspections of 360-point profiles (6 um noise, negative
   readings kept), weighings at the same inspections, the force over the first
-  cycle; the last inspection held out.  Made with 214 dynamic cycles (A = 100).
+  cycle; the last inspection held out.  Made with 214 dynamic cycles (A = 100),
+  the two campaigns of run-in with creep with the quasi-static model (see
+  their entries).
 
 The effect and its strength are recorded HERE only, never in the dataset
 folders: `diffwear calibrate` has to find them.  The true rig also differs from
@@ -46,6 +48,7 @@ _D = rig_defaults()
 TRUTH = {"k": 1.2 * _D["k"], "free_length": _D["free_length"] + 0.010}
 SHORT = ModelSettings(model="dynamic", dynamic_cycles=80)
 LONG = ModelSettings(model="dynamic", dynamic_cycles=214)
+QUASI_STATIC = ModelSettings(model="quasi-static")
 
 
 def lobed_k(lobes: int, peak_deg: float, amplitude: float = 0.6) -> EffectValues:
@@ -105,18 +108,21 @@ DATASETS = {
                                    TRUTH, None, 25, "21,400-cycle rig campaign K (synthetic)"),
     # two effects at once, each strong enough for these inspections: the slow
     # run-in of campaign G and a creeping bushing (the profile grows 15 % more
-    # than the mass says).  (A pressure exponent of 0.6 beside a run-in of 2.5
-    # over 2,000 cycles is not: the run-in's time scale absorbs it, score 1.2
-    # at the run-in fit; and on that faster run-in the quasi-static model's
-    # own error favours a transfer film with an exponent, which the dynamic
-    # check then fits at 6 times the chi-square.)
+    # than the mass says).  Made with the quasi-static model, the one the loop
+    # fits, so that they test the selection and not the model: made with the
+    # dynamic model, the quasi-static fit prefers a transfer film, creep and
+    # a pressure exponent of -0.5 (chi2 1209), which the dynamic check then
+    # fits at 15,173, and the report warns that the fit does not carry over.
+    # (A pressure exponent of 0.6 beside a run-in of 2.5 over 2,000 cycles is
+    # not strong enough: the run-in's time scale absorbs it, score 1.2.)
     "campaign_run_in_and_creep": (
         EffectValues.of(run_in=1.5, run_in_cycles=3000.0, creep=0.15),
-        CAMPAIGN_21400, LONG, TRUTH, None, 26, "21,400-cycle rig campaign L (synthetic)"),
+        CAMPAIGN_21400, QUASI_STATIC, TRUTH, None, 26, "21,400-cycle rig campaign L (synthetic)"),
     # the same run-in with creep below what these data can detect
     "campaign_run_in_weak_creep": (
         EffectValues.of(run_in=1.5, run_in_cycles=3000.0, creep=0.002),
-        CAMPAIGN_21400, LONG, TRUTH, None, 27, "21,400-cycle rig campaign M (synthetic)"),
+        CAMPAIGN_21400, QUASI_STATIC, TRUTH, None, 27,
+        "21,400-cycle rig campaign M (synthetic)"),
     # outside the library: k varies with the bushing angle (two and three lobes)
     "campaign_two_lobe_k": (lobed_k(2, 40.0), CAMPAIGN_21400, LONG, TRUTH, None, 28,
                             "21,400-cycle rig campaign N (synthetic)"),

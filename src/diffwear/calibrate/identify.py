@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import jax
@@ -162,6 +162,22 @@ def compile_check(data: Dataset, problem: Problem, settings: ModelSettings):
     effects = jax.tree.map(lambda a: jax.ShapeDtypeStruct(a.shape, a.dtype),
                            EffectValues.zero())
     return reference, jax.jit(other.residual).lower(x, effects).compile()
+
+
+def _reference_chi2(problem: Problem, prepared: Future):
+    """fit -> the dynamic model's fit-point chi-square at the fit's numbers
+    (evaluated, not refitted; cached by fit)."""
+    seen: dict = {}
+    rows = ~problem.holdout
+
+    def chi2(fit: FitResult) -> float:
+        if id(fit) not in seen:
+            _, residual = prepared.result()
+            r = np.asarray(residual(jnp.asarray(fit.notes["x"]), fit.effect_values()))
+            seen[id(fit)] = float(np.sum(r[rows] ** 2)) if np.all(np.isfinite(r)) else math.inf
+        return seen[id(fit)]
+
+    return chi2
 
 
 def model_check(problem: Problem, fit: FitResult, prepared) -> dict:
@@ -343,11 +359,14 @@ class Path:
         return " + ".join(self.model.effects) or "none"
 
 
-def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log) -> Path:
+def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
+          reference=None) -> Path:
     """Greedy forward selection from the one-effect model ``first``: the best
     qualifying addition by the criterion at each stage, then the effects
     already in the model re-judged beside it; an effect dropped is not
-    offered again on this path."""
+    offered again on this path.  ``reference(fit) -> chi2`` (the dynamic
+    model's fit-point chi-square, evaluated, not refitted): an addition must
+    lower it too, else it stands for the fitted model's own error."""
     current = first.fit
     adopted = {first.effect: first}
     stages: list = []
@@ -357,7 +376,21 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log) -> Path:
         stages.append(stage)
         ranked = sorted((a for a in stage.assessed.values() if a.qualifies),
                         key=lambda a: a.criterion)
-        if not ranked or ranked[0].criterion >= criterion(current):
+        ranked = [a for a in ranked if a.criterion < criterion(current)]
+        if ranked and reference is not None:
+            before = reference(current)
+            for a in ranked:
+                after = reference(a.fit)
+                if not after < before:
+                    a.qualifies = False
+                    a.reasons.append(f"the dynamic model's chi2 rises ({before:.1f} -> "
+                                     f"{after:.1f}): the fitted model's own error")
+                    log(f"+ {a.effect} beside {' + '.join(current.effects)}: the dynamic "
+                        f"model's chi2 rises {before:.1f} -> {after:.1f}; not adopted")
+                else:
+                    break
+            ranked = [a for a in ranked if a.qualifies]
+        if not ranked:
             break
         best = ranked[0]
         stage.added = best.effect
@@ -373,7 +406,8 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log) -> Path:
     return Path(current, {e: adopted[e] for e in current.effects if e in adopted}, stages)
 
 
-def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log) -> Selection:
+def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
+           reference=None) -> Selection:
     """Forward selection along `PATHS` paths (module notes): each starts from
     one of the best qualifying single effects and grows greedily; the paths'
     final models are compared by the criterion, within Occam's window."""
@@ -390,7 +424,7 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log) -> Se
               if a.criterion - ranked[0].criterion <= (1.0 - PATH_SHARE) * gain]
     paths: dict[tuple, Path] = {}
     for a in starts:
-        path = _grow(fitter, a, kinds, inspections, log)
+        path = _grow(fitter, a, kinds, inspections, log, reference)
         paths.setdefault(tuple(sorted(path.model.effects)), path)
     order = sorted(paths.values(), key=lambda p: p.criterion)
     window = [p for p in order if p.criterion - order[0].criterion < AMBIGUITY]
@@ -635,7 +669,8 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
         sel = Selection(base, [], [])
         scores = score_tests(fitter, base, kinds)
     else:
-        sel = select(fitter, base, kinds, inspections, data, log)
+        sel = select(fitter, base, kinds, inspections, data, log,
+                     None if prepared is None else _reference_chi2(problem, prepared))
         scores = sel.stages[0].scores
     first = sel.stages[0] if sel.stages else None
     refits = {e: a.fit for e, a in first.assessed.items()} if first else {}

@@ -37,10 +37,10 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
+from diffwear.calibrate.discrepancy import SIZES  # noqa: E402
 from diffwear.calibrate.effects import EffectValues  # noqa: E402
 from diffwear.calibrate.fit import ModelSettings  # noqa: E402
 from diffwear.calibrate.model import rig_defaults  # noqa: E402
-from diffwear.calibrate.discrepancy import SIZES  # noqa: E402
 from diffwear.calibrate.synthetic import CAMPAIGN_21400, Plan, synthesize  # noqa: E402
 
 HERE = Path(__file__).resolve().parent

@@ -164,18 +164,24 @@ def compile_check(data: Dataset, problem: Problem, settings: ModelSettings):
     return reference, jax.jit(other.residual).lower(x, effects).compile()
 
 
+def _reference_residual(fit: FitResult, prepared) -> np.ndarray:
+    """All normalised residuals of the dynamic model (``prepared`` by
+    `compile_check`) at ``fit``'s numbers: evaluated, not refitted."""
+    _, residual = prepared
+    return np.asarray(residual(jnp.asarray(fit.notes["x"]), fit.effect_values()))
+
+
 def _reference_chi2(problem: Problem, prepared: Future):
     """fit -> the dynamic model's fit-point chi-square at the fit's numbers
-    (evaluated, not refitted; cached by fit)."""
-    seen: dict = {}
+    (kept in the fit's notes)."""
     rows = ~problem.holdout
 
     def chi2(fit: FitResult) -> float:
-        if id(fit) not in seen:
-            _, residual = prepared.result()
-            r = np.asarray(residual(jnp.asarray(fit.notes["x"]), fit.effect_values()))
-            seen[id(fit)] = float(np.sum(r[rows] ** 2)) if np.all(np.isfinite(r)) else math.inf
-        return seen[id(fit)]
+        if "reference_chi2" not in fit.notes:
+            r = _reference_residual(fit, prepared.result())
+            fit.notes["reference_chi2"] = (float(np.sum(r[rows] ** 2))
+                                           if np.all(np.isfinite(r)) else math.inf)
+        return fit.notes["reference_chi2"]
 
     return chi2
 
@@ -185,8 +191,8 @@ def model_check(problem: Problem, fit: FitResult, prepared) -> dict:
     by `compile_check`): its chi-square on the fit and held-out points beside
     the fitted model's."""
     t0 = time.perf_counter()
-    reference, residual = prepared
-    r = np.asarray(residual(jnp.asarray(fit.notes["x"]), fit.effect_values()))
+    reference, _ = prepared
+    r = _reference_residual(fit, prepared)
     rows = ~problem.holdout
     ok = bool(np.all(np.isfinite(r)))
     chi2 = float(np.sum(r[rows] ** 2)) if ok else math.inf
@@ -298,7 +304,9 @@ def _judge_members(fitter, model: FitResult, inspections, log, always: bool = Fa
                 continue
         a = assess(fitter, e, model, without, inspections)
         out[e] = a
-        if not a.qualifies and (weakest is None or a.criterion < weakest[1].criterion):
+        # the weakest failing member: the one whose removal leaves the best model
+        if not a.qualifies and (weakest is None
+                                or criterion(without) < criterion(weakest[1])):
             weakest = (e, without)
     return out, weakest
 
@@ -359,6 +367,14 @@ class Path:
         return " + ".join(self.model.effects) or "none"
 
 
+def _improving(stage: Stage, current: FitResult) -> list:
+    """The stage's qualifying candidates that improve on ``current`` by the
+    criterion, best first."""
+    return sorted((a for a in stage.assessed.values()
+                   if a.qualifies and a.criterion < criterion(current)),
+                  key=lambda a: a.criterion)
+
+
 def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
           reference=None) -> Path:
     """Greedy forward selection from the one-effect model ``first``: the best
@@ -374,9 +390,7 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
     while len(current.effects) < MAX_EFFECTS:
         stage = _stage(fitter, current, kinds, inspections, log, tuple(excluded))
         stages.append(stage)
-        ranked = sorted((a for a in stage.assessed.values() if a.qualifies),
-                        key=lambda a: a.criterion)
-        ranked = [a for a in ranked if a.criterion < criterion(current)]
+        ranked = _improving(stage, current)
         if ranked and reference is not None:
             before = reference(current)
             for a in ranked:
@@ -412,9 +426,7 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
     one of the best qualifying single effects and grows greedily; the paths'
     final models are compared by the criterion, within Occam's window."""
     stage1 = _stage(fitter, base, kinds, inspections, log)
-    ranked = sorted((a for a in stage1.assessed.values() if a.qualifies),
-                    key=lambda a: a.criterion)
-    ranked = [a for a in ranked if a.criterion < criterion(base)]
+    ranked = _improving(stage1, base)
     if not ranked:
         return Selection(base, [], [stage1])
     # a path starts from a single effect that explains most of what the best

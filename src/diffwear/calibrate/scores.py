@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .effects import EFFECTS, SHAPED
+from .effects import EFFECTS, INDEX, SHAPED
 from .fit import LOG_STD
 
 # Shapes at which a shaped effect is scored: ln(shape / default) in units of
@@ -120,7 +120,7 @@ def score_tests(fitter, fit, kinds, exclude=()) -> list[Score]:
                 best[eff.name] = s
     for name, s in best.items():
         s.information, s.limit_log_shape = info[name]
-        if SHAPED[[e.name for e in EFFECTS].index(name)]:  # the grid's largest: Bonferroni
+        if SHAPED[INDEX[name]]:  # the grid's largest: Bonferroni
             s.p_value = min(1.0, len(SHAPE_GRID) * s.p_value)
     return sorted(best.values(), key=lambda s: -s.statistic)
 
@@ -140,7 +140,7 @@ def detection_limits(scores: list[Score]) -> dict:
     """{effect: {"strength": limit, "shape": SI shape where it holds or None}}."""
     out = {}
     for s in scores:
-        eff = next(e for e in EFFECTS if e.name == s.effect)
+        eff = EFFECTS[INDEX[s.effect]]
         shape = (eff.shape.default * math.exp(s.limit_log_shape)) if eff.shape else None
         limit = s.detection_limit
         out[s.effect] = {"strength": limit if math.isfinite(limit) else None, "shape": shape}

@@ -1182,6 +1182,8 @@ CASES: dict[str, Callable[[int], dict]] = {
     "calibration loop": calibration_loop,
     "calibration loop, discrepancy search (three-lobed k)":
         lambda r: calibration_loop(r, CALIBRATION_DATASETS / "campaign_three_lobe_k"),
+    "calibration loop, two effects (run-in and creep)":
+        lambda r: calibration_loop(r, CALIBRATION_DATASETS / "campaign_run_in_and_creep"),
     "scipy-peer": scipy_peer,
     "exudyn-peer": exudyn_peer,
 }

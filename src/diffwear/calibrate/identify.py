@@ -166,22 +166,22 @@ def compile_check(data: Dataset, problem: Problem, settings: ModelSettings):
 
 def _reference_residual(fit: FitResult, prepared) -> np.ndarray:
     """All normalised residuals of the dynamic model (``prepared`` by
-    `compile_check`) at ``fit``'s numbers: evaluated, not refitted."""
-    _, residual = prepared
-    return np.asarray(residual(jnp.asarray(fit.notes["x"]), fit.effect_values()))
+    `compile_check`) at ``fit``'s numbers: evaluated, not refitted (once per
+    fit: kept in its notes)."""
+    if "reference_residual" not in fit.notes:
+        _, residual = prepared
+        fit.notes["reference_residual"] = np.asarray(
+            residual(jnp.asarray(fit.notes["x"]), fit.effect_values()))
+    return fit.notes["reference_residual"]
 
 
 def _reference_chi2(problem: Problem, prepared: Future):
-    """fit -> the dynamic model's fit-point chi-square at the fit's numbers
-    (kept in the fit's notes)."""
+    """fit -> the dynamic model's fit-point chi-square at the fit's numbers."""
     rows = ~problem.holdout
 
     def chi2(fit: FitResult) -> float:
-        if "reference_chi2" not in fit.notes:
-            r = _reference_residual(fit, prepared.result())
-            fit.notes["reference_chi2"] = (float(np.sum(r[rows] ** 2))
-                                           if np.all(np.isfinite(r)) else math.inf)
-        return fit.notes["reference_chi2"]
+        r = _reference_residual(fit, prepared.result())
+        return float(np.sum(r[rows] ** 2)) if np.all(np.isfinite(r)) else math.inf
 
     return chi2
 
@@ -328,8 +328,12 @@ def prune(fitter: Fitter, model: FitResult, inspections, log, always: bool = Fal
 def _stage(fitter: Fitter, current: FitResult, kinds, inspections, log,
            exclude=()) -> Stage:
     """Score every effect not in ``current`` (nor ``exclude``) and refit each
-    with a positive score on top of it."""
-    scores = score_tests(fitter, current, kinds, exclude)
+    with a positive score on top of it (the scores kept in ``current``'s notes:
+    a path grown again reaches the same fits)."""
+    key = ("scores", tuple(sorted(exclude)))
+    if key not in current.notes:
+        current.notes[key] = score_tests(fitter, current, kinds, exclude)
+    scores = current.notes[key]
     log(("scores" if not current.effects else f"scores beside {' + '.join(current.effects)}")
         + ": " + ", ".join(f"{s.effect} {s.statistic:.3g}" for s in scores))
     stage = Stage(scores, {}, {})
@@ -402,6 +406,8 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
                     log(f"+ {a.effect} beside {' + '.join(current.effects)}: the dynamic "
                         f"model's chi2 rises {before:.1f} -> {after:.1f}; not adopted")
                 else:
+                    log(f"+ {a.effect} beside {' + '.join(current.effects)}: the dynamic "
+                        f"model's chi2 falls {before:.1f} -> {after:.1f}")
                     break
             ranked = [a for a in ranked if a.qualifies]
         if not ranked:
@@ -434,10 +440,41 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
     gain = criterion(base) - ranked[0].criterion
     starts = [a for a in ranked[:PATHS]
               if a.criterion - ranked[0].criterion <= (1.0 - PATH_SHARE) * gain]
-    paths: dict[tuple, Path] = {}
+    # Each path grown first without the dynamic model's check (one evaluation
+    # of the dynamic model costs as much as several refits); then the best
+    # path not yet checked is grown again with it (its refits reused, its log
+    # lines not repeated), until no unchecked path can enter the best checked
+    # one's window: the check only holds additions back.
+    grown = []
     for a in starts:
-        path = _grow(fitter, a, kinds, inspections, log, reference)
-        paths.setdefault(tuple(sorted(path.model.effects)), path)
+        seen: set = set()
+
+        def first_pass(line, seen=seen):
+            seen.add(line)
+            log(line)
+
+        grown.append([_grow(fitter, a, kinds, inspections, first_pass), seen,
+                      reference is None])
+    while True:
+        unchecked = [g for g in grown if not g[2]]
+        checked = [g[0].criterion for g in grown if g[2]]
+        if not unchecked or (checked and min(g[0].criterion for g in unchecked)
+                             >= min(checked) + AMBIGUITY):
+            break
+        g = min(unchecked, key=lambda g: g[0].criterion)
+        log(f"path {g[0].name}: checked on the dynamic model")
+        g[0] = _grow(fitter, starts[grown.index(g)], kinds, inspections,
+                     lambda line, seen=g[1]: None if line in seen else log(line), reference)
+        g[2] = True
+    paths: dict[tuple, Path] = {}
+    trailing = []
+    for path, _, was_checked in grown:
+        if was_checked:
+            paths.setdefault(tuple(sorted(path.model.effects)), path)
+        else:
+            trailing.append(path)
+            log(f"path {path.name}: not checked on the dynamic model (criterion "
+                f"{path.criterion:.1f}, {AMBIGUITY:g} or more above the best checked path)")
     order = sorted(paths.values(), key=lambda p: p.criterion)
     window = [p for p in order if p.criterion - order[0].criterion < AMBIGUITY]
     simplest = min(p.numbers for p in window)
@@ -452,8 +489,9 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
             f"{best.criterion:.1f} and {other.criterion:.1f}); {sep['sentence']}")
         stage1.ambiguous = (best, other)
         return Selection(base, [], stages, (best, other), sep)
+    others = sorted((p for p in (*order, *trailing) if p is not best), key=lambda p: p.criterion)
     log(f"selected: {best.name} (criterion {best.criterion:.1f}; other paths: "
-        + ", ".join(f"{p.name} {p.criterion:.1f}" for p in order if p is not best) + ")")
+        + (", ".join(f"{p.name} {p.criterion:.1f}" for p in others) or "none") + ")")
     return Selection(best.model, list(best.adopted.values()), stages)
 
 

@@ -36,6 +36,7 @@ from diffwear.calibrate.model import (
 from diffwear.calibrate.synthetic import Plan, synthesize
 from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
+from diffwear.errors import SolverError
 from diffwear.mechanism import GuideFriction
 from diffwear.wear import ArchardWear
 
@@ -275,6 +276,38 @@ def test_calibrate_cli_identifies_guide_friction_on_a_small_campaign(small_datas
     before = (out / "summary.json").read_bytes()
     assert main(["calibrate", str(small_dataset), "--out", str(out), "--quiet"]) == 2
     assert (out / "summary.json").read_bytes() == before
+
+
+def test_dynamic_check_in_its_own_process_equals_the_dynamic_model_here(small_dataset):
+    """The worker process's dynamic residual at a fit's numbers against the
+    same model evaluated in this process; the worker ends when closed, and a
+    dead worker is an error, never a silent result."""
+    from diffwear.calibrate.reference import DynamicCheck
+
+    data = load_dataset(small_dataset)
+    settings = ModelSettings(n_theta=60)
+    problem = Problem.from_dataset(data, settings)
+    fit = Fitter(problem).fit("guide_friction", s0=0.1)
+    here = problem.with_model(settings.with_model("dynamic").build(data.max_cycles))
+    want = np.asarray(jax.jit(here.residual)(jnp.asarray(fit.notes["x"]), fit.effect_values()))
+    check = DynamicCheck(data, settings)
+    try:
+        assert check.name == "dynamic"
+        got = check.residual(fit)
+        np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-12)
+        assert check.residual(fit) is got  # kept with the fit, not evaluated again
+    finally:
+        check.close()
+    assert check._process.poll() is not None
+    local = DynamicCheck(data, settings, in_process=True)  # where pipes cannot be passed
+    np.testing.assert_allclose(local.residual(Fitter(problem).fit("guide_friction", s0=0.1)),
+                               want, rtol=1e-10, atol=1e-12)
+    dead = DynamicCheck(data, settings)
+    dead._process.kill()
+    dead._process.wait()
+    with pytest.raises(SolverError, match="worker process ended"):
+        dead.residual(Fitter(problem).fit(None))
+    dead.close()
 
 
 @pytest.mark.parametrize("args, fragment", [

@@ -36,20 +36,18 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from ..errors import InputError, SolverError
 from . import learned
 from .dataset import Dataset
 from .discrepancy import VARIABLES
-from .effects import EFFECTS, NAMES, EffectValues, log_shape
+from .effects import EFFECTS, NAMES, log_shape
 from .fit import SCALES, FitResult, Fitter, ModelSettings, Problem
 from .parameters import RIG_PARAMETERS
+from .reference import DynamicCheck
 from .scores import (
     SHAPE_GRID,
     Score,
@@ -153,46 +151,26 @@ def _gof(fit: FitResult) -> dict:
 
 
 
-def compile_check(data: Dataset, problem: Problem, settings: ModelSettings):
-    """The dynamic model's residual function, compiled ahead (it runs beside
-    the fits in a thread: its compilation is a third of the check's cost)."""
-    reference = settings.with_model("dynamic").build(data.max_cycles)
-    other = problem.with_model(reference)
-    x = jax.ShapeDtypeStruct((problem.n_base,), jnp.float64)
-    effects = jax.tree.map(lambda a: jax.ShapeDtypeStruct(a.shape, a.dtype),
-                           EffectValues.zero())
-    return reference, jax.jit(other.residual).lower(x, effects).compile()
+class _DynamicChi2:
+    """fit -> the dynamic model's fit-point chi-square at the fit's numbers;
+    `submit` queues an evaluation that may be needed later."""
+
+    def __init__(self, problem: Problem, check: DynamicCheck):
+        self.rows, self.check = ~problem.holdout, check
+
+    def __call__(self, fit: FitResult) -> float:
+        r = self.check.residual(fit)
+        return float(np.sum(r[self.rows] ** 2)) if np.all(np.isfinite(r)) else math.inf
+
+    def submit(self, fit: FitResult) -> None:
+        self.check.submit(fit)
 
 
-def _reference_residual(fit: FitResult, prepared) -> np.ndarray:
-    """All normalised residuals of the dynamic model (``prepared`` by
-    `compile_check`) at ``fit``'s numbers: evaluated, not refitted (once per
-    fit: kept in its notes)."""
-    if "reference_residual" not in fit.notes:
-        _, residual = prepared
-        fit.notes["reference_residual"] = np.asarray(
-            residual(jnp.asarray(fit.notes["x"]), fit.effect_values()))
-    return fit.notes["reference_residual"]
-
-
-def _reference_chi2(problem: Problem, prepared: Future):
-    """fit -> the dynamic model's fit-point chi-square at the fit's numbers."""
-    rows = ~problem.holdout
-
-    def chi2(fit: FitResult) -> float:
-        r = _reference_residual(fit, prepared.result())
-        return float(np.sum(r[rows] ** 2)) if np.all(np.isfinite(r)) else math.inf
-
-    return chi2
-
-
-def model_check(problem: Problem, fit: FitResult, prepared) -> dict:
-    """The chosen fit evaluated (not refitted) on the dynamic model (``prepared``
-    by `compile_check`): its chi-square on the fit and held-out points beside
-    the fitted model's."""
+def model_check(problem: Problem, fit: FitResult, check: DynamicCheck) -> dict:
+    """The chosen fit evaluated (not refitted) on the dynamic model: its
+    chi-square on the fit and held-out points beside the fitted model's."""
     t0 = time.perf_counter()
-    reference, _ = prepared
-    r = _reference_residual(fit, prepared)
+    r = check.residual(fit)
     rows = ~problem.holdout
     ok = bool(np.all(np.isfinite(r)))
     chi2 = float(np.sum(r[rows] ** 2)) if ok else math.inf
@@ -200,13 +178,14 @@ def model_check(problem: Problem, fit: FitResult, prepared) -> dict:
     # residuals too (the goodness-of-fit limit of the fitted model's points)
     dof = max(fit.dof, 1)
     carries = chi2 <= dof + GOF_SIGMAS * math.sqrt(2 * dof) or chi2 <= 1.5 * fit.chi2_fit
-    return {"model": reference.name, "description": reference.describe(), "ok": ok,
+    return {"model": check.name, "description": check.describe(), "ok": ok,
             "carries_over": bool(ok and carries),
             "chi2_fit": chi2 if ok else None,
             "chi2_holdout": float(np.sum(r[~rows] ** 2)) if ok else None,
             "chi2_fit_model": fit.chi2_fit, "chi2_holdout_model": fit.chi2_holdout,
             "n_fit": int(rows.sum()), "n_holdout": int((~rows).sum()),
-            "wall_time_s": time.perf_counter() - t0}
+            "wall_time_s": time.perf_counter() - t0,
+            "waited_s": check.busy_s}
 
 
 @dataclass
@@ -380,13 +359,14 @@ def _improving(stage: Stage, current: FitResult) -> list:
 
 
 def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
-          reference=None) -> Path:
+          reference=None, foresee=None) -> Path:
     """Greedy forward selection from the one-effect model ``first``: the best
     qualifying addition by the criterion at each stage, then the effects
     already in the model re-judged beside it; an effect dropped is not
     offered again on this path.  ``reference(fit) -> chi2`` (the dynamic
     model's fit-point chi-square, evaluated, not refitted): an addition must
-    lower it too, else it stands for the fitted model's own error."""
+    lower it too, else it stands for the fitted model's own error.
+    ``foresee(fit)``: told the fits that check would evaluate (unchecked)."""
     current = first.fit
     adopted = {first.effect: first}
     stages: list = []
@@ -395,6 +375,9 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
         stage = _stage(fitter, current, kinds, inspections, log, tuple(excluded))
         stages.append(stage)
         ranked = _improving(stage, current)
+        if ranked and foresee is not None:
+            foresee(current)
+            foresee(ranked[0].fit)
         if ranked and reference is not None:
             before = reference(current)
             for a in ranked:
@@ -426,6 +409,13 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
     return Path(current, {e: adopted[e] for e in current.effects if e in adopted}, stages)
 
 
+@dataclass
+class _Grown:
+    path: Path
+    seen: set          # its log lines
+    checked: bool      # grown with the dynamic model's check
+
+
 def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
            reference=None) -> Selection:
     """Forward selection along `PATHS` paths (module notes): each starts from
@@ -440,11 +430,13 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
     gain = criterion(base) - ranked[0].criterion
     starts = [a for a in ranked[:PATHS]
               if a.criterion - ranked[0].criterion <= (1.0 - PATH_SHARE) * gain]
-    # Each path grown first without the dynamic model's check (one evaluation
-    # of the dynamic model costs as much as several refits); then the best
-    # path not yet checked is grown again with it (its refits reused, its log
-    # lines not repeated), until no unchecked path can enter the best checked
-    # one's window: the check only holds additions back.
+    # Each path grown first without the dynamic model's check (one dynamic
+    # evaluation costs as much as several refits; those a check would need
+    # are queued to run beside the fits); then the best path not yet checked
+    # is grown again with it (its refits reused, its log lines not repeated),
+    # until no unchecked path can enter the best checked one's window: the
+    # check only holds additions back.
+    foresee = getattr(reference, "submit", None)
     grown = []
     for a in starts:
         seen: set = set()
@@ -453,28 +445,28 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
             seen.add(line)
             log(line)
 
-        grown.append([_grow(fitter, a, kinds, inspections, first_pass), seen,
-                      reference is None])
+        grown.append(_Grown(_grow(fitter, a, kinds, inspections, first_pass,
+                                  foresee=foresee), seen, reference is None))
     while True:
-        unchecked = [g for g in grown if not g[2]]
-        checked = [g[0].criterion for g in grown if g[2]]
-        if not unchecked or (checked and min(g[0].criterion for g in unchecked)
+        unchecked = [g for g in grown if not g.checked]
+        checked = [g.path.criterion for g in grown if g.checked]
+        if not unchecked or (checked and min(g.path.criterion for g in unchecked)
                              >= min(checked) + AMBIGUITY):
             break
-        g = min(unchecked, key=lambda g: g[0].criterion)
-        log(f"path {g[0].name}: checked on the dynamic model")
-        g[0] = _grow(fitter, starts[grown.index(g)], kinds, inspections,
-                     lambda line, seen=g[1]: None if line in seen else log(line), reference)
-        g[2] = True
+        g = min(unchecked, key=lambda g: g.path.criterion)
+        log(f"path {g.path.name}: checked on the dynamic model")
+        g.path = _grow(fitter, starts[grown.index(g)], kinds, inspections,
+                       lambda line, seen=g.seen: None if line in seen else log(line), reference)
+        g.checked = True
     paths: dict[tuple, Path] = {}
     trailing = []
-    for path, _, was_checked in grown:
-        if was_checked:
-            paths.setdefault(tuple(sorted(path.model.effects)), path)
+    for g in grown:
+        if g.checked:
+            paths.setdefault(tuple(sorted(g.path.model.effects)), g.path)
         else:
-            trailing.append(path)
-            log(f"path {path.name}: not checked on the dynamic model (criterion "
-                f"{path.criterion:.1f}, {AMBIGUITY:g} or more above the best checked path)")
+            trailing.append(g.path)
+            log(f"path {g.path.name}: not checked on the dynamic model (criterion "
+                f"{g.path.criterion:.1f}, {AMBIGUITY:g} or more above the best checked path)")
     order = sorted(paths.values(), key=lambda p: p.criterion)
     window = [p for p in order if p.criterion - order[0].criterion < AMBIGUITY]
     simplest = min(p.numbers for p in window)
@@ -704,8 +696,20 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     require_fit_points(data, problem.n_base)
     fitter = Fitter(problem)
     check = check and problem.model.name != "dynamic" and data.mechanism is None
-    pool = ThreadPoolExecutor(max_workers=1)  # its thread starts on the first submit
-    prepared = pool.submit(compile_check, data, problem, settings) if check else None
+    # the dynamic model, compiled and evaluated beside the fits (`reference`)
+    dynamic = DynamicCheck(data, settings) if check else None
+    try:
+        result = _loop(data, problem, fitter, discrepancy, dynamic, log)
+    finally:
+        if dynamic is not None:
+            dynamic.close()
+    result.wall_time_s = time.perf_counter() - t0
+    return result
+
+
+def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
+          dynamic: DynamicCheck | None, log) -> Calibration:
+    """`calibrate`'s steps 1-6 (module notes)."""
     kinds = np.array([data.series[k].kind for k in problem.series_of_point])
     inspections = _inspections(data, problem)
     log(f"{problem.model.describe()}; fitting {', '.join(problem.fit_names)}")
@@ -720,7 +724,7 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
         scores = score_tests(fitter, base, kinds)
     else:
         sel = select(fitter, base, kinds, inspections, data, log,
-                     None if prepared is None else _reference_chi2(problem, prepared))
+                     None if dynamic is None else _DynamicChi2(problem, dynamic))
         scores = sel.stages[0].scores
     first = sel.stages[0] if sel.stages else None
     refits = {e: a.fit for e, a in first.assessed.items()} if first else {}
@@ -780,14 +784,13 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
                          unexplained, gof, 0.0, suspects, notes={"failed_refits": failed},
                          selection=sel, discrepancy=search, limits=limits, final=final,
                          adopted=adopted, partial=partial)
-    if prepared is not None:
-        result.check = model_check(problem, final, prepared.result())
+    if dynamic is not None:
+        dynamic.submit(final)
+        result.check = model_check(problem, final, dynamic)
         c = result.check
         log(f"check on the {c['model']} model: chi2 {c['chi2_fit']} on the fit points "
             f"(fitted model {final.chi2_fit:.1f}), held out {c['chi2_holdout']}")
         if not c["carries_over"]:
             log("warning: the fit does not carry over to the dynamic model; the quasi-static "
                 "model's own error may have chosen the effects (refit with --model dynamic)")
-    pool.shutdown()
-    result.wall_time_s = time.perf_counter() - t0
     return result

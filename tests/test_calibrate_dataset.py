@@ -560,3 +560,83 @@ def test_declared_angle_convention_maps_profiles_into_the_model_frame(tmp_path):
     bad = MANIFEST.replace('preset = "rig"', 'preset = "rig"\nbushing_angle_sense = "cw"')
     with pytest.raises(InputError, match="bushing_angle_sense"):
         load_dataset(make(tmp_path / "bad", bad, csvs))
+
+
+# ------------------------------------------------------- plausibility
+THESIS_RIG = Path(__file__).resolve().parents[1] / "design_studies" / "calibration" / "thesis_rig"
+
+
+def _thesis_rig_with_depth(tmp_path, depth_mm: str) -> Path:
+    import shutil
+
+    folder = tmp_path / "rig"
+    shutil.copytree(THESIS_RIG, folder)
+    (folder / "max_depth.csv").write_text(f"cycles,max_depth_mm\n21400,{depth_mm}\n")
+    return folder
+
+
+def test_a_depth_beyond_the_bushing_wall_is_refused_before_fitting(tmp_path, capsys):
+    from diffwear.cli import main
+
+    folder = _thesis_rig_with_depth(tmp_path, "485")
+    out = tmp_path / "out"
+    assert main(["calibrate", str(folder), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "max_depth.csv" in err[0] and "485 mm" in err[0]
+    assert "beyond the bushing wall of 6.342 mm" in err[0]  # the rig's wall (presets)
+    assert not out.exists()
+
+
+def test_unit_slip_factors_are_powers_of_a_thousand_within_half_a_decade():
+    from diffwear.calibrate.plausibility import _slip
+
+    assert [_slip(f) for f in (1e-3, 3e-3, 0.4e-3, 1.0, 20.0, 1e3, 2.5e3, 1e-6, 1e6)] == \
+        [-1, -1, -1, 0, 0, 1, 1, -2, 2]
+    assert _slip(3.5e-3) == 0 and _slip(0.0) == 0 and _slip(float("nan")) == 0
+
+
+def test_a_series_off_by_a_thousand_against_the_others_is_named():
+    """Hand-made predictions: the depth series reads 1/1000 of what the model
+    gives while the volume agrees; the fitted k at the stated one."""
+    from types import SimpleNamespace
+
+    from diffwear.calibrate.plausibility import unit_slips
+
+    s = [SimpleNamespace(name="mass", kind="volume", file=Path("worn_mass.csv"),
+                         y=np.array([1.0e-7, 2.0e-7]), sigma=1e-9),
+         SimpleNamespace(name="depth", kind="max_depth", file=Path("max_depth.csv"),
+                         y=np.array([2.0e-7, 4.0e-7]), sigma=1e-8),
+         SimpleNamespace(name="force", kind="force", file=Path("force.csv"),
+                         y=np.array([5.0, 6.0]), sigma=1.0)]
+    data = SimpleNamespace(series=s)
+    problem = SimpleNamespace(series_of_point=np.repeat([0, 1, 2], 2), fit_names=("k",))
+    prediction = np.array([1.0e-7, 2.0e-7, 2.0e-4, 4.0e-4, 5.0, 6.0])
+    base = SimpleNamespace(prediction=prediction, params={"k": 1e-13})
+    found = unit_slips(data, problem, base, 1e-13)
+    assert [w["series"] for w in found] == ["depth"]
+    assert found[0]["factor"] == pytest.approx(1e-3)
+    assert "metres in a millimetre column" in found[0]["message"]
+    # every series agreeing, the fitted k 1/1000 of the stated: all in one wrong unit
+    prediction[2:4] = s[1].y
+    base = SimpleNamespace(prediction=prediction, params={"k": 1e-16})
+    found = unit_slips(data, problem, base, 1e-13)
+    assert len(found) == 1 and found[0]["series"] is None
+    assert "every wear series reads 0.001 times" in found[0]["message"]
+    assert unit_slips(data, problem, SimpleNamespace(prediction=prediction,
+                                                     params={"k": 3e-13}), 1e-13) == []
+
+
+@pytest.mark.slow  # a base fit of the thesis rig: about a minute
+def test_metres_in_a_millimetre_column_is_named_beside_a_fit_at_the_noise_level(tmp_path):
+    import json
+
+    from diffwear.cli import main
+
+    folder = _thesis_rig_with_depth(tmp_path, "0.000485")  # Table 7-6's 0.485 mm, in metres
+    out = tmp_path / "out"
+    assert main(["calibrate", str(folder), "--out", str(out), "--quiet",
+                 "--no-dynamic-check"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    (w,) = s["unit_warnings"]
+    assert w["series"] == "max_depth" and 0.5e-3 < w["factor"] < 2e-3
+    assert "metres in a millimetre column" in (out / "report.md").read_text()

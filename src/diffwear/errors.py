@@ -4,6 +4,7 @@
 the file / key / value and the allowed range.  ``SolverError`` (exit code 3): the
 model was accepted but the numerical solution failed (step limit, NaN, no
 convergence); the message names the stage and the simulated time.
+``OutputError`` (exit code 4): the results could not be written (a full disk).
 """
 
 from __future__ import annotations
@@ -19,6 +20,13 @@ class InputError(DiffwearError, ValueError):
     """Bad input: a parameter, a file or a model description that cannot be used."""
 
     exit_code = 2
+
+
+class OutputError(DiffwearError, OSError):
+    """Results could not be written (a full disk, a folder that became
+    unwritable); the message names the file and the folder."""
+
+    exit_code = 4
 
 
 class SolverError(DiffwearError, RuntimeError):

@@ -2,8 +2,15 @@
 
 Every writer goes through `OutputDir`, which refuses, before any computation:
 
+* an empty or blank path (it would write into the current folder);
+* a folder that holds files diffwear did not write: only a new folder, an
+  empty one or a previous diffwear output is written into.  A diffwear
+  output is recognised by its manifest (``.diffwear-files``, the names of
+  every file the run wrote, kept up to date as it writes); a folder from a
+  release without one by its ``summary.json`` listing its files;
 * a folder that holds a previous run (``summary.json``) unless asked to
-  (``overwrite=True``), so that a mistyped command never destroys results;
+  (``overwrite=True``, which first removes the files that run wrote, and
+  only those), so that a mistyped command never destroys results;
 * a folder that holds an interrupted run (``checkpoint.npz`` without a
   summary) unless it is resumed or overwritten, so that its checkpoint is
   never thrown away silently;
@@ -14,11 +21,18 @@ Every writer goes through `OutputDir`, which refuses, before any computation:
 
 `release_all` removes this process's locks, and a folder this process
 created but never wrote to (an interrupt before the first result).
+
+Files are written under a temporary name and renamed when complete (the
+CSV, JSON and text writers; figures and archives name their target through
+`OutputDir.file`, and a failed write removes it), so a full disk leaves no
+truncated file: the error is an `OutputError` (exit code 4) naming the
+file and the folder.
 """
 
 from __future__ import annotations
 
 import atexit
+import errno
 import json
 import math
 import os
@@ -28,7 +42,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import InputError
+from .errors import InputError, OutputError
 
 
 def _jsonable(value):
@@ -45,6 +59,10 @@ def _jsonable(value):
 
 CHECKPOINT = "checkpoint.npz"  # an interrupted wear study's state (`studies._wear_common`)
 LOCK = ".diffwear-lock"        # holds the pid of the process writing the folder
+MANIFEST = ".diffwear-files"   # the names of the files a run wrote, one per line
+_OWN = {LOCK, MANIFEST}
+# names a file manager leaves in any folder: not the user's results
+_DESKTOP = {".DS_Store", "Thumbs.db", "desktop.ini"}
 _OPEN: list[OutputDir] = []    # folders this process writes (for `release_all`)
 
 
@@ -64,9 +82,13 @@ class OutputDir:
     interrupted run whose checkpoint is there."""
 
     def __init__(self, path: str | Path, *, overwrite: bool = False, resume: bool = False):
+        if not str(path).strip():
+            raise InputError(f"--out {str(path)!r}: empty; allowed: the path of a new folder, "
+                             "an empty one or a previous diffwear output")
         self.path = Path(path)
         if self.path.exists() and not self.path.is_dir():
             raise InputError(f"--out {self.path}: exists and is not a directory")
+        previous = self._previous_files()
         if (self.path / "summary.json").exists() and not overwrite:
             raise InputError(
                 f"--out {self.path}: already holds results (summary.json); choose another "
@@ -87,6 +109,61 @@ class OutputDir:
         self.files: list[str] = []
         self._lock()
         _OPEN.append(self)
+        self._remove(self._partial)
+        if resume:  # the interrupted run's files stay; this run adds to its list
+            self.files = [n for n in previous if (self.path / n).is_file()]
+        elif overwrite:
+            self._remove(previous)
+        self._write_manifest()
+
+    def _previous_files(self) -> list[str]:
+        """The files a previous diffwear run wrote here (its manifest, or its
+        summary's list); `InputError` if the folder holds anything else."""
+        self._partial: set[str] = set()
+        if not self.path.is_dir():
+            return []
+        present = {p.name for p in self.path.iterdir()} - _OWN - _DESKTOP
+        # a write cut short by a kill (the rename never happened): ours
+        self._partial = {n for n in present if n.startswith(".") and n.endswith(".partial")}
+        present -= self._partial
+        listed: set[str] = set()
+        manifest = self.path / MANIFEST
+        if manifest.is_file():
+            listed = {n for n in manifest.read_text(errors="replace").splitlines() if n}
+        else:
+            try:
+                files = json.loads((self.path / "summary.json").read_text()).get("files", [])
+                listed = {str(n) for n in files} | {"summary.json"}
+            except (OSError, ValueError, AttributeError):
+                pass
+        if CHECKPOINT in present:  # an interrupted run's state (listed once it ends)
+            listed.add(CHECKPOINT)
+        foreign = sorted(present - listed)
+        if foreign:
+            shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more"
+                                              if len(foreign) > 5 else "")
+            what = ("files diffwear did not write" if listed or not present
+                    else "files that are not a diffwear output")
+            raise InputError(f"--out {self.path}: holds {what} ({shown}); allowed: a new "
+                             "folder, an empty one or a previous diffwear output")
+        return sorted(listed & present)
+
+    def _remove(self, names) -> None:
+        """Remove the previous run's files (plain files directly in the folder)."""
+        for name in names:
+            target = self.path / name
+            if name in _OWN or Path(name).name != name or not target.is_file():
+                continue
+            try:
+                target.unlink()
+            except OSError as err:
+                raise InputError(f"--out {self.path}: cannot remove the previous run's {name} "
+                                 f"({err.strerror}); allowed: a folder you can write to") \
+                    from None
+
+    def _write_manifest(self) -> None:
+        names = "".join(f"{n}\n" for n in dict.fromkeys(self.files))
+        self._atomic(MANIFEST, lambda tmp: tmp.write_text(names))
 
     def _lock(self) -> None:
         lock = self.path / LOCK
@@ -111,6 +188,8 @@ class OutputDir:
         try:
             if lock.exists() and lock.read_text().strip() == str(os.getpid()):
                 lock.unlink()
+            if self.created and not self.files:
+                (self.path / MANIFEST).unlink(missing_ok=True)
             if self.created and self.path.is_dir() and not any(self.path.iterdir()):
                 self.path.rmdir()
         except OSError:
@@ -119,28 +198,64 @@ class OutputDir:
             _OPEN.remove(self)
 
     def file(self, name: str) -> Path:
-        self.files.append(name)
+        """The path to write ``name`` to, listed in the manifest first (so that
+        an interrupted run's files are known and a later --overwrite removes
+        them)."""
+        if name not in self.files:
+            self.files.append(name)
+            self._write_manifest()
         return self.path / name
+
+    def abandon_last(self) -> Path | None:
+        """After a write that failed outside the atomic writers: remove the
+        file registered last (it may be incomplete); returns its path."""
+        if not self.files:
+            return None
+        target = self.path / self.files[-1]
+        target.unlink(missing_ok=True)
+        return target
+
+    def _atomic(self, name: str, write) -> Path:
+        """``write(tmp)`` to a temporary name, renamed to ``name`` when done;
+        a failure leaves neither (`OutputError` naming the file and folder)."""
+        target = self.path / name
+        tmp = self.path / f".{name}.partial"
+        try:
+            write(tmp)
+            os.replace(tmp, target)
+        except OSError as err:
+            tmp.unlink(missing_ok=True)
+            raise output_error(err, target) from None
+        return target
 
     def csv(self, name: str, columns: Mapping[str, ArrayLike], fmt: str = "%.10g") -> Path:
         """Write a CSV with the given header -> column mapping (equal lengths)."""
         header = ",".join(columns)
         data = np.column_stack([np.asarray(c, dtype=float) for c in columns.values()])
-        target = self.file(name)
-        np.savetxt(target, data, delimiter=",", header=header, comments="", fmt=fmt)
-        return target
+        self.file(name)
+        return self._atomic(name, lambda tmp: np.savetxt(
+            tmp, data, delimiter=",", header=header, comments="", fmt=fmt))
 
     def json(self, name: str, payload: Mapping) -> Path:
-        target = self.file(name)
-        target.write_text(json.dumps(_jsonable(payload), indent=2, sort_keys=False) + "\n")
+        self.file(name)
+        body = json.dumps(_jsonable(payload), indent=2, sort_keys=False) + "\n"
+        target = self._atomic(name, lambda tmp: tmp.write_text(body))
         if name == "summary.json":  # the run is finished: the folder is free again
             self.release()
         return target
 
     def text(self, name: str, body: str) -> Path:
-        target = self.file(name)
-        target.write_text(body)
-        return target
+        self.file(name)
+        return self._atomic(name, lambda tmp: tmp.write_text(body))
+
+
+def output_error(err: OSError, target: Path) -> OutputError:
+    """One line for a failed write: the file, the folder and the reason."""
+    full = err.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC))
+    why = ("the disk holding it is full" if full else err.strerror or str(err))
+    return OutputError(f"cannot write {target.name} in {target.parent}: {why}; the "
+                       "incomplete file was removed (free space, then rerun with --overwrite, "
+                       "or --resume where the run keeps a checkpoint)")
 
 
 def release_all() -> list[OutputDir]:

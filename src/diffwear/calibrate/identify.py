@@ -47,6 +47,7 @@ from .discrepancy import VARIABLES
 from .effects import EFFECTS, NAMES, log_shape
 from .fit import SCALES, FitResult, Fitter, ModelSettings, Problem
 from .parameters import RIG_PARAMETERS
+from .plausibility import check_depths, unit_slips
 from .reference import DynamicCheck
 from .scores import (
     SHAPE_GRID,
@@ -552,6 +553,7 @@ class Calibration:
             "effect_shape": first.get("shape") if first else None,
             "effect_shape_interval": first.get("shape_interval") if first else None,
             "residual_unexplained": self.residual_unexplained,
+            "unit_warnings": self.notes.get("unit_warnings", []),
             "heldout_rmse_before": self.base.rmse_holdout,
             "heldout_rmse_after": final.rmse_holdout,
             "heldout_rmse_units": "stated 1-sigma measurement noise",
@@ -694,6 +696,8 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     if discrepancy != VARIABLES:  # asked for by name: refuse what the data cannot show
         learned.check_variables(data, discrepancy)
     require_fit_points(data, problem.n_base)
+    wall = problem.base0.get("wall")
+    check_depths(data, None if wall is None else float(wall))
     fitter = Fitter(problem)
     check = check and problem.model.name != "dynamic" and data.mechanism is None
     # the dynamic model, compiled and evaluated beside the fits (`reference`)
@@ -716,6 +720,10 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
     base = fitter.fit(None)
     log(f"base fit: chi2 {base.chi2_fit:.1f} on {base.n_fit} points, held-out RMSE "
         f"{base.rmse_holdout:.3g} sigma ({base.iterations} steps, {base.wall_time_s:.1f} s)")
+    stated_k = problem.base0.get("k")
+    slips = unit_slips(data, problem, base, None if stated_k is None else float(stated_k))
+    for w in slips:
+        log(f"warning: {w['message']}")
     too_few = base.n_fit - problem.n_base - 2 < MIN_DOF_FOR_EFFECT
     if too_few:
         log(f"{base.n_fit} fit points for {problem.n_base} parameters: too few to fit an effect "
@@ -781,7 +789,8 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
         identified = adopted[0].effect if adopted else "none"
     limits = detection_limits(score_tests(fitter, final, kinds)) if not too_few else {}
     result = Calibration(data, problem, base, scores, refits, qualifying, chosen, identified,
-                         unexplained, gof, 0.0, suspects, notes={"failed_refits": failed},
+                         unexplained, gof, 0.0, suspects,
+                         notes={"failed_refits": failed, "unit_warnings": slips},
                          selection=sel, discrepancy=search, limits=limits, final=final,
                          adopted=adopted, partial=partial)
     if dynamic is not None:

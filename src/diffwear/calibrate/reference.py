@@ -219,6 +219,8 @@ class DynamicCheck:
         """Stop the worker (pending evaluations are dropped)."""
         if self._process is None:
             return
+        if self._pending:  # mid-evaluation: it has nothing to save
+            self._process.kill()
         try:
             self._send(None)
         except SolverError:
@@ -230,6 +232,6 @@ class DynamicCheck:
                 pass
         try:
             self._process.wait(timeout=5.0)
-        except subprocess.TimeoutExpired:  # mid-evaluation: it has nothing to save
+        except subprocess.TimeoutExpired:
             self._process.kill()
             self._process.wait()

@@ -41,6 +41,10 @@ def describe_residuals(c, structure: dict) -> list[str]:
             if rms >= NOISE_RMS:
                 loud.append(f"{kind} {rms:.2g} sigma")
     if not loud:
+        if c.notes.get("unit_warnings"):  # a fit at the noise level of a mis-scaled series
+            return ["every series fits the base model at the noise level (RMS < "
+                    f"{NOISE_RMS} sigma), but see the unit warning: the fitted numbers "
+                    "may be off by a power of 1,000"]
         return ["every series fits the base model at the noise level (RMS < "
                 f"{NOISE_RMS} sigma): nothing for an effect to explain"]
     words.append("base-fit RMS residual above the noise: " + ", ".join(loud))

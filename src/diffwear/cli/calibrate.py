@@ -178,6 +178,7 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
         "Residuals are in units of each series' stated 1-sigma noise.",
         *(f"> {note}" for note in d.notes),
         *(f"> **Warning:** {w['message']}." for w in summary.get("frame_warnings", [])),
+        *(f"> **Warning:** {w['message']}." for w in summary.get("unit_warnings", [])),
     ]
     if c.base.n_fit <= len(d.fit_names) + 2:
         blocks.append(f"**What these data can support:** {c.base.n_fit} numbers for "

@@ -1,12 +1,14 @@
 """The ``diffwear`` command line.
 
 Exit codes: 0 success, 2 bad input (`InputError`, unknown study, bad option),
-3 solver failure (`SolverError`).
+3 solver failure (`SolverError`), 4 results not written (`OutputError`: a full
+disk), 130 interrupted (Ctrl-C).
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import inspect
 import sys
 from collections.abc import Sequence
@@ -22,6 +24,10 @@ from ..choices import (
 )
 from ..errors import DiffwearError, InputError
 
+# a write that failed for want of room or of a writable disk
+_DISK_ERRNOS = {errno.ENOSPC, errno.EFBIG, errno.EROFS, errno.EIO,
+                getattr(errno, "EDQUOT", errno.ENOSPC)}
+
 # Upper bound of --cycles: 1e8 crank cycles is ~6 years at 30 rpm.
 MAX_CYCLES = 100_000_000
 
@@ -36,6 +42,9 @@ def _study(args: argparse.Namespace) -> int:
     from ..studies import STUDIES
 
     if args.list or args.name is None:
+        if args.out is not None and not args.list:
+            raise InputError(f"study: name the study to run (available: {', '.join(STUDIES)}); "
+                             f"nothing was written to {args.out}")
         width = max(len(n) for n in STUDIES)
         for name, module in STUDIES.items():
             print(f"{name:<{width}}  {module.DESCRIPTION}")
@@ -460,7 +469,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import matplotlib
 
     matplotlib.use("Agg")  # the command writes figures to files; no window
-    from ..io import _OPEN, release_all
+    from ..io import _OPEN, output_error, release_all
 
     try:
         return args.func(args)
@@ -470,6 +479,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(_interrupted(args, tuple(_OPEN)), file=sys.stderr)
         return 130
+    except OSError as err:  # a figure or archive write that failed (a full disk)
+        target = _OPEN[-1].abandon_last() if _OPEN and err.errno in _DISK_ERRNOS else None
+        if target is None:
+            raise
+        failed = output_error(err, target)
+        print(f"diffwear: error: {failed}", file=sys.stderr)
+        return failed.exit_code
     finally:
         release_all()
 

@@ -1,0 +1,139 @@
+"""Output folders: only a new, an empty or a previous diffwear folder is
+written into; --overwrite removes the previous run's own files and only
+those; a full disk leaves no truncated file and one line (exit 4)."""
+
+from __future__ import annotations
+
+import errno
+import json
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+import numpy as np
+import pytest
+
+from diffwear.cli import main
+from diffwear.errors import InputError
+from diffwear.io import MANIFEST, OutputDir, release_all
+
+RUN = ["run", "ideal_slider_crank", "--quiet"]
+
+
+@pytest.fixture(autouse=True)
+def _release():
+    yield
+    release_all()
+
+
+def _listing(folder):
+    return sorted(p.name for p in folder.iterdir())
+
+
+def test_a_folder_of_the_users_own_files_is_refused_and_left_as_it_was(tmp_path, capsys):
+    out = tmp_path / "mine"
+    out.mkdir()
+    mine = {"trajectory.csv": "t,x\n0,1\n", "report.md": "# my notes\n", "notes.txt": "keep"}
+    for name, body in mine.items():
+        (out / name).write_text(body)
+    for extra in ([], ["--overwrite"]):
+        assert main([*RUN, "--out", str(out), *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "notes.txt, report.md, trajectory.csv" in err[0]
+        assert "did not write" in err[0] or "not a diffwear output" in err[0]
+    assert _listing(out) == sorted(mine)
+    assert all((out / n).read_text() == body for n, body in mine.items())
+
+
+@pytest.mark.parametrize("blank", ["", "   "])
+def test_an_empty_out_is_refused(blank, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main([*RUN, "--out", blank]) == 2
+    assert "empty" in capsys.readouterr().err
+    assert _listing(tmp_path) == []
+
+
+def test_overwrite_removes_the_previous_runs_files_and_only_those(tmp_path):
+    out = tmp_path / "run"
+    previous = OutputDir(out)  # a previous run that wrote more files than the next one
+    previous.csv("contact_0.csv", {"x": [1.0]})
+    previous.text("wear_history_0.csv", "n,h\n")
+    previous.file("wear.png").write_bytes(b"png")
+    previous.json("summary.json", {"files": ["contact_0.csv", "wear_history_0.csv", "wear.png"]})
+    release_all()
+    assert main([*RUN, "--out", str(out)]) == 2  # results there: refused without --overwrite
+    assert main([*RUN, "--out", str(out), "--overwrite"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert _listing(out) == sorted([*summary["files"], MANIFEST])
+    assert not {"contact_0.csv", "wear_history_0.csv", "wear.png"} & set(_listing(out))
+    assert (out / MANIFEST).read_text().split() == list(dict.fromkeys(
+        (out / MANIFEST).read_text().split()))
+
+
+def test_a_folder_written_before_manifests_is_recognised_by_its_summary(tmp_path):
+    out = tmp_path / "old"
+    out.mkdir()
+    (out / "a.csv").write_text("x\n1\n")
+    (out / "summary.json").write_text(json.dumps({"files": ["a.csv", "summary.json"]}))
+    OutputDir(out, overwrite=True)
+    assert _listing(out) == sorted([".diffwear-lock", MANIFEST])
+    (out / "b.txt").write_text("mine")
+    release_all()
+    with pytest.raises(InputError, match=r"b\.txt"):
+        OutputDir(out, overwrite=True)
+
+
+def test_a_full_disk_leaves_no_truncated_file_and_one_line(tmp_path, capsys, monkeypatch):
+    """np.savetxt (the CSV writer) and a figure's savefig cut short by ENOSPC
+    after writing part of the file: exit 4, the file named, nothing partial
+    left, the files written before it intact."""
+    import matplotlib.figure
+
+    def full(target, written: bytes):
+        with open(target, "wb") as f:
+            f.write(written)
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    real_savetxt = np.savetxt
+
+    def savetxt(target, *a, **k):
+        if "reaction_driver" in str(target):
+            full(target, b"t,F\n0.0,1.")
+        return real_savetxt(target, *a, **k)
+
+    monkeypatch.setattr(np, "savetxt", savetxt)
+    out = tmp_path / "csv"
+    assert main([*RUN, "--out", str(out)]) == 4
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "reaction_driver.csv" in err[0] and "disk" in err[0] \
+        and "full" in err[0] and "Traceback" not in err[0]
+    assert not any("reaction_driver" in n for n in _listing(out))
+    assert not any(n.endswith(".partial") for n in _listing(out))
+    assert (out / "trajectory.csv").read_text().startswith("t_s,")  # written before: intact
+    monkeypatch.setattr(np, "savetxt", real_savetxt)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig",
+                        lambda self, target, **k: full(target, b"\x89PNG\r\n"))
+    out = tmp_path / "png"
+    assert main([*RUN, "--out", str(out)]) == 4
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "trajectory.png" in err[0] and "full" in err[0]
+    assert "trajectory.png" not in _listing(out)
+
+
+def test_a_write_cut_short_by_a_kill_is_not_taken_for_a_users_file(tmp_path):
+    out = tmp_path / "killed"
+    OutputDir(out).csv("a.csv", {"x": [1.0]})
+    release_all()
+    (out / ".summary.json.partial").write_text('{"fil')  # the rename never happened
+    OutputDir(out, overwrite=True)
+    assert ".summary.json.partial" not in _listing(out)
+
+
+def test_study_without_a_name_but_an_out_is_refused_like_design(tmp_path, capsys):
+    out = tmp_path / "x"
+    assert main(["study", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "name the study" in err and "ideal-slider-crank" in err and not out.exists()
+    assert main(["study"]) == 0  # the list, as before

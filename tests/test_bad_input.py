@@ -162,3 +162,74 @@ def test_a_crank_that_cannot_turn_fully_is_refused_at_the_angle_it_stops():
 def test_a_grashof_crank_rocker_moves_through_its_cycle():
     mech, q_guess = four_bar()
     _cycle(mech, q_guess)
+
+
+# ------------------------------------------------ the Python API refuses what the CLI refuses
+@pytest.fixture(scope="module")
+def crank():
+    mech, q_guess = slider_crank()
+    return mech, consistent_state(mech, q_guess)
+
+
+@pytest.mark.parametrize("y0, t1, match", [
+    (lambda y: y[:-1], 0.01, r"y0 has shape \(\d+,\); expected \(\d+,\)"),
+    (lambda y: y.astype(jnp.float32), 0.01, "y0 is float32; expected float64"),
+    (lambda y: y.at[0].set(jnp.nan), 0.01, "y0 must be finite"),
+    (lambda y: y, math.nan, "t1 must be finite"),
+    (lambda y: y, -0.01, r"t1 = -0.01 s must be after t0 = 0 s"),
+])
+def test_simulate_refuses_a_bad_state_or_time(crank, y0, t1, match):
+    mech, y = crank
+    with pytest.raises(InputError, match=match):
+        simulate(mech, y0(y), t1)
+
+
+def test_two_joint_life_refuses_a_non_finite_or_short_design():
+    """Eagerly an `InputError`; inside jit the program stops with the same
+    words (never a NaN life beside a finite one)."""
+    import jax
+
+    from diffwear.design import TwoJointLife
+
+    model = TwoJointLife()
+    with pytest.raises(InputError, match=r"design must be finite, got \[nan"):
+        model(np.array([np.nan, 0.02, 0.02, 0.02]))
+    with pytest.raises(InputError, match=r"expected 4 values .* got shape \(3,\)"):
+        model(np.array([0.02, 0.02, 0.02]))
+    with pytest.raises(InputError, match=r"got shape \(3,\)"):
+        jax.jit(lambda x: model(x))(jnp.array([0.02, 0.02, 0.02]))
+    with pytest.raises(Exception, match="every value of .* must be finite"):
+        jax.jit(lambda x: model(x))(jnp.array([jnp.nan, 0.02, 0.02, 0.02]))
+
+
+def test_a_life_not_computed_has_a_nan_derivative_not_zero():
+    """`jnp.where(ok, life, nan)` has derivative 0 where not ok; the life's
+    NaN carries into the derivative instead (closed form beside it)."""
+    import jax
+
+    from diffwear.wear.life import not_computed_is_nan
+
+    def life(k):
+        return not_computed_is_nan(jnp.where(k < 1.0, 3.0 / k, jnp.nan), (k,))
+
+    assert jax.grad(life)(0.5) == pytest.approx(-12.0)  # d(3/k)/dk = -3/k^2
+    assert jax.jacfwd(life)(0.5) == pytest.approx(-12.0)
+    for derivative in (jax.grad, jax.jacfwd):
+        assert math.isnan(life(2.0)) and math.isnan(derivative(life)(2.0))
+
+
+def test_a_quasi_static_life_cut_short_has_a_nan_gradient():
+    """One wear slot cannot reach the limit: status 'incomplete', the life
+    NaN, and its gradient by the design NaN, never a silent 0."""
+    import jax
+
+    from diffwear.design import TwoJointLife
+    from diffwear.quasistatic import QuasiStatic
+    from diffwear.wear.status import STATUS_INCOMPLETE
+
+    model = TwoJointLife(wear_model=QuasiStatic(samples=36, steps=16, max_steps=1),
+                         n_theta=36).prepared()
+    x = jnp.array([0.02, 0.02, 0.02, 0.02])
+    assert int(model.evaluate(x).status) == STATUS_INCOMPLETE
+    value, grad = jax.value_and_grad(lambda v: model(v)[0])(x)
+    assert math.isnan(float(value)) and np.all(np.isnan(np.asarray(grad)))

@@ -261,3 +261,34 @@ def test_diverged_assembly_is_diagnosed_at_the_guess(tmp_path, monkeypatch):
 
 def test_at_least_25_cases():
     assert len(CASES) >= 25
+
+
+def test_a_near_zero_inertia_is_refused_naming_the_body_and_key(tmp_path, capsys):
+    """1e-30 kg m^2 on a 0.5 kg crank (radius of gyration 1.4e-15 m): refused
+    at the file's key, not an assembly failure with a tiny residual."""
+    text = (SHIPPED_MECHANISMS / "four_bar_wear.toml").read_text()
+    path = tmp_path / "tiny.toml"
+    path.write_text(text.replace('inertia = "0.000417 kg m^2"', 'inertia = "1e-30 kg m^2"'))
+    out = tmp_path / "out"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bodies[0].inertia" in err[0] and "'crank'" in err[0]
+    assert "radius of gyration of 1.41e-15 m" in err[0] and not out.exists()
+
+
+@pytest.mark.parametrize("old, new, cause", [
+    ('bushing_radius = "6.05 mm"', 'bushing_radius = "20 mm"',
+     "its clearance (14 mm) is larger than its pin radius (6 mm)"),
+    ('layer_thickness = "4 mm"', 'layer_thickness = "0.01 mm"',
+     "its bushing wall (law.layer_thickness 0.01 mm) is thinner than its clearance (0.05 mm)"),
+])
+def test_a_failed_cycle_model_names_the_input_that_makes_it(old, new, cause, tmp_path, capsys):
+    text = (SHIPPED_MECHANISMS / "four_bar_wear.toml").read_text()
+    assert old in text
+    path = tmp_path / "joint.toml"
+    path.write_text(text.replace(old, new))
+    out = tmp_path / "out"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet", "--cycles", "2000"]) == 3
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the cycle model failed" in err[0]
+    assert f"likely cause: {cause}" in err[0]

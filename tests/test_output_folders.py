@@ -137,3 +137,13 @@ def test_study_without_a_name_but_an_out_is_refused_like_design(tmp_path, capsys
     err = capsys.readouterr().err
     assert "name the study" in err and "ideal-slider-crank" in err and not out.exists()
     assert main(["study"]) == 0  # the list, as before
+
+
+def test_a_killed_runs_files_are_not_mixed_with_a_new_runs(tmp_path):
+    out = tmp_path / "killed"
+    OutputDir(out).csv("contact_0.csv", {"x": [1.0]})  # killed before its summary
+    release_all()
+    with pytest.raises(InputError, match=r"did not finish \(contact_0\.csv\).*--overwrite"):
+        OutputDir(out)
+    OutputDir(out, overwrite=True)
+    assert "contact_0.csv" not in _listing(out)

@@ -13,7 +13,9 @@ Every writer goes through `OutputDir`, which refuses, before any computation:
   only those), so that a mistyped command never destroys results;
 * a folder that holds an interrupted run (``checkpoint.npz`` without a
   summary) unless it is resumed or overwritten, so that its checkpoint is
-  never thrown away silently;
+  never thrown away silently, and one holding the files of a run that was
+  killed before its summary unless overwritten (never mixed with a new
+  run's);
 * a folder another diffwear process is writing (its lock file names the
   process; a lock left by a process that no longer runs is taken over);
 * a folder that cannot be created or written (the reason, not a traceback
@@ -99,6 +101,12 @@ class OutputDir:
             raise InputError(
                 f"--out {self.path}: holds an interrupted run ({CHECKPOINT}, no summary.json); "
                 f"pass --resume {self.path} to continue it, or --overwrite to start over")
+        unfinished = [n for n in previous if n != CHECKPOINT]
+        if unfinished and not (self.path / "summary.json").exists() and not (overwrite or resume):
+            raise InputError(
+                f"--out {self.path}: holds the files of a run that did not finish "
+                f"({', '.join(unfinished[:5])}{' ...' if len(unfinished) > 5 else ''}); pass "
+                "--overwrite to replace them, or choose another folder")
         existed = self.path.exists()
         try:
             self.path.mkdir(parents=True, exist_ok=True)

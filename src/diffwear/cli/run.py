@@ -281,9 +281,11 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                            f"bushing wall after {w['cycles']:,.0f} cycles (max depth "
                            f"{joints[name]['max_wear_depth_mm']:.4f} mm)")
         elif w["status"] != STATUS_OK:
+            causes = mechanism_wear.likely_causes(mfile, name)
             pierced.append(f"the wear of clearance joint {name!r} stopped after "
                            f"{w['cycles']:,.0f} cycles: "
-                           f"{STATUS_TEXT.get(w['status'], 'status ' + str(w['status']))}")
+                           f"{STATUS_TEXT.get(w['status'], 'status ' + str(w['status']))}"
+                           + (f"; likely cause: {'; and '.join(causes)}" if causes else ""))
         elif w.get("contact_margin_worn", math.inf) < 1.0:
             warnings.append(f"clearance joint {name!r}: on the worn profile the pin may lift "
                             f"off the wall (contact margin {w['contact_margin_worn']:.2g})")

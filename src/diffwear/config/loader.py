@@ -236,7 +236,10 @@ def _bodies(ctx: Context, raw) -> list[Body]:
                             f"{name!r} is already the name of bodies[{seen[name]}]",
                             "unique body names")
         seen[name] = k
-        out.append(Body(name, v["mass"], v["inertia"]))
+        try:
+            out.append(Body(name, v["mass"], v["inertia"]))
+        except InputError as err:
+            raise ctx.wrap(f"bodies[{k}].inertia", err) from None
     return out
 
 

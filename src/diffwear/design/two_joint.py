@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .._checks import concrete
+from .._checks import check_finite, concrete
 from ..contact import centred_state
 from ..dynamics import consistent_state
 from ..errors import InputError, SolverError
@@ -162,7 +162,16 @@ class TwoJointLife(eqx.Module):
     def __call__(self, x: Float[Array, "4"]) -> Float[Array, "2"]:
         # compiled as one program even when called eagerly (op by op, a life
         # is hundreds of small compilations); inside jit / vmap / jacfwd the
-        # inner jit is inlined
+        # inner jit is inlined.  Its shape is checked, and a non-finite value
+        # is an `InputError` (concrete) or stops the program with the same
+        # words (`eqx.error_if`, inside a trace); the Table 8-3 box is
+        # `life`'s check (a derivative at a bound may step past it)
+        check_finite("design", x)
+        if jnp.shape(x) != (4,):
+            raise InputError(f"design: expected 4 values (d1, d2, h1, h2) in m, got shape "
+                             f"{jnp.shape(x)}")
+        x = eqx.error_if(jnp.asarray(x, dtype=float), ~jnp.all(jnp.isfinite(x)),
+                         "design: every value of (d1, d2, h1, h2) must be finite")
         return _evaluate(self, x).cycles
 
     def life(self, x) -> np.ndarray:

@@ -22,8 +22,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from .._checks import require_float64
-from ..errors import SolverError
+from .._checks import check_finite, concrete, require_float64
+from ..errors import InputError, SolverError
 from ..mechanism import Mechanism
 from .equations import Baumgarte, vector_field
 from .projection import replace_inner, stepping_solver
@@ -98,6 +98,26 @@ def _args_for_state_jacobian(args):
     return mech.for_state_jacobian(), baumgarte
 
 
+def _check_inputs(mech: Mechanism, y0, t0, t1) -> None:
+    """`InputError` for a state of the wrong length or precision and for
+    times that are not finite or run backwards (concrete values; the shape
+    and dtype inside a trace too)."""
+    shape, dtype = jnp.shape(y0), jnp.result_type(y0)
+    if shape != (mech.n_state,):
+        raise InputError(f"simulate: y0 has shape {shape}; expected ({mech.n_state},): the "
+                         f"positions and velocities of the mechanism's {len(mech.bodies)} "
+                         "bodies (e.g. from consistent_state)")
+    if dtype != jnp.float64:
+        raise InputError(f"simulate: y0 is {dtype}; expected float64 (build it with "
+                         "jnp.asarray(..., dtype=float) with jax_enable_x64 on)")
+    check_finite("simulate: y0", y0)
+    check_finite("simulate: t0", t0)
+    check_finite("simulate: t1", t1)
+    a, b = concrete(t0), concrete(t1)
+    if a is not None and b is not None and not float(b) > float(a):
+        raise InputError(f"simulate: t1 = {float(b):g} s must be after t0 = {float(a):g} s")
+
+
 def simulate(
     mech: Mechanism,
     y0: Float[Array, " s"],
@@ -127,6 +147,7 @@ def simulate(
     mechanism; `diffwear.dynamics.projection`).
     """
     require_float64("simulate")
+    _check_inputs(mech, y0, t0, t1)
     baumgarte = Baumgarte() if baumgarte is None else baumgarte
     solver = diffrax.Tsit5() if solver is None else solver
     if isinstance(stepping_solver(solver), AbstractRosenbrock):

@@ -72,6 +72,26 @@ def bushing_walls(mfile: MechanismFile, joints, limit: float | None = None) -> l
     return walls
 
 
+def likely_causes(mfile: MechanismFile, name: str) -> list[str]:
+    """Inputs of clearance joint ``name`` that make its cycle model fail,
+    in words naming the keys to change (for the message of a failed run)."""
+    el = mfile.mechanism.element(name)
+    rp, rb = float(el.pin_radius), float(el.bushing_radius)
+    c = rb - rp
+    wall = dict(mfile.bushing_walls).get(name, math.inf)
+    out = []
+    if c > rp:
+        out.append(f"its clearance ({c * 1e3:.4g} mm) is larger than its pin radius "
+                   f"({rp * 1e3:.4g} mm): the pin crosses the bore without holding contact "
+                   "(clearances are fractions of a percent of the radius; change clearance "
+                   "or bushing_radius)")
+    if wall < c and not out:
+        out.append(f"its bushing wall (law.layer_thickness {wall * 1e3:.4g} mm) is thinner "
+                   f"than its clearance ({c * 1e3:.4g} mm): the foundation stiffness E / "
+                   "wall makes the contact too stiff to integrate (change layer_thickness)")
+    return out
+
+
 def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None = None,
                 model: QuasiStatic | None = None) -> dict:
     """Per joint: depth profile [m], grid angles, peak-depth history, volume

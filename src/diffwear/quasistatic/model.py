@@ -36,7 +36,7 @@ from ..mechanism import GROUND, Mechanism
 from ..wear.life import LifeResult
 from ..wear.model import AbstractWearModel
 from ..wear.profile_ode import ProfileHistory, ProfileSolution, integrate_profile
-from ..wear.status import STATUS_CONTACT_LOSS, STATUS_OK, STATUS_SOLVER
+from ..wear.status import STATUS_CONTACT_LOSS, STATUS_INCOMPLETE, STATUS_OK, STATUS_SOLVER
 from .joint import QuasiStaticJoint
 from .loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
 
@@ -200,7 +200,10 @@ class QuasiStatic(AbstractWearModel):
                    "joint_status": joint_status,
                    "contact_margin": jnp.stack([m[0] for _, m in per_joint]),
                    "contact_margin_worn": jnp.stack([m[1] for _, m in per_joint])}
-        return LifeResult(cycles=jnp.stack([s.life for s in sols]),
+        # a joint whose cycle model failed has no life: NaN, and NaN derivatives
+        failed = (joint_status == STATUS_SOLVER) | (joint_status == STATUS_INCOMPLETE)
+        lives = jnp.where(failed, jnp.nan, jnp.stack([s.life for s in sols]))
+        return LifeResult(cycles=lives,
                           depth=tuple(s.depth for s in sols), status=status,
                           dynamic_cycles=jnp.zeros((), int), history=history)
 

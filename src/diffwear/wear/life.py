@@ -139,6 +139,20 @@ class LifeResult(eqx.Module):
     history: dict
 
 
+def not_computed_is_nan(cycles, inputs):
+    """``cycles`` whose derivatives by every float leaf of ``inputs`` are NaN
+    once any life is NaN (not computed).  A gradient through ``jnp.where(ok,
+    life, nan)`` is 0 where not ok, which an optimiser reads as a flat
+    optimum; a NaN scaled into the tangent does not survive the selects
+    upstream in reverse mode.  So a term NaN x (sum of the inputs) is added
+    where a life is NaN (0 x it elsewhere: the value and the derivatives of
+    the computed lives are unchanged; infinite leaves are left out)."""
+    leaves = jax.tree.leaves(eqx.filter(inputs, eqx.is_inexact_array))
+    probe = sum((jnp.sum(jnp.where(jnp.isfinite(v), v, 0.0)) for v in leaves),
+                jnp.zeros(()))
+    return cycles + jnp.where(jnp.isnan(cycles), jnp.nan, 0.0) * probe
+
+
 def _with_profiles(mech: Mechanism, indices, bases, depths) -> Mechanism:
     for i, base, h in zip(indices, bases, depths):
         mech = eqx.tree_at(lambda m: m.forces[i].profile.clearance, mech, base + h)

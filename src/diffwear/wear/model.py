@@ -25,7 +25,7 @@ from .._checks import require_float64
 from ..errors import InputError
 from ..mechanism import Mechanism
 from .cycle import CYCLE_ATOL, CYCLE_RTOL
-from .life import LifeResult, dynamic_cycles_to_limit
+from .life import LifeResult, dynamic_cycles_to_limit, not_computed_is_nan
 
 
 class AbstractWearModel(eqx.Module):
@@ -97,12 +97,20 @@ def cycles_to_limit(mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, "
     """
     require_float64("cycles_to_limit")
     if model is None:
-        return dynamic_cycles_to_limit(mech, joints, y0, period=period, limit=limit,
-                                       **dynamic_options)
+        res = dynamic_cycles_to_limit(mech, joints, y0, period=period, limit=limit,
+                                      **dynamic_options)
+        return _undefined_where_not_computed(res, (mech, y0, period, limit))
     if dynamic_options:
         raise InputError(f"cycles_to_limit: options {sorted(dynamic_options)} belong to the "
                          "model object; pass them to it (e.g. Dynamic(steps=20))")
     if not isinstance(model, AbstractWearModel):
         raise InputError(f"cycles_to_limit: model must be a wear model (Dynamic(), "
                          f"QuasiStatic()), got {model!r}")
-    return model.life(mech, tuple(joints), y0, period=period, limit=limit)
+    res = model.life(mech, tuple(joints), y0, period=period, limit=limit)
+    return _undefined_where_not_computed(res, (model, mech, y0, period, limit))
+
+
+def _undefined_where_not_computed(res: LifeResult, inputs) -> LifeResult:
+    """A life not computed (NaN) has NaN derivatives, never a silent 0
+    (`diffwear.wear.life.not_computed_is_nan`)."""
+    return eqx.tree_at(lambda r: r.cycles, res, not_computed_is_nan(res.cycles, inputs))

@@ -73,6 +73,28 @@ def test_chunked_and_ordered_equal_unchunked(full, chunk_size, order):
         np.testing.assert_allclose(r[k], full[k], rtol=1e-10, atol=0, err_msg=k)
 
 
+def test_a_sweep_too_big_for_memory_is_chunked_to_fit(full, monkeypatch):
+    """With the memory available set to what 5 points need (XLA's own count
+    of the 16-point program, per point), the default sweep runs in chunks of
+    4 (half the memory: `MEMORY_SHARE`) with the same results; a requested
+    chunk that does not fit is refused with the estimate, and so is a model
+    of which one point does not."""
+    from diffwear.sweep import memory
+
+    per_point = full.info["bytes_per_point"]
+    assert per_point > 0  # XLA gives the count on this backend
+    monkeypatch.setattr(memory, "available_bytes", lambda device: 9.0 * per_point)
+    r = sweep(toy, BASE, GRID)
+    assert r.info["chunk_size"] == 4 and r.info["chunks"] == 4
+    for k in ("x1", "steps"):
+        np.testing.assert_allclose(r[k], full[k], rtol=1e-10, atol=0, err_msg=k)
+    with pytest.raises(InputError, match=r"chunk_size 8 needs ~.* GB .*allowed: chunk_size <= [1-7]$"):
+        sweep(toy, BASE, GRID, chunk_size=8)
+    monkeypatch.setattr(memory, "available_bytes", lambda device: 1.0 * per_point)
+    with pytest.raises(InputError, match="one point of this model needs"):
+        sweep(toy, BASE, GRID)
+
+
 def test_padding_dropped():
     """A 3-point sweep in chunks of 2: the padded slot (a copy of the last point)
     leaves no trace; results stay in grid order."""

@@ -14,6 +14,7 @@ import numpy as np
 from .._checks import require_float64
 from ..errors import InputError
 from .grid import full_grid, validate
+from .memory import chunk_for_memory
 from .result import SweepResult, build_result
 
 AXIS = "points"
@@ -79,7 +80,9 @@ def sweep(model_fn: Callable[[dict], dict], base_params: Mapping, grid: Mapping,
     against it.  ``grid``: name -> 1-D array; the sweep is their cartesian
     product (C order, last name fastest), other parameters from ``base_params``.
 
-    ``chunk_size``: points per ``jax.vmap`` call (default: all at once), rounded
+    ``chunk_size``: points per ``jax.vmap`` call (default: all at once, or the
+    largest chunk that fits in memory: `diffwear.sweep.memory`; a requested
+    chunk that does not fit is refused with the estimate), rounded
     up to a multiple of the device count; the last chunk is padded with copies
     of its last point, whose outputs are dropped.  One compilation serves every
     chunk.  ``devices``: None (all local devices), a count, or a list; with more
@@ -123,13 +126,19 @@ def evaluate(model_fn: Callable[[dict], dict], cols: Mapping[str, np.ndarray], *
 
     devs = _devices(devices)
     nd = len(devs)
-    if chunk_size is None:
-        size = n
-    else:
-        if int(chunk_size) != chunk_size or chunk_size < 1:
-            raise InputError(f"sweep: chunk_size must be a positive integer, got {chunk_size!r}")
-        size = min(int(chunk_size), n)
-    size = nd * math.ceil(size / nd)
+    if chunk_size is not None and (int(chunk_size) != chunk_size or chunk_size < 1):
+        raise InputError(f"sweep: chunk_size must be a positive integer, got {chunk_size!r}")
+    fn = batched_fn(model_fn, devs)
+
+    def compile_at(size: int):
+        return fn.lower({k: jnp.zeros(size, jnp.float64) for k in names}).compile()
+
+    # the chunk that fits in memory (`memory`): all points at once if they do
+    t0 = time.perf_counter()
+    size, per_point, compiled = chunk_for_memory(compile_at, n, nd, chunk_size, devs[0])
+    if compiled is None:
+        compiled = compile_at(size)
+    compile_s = time.perf_counter() - t0
     n_chunks = math.ceil(n / size)
 
     t0 = time.perf_counter()
@@ -146,12 +155,6 @@ def evaluate(model_fn: Callable[[dict], dict], cols: Mapping[str, np.ndarray], *
     padded = np.concatenate([order, np.full(n_chunks * size - n, order[-1])])
     order_s = time.perf_counter() - t0
 
-    fn = batched_fn(model_fn, devs)
-    example = {k: jnp.zeros(size, jnp.float64) for k in names}
-    t0 = time.perf_counter()
-    compiled = fn.lower(example).compile()
-    compile_s = time.perf_counter() - t0
-
     results = {k: np.empty(n) for k in out_names}
     chunk_s = []
     for c in range(n_chunks):
@@ -164,6 +167,7 @@ def evaluate(model_fn: Callable[[dict], dict], cols: Mapping[str, np.ndarray], *
             results[k][keep] = np.asarray(out[k], dtype=float)[: keep.size]
 
     info = {"points": n, "chunks": n_chunks, "chunk_size": size, "padding": n_chunks * size - n,
+            "bytes_per_point": per_point,
             "devices": nd, "ordered": order_by is not None, "order": order, "compile_s": compile_s,
             "run_s": float(sum(chunk_s)), "chunk_s": chunk_s, "order_s": order_s}
     return results, info

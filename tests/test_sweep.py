@@ -88,7 +88,8 @@ def test_a_sweep_too_big_for_memory_is_chunked_to_fit(full, monkeypatch):
     assert r.info["chunk_size"] == 4 and r.info["chunks"] == 4
     for k in ("x1", "steps"):
         np.testing.assert_allclose(r[k], full[k], rtol=1e-10, atol=0, err_msg=k)
-    with pytest.raises(InputError, match=r"chunk_size 8 needs ~.* GB .*allowed: chunk_size <= [1-7]$"):
+    too_big = r"chunk_size 8 needs ~.* GB .*allowed: chunk_size <= [1-7]$"
+    with pytest.raises(InputError, match=too_big):
         sweep(toy, BASE, GRID, chunk_size=8)
     monkeypatch.setattr(memory, "available_bytes", lambda device: 1.0 * per_point)
     with pytest.raises(InputError, match="one point of this model needs"):

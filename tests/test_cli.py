@@ -585,3 +585,90 @@ wear = { coefficient = "5.05e-4 mm^3/(N m)" }
                  "--quiet"]) == 2
     assert "this file wears 2 (crank_coupler, coupler_rocker)" in capsys.readouterr().err
     assert not out.exists()
+
+
+def _lost_interrupt():
+    """SIGINT delivered and its KeyboardInterrupt swallowed, as inside one of
+    JAX's garbage-collection callbacks ("Exception ignored in ...")."""
+    import os
+    import signal
+
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        for _ in range(100):  # the handler runs at the next bytecode boundary
+            pass
+    except KeyboardInterrupt:
+        pass
+
+
+def test_a_ctrl_c_lost_in_a_callback_still_ends_the_run_with_130(tmp_path, capsys):
+    """A wear run whose Ctrl-C was swallowed stops at the next chunk, after
+    its checkpoint (resumable, the resume line printed), never finishing
+    with exit 0."""
+    from diffwear.studies import _wear_common as common
+
+    real = common.save_checkpoint
+    calls = []
+
+    def save_and_lose_an_interrupt(*args, **kwargs):
+        real(*args, **kwargs)
+        calls.append(1)
+        if len(calls) == 1:
+            _lost_interrupt()
+
+    out = tmp_path / "run"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(common, "save_checkpoint", save_and_lose_an_interrupt)
+        assert main(["study", WEAR, "--cycles", "3", "--out", str(out), "--quiet"]) == 130
+    assert len(calls) == 1  # stopped at the chunk where it was pressed
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"--resume {out}" in err[0]
+    assert (out / "checkpoint.npz").is_file() and not (out / "summary.json").exists()
+
+
+def test_a_ctrl_c_lost_as_a_command_ends_is_still_130(tmp_path, capsys, monkeypatch):
+    from diffwear.studies import STUDIES
+
+    def finishes(out, **kwargs):
+        _lost_interrupt()
+        out.json("summary.json", {"files": []})
+
+    monkeypatch.setattr(STUDIES[STUDY], "run", finishes)
+    assert main(["study", STUDY, "--out", str(tmp_path / "x"), "--quiet"]) == 130
+    assert "interrupted as the run ended; its results were written" in capsys.readouterr().err
+    import signal
+
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handler restored
+
+
+@pytest.mark.slow  # three real interrupts of a dynamic file run: about a minute
+def test_ctrl_c_on_the_command_is_exit_130_at_any_moment(tmp_path):
+    """``diffwear run four_bar_wear --model dynamic`` interrupted by SIGINT at
+    three moments once it runs (its folder locked: compiling, early, later):
+    exit 130 and one line every time, no traceback, no segmentation fault; a
+    run interrupted after its first checkpoint resumes."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    exe = os.path.join(os.path.dirname(sys.executable), "diffwear")
+    for k, delay in enumerate((0.0, 3.0, 8.0)):
+        out = tmp_path / f"run{k}"
+        p = subprocess.Popen([exe, "run", "four_bar_wear", "--model", "dynamic", "--cycles",
+                              "2000", "--out", str(out), "--quiet"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for _ in range(600):  # started: its output folder is locked
+            if (out / ".diffwear-lock").exists():
+                break
+            time.sleep(0.1)
+        time.sleep(delay)
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=120)
+        assert p.returncode == 130, (delay, p.returncode, err[-2000:])
+        lines = [ln for ln in err.strip().splitlines() if ln]
+        assert "Traceback" not in err and lines[-1].startswith("diffwear: interrupted"), err
+        if (out / "checkpoint.npz").is_file():
+            assert subprocess.run([exe, "run", "four_bar_wear", "--resume", str(out),
+                                   "--quiet"], capture_output=True).returncode == 0

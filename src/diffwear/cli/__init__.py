@@ -12,6 +12,6 @@ CSV, figures, ``summary.json``).
 Only this package chooses the matplotlib backend; nothing below it imports it.
 """
 
-from .command import build_parser, main
+from .command import build_parser, entry, main
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "entry", "main"]

@@ -1,7 +1,5 @@
 """``python -m diffwear.cli``: the ``diffwear`` command."""
 
-import sys
+from .command import entry
 
-from .command import main
-
-sys.exit(main())
+entry()

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import errno
 import inspect
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -469,10 +470,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     import matplotlib
 
     matplotlib.use("Agg")  # the command writes figures to files; no window
+    from .. import interrupt
     from ..io import _OPEN, output_error, release_all
 
+    previous = interrupt.install()
     try:
-        return args.func(args)
+        code = args.func(args)
+        if interrupt.requested():  # pressed, and lost inside a callback: still an interrupt
+            print("diffwear: interrupted as the run ended; its results were written",
+                  file=sys.stderr)
+            return 130
+        return code
     except DiffwearError as err:
         print(f"diffwear: error: {err}", file=sys.stderr)
         return err.exit_code
@@ -488,4 +496,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         return failed.exit_code
     finally:
         release_all()
+        interrupt.restore(previous)
+
+
+def entry() -> None:
+    """The ``diffwear`` console command: `main`, then the exit.  After Ctrl-C
+    the process ends without the interpreter's teardown, which raced XLA's
+    threads still winding down (a segmentation fault after the message)."""
+    try:
+        code = main()
+    except KeyboardInterrupt:  # while starting up (importing), before main's own handling
+        print("diffwear: interrupted; no results were written", file=sys.stderr)
+        code = 130
+    if code == 130:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
+    sys.exit(code)
 

@@ -10,6 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import interrupt
 from ..choices import WEAR_CONTACTS as CONTACTS
 from ..choices import check_wear_model
 from ..contact import centred_state, contact_history
@@ -133,6 +134,7 @@ def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, ma
     def on_chunk(ck):
         save_checkpoint(path, ck, meta)
         bar.update(float(ck.state.n) - bar.n)
+        interrupt.check()  # a Ctrl-C lost inside a callback ends the run here
 
     t0 = time.perf_counter()
     try:

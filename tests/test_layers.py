@@ -86,7 +86,7 @@ def test_no_module_getattr_import_tricks():
 # package or from a lower layer (peers in one layer do not import each other).
 LAYERS = (
     ("errors",),                          # the error classes
-    ("choices", "_checks", "io", "report", "gradient_check"),  # options, checks, outputs
+    ("choices", "_checks", "io", "report", "gradient_check", "interrupt"),  # options, outputs
     ("mechanism",),                       # bodies, joints, forces: the DAE's terms
     ("dynamics", "contact", "fem"),       # integration; contact laws; FEM contact
     ("wear",),                            # Archard wear, the profile, the evolution

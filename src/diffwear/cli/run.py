@@ -159,8 +159,8 @@ def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
             ("max constraint violation",
              f"{s['max_constraint_violation']:.3e} (m; rad for angle rows)"),
             ("integrator steps", s["integrator_steps"]),
-            ("simulation time (incl. compilation)", f"{s['simulate_time_s']:.2f} s"),
-            ("wall time", f"{s['wall_time_s']:.2f} s")]),
+            ("the motion's simulation, compilation included", f"{s['simulate_time_s']:.2f} s"),
+            ("the whole run (motion, wear, files and figures)", f"{s['wall_time_s']:.2f} s")]),
     ]
     if s["reactions"]:
         blocks.append(Section("Joint reactions", [

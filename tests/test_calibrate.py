@@ -294,7 +294,8 @@ def test_dynamic_check_in_its_own_process_equals_the_dynamic_model_here(small_da
     check = DynamicCheck(data, settings)
     try:
         assert check.name == "dynamic"
-        got = check.residual(fit)
+        got = check.residual(fit)  # its own evaluation, not the in-process one's
+        assert got is not want
         np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-12)
         assert check.residual(fit) is got  # kept with the fit, not evaluated again
     finally:

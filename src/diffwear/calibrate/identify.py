@@ -794,7 +794,6 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
                          selection=sel, discrepancy=search, limits=limits, final=final,
                          adopted=adopted, partial=partial)
     if dynamic is not None:
-        dynamic.submit(final)
         result.check = model_check(problem, final, dynamic)
         c = result.check
         log(f"check on the {c['model']} model: chi2 {c['chi2_fit']} on the fit points "

@@ -19,6 +19,7 @@ parent closes it or dies (its pipe ends).  Where pipes cannot be passed
 
 from __future__ import annotations
 
+import itertools
 import os
 import pickle
 import signal
@@ -36,6 +37,7 @@ from .effects import EffectValues
 __all__ = ["DynamicCheck"]
 
 WORKER = "diffwear.calibrate._dynamic_worker"  # its entry point (run with -m)
+_CHECKS = itertools.count()  # one entry per check in a fit's notes
 
 
 @dataclass(frozen=True)
@@ -134,6 +136,8 @@ class DynamicCheck:
         self._pending: set[int] = set()
         self._results: dict[int, object] = {}
         self._next = 0
+        # this check's entry in a fit's notes: its request key, then its residual
+        self._note = ("dynamic check", next(_CHECKS))
         self.busy_s = 0.0   # time the caller waited for the worker
 
     def _send(self, message) -> None:
@@ -185,11 +189,11 @@ class DynamicCheck:
 
     def submit(self, fit) -> None:
         """Queue the dynamic model's evaluation at ``fit``'s numbers (once)."""
-        if "reference_key" in fit.notes:
+        if self._note in fit.notes:
             return
         key = self._next
         self._next += 1
-        fit.notes["reference_key"] = key
+        fit.notes[self._note] = key
         e = fit.effect_values()
         request = (np.asarray(fit.notes["x"]), np.asarray(e.strength),
                    np.asarray(e.log_shape), np.asarray(e.discrepancy))
@@ -201,19 +205,21 @@ class DynamicCheck:
 
     def residual(self, fit) -> np.ndarray:
         """All normalised residuals of the dynamic model at ``fit``'s numbers
-        (evaluated, not refitted; non-finite where its integration failed)."""
-        if "reference_residual" not in fit.notes:
-            self.submit(fit)
-            key = fit.notes["reference_key"]
-            while key not in self._results:
-                self._receive()
-            r = self._results.pop(key)
-            if self._local is not None:
-                r = _evaluate(self._local, r)
-            if isinstance(r, str):
-                raise SolverError(f"the dynamic model's evaluation failed: {r}")
-            fit.notes["reference_residual"] = r
-        return fit.notes["reference_residual"]
+        (evaluated, not refitted; non-finite where its integration failed);
+        kept in the fit's notes under this check's own entry."""
+        self.submit(fit)
+        entry = fit.notes[self._note]
+        if isinstance(entry, np.ndarray):
+            return entry
+        while entry not in self._results:
+            self._receive()
+        r = self._results.pop(entry)
+        if self._local is not None:
+            r = _evaluate(self._local, r)
+        if not isinstance(r, np.ndarray):  # the worker's message
+            raise SolverError(f"the dynamic model's evaluation failed: {r}")
+        fit.notes[self._note] = r
+        return r
 
     def close(self) -> None:
         """Stop the worker (pending evaluations are dropped)."""

@@ -90,7 +90,7 @@ class OutputDir:
         self.path = Path(path)
         if self.path.exists() and not self.path.is_dir():
             raise InputError(f"--out {self.path}: exists and is not a directory")
-        previous = self._previous_files()
+        previous, partial = self._previous_files()
         if (self.path / "summary.json").exists() and not overwrite:
             raise InputError(
                 f"--out {self.path}: already holds results (summary.json); choose another "
@@ -117,23 +117,23 @@ class OutputDir:
         self.files: list[str] = []
         self._lock()
         _OPEN.append(self)
-        self._remove(self._partial)
+        self._remove(partial)
         if resume:  # the interrupted run's files stay; this run adds to its list
             self.files = [n for n in previous if (self.path / n).is_file()]
         elif overwrite:
             self._remove(previous)
         self._write_manifest()
 
-    def _previous_files(self) -> list[str]:
-        """The files a previous diffwear run wrote here (its manifest, or its
-        summary's list); `InputError` if the folder holds anything else."""
-        self._partial: set[str] = set()
+    def _previous_files(self) -> tuple[list[str], set[str]]:
+        """(the files a previous diffwear run wrote here: its manifest, or its
+        summary's list; the temporary files of writes cut short by a kill);
+        `InputError` if the folder holds anything else."""
         if not self.path.is_dir():
-            return []
+            return [], set()
         present = {p.name for p in self.path.iterdir()} - _OWN - _DESKTOP
         # a write cut short by a kill (the rename never happened): ours
-        self._partial = {n for n in present if n.startswith(".") and n.endswith(".partial")}
-        present -= self._partial
+        partial = {n for n in present if n.startswith(".") and n.endswith(".partial")}
+        present -= partial
         listed: set[str] = set()
         manifest = self.path / MANIFEST
         if manifest.is_file():
@@ -154,7 +154,7 @@ class OutputDir:
                     else "files that are not a diffwear output")
             raise InputError(f"--out {self.path}: holds {what} ({shown}); allowed: a new "
                              "folder, an empty one or a previous diffwear output")
-        return sorted(listed & present)
+        return sorted(listed & present), partial
 
     def _remove(self, names) -> None:
         """Remove the previous run's files (plain files directly in the folder)."""

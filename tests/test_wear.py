@@ -171,6 +171,32 @@ def test_running_out_of_slots_is_an_error_not_a_short_answer(problem):
         res.check()
 
 
+def test_a_checkpoint_write_cut_short_keeps_the_previous_one_and_leaves_no_file(tmp_path,
+                                                                               monkeypatch):
+    """Ctrl-C while the checkpoint is written: the previous checkpoint stays
+    whole and readable, and no temporary file is left in the folder (which
+    the next run would otherwise find there)."""
+    from diffwear.wear import Checkpoint, EvolutionState, load_checkpoint, save_checkpoint
+
+    path = tmp_path / "checkpoint.npz"
+    zero = np.asarray(0.0)
+    state = EvolutionState(h=np.zeros(3), y=np.zeros(2), t=zero, n=zero, dyn=np.asarray(0),
+                           ls=zero, status=np.asarray(0), fail_n=zero, fail_h=zero)
+    ck = Checkpoint(state, {"cycles": np.zeros(1)}, 1)
+    save_checkpoint(path, ck, {"cycles": 1})
+
+    def interrupted(f, **arrays):
+        f.write(b"PK half a file")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(np, "savez", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        save_checkpoint(path, ck, {"cycles": 2})
+    monkeypatch.undo()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["checkpoint.npz"]
+    assert load_checkpoint(path)[1] == {"cycles": 1}
+
+
 def _chunked(problem, cycles=6, a=2.0, chunk_slots=2, **kw):
     from diffwear.wear import ChunkedEvolution, Evolver
 
@@ -203,7 +229,7 @@ def test_interrupted_chunked_run_resumes_to_the_same_result(problem, short_run, 
     ck, meta = load_checkpoint(path)
     assert seen == [2] and ck.slots_done == 2 and meta == {"cycles": 6}
     assert float(ck.state.n) == 4.0 and ck.history["cycles"].shape == (2,)
-    assert not list(tmp_path.glob("*.tmp"))
+    assert not list(tmp_path.glob(".*.partial"))
     res = run.run(start=ck).check()
     for name in ("depth", "y", "t", "cycles", "dynamic_cycles", "load_sliding", "status"):
         np.testing.assert_allclose(np.asarray(getattr(res, name)),

@@ -396,12 +396,18 @@ def save_checkpoint(path, ckpt: Checkpoint, meta: dict) -> None:
     arrays.update({f"history.{k}": np.asarray(v) for k, v in ckpt.history.items()})
     arrays["slots_done"] = np.asarray(ckpt.slots_done)
     arrays["meta"] = np.asarray(json.dumps(meta))
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
-        np.savez(f, **cast(dict[str, Any], arrays))
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    # the output folders' name for a write in progress (`diffwear.io`), so that
+    # one cut short by a kill is recognised there as this run's own, not foreign
+    tmp = path.with_name(f".{path.name}.partial")
+    try:
+        with open(tmp, "wb") as f:
+            np.savez(f, **cast(dict[str, Any], arrays))
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:  # a full disk, or Ctrl-C while writing: no half file left
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def load_checkpoint(path) -> tuple[Checkpoint, dict]:

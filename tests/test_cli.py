@@ -641,6 +641,45 @@ def test_a_ctrl_c_lost_as_a_command_ends_is_still_130(tmp_path, capsys, monkeypa
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handler restored
 
 
+def test_an_interrupt_lost_in_a_callback_is_not_printed_but_other_lost_errors_are():
+    """Python prints an exception raised where it cannot propagate (a
+    finaliser, one of JAX's garbage-collection callbacks) as "Exception
+    ignored ... Traceback"; while the command's handler is installed a lost
+    Ctrl-C is recorded and not printed (the command ends with its own one
+    line), and any other lost exception is printed as before."""
+    import subprocess
+    import sys
+
+    script = """
+import gc, os, signal
+from diffwear import interrupt
+
+class Finaliser:
+    def __init__(self, interrupt_it):
+        self.interrupt_it = interrupt_it
+    def __del__(self):
+        if self.interrupt_it:
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):
+                pass
+        raise ValueError("a lost error")
+
+previous = interrupt.install()
+Finaliser(True)
+gc.collect()
+print("requested", interrupt.requested())
+Finaliser(False)
+interrupt.restore(previous)
+print("restored", signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+"""
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split() == ["requested", "True", "restored", "True"]
+    assert "KeyboardInterrupt" not in p.stderr
+    assert p.stderr.count("Exception ignored") == 1 and "ValueError: a lost error" in p.stderr
+
+
 @pytest.mark.slow  # three real interrupts of a dynamic file run: about a minute
 def test_ctrl_c_on_the_command_is_exit_130_at_any_moment(tmp_path):
     """``diffwear run four_bar_wear --model dynamic`` interrupted by SIGINT at

@@ -2,16 +2,19 @@
 
 Python raises `KeyboardInterrupt` in whatever frame runs when SIGINT
 arrives.  Inside one of JAX's garbage-collection callbacks it is printed as
-"Exception ignored" and lost, and the run goes on to the end.  The
-``diffwear`` command installs `install`'s handler, which records the
-interrupt before raising it, so that the next `check` raises it again: the
-wear loop checks between chunks (after the checkpoint is saved, so the run
-resumes from there), and the command once it returns.
+"Exception ignored" (with a traceback) and lost, and the run goes on to the
+end.  The ``diffwear`` command installs `install`'s handler, which records
+the interrupt before raising it, so that the next `check` raises it again:
+the wear loop checks between chunks (after the checkpoint is saved, so the
+run resumes from there), and the command once it returns.  While installed,
+an interrupt lost that way is not printed (the command says it was
+interrupted in its own one line); other lost exceptions still are.
 """
 
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 
 __all__ = ["check", "install", "requested", "restore"]
@@ -24,18 +27,30 @@ def _handler(signum, frame):
     raise KeyboardInterrupt
 
 
+def _unraisable(hook):
+    def unraisable(info):
+        if not (isinstance(info.exc_value, KeyboardInterrupt) and _requested.is_set()):
+            hook(info)
+    unraisable.wrapped = hook  # type: ignore[attr-defined]
+    return unraisable
+
+
 def install():
     """Handle SIGINT with the recording handler (main thread only); returns
-    the previous handler for `restore` (None where it cannot be set)."""
+    what `restore` puts back (None where it cannot be set)."""
     _requested.clear()
     if threading.current_thread() is not threading.main_thread():
         return None
-    return signal.signal(signal.SIGINT, _handler)
+    hook = sys.unraisablehook
+    sys.unraisablehook = _unraisable(hook)
+    return signal.signal(signal.SIGINT, _handler), hook
 
 
 def restore(previous) -> None:
     if previous is not None and threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, previous)
+        handler, hook = previous
+        signal.signal(signal.SIGINT, handler)
+        sys.unraisablehook = hook
 
 
 def requested() -> bool:

@@ -741,6 +741,34 @@ print("not interrupted")
     assert p.stderr == "diffwear: interrupted; no results were written\n" and not p.stdout
 
 
+def test_ctrl_c_while_the_finished_command_exits_is_exit_130_with_its_line():
+    """SIGINT after the run wrote its results, while the process ends (sent
+    here from an exit handler): recorded, not raised, and reported as an
+    interrupt after the results were written, never a traceback or a silent
+    death by the signal."""
+    import subprocess
+    import sys
+
+    script = """
+import atexit, os, signal, sys, time
+from diffwear.cli import command
+
+def late_ctrl_c():
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(0.2)
+    print("exit handlers ran")
+
+atexit.register(late_ctrl_c)
+command.main = lambda: 0
+command.entry()
+"""
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 130, (p.returncode, p.stderr[-2000:])
+    assert p.stdout == "exit handlers ran\n"
+    assert p.stderr == "diffwear: interrupted as the run ended; its results were written\n"
+
+
 @pytest.mark.long  # 50 real runs interrupted at random moments: about ten minutes
 def test_fifty_ctrl_cs_at_random_moments_are_all_exit_130_and_the_run_resumes(tmp_path):
     """``diffwear run four_bar_wear --model dynamic`` interrupted 50 times, each

@@ -17,7 +17,7 @@ import signal
 import sys
 import threading
 
-__all__ = ["check", "install", "requested", "restore"]
+__all__ = ["check", "hold", "install", "requested", "restore"]
 
 _requested = threading.Event()
 
@@ -25,6 +25,10 @@ _requested = threading.Event()
 def _handler(signum, frame):
     _requested.set()
     raise KeyboardInterrupt
+
+
+def _record(signum, frame):
+    _requested.set()
 
 
 def _unraisable(hook):
@@ -51,6 +55,14 @@ def restore(previous) -> None:
         handler, hook = previous
         signal.signal(signal.SIGINT, handler)
         sys.unraisablehook = hook
+
+
+def hold() -> None:
+    """From here on a Ctrl-C is recorded, never raised: for a process whose
+    work is over and that is ending (main thread only)."""
+    _requested.clear()
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, _record)
 
 
 def requested() -> bool:

@@ -8,6 +8,7 @@ disk), 130 interrupted (Ctrl-C).
 from __future__ import annotations
 
 import argparse
+import atexit
 import errno
 import inspect
 import os
@@ -500,17 +501,42 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def entry() -> None:
-    """The ``diffwear`` console command: `main`, then the exit.  After Ctrl-C
-    the process ends without the interpreter's teardown, which raced XLA's
-    threads still winding down (a segmentation fault after the message)."""
+    """The ``diffwear`` console command: `main`, then the exit.
+
+    Once `main` returns, a Ctrl-C is only recorded (a run that finished and
+    wrote its results is reported as interrupted, exit 130), and the process
+    ends with the exit handlers run but without the interpreter's teardown:
+    the teardown raced XLA's threads still winding down (a segmentation fault
+    after the message), and it restores SIGINT's default action first, so a
+    late Ctrl-C killed the process without a word (exit -2).
+    """
+    from .. import interrupt
+
     try:
         code = main()
-    except KeyboardInterrupt:  # while starting up (importing), before main's own handling
+    except KeyboardInterrupt:  # between main's own handling and the hold below
         print("diffwear: interrupted; no results were written", file=sys.stderr)
         code = 130
-    if code == 130:
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(130)
-    sys.exit(code)
+    except SystemExit as stop:  # the parser's --help and usage errors
+        code = _exit_code(stop)
+    finally:
+        interrupt.hold()
+    atexit._run_exitfuncs()
+    if code == 0 and interrupt.requested():
+        print("diffwear: interrupted as the run ended; its results were written",
+              file=sys.stderr)
+        code = 130
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a closed pipe (`diffwear ... | head`)
+            pass
+    os._exit(code)
+
+
+def _exit_code(stop: SystemExit) -> int:
+    if stop.code is None or isinstance(stop.code, int):
+        return stop.code or 0
+    print(stop.code, file=sys.stderr)
+    return 1
 

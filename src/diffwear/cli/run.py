@@ -35,6 +35,7 @@ from ..mechanism import Mechanism
 from ..mechanism_file import (
     Results,
     check_motion,
+    check_size,
     check_step_budget,
     contact_warnings,
     initial_state,
@@ -215,6 +216,9 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
     the cycles to that depth.  Bad input fails before ``out_dir`` is touched."""
     started = time.perf_counter()
     check_step_budget(mfile)
+    slow = check_size(mfile)
+    if slow is not None:  # said now, before the wait
+        print(f"diffwear: warning: {slow}", file=sys.stderr)
     if cycles is None and (resume or model != "quasi-static" or method != "constant"):
         raise InputError("--model, --method and --resume belong to a wear mfile: give "
                          "--cycles N")

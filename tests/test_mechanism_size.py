@@ -1,0 +1,109 @@
+"""A mechanism file too large to compile in reasonable time or memory is warned
+about (with the estimate) or refused before anything is traced.
+
+The files are those the estimate was measured on (``benchmarks/compile_size.py``):
+free bodies, and pendulum chains of revolute joints.
+"""
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+from diffwear.cli import main
+from diffwear.config import load
+from diffwear.errors import InputError
+from diffwear.mechanism_file import size
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "compile_size.py"
+RECORD = Path(__file__).resolve().parents[1] / "benchmarks" / "records" / "compile_size.json"
+
+
+@pytest.fixture(scope="module")
+def files():
+    spec = importlib.util.spec_from_file_location("diffwear_benchmarks_compile_size", BENCH)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _write(files, tmp_path, kind, n):
+    path = tmp_path / f"{kind}{n}.toml"
+    path.write_text(files.mechanism_text(kind, n))
+    return path
+
+
+def test_the_estimate_counts_what_the_file_holds_and_follows_the_record(files, tmp_path):
+    """A 40-link chain: 40 bodies, 40 revolute joints + gravity = 41 elements,
+    120 coordinates; time and memory from the fit's coefficients by hand."""
+    est = size.estimate(load(_write(files, tmp_path, "chain", 40)))
+    assert (est.bodies, est.elements, est.coordinates) == (40, 41, 120)
+    fit = json.loads(RECORD.read_text())["fit"]
+    seconds = (fit["seconds"]["base"] + 41 * fit["seconds"]["per_element"]
+               + 120 * fit["seconds"]["per_coordinate"])
+    memory = (fit["bytes"]["base"] + 41**2 * fit["bytes"]["per_element_squared"]
+              + 120 * fit["bytes"]["per_coordinate"])
+    assert est.seconds == pytest.approx(seconds, rel=1e-6)
+    assert est.bytes == pytest.approx(memory, rel=1e-6)
+
+
+def test_the_fit_reproduces_its_measurements_within_a_factor_of_two():
+    """The record's own rows against the fitted formula: an estimate, but of
+    the right size (the warning's "about N min" must not mislead)."""
+    record = json.loads(RECORD.read_text())
+    fit = record["fit"]
+    for row in record["rows"]:
+        t = (fit["seconds"]["base"] + row["elements"] * fit["seconds"]["per_element"]
+             + row["coordinates"] * fit["seconds"]["per_coordinate"])
+        m = (fit["bytes"]["base"] + row["elements"] ** 2 * fit["bytes"]["per_element_squared"]
+             + row["coordinates"] * fit["bytes"]["per_coordinate"])
+        assert 0.5 < t / row["seconds"] < 2.0, row
+        assert 0.5 < m / row["peak_bytes"] < 2.0, row
+
+
+def test_a_small_file_passes_silently(files, tmp_path):
+    assert size.check_size(load(_write(files, tmp_path, "chain", 3))) is None
+
+
+def test_ten_thousand_free_bodies_are_warned_about_before_compiling(files, tmp_path, capsys,
+                                                                  monkeypatch):
+    """The warning names the size and the estimate, and comes before the
+    first compilation (here stopped at the initial state)."""
+    from diffwear.cli import run as run_cli
+
+    class Stop(Exception):
+        pass
+
+    def stop(mfile):
+        raise Stop
+
+    monkeypatch.setattr(size, "physical_memory", lambda: 10**12)
+    monkeypatch.setattr(run_cli, "initial_state", stop)
+    path = _write(files, tmp_path, "free", 10_000)
+    with pytest.raises(Stop):
+        main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert "diffwear: warning:" in err and "10,000 bodies" in err
+    assert "30,000 coordinates" in err and "estimated to take about" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_file_beyond_the_machines_memory_is_refused_with_the_estimate(files, tmp_path,
+                                                                      capsys, monkeypatch):
+    monkeypatch.setattr(size, "physical_memory", lambda: 2 * 10**9)
+    path = _write(files, tmp_path, "chain", 400)
+    est = size.estimate(load(path))
+    assert est.bytes > 2e9
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and str(path) in err
+    assert "400 bodies, 401 joints and force elements" in err
+    assert f"{est.bytes / 1e9:.1f} GB of memory, more than this machine's 2.0 GB" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_api_refuses_against_a_given_memory(files, tmp_path):
+    mfile = load(_write(files, tmp_path, "chain", 5))
+    with pytest.raises(InputError, match="more than this machine's"):
+        size.check_size(mfile, memory=1)

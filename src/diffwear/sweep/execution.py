@@ -1,0 +1,206 @@
+"""How a sweep's points are run.
+
+* `Batched`: ``jit(vmap(model))`` over chunks of points, split over devices
+  with ``shard_map``: what an accelerator wants (thousands of points per
+  kernel launch).
+* `Looped`: one jitted single-point run after another, in this process.  On a
+  CPU this beats vmap for the adaptive solvers of this project: a vmapped
+  adaptive solve steps all its points in lockstep (each chunk runs as long
+  as its slowest point), and ``lax.cond`` becomes ``select`` under vmap, so
+  both branches are computed.
+* `Pooled`: the points shared over processes, one per CPU core, each looping
+  (started fresh, each compiles the model once; a process, not a thread:
+  two executions at once from threads can hang the XLA CPU runtime).
+* `Auto` (the default): `Batched` on an accelerator (or when a chunk size or
+  several devices are asked for); on a CPU it loops, times the first point
+  after the compilation, and moves the rest to a pool when the time saved
+  outweighs the pool's start-up (``POOL_START_S`` per process plus a
+  compilation).
+
+A looped or pooled point's result is exactly the single jitted run's.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import pickle
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import InputError
+
+# Start-up of a pool process before it compiles: spawning the interpreter and
+# importing diffwear (2.1 s measured for ``import diffwear`` on a 2-core
+# machine), with a margin for the spawn and the transfer of the model.
+POOL_START_S = 4.0
+
+# A pool is cut into this many blocks per process, so that the processes
+# finish together and the progress moves.
+BLOCKS_PER_WORKER = 4
+
+
+@dataclass(frozen=True)
+class Batched:
+    """``jit(vmap(model))`` in chunks of ``chunk_size`` points (default: all
+    that fit in memory), over ``devices`` (None: all local devices, a count,
+    or a list) with ``shard_map``."""
+
+    chunk_size: int | None = None
+    devices: Any = None
+
+
+@dataclass(frozen=True)
+class Looped:
+    """One jitted single-point run after another, in this process."""
+
+
+@dataclass(frozen=True)
+class Pooled:
+    """The points shared over ``workers`` processes (default: the CPU cores
+    this process may use), each running them one after another."""
+
+    workers: int | None = None
+
+
+@dataclass(frozen=True)
+class Auto:
+    """`Batched` on an accelerator; on a CPU `Looped`, or `Pooled` over
+    ``workers`` processes (default: the cores; 1: never a pool) when the
+    first point's time says the pool pays."""
+
+    workers: int | None = None
+
+
+Execution = Batched | Looped | Pooled | Auto
+
+
+def cpu_cores() -> int:
+    """The CPU cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover (macOS, Windows)
+        return os.cpu_count() or 1
+
+
+def platform() -> str:
+    """The platform computations go to: JAX's default device if one is set
+    (``jax.default_device``), else its default backend."""
+    device = jax.config.jax_default_device
+    if device is not None:
+        return device if isinstance(device, str) else device.platform
+    return jax.default_backend()
+
+
+def workers_for(workers: int | None) -> int:
+    if workers is None:
+        return cpu_cores()
+    if int(workers) != workers or workers < 1:
+        raise InputError(f"sweep: workers must be a positive integer, got {workers!r}")
+    return int(workers)
+
+
+def picklable(model_fn) -> bool:
+    """Whether ``model_fn`` can be sent to a pool process: it pickles, and
+    not as a name in the caller's script (``__main__``), which a worker
+    process does not run.  The ready-made models can; a lambda, a closure
+    or a script's own function cannot."""
+    try:
+        data = pickle.dumps(model_fn)
+    except Exception:  # noqa: BLE001 - any pickling failure means: not here
+        return False
+    return b"__main__" not in data
+
+
+def _point(cols: Mapping[str, np.ndarray], i: int) -> dict:
+    return {k: np.asarray(v[i], dtype=np.float64) for k, v in cols.items()}
+
+
+def compile_point(model_fn: Callable, names: Sequence[str]):
+    """``jit(model_fn)`` compiled for one point (a dict of float64 scalars)."""
+    spec = {k: jax.ShapeDtypeStruct((), jnp.float64) for k in names}
+    return jax.jit(model_fn).lower(spec).compile()
+
+
+def run_points(compiled, cols: Mapping[str, np.ndarray], indices, results: dict,
+               progress: Callable[[int], None] | None = None) -> None:
+    """Run ``compiled`` at the points ``indices`` of ``cols``, writing each
+    output into ``results[name][i]``."""
+    for i in indices:
+        out = compiled(_point(cols, int(i)))
+        for k, v in out.items():
+            results[k][i] = float(v)
+        if progress is not None:
+            progress(1)
+
+
+def _pool_setup(model_fn, names):
+    """In a pool process: CPU only, one thread (the pool uses the cores;
+    read when the backend starts, at the first computation); returns the
+    handler of a block of points, which compiles the model at its first."""
+    jax.config.update("jax_platforms", "cpu")
+    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "")
+                               + " --xla_cpu_multi_thread_eigen=false"
+                               + " intra_op_parallelism_threads=1").strip()
+    compiled: list = []
+
+    def block(cols: dict) -> tuple[dict, float]:
+        t0 = time.perf_counter()
+        if not compiled:
+            compiled.append(compile_point(model_fn, names))
+        compile_s = time.perf_counter() - t0
+        n = len(next(iter(cols.values())))
+        results: dict = {}
+        for i in range(n):
+            out = compiled[0](_point(cols, i))
+            for k, v in out.items():
+                results.setdefault(k, np.empty(n))[i] = float(v)
+        return results, compile_s
+
+    return block
+
+
+def run_pool(model_fn, cols: Mapping[str, np.ndarray], indices: np.ndarray, workers: int,
+             results: dict, progress: Callable[[int], None] | None = None) -> dict:
+    """Run the points ``indices`` over ``workers`` fresh processes
+    (`diffwear.worker`), in blocks; returns the pool's time and its longest
+    compilation (seconds)."""
+    from .. import worker
+
+    names = list(cols)
+    size = max(1, math.ceil(indices.size / (workers * BLOCKS_PER_WORKER)))
+    blocks = [indices[s:s + size] for s in range(0, indices.size, size)]
+    compile_s = [0.0]
+
+    def done(b: int, answer) -> None:
+        out, c = answer
+        compile_s.append(c)
+        for k, v in out.items():
+            results[k][blocks[b]] = v
+        if progress is not None:
+            progress(blocks[b].size)
+
+    t0 = time.perf_counter()
+    worker.run_pool(workers, _pool_setup, (model_fn, names),
+                    ({k: np.asarray(cols[k])[b] for k in names} for b in blocks), done,
+                    what="sweep's pool")
+    return {"pool_s": time.perf_counter() - t0, "pool_compile_s": max(compile_s)}
+
+
+def pool_pays(remaining: int, per_point_s: float, compile_s: float, workers: int) -> bool:
+    """Whether ``remaining`` points of ``per_point_s`` finish sooner over
+    ``workers`` fresh processes (each starting and compiling) than here."""
+    if workers < 2 or remaining < 2:
+        return False
+    saved = remaining * per_point_s * (1.0 - 1.0 / min(workers, remaining))
+    return saved > POOL_START_S + compile_s
+
+
+__all__ = ["Auto", "Batched", "Execution", "Looped", "Pooled", "compile_point", "cpu_cores",
+           "picklable", "platform", "pool_pays", "run_points", "run_pool", "workers_for"]

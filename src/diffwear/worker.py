@@ -4,7 +4,8 @@ A `WorkerProcess` is ``python -m diffwear._worker_entry`` (a fresh
 interpreter: JAX is not fork-safe, and multiprocessing's spawn would re-run a
 caller's unguarded script) with the caller's import path, sent
 ``setup(*args)`` once, which returns the
-handler its requests are answered with.  It ignores Ctrl-C (the parent
+handler its requests are answered with (and what the parent is told once it
+is ready).  It ignores Ctrl-C (the parent
 decides) and ends when the parent sends ``None``, closes it, or dies (its
 pipe ends).  A process, not a thread: two XLA programs executing at once
 from two threads of one process were seen to hang on the CPU backend.
@@ -36,8 +37,9 @@ ENTRY = "diffwear._worker_entry"  # run with -m
 
 
 def serve(read_fd: int, write_fd: int) -> None:
-    """The worker's side: read ``(setup, args)``, answer ``("ready", None)``
-    (or ``("failed", message)``), then answer each ``(key, payload)`` with
+    """The worker's side: read the import path and ``(setup, args)``; with
+    ``(handler, info) = setup(*args)`` answer ``("ready", info)`` (or
+    ``("failed", message)``), then answer each ``(key, payload)`` with
     ``(key, ("ok", handler(payload)))`` or ``(key, ("error", message))``
     until ``None`` or the end of the pipe."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -53,11 +55,11 @@ def serve(read_fd: int, write_fd: int) -> None:
             # the parent's import path first, so that what it sends unpickles
             sys.path[:] = pickle.load(rd)
             setup, args = pickle.load(rd)
-            handler = setup(*args)
+            handler, info = setup(*args)
         except Exception as err:  # noqa: BLE001 - reported to the parent, which decides
             send(("failed", f"{type(err).__name__}: {err}"))
             return
-        send(("ready", None))
+        send(("ready", info))
         while True:
             try:
                 request = pickle.load(rd)
@@ -77,8 +79,9 @@ def serve(read_fd: int, write_fd: int) -> None:
 
 
 class WorkerProcess:
-    """A worker answering requests with ``setup(*args)`` (module notes);
-    ``what`` names it in errors.  ``setup`` and ``args`` must pickle."""
+    """A worker answering requests with the handler of ``setup(*args)``
+    (module notes); ``what`` names it in errors.  ``setup`` and ``args`` must
+    pickle."""
 
     def __init__(self, setup: Callable, *args, what: str = "worker"):
         self.what = what
@@ -93,6 +96,7 @@ class WorkerProcess:
         self._out = os.fdopen(to_child, "wb")
         self._in = os.fdopen(from_child, "rb")
         self.ready = False
+        self.info: Any = None   # what setup returned beside its handler, once ready
         self.busy_s = 0.0   # time the caller waited for it
         self.send_raw(list(sys.path))
         self.send_raw((setup, args))
@@ -123,7 +127,7 @@ class WorkerProcess:
         finally:
             self.busy_s += time.perf_counter() - t0
         if message[0] == "ready":
-            self.ready = True
+            self.ready, self.info = True, message[1]
             return None
         if message[0] == "failed":
             raise SolverError(f"the {self.what} could not start: {message[1]}")

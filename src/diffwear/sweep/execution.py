@@ -92,7 +92,7 @@ def cpu_cores() -> int:
 def platform() -> str:
     """The platform computations go to: JAX's default device if one is set
     (``jax.default_device``), else its default backend."""
-    device = jax.config.jax_default_device
+    device = jax.config.jax_default_device  # type: ignore[attr-defined]
     if device is not None:
         return device if isinstance(device, str) else device.platform
     return jax.default_backend()
@@ -143,7 +143,8 @@ def run_points(compiled, cols: Mapping[str, np.ndarray], indices, results: dict,
 def _pool_setup(model_fn, names):
     """In a pool process: CPU only, one thread (the pool uses the cores;
     read when the backend starts, at the first computation); returns the
-    handler of a block of points, which compiles the model at its first."""
+    handler of a block of points, which compiles the model at its first
+    (`diffwear.worker`)."""
     jax.config.update("jax_platforms", "cpu")
     os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "")
                                + " --xla_cpu_multi_thread_eigen=false"
@@ -163,7 +164,7 @@ def _pool_setup(model_fn, names):
                 results.setdefault(k, np.empty(n))[i] = float(v)
         return results, compile_s
 
-    return block
+    return block, None
 
 
 def run_pool(model_fn, cols: Mapping[str, np.ndarray], indices: np.ndarray, workers: int,

@@ -125,14 +125,15 @@ def _small_rig():
 
 
 def test_a_pool_of_processes_gives_the_loops_numbers_exactly():
-    """Two worker processes, each compiling the model once, against the loop
-    here: the same compiled single-point program, so the same bits; the
-    progress callback counts every point once."""
+    """Two worker processes running the program compiled here (sent to
+    them, not compiled again) against the loop here: the same program, so
+    the same bits; the progress callback counts every point once."""
     model, grid = _small_rig()
     seen = []
     pooled = sweep(model, model.defaults, grid, execution=Pooled(workers=2), progress=seen.append)
     loop = sweep(model, model.defaults, grid, execution=Looped())
     assert pooled.info["execution"] == "pooled" and pooled.info["processes"] == 2
+    assert pooled.info["pool_program"] == "sent" and pooled.info["pool_compile_s"] < 1e-3
     assert loop.info["execution"] == "looped" and sum(seen) == 5
     for k in ("max_depth_mm", "volume_mm3", "mean_joint_force_N", "status"):
         np.testing.assert_array_equal(pooled[k], loop[k], err_msg=k)
@@ -141,37 +142,41 @@ def test_a_pool_of_processes_gives_the_loops_numbers_exactly():
 
 def test_auto_moves_the_rest_to_a_pool_when_it_pays(monkeypatch):
     """`Auto` runs the first two points here (compile, then one timed), and
-    the other three over the pool when `pool_pays` says so."""
+    the other three over the pool when `pool_pays` says so; a model that does
+    not pickle (a lambda) goes too, as its compiled program."""
     from diffwear.sweep import runner
 
     model, grid = _small_rig()
     asked = []
 
-    def pays(remaining, per_point_s, compile_s, workers):
+    def pays(remaining, per_point_s, workers):
         asked.append((remaining, workers))
         return True
 
     monkeypatch.setattr(runner, "pool_pays", pays)
-    auto = sweep(model, model.defaults, grid, execution=Auto(workers=2))
+    auto = sweep(lambda p: model(p), model.defaults, grid, execution=Auto(workers=2))
     loop = sweep(model, model.defaults, grid, execution=Looped())
     assert asked == [(3, 2)] and auto.info["execution"] == "pooled"
     np.testing.assert_array_equal(auto["max_depth_mm"], loop["max_depth_mm"])
 
 
 def test_auto_keeps_the_points_here_when_the_pool_cannot_take_the_model(monkeypatch):
-    """A model that pickles here but not in a fresh process (its module
-    exists only in this one): `Auto` finishes the points in the loop and
-    says why in the info; `Pooled` reports the failure."""
+    """Where the compiled program cannot be sent (here: made so), the pool
+    compiles the model itself, which must then unpickle there: one whose
+    module exists only in this process cannot.  `Auto` finishes the points in
+    the loop and says why in the info; `Pooled` reports the failure, and a
+    lambda is refused up front."""
     import types
 
     from diffwear.errors import SolverError
-    from diffwear.sweep import runner
+    from diffwear.sweep import execution, runner
 
     module = types.ModuleType("diffwear_model_made_in_this_process")
     exec(TOY, module.__dict__)
     module.toy.__module__ = module.__name__
     monkeypatch.setitem(sys.modules, module.__name__, module)
     monkeypatch.setattr(runner, "pool_pays", lambda *args: True)
+    monkeypatch.setattr(execution, "serialized", lambda compiled: None)
     grid = {"omega": [1.0, 10.0, 25.0, 40.0]}
     auto = sweep(module.toy, BASE, grid, execution=Auto(workers=2))
     assert auto.info["execution"] == "looped"
@@ -179,26 +184,24 @@ def test_auto_keeps_the_points_here_when_the_pool_cannot_take_the_model(monkeypa
     np.testing.assert_array_equal(auto["x1"], sweep(toy, BASE, grid)["x1"])
     with pytest.raises(SolverError, match="could not start"):
         sweep(module.toy, BASE, grid, execution=Pooled(workers=2))
+    with pytest.raises(InputError, match="cannot be pickled"):
+        sweep(lambda p: toy(p), BASE, grid, execution=Pooled(workers=2))
 
 
 def test_a_pool_pays_when_the_time_it_saves_exceeds_its_start_up():
     """Over w processes, n points of t seconds save n t (1 - 1/w); a pool
-    costs `POOL_START_S` plus a compilation."""
+    costs `POOL_START_S` (the program is sent, not compiled again)."""
     from diffwear.sweep.execution import POOL_START_S, pool_pays
 
-    compile_s = 3.0
-    need = POOL_START_S + compile_s
-    assert pool_pays(10, 2.0, compile_s, 2) is (10 * 2.0 * 0.5 > need)
-    assert pool_pays(100, 2.0, compile_s, 2)
-    assert not pool_pays(3, 2.0, compile_s, 2)        # 3 s saved
-    assert not pool_pays(1000, 2.0, compile_s, 1)     # one core: nothing to share
-    assert pool_pays(40, 1.0, compile_s, 4) is (40 * 0.75 > need)
+    assert pool_pays(10, 2.0, 2) is (10 * 2.0 * 0.5 > POOL_START_S)
+    assert pool_pays(100, 2.0, 2)
+    assert not pool_pays(3, 2.0, 2)        # 3 s saved
+    assert not pool_pays(1000, 2.0, 1)     # one core: nothing to share
+    assert pool_pays(40, 0.2, 4) is (40 * 0.2 * 0.75 > POOL_START_S)
 
 
-def test_execution_options_that_do_not_go_together_are_refused(looped):
+def test_execution_options_that_do_not_go_together_are_refused():
     model, grid = _small_rig()
-    with pytest.raises(InputError, match="cannot be pickled"):
-        sweep(lambda p: toy(p), BASE, GRID, execution=Pooled(workers=2))
     with pytest.raises(InputError, match="belong to batched execution, not Looped"):
         sweep(toy, BASE, GRID, execution=Looped(), chunk_size=4)
     with pytest.raises(InputError, match="give chunk_size and devices to Batched"):
@@ -212,17 +215,17 @@ def test_execution_options_that_do_not_go_together_are_refused(looped):
 
 
 def test_a_point_that_fails_in_a_pool_is_reported_as_the_pools_failure():
-    """A model that cannot run (here: a parameter outside the model's names
-    reaches it as an unknown key) fails in the worker; the sweep raises a
-    `SolverError` that says so instead of hanging or returning NaN."""
+    """A point the program cannot run (its parameters do not match the
+    program's) fails in the worker; the sweep raises a `SolverError` that
+    says so, instead of hanging or returning NaN."""
     from diffwear.errors import SolverError
-    from diffwear.sweep.execution import run_pool
+    from diffwear.sweep.execution import compile_point, run_pool
 
-    model, _ = _small_rig()
+    compiled = compile_point(toy, list(BASE))
     cols = {"not_a_parameter": np.zeros(3)}
-    results = {"max_depth_mm": np.full(3, np.nan)}
-    with pytest.raises(SolverError, match="the sweep's pool failed: KeyError"):
-        run_pool(model, cols, np.arange(3), 2, results)
+    results = {"x1": np.full(3, np.nan)}
+    with pytest.raises(SolverError, match="the sweep's pool failed: "):
+        run_pool(compiled, toy, cols, np.arange(3), 2, results)
 
 
 def test_padding_dropped():

@@ -9,13 +9,13 @@
   as its slowest point), and ``lax.cond`` becomes ``select`` under vmap, so
   both branches are computed.
 * `Pooled`: the points shared over processes, one per CPU core, each looping
-  (started fresh, each compiles the model once; a process, not a thread:
-  two executions at once from threads can hang the XLA CPU runtime).
+  with the program compiled here (sent serialised, loaded in milliseconds;
+  a process, not a thread: two executions at once from threads can hang the
+  XLA CPU runtime).
 * `Auto` (the default): `Batched` on an accelerator (or when a chunk size or
   several devices are asked for); on a CPU it loops, times the first point
   after the compilation, and moves the rest to a pool when the time saved
-  outweighs the pool's start-up (``POOL_START_S`` per process plus a
-  compilation).
+  outweighs the pool's start-up (``POOL_START_S``).
 
 A looped or pooled point's result is exactly the single jitted run's.
 """
@@ -140,16 +140,37 @@ def run_points(compiled, cols: Mapping[str, np.ndarray], indices, results: dict,
             progress(1)
 
 
-def _pool_setup(model_fn, names):
+def serialized(compiled) -> tuple | None:
+    """The compiled program as bytes a pool process can load (XLA's own
+    serialisation: the CPU backend has it), or None where it cannot be."""
+    from jax.experimental import serialize_executable
+
+    try:
+        payload = serialize_executable.serialize(compiled)
+        pickle.dumps(payload)
+    except Exception:  # noqa: BLE001 - a backend or program without it: compile there
+        return None
+    return payload
+
+
+def _pool_setup(program, model_fn, names):
     """In a pool process: CPU only, one thread (the pool uses the cores;
     read when the backend starts, at the first computation); returns the
-    handler of a block of points, which compiles the model at its first
-    (`diffwear.worker`)."""
+    handler of a block of points (`diffwear.worker`).  ``program``: the
+    parent's compiled program (`serialized`), loaded here; without it the
+    model is compiled at the first block."""
     jax.config.update("jax_platforms", "cpu")
     os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "")
                                + " --xla_cpu_multi_thread_eigen=false"
                                + " intra_op_parallelism_threads=1").strip()
     compiled: list = []
+    if program is not None:
+        from jax.experimental import serialize_executable
+
+        # LAPACK's kernels are bound when a linear-algebra operation is first
+        # lowered; a loaded program calling them before that crashes
+        jax.jit(jnp.linalg.cholesky).lower(jnp.eye(1))
+        compiled.append(serialize_executable.deserialize_and_load(*program))
 
     def block(cols: dict) -> tuple[dict, float]:
         t0 = time.perf_counter()
@@ -167,13 +188,21 @@ def _pool_setup(model_fn, names):
     return block, None
 
 
-def run_pool(model_fn, cols: Mapping[str, np.ndarray], indices: np.ndarray, workers: int,
-             results: dict, progress: Callable[[int], None] | None = None) -> dict:
+def run_pool(compiled, model_fn, cols: Mapping[str, np.ndarray], indices: np.ndarray,
+             workers: int, results: dict,
+             progress: Callable[[int], None] | None = None) -> dict:
     """Run the points ``indices`` over ``workers`` fresh processes
-    (`diffwear.worker`), in blocks; returns the pool's time and its longest
-    compilation (seconds)."""
+    (`diffwear.worker`), in blocks, with this process's ``compiled`` program
+    (or, where it cannot be sent, ``model_fn`` compiled there: it must then
+    pickle); returns the pool's time and its longest compilation there."""
     from .. import worker
 
+    program = serialized(compiled)
+    if program is None and not picklable(model_fn):
+        raise InputError("sweep: Pooled() sends the model to other processes, and this one "
+                         "cannot be pickled (a lambda or a closure?) nor its compiled "
+                         "program serialised; allowed: a model defined at a module's top "
+                         "level, or Looped()")
     names = list(cols)
     size = max(1, math.ceil(indices.size / (workers * BLOCKS_PER_WORKER)))
     blocks = [indices[s:s + size] for s in range(0, indices.size, size)]
@@ -188,20 +217,23 @@ def run_pool(model_fn, cols: Mapping[str, np.ndarray], indices: np.ndarray, work
             progress(blocks[b].size)
 
     t0 = time.perf_counter()
-    worker.run_pool(workers, _pool_setup, (model_fn, names),
+    worker.run_pool(workers, _pool_setup, (program, None if program else model_fn, names),
                     ({k: np.asarray(cols[k])[b] for k in names} for b in blocks), done,
                     what="sweep's pool")
-    return {"pool_s": time.perf_counter() - t0, "pool_compile_s": max(compile_s)}
+    return {"pool_s": time.perf_counter() - t0, "pool_compile_s": max(compile_s),
+            "pool_program": "sent" if program is not None else "compiled in each process"}
 
 
-def pool_pays(remaining: int, per_point_s: float, compile_s: float, workers: int) -> bool:
+def pool_pays(remaining: int, per_point_s: float, workers: int) -> bool:
     """Whether ``remaining`` points of ``per_point_s`` finish sooner over
-    ``workers`` fresh processes (each starting and compiling) than here."""
+    ``workers`` fresh processes (each starting, then loading the compiled
+    program) than here."""
     if workers < 2 or remaining < 2:
         return False
     saved = remaining * per_point_s * (1.0 - 1.0 / min(workers, remaining))
-    return saved > POOL_START_S + compile_s
+    return saved > POOL_START_S
 
 
 __all__ = ["Auto", "Batched", "Execution", "Looped", "Pooled", "compile_point", "cpu_cores",
-           "picklable", "platform", "pool_pays", "run_points", "run_pool", "workers_for"]
+           "picklable", "platform", "pool_pays", "run_points", "run_pool", "serialized",
+           "workers_for"]

@@ -22,7 +22,6 @@ from .execution import (
     Looped,
     Pooled,
     compile_point,
-    picklable,
     platform,
     pool_pays,
     run_points,
@@ -241,52 +240,43 @@ def _batched(model_fn, cols, order, out_names, execution: Batched, progress):
 
 def _one_at_a_time(model_fn, cols, order, out_names, execution: Looped | Pooled | Auto,
                    progress):
-    """Single jitted runs: here (`Looped`), over processes (`Pooled`), or here
-    until the first point's time says a pool pays (`Auto`)."""
+    """Single jitted runs of the program compiled here: in this process
+    (`Looped`), over processes (`Pooled`), or here until the first point's
+    time says a pool pays (`Auto`)."""
     n = order.size
     results = {k: np.full(n, np.nan) for k in out_names}
     workers = 1 if isinstance(execution, Looped) else workers_for(execution.workers)
     if isinstance(execution, Pooled) and not worker.AVAILABLE:
         raise InputError("sweep: Pooled() needs worker processes, which this platform does "
                          "not offer (pipes cannot be passed to a child); allowed: Looped()")
-    if isinstance(execution, Pooled) and not picklable(model_fn):
-        raise InputError("sweep: Pooled() sends the model to other processes, and this one "
-                         "cannot be pickled (a lambda or a closure?); allowed: a model "
-                         "defined at a module's top level, or Looped()")
     info: dict = {"execution": "looped", "processes": 1, "chunks": n, "chunk_size": 1,
                   "padding": 0, "bytes_per_point": None, "devices": 1}
-    compile_s = 0.0
-    done = 0
+    t0 = time.perf_counter()
+    compiled = compile_point(model_fn, list(cols))
+    compile_s = time.perf_counter() - t0
     t_run = time.perf_counter()
+    done = 0
     if not isinstance(execution, Pooled):
-        t0 = time.perf_counter()
-        compiled = compile_point(model_fn, list(cols))
-        compile_s = time.perf_counter() - t0
-        t_run = time.perf_counter()
         probe = min(n, 2)  # the first point's run, then one timed alone
         run_points(compiled, cols, order[:1], results, progress)
         t1 = time.perf_counter()
         run_points(compiled, cols, order[1:probe], results, progress)
         per_point = time.perf_counter() - t1 if probe == 2 else t1 - t_run
         done = probe
-        go_on = not (isinstance(execution, Auto)
-                     and pool_pays(n - done, per_point, compile_s, workers)
-                     and worker.AVAILABLE and picklable(model_fn))
-        if go_on:
+        if not (isinstance(execution, Auto) and worker.AVAILABLE
+                and pool_pays(n - done, per_point, workers)):
             run_points(compiled, cols, order[done:], results, progress)
             done = n
     if done < n:
         try:
-            pool = run_pool(model_fn, cols, order[done:], workers, results, progress)
-        except SolverError as err:
-            if isinstance(execution, Pooled) or "could not start" not in str(err):
+            pool = run_pool(compiled, model_fn, cols, order[done:], workers, results, progress)
+        except (SolverError, InputError) as err:
+            if isinstance(execution, Pooled) or "the sweep's pool failed" in str(err):
                 raise
-            # `Auto`: a pool that cannot start (the model does not unpickle
-            # there) leaves the points to the loop here
+            # `Auto`: a pool that cannot take the model leaves the points here
             run_points(compiled, cols, order[done:], results, progress)
             info["pool_error"] = str(err)
         else:
             info |= {"execution": "pooled", "processes": min(workers, n - done), **pool}
-            compile_s = max(compile_s, pool["pool_compile_s"])
     info |= {"compile_s": compile_s, "run_s": time.perf_counter() - t_run}
     return results, info

@@ -163,15 +163,17 @@ class WorkerProcess:
             self.process.wait()
 
 
-def run_pool(workers: int, setup: Callable, args: tuple, tasks: Iterable,
+def run_pool(workers: int, setup: Callable, args_of: Callable[[int], tuple], tasks: Iterable,
              on_result: Callable[[int, Any], None], *, what: str = "worker") -> None:
-    """``handler(task)`` for every task over ``workers`` processes, each sent
-    the next task as it answers; ``on_result(task_index, value)`` as answers
-    come, in this thread.  A failed task raises its `SolverError` (the rest
-    are dropped).  Each worker's answers are read by a thread of its own
-    (reading only: the computing is in the processes)."""
+    """``handler(task)`` for every task over ``workers`` processes (worker i
+    set up with ``setup(*args_of(i))``), each sent the next task as it
+    answers; ``on_result(task_index, value)`` as answers come, in this
+    thread.  A failed task raises its `SolverError` (the rest are dropped).
+    Each worker's answers are read by a thread of its own (reading only: the
+    computing is in the processes)."""
     pending = list(enumerate(tasks))[::-1]
-    pool = [WorkerProcess(setup, *args, what=what) for _ in range(min(workers, len(pending)))]
+    pool = [WorkerProcess(setup, *args_of(i), what=what)
+            for i in range(min(workers, len(pending)))]
     answers: queue.Queue = queue.Queue()
 
     def read(w: WorkerProcess) -> None:

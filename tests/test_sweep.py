@@ -149,14 +149,14 @@ def test_auto_moves_the_rest_to_a_pool_when_it_pays(monkeypatch):
     model, grid = _small_rig()
     asked = []
 
-    def pays(remaining, per_point_s, workers):
-        asked.append((remaining, workers))
+    def pays(remaining, per_point_s, workers, compile_s):
+        asked.append((remaining, workers, compile_s))
         return True
 
     monkeypatch.setattr(runner, "pool_pays", pays)
     auto = sweep(lambda p: model(p), model.defaults, grid, execution=Auto(workers=2))
     loop = sweep(model, model.defaults, grid, execution=Looped())
-    assert asked == [(3, 2)] and auto.info["execution"] == "pooled"
+    assert asked == [(3, 2, 0.0)] and auto.info["execution"] == "pooled"  # program sent
     np.testing.assert_array_equal(auto["max_depth_mm"], loop["max_depth_mm"])
 
 
@@ -169,14 +169,14 @@ def test_auto_keeps_the_points_here_when_the_pool_cannot_take_the_model(monkeypa
     import types
 
     from diffwear.errors import SolverError
-    from diffwear.sweep import execution, runner
+    from diffwear.sweep import runner
 
     module = types.ModuleType("diffwear_model_made_in_this_process")
     exec(TOY, module.__dict__)
     module.toy.__module__ = module.__name__
     monkeypatch.setitem(sys.modules, module.__name__, module)
     monkeypatch.setattr(runner, "pool_pays", lambda *args: True)
-    monkeypatch.setattr(execution, "serialized", lambda compiled: None)
+    monkeypatch.setattr(runner, "serialized", lambda compiled: None)
     grid = {"omega": [1.0, 10.0, 25.0, 40.0]}
     auto = sweep(module.toy, BASE, grid, execution=Auto(workers=2))
     assert auto.info["execution"] == "looped"
@@ -188,9 +188,35 @@ def test_auto_keeps_the_points_here_when_the_pool_cannot_take_the_model(monkeypa
         sweep(lambda p: toy(p), BASE, grid, execution=Pooled(workers=2))
 
 
+def test_a_program_with_python_callbacks_is_compiled_in_each_pool_process():
+    """XLA cannot serialise a program that calls back into Python (the
+    dynamic model's checks do); such a program is not sent, each process
+    compiles the model itself, with the loop's results."""
+    from diffwear.sweep.execution import compile_point, run_pool, serialized
+
+    def with_callback(p):
+        jax.debug.callback(lambda x: None, p["omega"])
+        return toy(p)
+
+    assert serialized(compile_point(with_callback, list(BASE))) is None
+    model, grid = _small_rig()
+    names = list(model.defaults)
+    cols = {k: np.full(2, v) for k, v in model.defaults.items()}
+    cols["clearance"] = grid["clearance"][:2]
+    results = {k: np.full(2, np.nan) for k in ("max_depth_mm", "volume_mm3",
+                                               "mean_joint_force_N", "status")}
+    info = run_pool(None, model, cols, np.arange(2), 2, results)
+    assert info["pool_program"] == "compiled in each process" and info["pool_compile_s"] > 0
+    loop = sweep(model, model.defaults, {"clearance": grid["clearance"][:2]},
+                 execution=Looped())
+    np.testing.assert_array_equal(results["max_depth_mm"], loop["max_depth_mm"])
+    assert names == list(cols)
+
+
 def test_a_pool_pays_when_the_time_it_saves_exceeds_its_start_up():
     """Over w processes, n points of t seconds save n t (1 - 1/w); a pool
-    costs `POOL_START_S` (the program is sent, not compiled again)."""
+    costs `POOL_START_S`, and a compilation where the program cannot be
+    sent."""
     from diffwear.sweep.execution import POOL_START_S, pool_pays
 
     assert pool_pays(10, 2.0, 2) is (10 * 2.0 * 0.5 > POOL_START_S)
@@ -198,6 +224,8 @@ def test_a_pool_pays_when_the_time_it_saves_exceeds_its_start_up():
     assert not pool_pays(3, 2.0, 2)        # 3 s saved
     assert not pool_pays(1000, 2.0, 1)     # one core: nothing to share
     assert pool_pays(40, 0.2, 4) is (40 * 0.2 * 0.75 > POOL_START_S)
+    assert pool_pays(10, 2.0, 2, compile_s=1.0) is (10.0 > POOL_START_S + 1.0)
+    assert not pool_pays(10, 2.0, 2, compile_s=10.0)
 
 
 def test_execution_options_that_do_not_go_together_are_refused():
@@ -219,13 +247,15 @@ def test_a_point_that_fails_in_a_pool_is_reported_as_the_pools_failure():
     program's) fails in the worker; the sweep raises a `SolverError` that
     says so, instead of hanging or returning NaN."""
     from diffwear.errors import SolverError
-    from diffwear.sweep.execution import compile_point, run_pool
+    from diffwear.sweep.execution import compile_point, run_pool, serialized
 
-    compiled = compile_point(toy, list(BASE))
+    model, _ = _small_rig()
+    program = serialized(compile_point(model, list(model.defaults)))
+    assert program is not None
     cols = {"not_a_parameter": np.zeros(3)}
-    results = {"x1": np.full(3, np.nan)}
+    results = {"max_depth_mm": np.full(3, np.nan)}
     with pytest.raises(SolverError, match="the sweep's pool failed: "):
-        run_pool(compiled, toy, cols, np.arange(3), 2, results)
+        run_pool(program, model, cols, np.arange(3), 2, results)
 
 
 def test_padding_dropped():

@@ -10,12 +10,14 @@
   both branches are computed.
 * `Pooled`: the points shared over processes, one per CPU core, each looping
   with the program compiled here (sent serialised, loaded in milliseconds;
-  a process, not a thread: two executions at once from threads can hang the
-  XLA CPU runtime).
+  a program with Python callbacks cannot be, and is compiled in each
+  process instead; a process, not a thread: two executions at once from
+  threads can hang the XLA CPU runtime).
 * `Auto` (the default): `Batched` on an accelerator (or when a chunk size or
   several devices are asked for); on a CPU it loops, times the first point
   after the compilation, and moves the rest to a pool when the time saved
-  outweighs the pool's start-up (``POOL_START_S``).
+  outweighs the pool's start-up (``POOL_START_S``, and the compilation where
+  the program cannot be sent).
 
 A looped or pooled point's result is exactly the single jitted run's.
 """
@@ -197,16 +199,17 @@ def _pool_setup(program, model_fn, names, core):
     return block, None
 
 
-def run_pool(compiled, model_fn, cols: Mapping[str, np.ndarray], indices: np.ndarray,
+def run_pool(program, model_fn, cols: Mapping[str, np.ndarray], indices: np.ndarray,
              workers: int, results: dict,
              progress: Callable[[int], None] | None = None) -> dict:
     """Run the points ``indices`` over ``workers`` fresh processes
-    (`diffwear.worker`), in blocks, with this process's ``compiled`` program
-    (or, where it cannot be sent, ``model_fn`` compiled there: it must then
-    pickle); returns the pool's time and its longest compilation there."""
+    (`diffwear.worker`), in blocks, with this process's compiled program
+    (``program``, `serialized`) or, where it could not be serialised (None:
+    a program with Python callbacks), ``model_fn`` compiled in each process
+    (it must then pickle); returns the pool's time and its longest
+    compilation there."""
     from .. import worker
 
-    program = serialized(compiled)
     if program is None and not picklable(model_fn):
         raise InputError("sweep: Pooled() sends the model to other processes, and this one "
                          "cannot be pickled (a lambda or a closure?) nor its compiled "
@@ -239,14 +242,16 @@ def run_pool(compiled, model_fn, cols: Mapping[str, np.ndarray], indices: np.nda
             "pool_program": "sent" if program is not None else "compiled in each process"}
 
 
-def pool_pays(remaining: int, per_point_s: float, workers: int) -> bool:
+def pool_pays(remaining: int, per_point_s: float, workers: int,
+              compile_s: float = 0.0) -> bool:
     """Whether ``remaining`` points of ``per_point_s`` finish sooner over
-    ``workers`` fresh processes (each starting, then loading the compiled
-    program) than here."""
+    ``workers`` fresh processes than here: each starts (`POOL_START_S`),
+    then loads the program compiled here, or compiles it (``compile_s``,
+    where it cannot be sent), the processes at once."""
     if workers < 2 or remaining < 2:
         return False
     saved = remaining * per_point_s * (1.0 - 1.0 / min(workers, remaining))
-    return saved > POOL_START_S
+    return saved > POOL_START_S + compile_s
 
 
 __all__ = ["Auto", "Batched", "Execution", "Looped", "Pooled", "available_cores", "compile_point",

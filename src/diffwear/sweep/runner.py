@@ -26,6 +26,7 @@ from .execution import (
     pool_pays,
     run_points,
     run_pool,
+    serialized,
     workers_for,
 )
 from .grid import full_grid, validate
@@ -256,6 +257,7 @@ def _one_at_a_time(model_fn, cols, order, out_names, execution: Looped | Pooled 
     compile_s = time.perf_counter() - t0
     t_run = time.perf_counter()
     done = 0
+    program = None if isinstance(execution, Looped) else serialized(compiled)
     if not isinstance(execution, Pooled):
         probe = min(n, 2)  # the first point's run, then one timed alone
         run_points(compiled, cols, order[:1], results, progress)
@@ -264,12 +266,13 @@ def _one_at_a_time(model_fn, cols, order, out_names, execution: Looped | Pooled 
         per_point = time.perf_counter() - t1 if probe == 2 else t1 - t_run
         done = probe
         if not (isinstance(execution, Auto) and worker.AVAILABLE
-                and pool_pays(n - done, per_point, workers)):
+                and pool_pays(n - done, per_point, workers,
+                              0.0 if program is not None else compile_s)):
             run_points(compiled, cols, order[done:], results, progress)
             done = n
     if done < n:
         try:
-            pool = run_pool(compiled, model_fn, cols, order[done:], workers, results, progress)
+            pool = run_pool(program, model_fn, cols, order[done:], workers, results, progress)
         except (SolverError, InputError) as err:
             if isinstance(execution, Pooled) or "the sweep's pool failed" in str(err):
                 raise

@@ -1099,7 +1099,7 @@ CPU_SWEEP_GRID_QUICK = (2, 2)
 def cpu_sweep(model_name: str) -> Callable[[int], dict]:
     """One sweep of the rig's wear over clearance x k on the CPU, run four
     ways beside the baseline a user would write, a plain loop of single
-    jitted runs: `sweep` batched (jit(vmap), one chunk), looped, pooled over
+    jitted runs: `sweep` batched (jit(vmap), chunks of 16), looped, pooled over
     the cores, and the default (`Auto`).  ``quasi-static``: the 21,400-cycle
     rig at the default quasi-static settings, 64 points; ``dynamic``: the
     same at the study's 50 dynamic cycles, 8 points (quick: 4 points of 200
@@ -1140,7 +1140,10 @@ def cpu_sweep(model_name: str) -> Callable[[int], dict]:
         out = {"points": points, "cores": cpu_cores(), "loop_s": loop_s,
                "loop_compile_s": max(first - loop_s / points, 0.0),
                "points_per_s_loop": points / loop_s}
-        for tag, execution in (("batched", Batched()), ("looped", Looped()),
+        # chunks of 16: a 64-point vmapped quasi-static rig deadlocks XLA's
+        # multi-threaded CPU runtime here (every thread idle; 16 runs, and 64
+        # with --xla_cpu_multi_thread_eigen=false)
+        for tag, execution in (("batched", Batched(chunk_size=16)), ("looped", Looped()),
                                ("pooled", Pooled()), ("auto", Auto())):
             res = sweep(model, base, grid, execution=execution)
             out[f"{tag}_s"] = res.info["run_s"]

@@ -1141,8 +1141,10 @@ def cpu_sweep(model_name: str) -> Callable[[int], dict]:
                "loop_compile_s": max(first - loop_s / points, 0.0),
                "points_per_s_loop": points / loop_s}
         # chunks of 16: a 64-point vmapped quasi-static rig deadlocks XLA's
-        # multi-threaded CPU runtime here (every thread idle; 16 runs, and 64
-        # with --xla_cpu_multi_thread_eigen=false)
+        # multi-threaded CPU runtime here (every thread idle; 16 points run,
+        # mostly, and 64 with XLA_FLAGS=--xla_cpu_multi_thread_eigen=false,
+        # which the record's run sets: `xla_flags`)
+        out["xla_flags"] = os.environ.get("XLA_FLAGS", "")
         for tag, execution in (("batched", Batched(chunk_size=16)), ("looped", Looped()),
                                ("pooled", Pooled()), ("auto", Auto())):
             res = sweep(model, base, grid, execution=execution)

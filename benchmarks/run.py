@@ -1090,6 +1090,85 @@ def quasi_static_life_sweep(repeats: int) -> dict:
     return out
 
 
+# Grids of the CPU sweep cases, clearances x wear coefficients: the quasi-static
+# rig's points take ~0.15 s, the dynamic rig's at 50 dynamic cycles ~10 s.
+CPU_SWEEP_GRID = {"quasi-static": (8, 8), "dynamic": (2, 4)}
+CPU_SWEEP_GRID_QUICK = (2, 2)
+
+
+def cpu_sweep(model_name: str) -> Callable[[int], dict]:
+    """One sweep of the rig's wear over clearance x k on the CPU, run four
+    ways beside the baseline a user would write, a plain loop of single
+    jitted runs: `sweep` batched (jit(vmap), chunks of 16), looped, pooled over
+    the cores, and the default (`Auto`).  ``quasi-static``: the 21,400-cycle
+    rig at the default quasi-static settings, 64 points; ``dynamic``: the
+    same at the study's 50 dynamic cycles, 8 points (quick: 4 points of 200
+    cycles, 1 dynamic cycle, 60 nodes).  Times
+    exclude the compilation (the loop's first call, each sweep's
+    ``compile_s``), as a second run finds it compiled; a pool's start-up
+    (and its compilation, where the program cannot be sent) is counted.
+    ``ratio_*_to_loop``: seconds per point against the loop's (<= 1: at
+    least as fast).  Once each (``repeats`` unused)."""
+    import jax
+    import numpy as np
+
+    from diffwear.quasistatic import QuasiStatic
+    from diffwear.sweep import Auto, Batched, Looped, Pooled, sweep
+    from diffwear.sweep.execution import cpu_cores
+    from diffwear.sweep.models import RigWear
+    from diffwear.wear import Dynamic
+
+    def case(repeats: int) -> dict:
+        quick = repeats <= QUICK_REPEATS
+        settings = {"cycles": 200.0, "n_theta": 60} if quick else {}
+        if model_name == "quasi-static":
+            model = RigWear(wear_model=QuasiStatic(), **settings)
+        else:
+            model = RigWear(wear_model=Dynamic(), dynamic_cycles=1 if quick else 50,
+                            **settings)
+        n_c, n_k = CPU_SWEEP_GRID_QUICK if quick else CPU_SWEEP_GRID[model_name]
+        base = model.defaults
+        grid = {"clearance": np.geomspace(0.02e-3, 0.1e-3, n_c),
+                "k": base["k"] * np.geomspace(0.5, 1.5, n_k)}
+        points = n_c * n_k
+        one = jax.jit(model)
+        rows = [{**base, "clearance": c, "k": k} for c in grid["clearance"] for k in grid["k"]]
+        _, first = timed(one, rows[0])
+        t0 = time.perf_counter()
+        loop = [jax.block_until_ready(one(r)) for r in rows]
+        loop_s = time.perf_counter() - t0
+        out = {"points": points, "cores": cpu_cores(), "loop_s": loop_s,
+               "loop_compile_s": max(first - loop_s / points, 0.0),
+               "points_per_s_loop": points / loop_s}
+        # chunks of 16: a 64-point vmapped quasi-static rig deadlocks XLA's
+        # multi-threaded CPU runtime here (every thread idle; 16 points run,
+        # mostly, and 64 with XLA_FLAGS=--xla_cpu_multi_thread_eigen=false,
+        # which the record's run sets: `xla_flags`)
+        out["xla_flags"] = os.environ.get("XLA_FLAGS", "")
+        for tag, execution in (("batched", Batched(chunk_size=16)), ("looped", Looped()),
+                               ("pooled", Pooled()), ("auto", Auto())):
+            res = sweep(model, base, grid, execution=execution)
+            out[f"{tag}_s"] = res.info["run_s"]
+            out[f"{tag}_compile_s"] = res.info["compile_s"]
+            out[f"{tag}_processes"] = res.info["processes"]
+            out[f"points_per_s_{tag}"] = points / res.info["run_s"]
+            out[f"ratio_{tag}_to_loop"] = res.info["run_s"] / loop_s
+            if tag == "auto":
+                out["auto_ran"] = res.info["execution"]
+            if tag in ("pooled", "auto") and "pool_program" in res.info:
+                out[f"{tag}_program"] = res.info["pool_program"]
+            depth = np.array([float(r["max_depth_mm"]) for r in loop])
+            out[f"max_rel_diff_{tag}_vs_loop"] = float(np.max(np.abs(
+                res["max_depth_mm"] / depth - 1.0)))
+        out.update({"compile_s": out["loop_compile_s"], "run_s": out["auto_s"],
+                    "note": f"{points} points; default sweep ran {out['auto_ran']} "
+                            f"({out['auto_processes']} processes): "
+                            f"{out['ratio_auto_to_loop']:.2f}x the loop's time"})
+        return out
+
+    return case
+
+
 CALIBRATION_DATASETS = Path(__file__).resolve().parents[1] / "design_studies" / "calibration"
 CALIBRATION_DATASET = CALIBRATION_DATASETS / "campaign_slow_run_in"
 
@@ -1179,6 +1258,10 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig-21400 quasi-static": rig_21400_quasi_static,
     "quasi-static life gradient (4 parameters)": quasi_static_life_gradient,
     "quasi-static life sweep, 1000 designs": quasi_static_life_sweep,
+    "CPU sweep, quasi-static rig, 64 points (batched, looped, pooled, default vs loop)":
+        cpu_sweep("quasi-static"),
+    "CPU sweep, dynamic rig, 8 points (batched, looped, pooled, default vs loop)":
+        cpu_sweep("dynamic"),
     "calibration loop": calibration_loop,
     "calibration loop, discrepancy search (three-lobed k)":
         lambda r: calibration_loop(r, CALIBRATION_DATASETS / "campaign_three_lobe_k"),

@@ -150,3 +150,23 @@ def test_exudyn_peer_not_available(bench, monkeypatch, tmp_path):
     assert bench.exudyn_python() is None
     m = bench.exudyn_peer(bench.QUICK_REPEATS)
     assert m == {"available": False, "note": m["note"]} and "not available" in m["note"]
+
+
+@pytest.mark.long  # compiles the three batched models on the CPU: about three minutes
+def test_the_prepared_gpu_script_runs_here_in_quick_mode(tmp_path):
+    """``benchmarks/gpu.py --quick`` on the CPU: every case runs, and the
+    batched results are finite and counted (the GPU run is the same code)."""
+    spec = importlib.util.spec_from_file_location(
+        "diffwear_benchmarks_gpu", RUN_PY.with_name("gpu.py"))
+    gpu = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gpu)
+    target = tmp_path / "gpu.json"
+    assert gpu.main(["--quick", "--json", str(target)]) == 0
+    record = json.loads(target.read_text())
+    cases = record["cases"]
+    assert record["quick"] is True and record["backend"] == "cpu"
+    assert cases["two_joint_lives"]["designs"] == 64 and cases["two_joint_lives"]["finite"]
+    for name in ("qs_rig_sweep", "dynamic_rig_sweep"):
+        assert cases[name]["points"] == (4 if name == "qs_rig_sweep" else 2)
+        assert cases[name]["failed"] == 0 and cases[name]["points_per_s"] > 0
+    assert cases["dynamic_rig_one"]["run_s"] > 0

@@ -36,7 +36,7 @@ def tiny_dir(tmp_path_factory):
     (root / "tiny.toml").write_text(TINY)
     out = root / "out"
     assert main(["sweep", str(root / "tiny.toml"), "--out", str(out), "--quiet",
-                 "--chunk-size", "4"]) == 0
+                 "--device", "cpu"]) == 0
     return out
 
 
@@ -52,7 +52,8 @@ def test_tiny_sweep_outputs(tiny_dir):
     for name in ("max_depth_mm.png", "volume_mm3.png", "mean_joint_force_N.png"):
         assert (tiny_dir / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
     assert summary["grid_shape"] == [2, 3] and summary["points"] == 6
-    assert summary["failed_points"] == [] and summary["chunk_size"] == 4
+    assert summary["failed_points"] == [] and summary["device"] == "cpu"
+    assert summary["execution"] in ("looped", "pooled") and summary["chunk_size"] == 1
     np.testing.assert_allclose(summary["grid_si"]["clearance_m"], [2e-5, 5e-5], rtol=1e-15)
     np.testing.assert_allclose(summary["grid_si"]["k_per_Pa"], [5e-11, 7.5e-11, 1e-10],
                                rtol=1e-15)
@@ -75,6 +76,7 @@ def test_tiny_sweep_outputs(tiny_dir):
             np.testing.assert_array_equal(nc.variables["clearance"][:], [2e-5, 5e-5])
     report = (tiny_dir / "report.md").read_text()
     assert report.startswith("# sweep: tiny rig") and "](volume_mm3.png)" in report
+    assert "Run one point after another" in report and "on the CPU" in report
 
 
 @pytest.mark.slow
@@ -84,6 +86,21 @@ def test_existing_out_not_overwritten(tiny_dir, capsys):
                  "--quiet"]) == 2
     assert "already holds results" in capsys.readouterr().err
     assert {p.name: p.read_bytes() for p in tiny_dir.iterdir()} == before
+
+
+def test_device_options_that_cannot_be_met_are_refused_before_anything_runs(tmp_path, capsys):
+    import jax
+
+    f = tmp_path / "tiny.toml"
+    f.write_text(TINY)
+    out = tmp_path / "out"
+    if not any(d.platform == "gpu" for d in jax.devices()):
+        assert main(["sweep", str(f), "--out", str(out), "--device", "gpu", "--quiet"]) == 2
+        assert "--device gpu: JAX sees no GPU here" in capsys.readouterr().err
+    assert main(["sweep", str(f), "--out", str(out), "--device", "cpu", "--workers", "2",
+                 "--quiet"]) == 2
+    assert "--device cpu belongs to a sweep on this machine" in capsys.readouterr().err
+    assert not out.exists()
 
 
 def _bad(tmp_path, capsys, text):

@@ -86,7 +86,8 @@ def test_no_module_getattr_import_tricks():
 # package or from a lower layer (peers in one layer do not import each other).
 LAYERS = (
     ("errors",),                          # the error classes
-    ("choices", "_checks", "io", "report", "gradient_check", "interrupt"),  # options, outputs
+    ("choices", "_checks", "io", "report", "gradient_check", "interrupt",  # options, outputs,
+     "worker"),                           # worker processes
     ("mechanism",),                       # bodies, joints, forces: the DAE's terms
     ("dynamics", "contact", "fem"),       # integration; contact laws; FEM contact
     ("wear",),                            # Archard wear, the profile, the evolution
@@ -97,7 +98,7 @@ LAYERS = (
     ("config",),                          # input formats: mechanism and sweep files
     ("mechanism_file",),                  # a loaded mechanism file, run whole
     ("calibrate", "design"),              # fitting to data; the bushing design
-    ("cli",),                             # the command and its output folders
+    ("cli", "_worker_entry"),             # the command; a worker process's entry point
 )
 
 

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from diffwear.errors import InputError
-from diffwear.sweep import SweepResult, sweep
+from diffwear.sweep import Auto, Batched, Looped, Pooled, SweepResult, sweep
 
 TOY = '''
 import diffrax, jax.numpy as jnp
@@ -42,12 +42,30 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 
 @pytest.fixture(scope="module")
 def full():
+    return sweep(toy, BASE, GRID, execution=Batched())
+
+
+@pytest.fixture(scope="module")
+def looped():
     return sweep(toy, BASE, GRID)
 
 
-def test_matches_single_runs(full):
-    """Every grid point equals a single jitted run of the model (rel 1e-10)."""
+def test_on_a_cpu_the_default_runs_one_point_after_another_exactly_as_single_runs(looped):
+    """`Auto` on a CPU loops (the toy is too cheap for a pool to pay), and a
+    looped point is the single jitted run's result, bit for bit."""
+    assert looped.info["execution"] == "looped" and looped.info["processes"] == 1
     one = jax.jit(toy)
+    for i, w in enumerate(GRID["omega"]):
+        for j, z in enumerate(GRID["zeta"]):
+            ref = one({"omega": w, "zeta": z, "x0": 2.0})
+            assert looped.grid("x1")[i, j] == float(ref["x1"])
+            assert looped.grid("steps")[i, j] == float(ref["steps"])
+
+
+def test_matches_single_runs(full):
+    """Every batched grid point equals a single jitted run of the model (rel 1e-10)."""
+    one = jax.jit(toy)
+    assert full.info["execution"] == "batched"
     assert full.grid_shape == (4, 4) and len(full) == 16
     for i, w in enumerate(GRID["omega"]):
         for j, z in enumerate(GRID["zeta"]):
@@ -84,7 +102,7 @@ def test_a_sweep_too_big_for_memory_is_chunked_to_fit(full, monkeypatch):
     per_point = full.info["bytes_per_point"]
     assert per_point > 0  # XLA gives the count on this backend
     monkeypatch.setattr(memory, "available_bytes", lambda device: 9.0 * per_point)
-    r = sweep(toy, BASE, GRID)
+    r = sweep(toy, BASE, GRID, execution=Batched())
     assert r.info["chunk_size"] == 4 and r.info["chunks"] == 4
     for k in ("x1", "steps"):
         np.testing.assert_allclose(r[k], full[k], rtol=1e-10, atol=0, err_msg=k)
@@ -93,7 +111,151 @@ def test_a_sweep_too_big_for_memory_is_chunked_to_fit(full, monkeypatch):
         sweep(toy, BASE, GRID, chunk_size=8)
     monkeypatch.setattr(memory, "available_bytes", lambda device: 1.0 * per_point)
     with pytest.raises(InputError, match="one point of this model needs"):
-        sweep(toy, BASE, GRID)
+        sweep(toy, BASE, GRID, execution=Batched())
+
+
+def _small_rig():
+    """A ready-made model (it pickles, so a pool can take it): the quasi-static
+    rig wear over 2,000 cycles on a 60-node profile."""
+    from diffwear.quasistatic import QuasiStatic
+    from diffwear.sweep.models import RigWear
+
+    model = RigWear(cycles=2000.0, n_theta=60, wear_model=QuasiStatic())
+    return model, {"clearance": np.linspace(0.2e-3, 0.4e-3, 5)}
+
+
+def test_a_pool_of_processes_gives_the_loops_numbers_exactly():
+    """Two worker processes running the program compiled here (sent to
+    them, not compiled again) against the loop here: the same program, so
+    the same bits; the progress callback counts every point once."""
+    model, grid = _small_rig()
+    seen = []
+    pooled = sweep(model, model.defaults, grid, execution=Pooled(workers=2), progress=seen.append)
+    loop = sweep(model, model.defaults, grid, execution=Looped())
+    assert pooled.info["execution"] == "pooled" and pooled.info["processes"] == 2
+    assert pooled.info["pool_program"] == "sent" and pooled.info["pool_compile_s"] < 1e-3
+    assert loop.info["execution"] == "looped" and sum(seen) == 5
+    for k in ("max_depth_mm", "volume_mm3", "mean_joint_force_N", "status"):
+        np.testing.assert_array_equal(pooled[k], loop[k], err_msg=k)
+    assert np.all(np.diff(loop["max_depth_mm"]) != 0)  # the points differ
+
+
+def test_auto_moves_the_rest_to_a_pool_when_it_pays(monkeypatch):
+    """`Auto` runs the first two points here (compile, then one timed), and
+    the other three over the pool when `pool_pays` says so; a model that does
+    not pickle (a lambda) goes too, as its compiled program."""
+    from diffwear.sweep import runner
+
+    model, grid = _small_rig()
+    asked = []
+
+    def pays(remaining, per_point_s, workers, compile_s):
+        asked.append((remaining, workers, compile_s))
+        return True
+
+    monkeypatch.setattr(runner, "pool_pays", pays)
+    auto = sweep(lambda p: model(p), model.defaults, grid, execution=Auto(workers=2))
+    loop = sweep(model, model.defaults, grid, execution=Looped())
+    assert asked == [(3, 2, 0.0)] and auto.info["execution"] == "pooled"  # program sent
+    np.testing.assert_array_equal(auto["max_depth_mm"], loop["max_depth_mm"])
+
+
+def test_auto_keeps_the_points_here_when_the_pool_cannot_take_the_model(monkeypatch):
+    """Where the compiled program cannot be sent (here: made so), the pool
+    compiles the model itself, which must then unpickle there: one whose
+    module exists only in this process cannot.  `Auto` finishes the points in
+    the loop and says why in the info; `Pooled` reports the failure, and a
+    lambda is refused up front."""
+    import types
+
+    from diffwear.errors import SolverError
+    from diffwear.sweep import runner
+
+    module = types.ModuleType("diffwear_model_made_in_this_process")
+    exec(TOY, module.__dict__)
+    module.toy.__module__ = module.__name__
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    monkeypatch.setattr(runner, "pool_pays", lambda *args: True)
+    monkeypatch.setattr(runner, "serialized", lambda compiled: None)
+    grid = {"omega": [1.0, 10.0, 25.0, 40.0]}
+    auto = sweep(module.toy, BASE, grid, execution=Auto(workers=2))
+    assert auto.info["execution"] == "looped"
+    assert "No module named 'diffwear_model_made_in_this_process'" in auto.info["pool_error"]
+    np.testing.assert_array_equal(auto["x1"], sweep(toy, BASE, grid)["x1"])
+    with pytest.raises(SolverError, match="could not start"):
+        sweep(module.toy, BASE, grid, execution=Pooled(workers=2))
+    with pytest.raises(InputError, match="cannot be pickled"):
+        sweep(lambda p: toy(p), BASE, grid, execution=Pooled(workers=2))
+
+
+def test_a_program_with_python_callbacks_is_compiled_in_each_pool_process():
+    """XLA cannot serialise a program that calls back into Python (the
+    dynamic model's checks do); such a program is not sent, each process
+    compiles the model itself, with the loop's results."""
+    from diffwear.sweep.execution import compile_point, run_pool, serialized
+
+    def with_callback(p):
+        jax.debug.callback(lambda x: None, p["omega"])
+        return toy(p)
+
+    assert serialized(compile_point(with_callback, list(BASE))) is None
+    model, grid = _small_rig()
+    names = list(model.defaults)
+    cols = {k: np.full(2, v) for k, v in model.defaults.items()}
+    cols["clearance"] = grid["clearance"][:2]
+    results = {k: np.full(2, np.nan) for k in ("max_depth_mm", "volume_mm3",
+                                               "mean_joint_force_N", "status")}
+    info = run_pool(None, model, cols, np.arange(2), 2, results)
+    assert info["pool_program"] == "compiled in each process" and info["pool_compile_s"] > 0
+    loop = sweep(model, model.defaults, {"clearance": grid["clearance"][:2]},
+                 execution=Looped())
+    np.testing.assert_array_equal(results["max_depth_mm"], loop["max_depth_mm"])
+    assert names == list(cols)
+
+
+def test_a_pool_pays_when_the_time_it_saves_exceeds_its_start_up():
+    """Over w processes, n points of t seconds save n t (1 - 1/w); a pool
+    costs `POOL_START_S`, and a compilation where the program cannot be
+    sent."""
+    from diffwear.sweep.execution import POOL_START_S, pool_pays
+
+    assert pool_pays(10, 2.0, 2) is (10 * 2.0 * 0.5 > POOL_START_S)
+    assert pool_pays(100, 2.0, 2)
+    assert not pool_pays(3, 2.0, 2)        # 3 s saved
+    assert not pool_pays(1000, 2.0, 1)     # one core: nothing to share
+    assert pool_pays(40, 0.2, 4) is (40 * 0.2 * 0.75 > POOL_START_S)
+    assert pool_pays(10, 2.0, 2, compile_s=1.0) is (10.0 > POOL_START_S + 1.0)
+    assert not pool_pays(10, 2.0, 2, compile_s=10.0)
+
+
+def test_execution_options_that_do_not_go_together_are_refused():
+    model, grid = _small_rig()
+    with pytest.raises(InputError, match="belong to batched execution, not Looped"):
+        sweep(toy, BASE, GRID, execution=Looped(), chunk_size=4)
+    with pytest.raises(InputError, match="give chunk_size and devices to Batched"):
+        sweep(toy, BASE, GRID, execution=Batched(), chunk_size=4)
+    with pytest.raises(InputError, match="allowed: Batched"):
+        sweep(toy, BASE, GRID, execution="loop")
+    with pytest.raises(InputError, match="workers must be a positive integer"):
+        sweep(model, model.defaults, grid, execution=Pooled(workers=0))
+    r = sweep(toy, BASE, GRID, chunk_size=8)  # a chunk size asks for batches
+    assert r.info["execution"] == "batched" and r.info["chunk_size"] == 8
+
+
+def test_a_point_that_fails_in_a_pool_is_reported_as_the_pools_failure():
+    """A point the program cannot run (its parameters do not match the
+    program's) fails in the worker; the sweep raises a `SolverError` that
+    says so, instead of hanging or returning NaN."""
+    from diffwear.errors import SolverError
+    from diffwear.sweep.execution import compile_point, run_pool, serialized
+
+    model, _ = _small_rig()
+    program = serialized(compile_point(model, list(model.defaults)))
+    assert program is not None
+    cols = {"not_a_parameter": np.zeros(3)}
+    results = {"max_depth_mm": np.full(3, np.nan)}
+    with pytest.raises(SolverError, match="the sweep's pool failed: "):
+        run_pool(program, model, cols, np.arange(3), 2, results)
 
 
 def test_padding_dropped():

@@ -12,6 +12,10 @@ WEAR_METHODS = ("constant", "adaptive", "error")
 WEAR_CONTACTS = ("efm", "fem")
 # The wear model (--model): the dynamic reference or the quasi-static joint.
 WEAR_MODELS = ("dynamic", "quasi-static")
+# Where `diffwear sweep` runs its points (--device): auto picks the GPU when
+# JAX has one; on a CPU the points run one after another (over a process per
+# core when that pays), on a GPU vmapped in chunks (`diffwear.sweep.execution`).
+SWEEP_DEVICES = ("auto", "cpu", "gpu")
 # The dynamic cycles' integrator (--integrator; `diffwear.wear.cycle.CYCLE_INTEGRATORS`).
 WEAR_INTEGRATORS = ("tsit5", "rodas4")
 

@@ -8,35 +8,26 @@ one core busy; so the dynamic model runs in a worker process, compiled once,
 fed each fit's numbers as soon as the selection may need them (`submit`) and
 read when it does (`residual`).
 
-A process, not a thread: two XLA programs executing at once from two threads
-of one process were seen to hang on the CPU backend.  The worker is a fresh
-interpreter (``python -m diffwear.calibrate._dynamic_worker``: JAX is not fork-safe,
-and multiprocessing's spawn would re-run a caller's unguarded script), talks
-pickles over two pipes, ignores Ctrl-C (the parent decides) and ends when the
-parent closes it or dies (its pipe ends).  Where pipes cannot be passed
-(Windows) the model is evaluated in this process instead.
+The worker is a `diffwear.worker.WorkerProcess` (a fresh interpreter fed
+pickles over pipes; a process, not a thread, as XLA's CPU runtime needs).
+Where pipes cannot be passed (Windows) the model is evaluated in this
+process instead.
 """
 
 from __future__ import annotations
 
 import itertools
-import os
-import pickle
-import signal
-import subprocess
-import sys
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from .. import worker
 from ..errors import SolverError
 from .dataset import Dataset
 from .effects import EffectValues
 
 __all__ = ["DynamicCheck"]
 
-WORKER = "diffwear.calibrate._dynamic_worker"  # its entry point (run with -m)
 _CHECKS = itertools.count()  # one entry per check in a fit's notes
 
 
@@ -69,110 +60,61 @@ def _evaluate(residual, request) -> np.ndarray:
         jnp.asarray(s), jnp.asarray(g), jnp.asarray(d))))
 
 
-def _serve(read_fd: int, write_fd: int) -> None:
-    """The worker: read (data, settings), compile the dynamic model's
-    residual, then answer ``(key, x, strength, log_shape, discrepancy)`` with
-    ``(key, residual)`` (or ``(key, message)`` when it fails) until ``None``
-    or the end of the pipe."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    import jax
-
-    jax.config.update("jax_enable_x64", True)
-    with os.fdopen(read_fd, "rb") as rd, os.fdopen(write_fd, "wb") as wr:
-        def send(message) -> None:
-            pickle.dump(message, wr, protocol=pickle.HIGHEST_PROTOCOL)
-            wr.flush()
-
-        try:
-            data, settings = pickle.load(rd)
-            reference, residual = _build(data, settings)
-        except Exception as err:  # noqa: BLE001 - reported to the parent, which decides
-            send(f"{type(err).__name__}: {err}")
-            return
-        send(_Ready(reference.name, reference.describe()))
-        while True:
-            try:
-                request = pickle.load(rd)
-            except (EOFError, OSError):
-                return
-            if request is None:
-                return
-            key, *numbers = request
-            r: np.ndarray | str
-            try:
-                r = _evaluate(residual, numbers)
-            except Exception as err:  # noqa: BLE001
-                r = f"{type(err).__name__}: {err}"
-            try:
-                send((key, r))
-            except (BrokenPipeError, OSError):
-                return
+def _setup(data: Dataset, settings):
+    """In the worker: compile the dynamic model's residual; its handler
+    answers ``(x, strength, log_shape, discrepancy)`` with the residual."""
+    reference, residual = _build(data, settings)
+    return (lambda request: _evaluate(residual, request),
+            _Ready(reference.name, reference.describe()))
 
 
 class DynamicCheck:
     """The dynamic model of ``data`` (``settings`` with the dynamic model),
     evaluated at fits' numbers in a worker process (module notes)."""
 
-    def __init__(self, data: Dataset, settings, *, in_process: bool = os.name == "nt"):
+    def __init__(self, data: Dataset, settings, *, in_process: bool = not worker.AVAILABLE):
         self._local = None
-        self._process: subprocess.Popen | None = None
+        self._worker: worker.WorkerProcess | None = None
+        self._ready: _Ready | None = None
         if in_process:
             reference, residual = _build(data, settings)
             self._local = residual
-            self._ready: _Ready | None = _Ready(reference.name, reference.describe())
+            self._ready = _Ready(reference.name, reference.describe())
         else:
-            from_parent, to_child = os.pipe()
-            from_child, to_parent = os.pipe()
-            self._process = subprocess.Popen(
-                [sys.executable, "-m", WORKER, str(from_parent), str(to_parent)],
-                pass_fds=(from_parent, to_parent), stdin=subprocess.DEVNULL,
-                start_new_session=True)  # a Ctrl-C in the terminal is the parent's
-            os.close(from_parent)
-            os.close(to_parent)
-            self._out = os.fdopen(to_child, "wb")
-            self._in = os.fdopen(from_child, "rb")
-            self._ready = None
-            self._send((data, settings))
+            self._worker = worker.WorkerProcess(_setup, data, settings,
+                                                what="dynamic model's worker")
         self._pending: set[int] = set()
         self._results: dict[int, object] = {}
         self._next = 0
         # this check's entry in a fit's notes: its request key, then its residual
         self._note = ("dynamic check", next(_CHECKS))
-        self.busy_s = 0.0   # time the caller waited for the worker
 
-    def _send(self, message) -> None:
-        try:
-            pickle.dump(message, self._out, protocol=pickle.HIGHEST_PROTOCOL)
-            self._out.flush()
-        except (BrokenPipeError, OSError):
-            raise self._ended() from None
+    @property
+    def busy_s(self) -> float:
+        """Time the caller waited for the worker."""
+        return 0.0 if self._worker is None else self._worker.busy_s
+
+    @property
+    def _process(self):
+        return None if self._worker is None else self._worker.process
 
     def _receive(self) -> None:
-        """One message from the worker (blocks); a dead worker is an error."""
-        t0 = time.perf_counter()
+        """One message from the worker (blocks); a failed build or a dead
+        worker is an error."""
+        assert self._worker is not None
         try:
-            message = pickle.load(self._in)
-        except (EOFError, OSError, pickle.UnpicklingError):
-            raise self._ended() from None
-        finally:
-            self.busy_s += time.perf_counter() - t0
-        if isinstance(message, _Ready):
-            self._ready = message
-        elif isinstance(message, str):
-            raise SolverError(f"the dynamic model could not be built: {message}")
-        else:
-            key, r = message
-            self._pending.discard(key)
-            self._results[key] = r
-
-    def _ended(self) -> SolverError:
-        code = None
-        if self._process is not None:
-            try:
-                code = self._process.wait(timeout=1.0)
-            except subprocess.TimeoutExpired:
-                pass
-        return SolverError(f"the dynamic model's worker process ended (exit code {code})")
+            answer = self._worker.receive()
+        except SolverError as err:
+            if "could not start" in str(err):
+                raise SolverError(f"the dynamic model could not be built: "
+                                  f"{str(err).split(': ', 1)[1]}") from None
+            raise
+        if answer is None:
+            self._ready = self._worker.info
+            return
+        key, r = answer
+        self._pending.discard(key)
+        self._results[key] = r
 
     @property
     def ready(self) -> _Ready:
@@ -200,7 +142,8 @@ class DynamicCheck:
         if self._local is not None:  # evaluated when read
             self._results[key] = request
             return
-        self._send((key, *request))
+        assert self._worker is not None
+        self._worker.send(key, request)
         self._pending.add(key)
 
     def residual(self, fit) -> np.ndarray:
@@ -216,28 +159,14 @@ class DynamicCheck:
         r = self._results.pop(entry)
         if self._local is not None:
             r = _evaluate(self._local, r)
-        if not isinstance(r, np.ndarray):  # the worker's message
-            raise SolverError(f"the dynamic model's evaluation failed: {r}")
+        if isinstance(r, SolverError):  # the worker's message
+            raise SolverError(f"the dynamic model's evaluation failed: "
+                              f"{str(r).split(': ', 1)[1]}")
+        assert isinstance(r, np.ndarray)
         fit.notes[self._note] = r
         return r
 
     def close(self) -> None:
         """Stop the worker (pending evaluations are dropped)."""
-        if self._process is None:
-            return
-        if self._pending:  # mid-evaluation: it has nothing to save
-            self._process.kill()
-        try:
-            self._send(None)
-        except SolverError:
-            pass
-        for f in (self._out, self._in):
-            try:
-                f.close()
-            except OSError:
-                pass
-        try:
-            self._process.wait(timeout=5.0)
-        except subprocess.TimeoutExpired:
-            self._process.kill()
-            self._process.wait()
+        if self._worker is not None:
+            self._worker.close(kill=bool(self._pending))  # mid-evaluation: nothing to save

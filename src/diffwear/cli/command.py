@@ -18,6 +18,7 @@ from pathlib import Path
 
 from .._checks import check_int_option
 from ..choices import (
+    SWEEP_DEVICES,
     WEAR_CONTACTS,
     WEAR_INTEGRATORS,
     WEAR_METHODS,
@@ -176,14 +177,20 @@ def _sweep(args: argparse.Namespace) -> int:
         check_int_option("--chunk-size", args.chunk_size, 1, MAX_POINTS)
     if args.workers is not None:
         check_int_option("--workers", args.workers, 1, 1024)
+    if args.device != "auto" and (args.workers is not None or args.cluster is not None):
+        raise InputError(f"--device {args.device} belongs to a sweep on this machine; with "
+                         "--cluster or --workers each Dask worker runs its points itself")
     if args.workers is not None and args.cluster is not None:
         raise InputError("--cluster ADDRESS and --workers N exclude each other (--workers "
                          "starts a local cluster)")
+    if args.cluster is None and args.workers is None:
+        driver.device_platform(args.device)  # a GPU asked for and missing: before --out
     text = decode(Path(args.file).read_bytes(), args.file)
     log = _log(args)
     out = OutputDir(args.out, overwrite=args.overwrite)
     if args.cluster is None and args.workers is None:
-        driver.run(spec, out, chunk_size=args.chunk_size, input_text=text, log=log)
+        driver.run(spec, out, chunk_size=args.chunk_size, input_text=text, log=log,
+                   device=args.device, progress=not args.quiet)
         return 0
     try:
         from distributed import Client, LocalCluster
@@ -411,15 +418,20 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("sweep", help="evaluate a model over a parameter grid (TOML; see the docs, "
                        "'Sweeps, sensitivity and clusters')",
                        description="Evaluate a ready-made model (rig-wear, clearance-force) at "
-                       "every point of a grid given in a sweep file, vmapped in chunks; write "
+                       "every point of a grid given in a sweep file (on the CPU or the GPU); write "
                        "results.csv/.npz (.nc with SciPy), heatmaps or line plots, summary.json "
                        "and report.md.",
                        epilog="Exit codes: 0 success, 2 bad input, 3 a point failed (results "
                        "are written all the same).")
     p.add_argument("file", help="sweep file, e.g. design_studies/sweep_rig_clearance_k.toml")
     _output_options(p, required=True)
+    p.add_argument("--device", choices=SWEEP_DEVICES, default="auto",
+                   help="where the points run: cpu (one jitted run after another, over a "
+                        "process per core when the first point's time says that pays), gpu "
+                        "(vmapped in chunks), auto (default: the GPU when JAX has one)")
     p.add_argument("--chunk-size", type=int, default=None,
-                   help="points per vmap call (default: the file's [run] chunk_size, else all)")
+                   help="points per vmap call on a GPU (default: the file's [run] chunk_size, "
+                        "else all that fit in its memory)")
     p.add_argument("--cluster", metavar="ADDRESS", default=None,
                    help="run on the Dask scheduler at ADDRESS (tcp://host:8786); needs the "
                         "'cluster' extra")

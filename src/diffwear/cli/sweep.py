@@ -26,14 +26,18 @@ import math
 import time
 from typing import Any
 
+import jax
 import numpy as np
+from tqdm.auto import tqdm
 
+from ..choices import SWEEP_DEVICES
 from ..config.sweep import SweepSpec
 from ..config.units import DIMENSIONS, key_suffix
-from ..errors import SolverError
+from ..errors import InputError, SolverError
 from ..io import OutputDir
 from ..plots import sweep as plots_sweep
 from ..report import Block, Figure, Report, Table, render
+from ..sweep.execution import Auto, Batched
 from ..sweep.result import SweepResult
 from ..sweep.runner import sweep
 
@@ -65,23 +69,64 @@ def failed_points(res: SweepResult) -> np.ndarray:
     return np.flatnonzero(bad)
 
 
+def device_platform(device: str) -> str:
+    """The platform ``--device`` names: "cpu" or "gpu" ("auto": the GPU when
+    JAX has one); `InputError` for a GPU that is not there."""
+    if device not in SWEEP_DEVICES:
+        raise InputError(f"--device {device!r}; allowed: {', '.join(SWEEP_DEVICES)}")
+    if device == "cpu":
+        return "cpu"
+    try:
+        jax.devices("gpu")
+    except RuntimeError:
+        if device == "gpu":
+            raise InputError(f"--device gpu: JAX sees no GPU here (backend "
+                             f"{jax.default_backend()}); allowed: --device cpu or auto") from None
+        return "cpu"
+    return "gpu"
+
+
+def how(info: dict) -> str:
+    """How a sweep ran, in words."""
+    if info.get("execution") == "pooled":
+        return f"one point after another over {info['processes']} processes"
+    if info.get("execution") == "looped":
+        return "one point after another"
+    if info.get("execution") == "batched":
+        return f"vmapped in {info['chunks']} chunk(s) of {info['chunk_size']}"
+    return f"{info.get('tasks', '?')} tasks on the Dask cluster"
+
+
 def run(spec: SweepSpec, out: OutputDir, *, chunk_size: int | None = None, client=None,
-        input_text: str | None = None, log=print) -> dict:
-    """Run the sweep (locally, or on the Dask ``client``) and write every output."""
+        input_text: str | None = None, log=print, device: str = "auto",
+        progress: bool = False) -> dict:
+    """Run the sweep (locally on ``device``, or on the Dask ``client``) and
+    write every output; ``progress``: a bar with points/s."""
     started = time.perf_counter()
     chunk = chunk_size if chunk_size is not None else spec.chunk_size
     axes = ", ".join(f"{k} x {v.size}" for k, v in spec.grid.items())
-    where = "on the Dask cluster" if client is not None else "locally"
-    log(f"[sweep] {spec.model_name}: {spec.points} points ({axes}) {where}, "
-        f"chunk size {chunk or 'all'}")
     if client is None:
-        res = sweep(spec.model, spec.base, spec.grid, chunk_size=chunk)
+        platform = device_platform(device)
+        plan = ("one jitted run after another (over a process per core when that pays)"
+                if platform == "cpu" else f"vmapped in chunks of {chunk or 'all that fit'}")
+        log(f"[sweep] {spec.model_name}: {spec.points} points ({axes}) on the "
+            f"{platform.upper()}: {plan}")
+        execution = Auto() if platform == "cpu" else Batched(chunk)
+        bar = tqdm(total=spec.points, unit="point", disable=not progress, desc="sweep",
+                   mininterval=1.0)
+        with bar, jax.default_device(jax.devices(platform)[0]):
+            res = sweep(spec.model, spec.base, spec.grid, execution=execution,
+                        progress=bar.update)
+        res.info["device"] = platform
     else:
         from ..sweep.distributed import sweep_distributed
 
+        log(f"[sweep] {spec.model_name}: {spec.points} points ({axes}) on the Dask cluster, "
+            f"chunk size {chunk or 'all'}")
         res = sweep_distributed(spec.model, spec.base, spec.grid, client=client, chunk_size=chunk)
     wall = time.perf_counter() - started
-    log(f"[sweep] done: compile {res.info['compile_s']:.1f} s, run {res.info['run_s']:.1f} s")
+    log(f"[sweep] done: {how(res.info)}; compile {res.info['compile_s']:.1f} s, run "
+        f"{res.info['run_s']:.1f} s")
     return write(spec, res, out, input_text=input_text, wall_s=wall)
 
 
@@ -122,6 +167,8 @@ def write(spec: SweepSpec, res: SweepResult, out: OutputDir, *, input_text=None,
         "failed_points": [int(i) for i in bad],
         "compile_s": info.get("compile_s"), "run_s": info.get("run_s"),
         "points_per_s": len(res) / info["run_s"] if info.get("run_s") else None,
+        "device": info.get("device"), "execution": info.get("execution", "dask"),
+        "processes": info.get("processes"),
         "chunk_size": info.get("chunk_size"), "devices": info.get("devices"),
         "workers": info.get("workers"), "wall_time_s": wall_s,
         "netcdf": netcdf,
@@ -200,7 +247,9 @@ def _report(spec: SweepSpec, res: SweepResult, summary: dict, figures: list[str]
         Table(("output", "min", "max", "max at"), outputs, align="lrrl"),
         f"**{len(failed)} point(s) failed** (indices in summary.json `failed_points`)."
         if failed else "",
-        f"Compile {summary['compile_s']:.1f} s, run {summary['run_s']:.1f} s"
+        f"Run {how(res.info)}"
+        + (f" on the {summary['device'].upper()}" if summary["device"] else "")
+        + f": compile {summary['compile_s']:.1f} s, run {summary['run_s']:.1f} s"
         + (f" ({pps:.2f} points/s)" if pps else "") + ".",
         "Tables: [results.csv](results.csv), [results.npz](results.npz)"
         + (", [results.nc](results.nc)" if summary["netcdf"] == "results.nc" else "")

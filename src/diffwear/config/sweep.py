@@ -13,7 +13,7 @@ settings, base values and grid axes, every dimensioned number with its unit.
     clearance = ["0.02 mm", "0.033 mm", "0.05 mm"]
     k = { start = "2.5e-4 mm^3/(N m)", stop = "1e-3 mm^3/(N m)", num = 4, spacing = "log" }
     [run]
-    chunk_size = 8                points per vmap call (default: all)
+    chunk_size = 8                points per vmap call on a GPU (default: all that fit)
 
 A grid axis is a non-empty array of quantities (``"0.02 mm"``; plain numbers for
 dimensionless parameters) or ``{ start, stop, num, spacing = "linear" | "log" }``.

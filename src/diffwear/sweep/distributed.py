@@ -41,9 +41,11 @@ def _run_block(model_fn, cols: dict, chunk_size, start: int):
     import jax
 
     jax.config.update("jax_enable_x64", True)  # diffwear computes in float64
+    from .execution import Auto
     from .runner import evaluate
 
-    out, info = evaluate(model_fn, cols, chunk_size=chunk_size)
+    # one process per worker already: never a pool inside it
+    out, info = evaluate(model_fn, cols, execution=Auto(workers=1), chunk_size=chunk_size)
     info = {k: v for k, v in info.items() if k not in ("order", "chunk_s")}
     info["start"] = start
     info["x64"] = bool(jax.config.read("jax_enable_x64"))

@@ -1,3 +1,6 @@
+import importlib.util
+from pathlib import Path
+
 import jax
 import pytest
 
@@ -19,3 +22,20 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if "long" in item.keywords or "slow" in item.keywords:
             item.add_marker(skip)
+
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+@pytest.fixture(scope="session")
+def load_benchmark():
+    """``load_benchmark(name)``: the script ``benchmarks/NAME.py`` (not a
+    package) loaded as a module."""
+    def load(name: str):
+        spec = importlib.util.spec_from_file_location(f"diffwear_benchmarks_{name}",
+                                                      BENCHMARKS / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+
+    return load

@@ -3,7 +3,6 @@
 Only structure and positivity are checked, never timings.
 """
 
-import importlib.util
 import json
 import math
 from pathlib import Path
@@ -15,11 +14,8 @@ CASE = "ideal slider-crank, 2 s"
 
 
 @pytest.fixture(scope="module")
-def bench():
-    spec = importlib.util.spec_from_file_location("diffwear_benchmarks_run", RUN_PY)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def bench(load_benchmark):
+    return load_benchmark("run")
 
 
 def test_quick_run_writes_table_and_json(bench, tmp_path, capsys):
@@ -153,13 +149,10 @@ def test_exudyn_peer_not_available(bench, monkeypatch, tmp_path):
 
 
 @pytest.mark.long  # compiles the three batched models on the CPU: about three minutes
-def test_the_prepared_gpu_script_runs_here_in_quick_mode(tmp_path):
+def test_the_prepared_gpu_script_runs_here_in_quick_mode(tmp_path, load_benchmark):
     """``benchmarks/gpu.py --quick`` on the CPU: every case runs, and the
     batched results are finite and counted (the GPU run is the same code)."""
-    spec = importlib.util.spec_from_file_location(
-        "diffwear_benchmarks_gpu", RUN_PY.with_name("gpu.py"))
-    gpu = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(gpu)
+    gpu = load_benchmark("gpu")
     target = tmp_path / "gpu.json"
     assert gpu.main(["--quick", "--json", str(target)]) == 0
     record = json.loads(target.read_text())

@@ -5,7 +5,6 @@ The files are those the estimate was measured on (``benchmarks/compile_size.py``
 free bodies, and pendulum chains of revolute joints.
 """
 
-import importlib.util
 import json
 from pathlib import Path
 
@@ -16,16 +15,12 @@ from diffwear.config import load
 from diffwear.errors import InputError
 from diffwear.mechanism_file import size
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "compile_size.py"
 RECORD = Path(__file__).resolve().parents[1] / "benchmarks" / "records" / "compile_size.json"
 
 
 @pytest.fixture(scope="module")
-def files():
-    spec = importlib.util.spec_from_file_location("diffwear_benchmarks_compile_size", BENCH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def files(load_benchmark):
+    return load_benchmark("compile_size")
 
 
 def _write(files, tmp_path, kind, n):

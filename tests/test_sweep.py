@@ -149,7 +149,7 @@ def test_auto_moves_the_rest_to_a_pool_when_it_pays(monkeypatch):
     model, grid = _small_rig()
     asked = []
 
-    def pays(remaining, per_point_s, workers, compile_s):
+    def pays(remaining, per_point_s, workers, compile_s=0.0):
         asked.append((remaining, workers, compile_s))
         return True
 

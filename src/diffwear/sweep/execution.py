@@ -161,7 +161,7 @@ def serialized(compiled) -> tuple | None:
     return payload
 
 
-def _pool_setup(program, model_fn, names, core):
+def _pool_setup(program, model_fn, names, out_names, core):
     """In a pool process: CPU only, on its own ``core``; returns the handler
     of a block of points (`diffwear.worker`).  ``program``: the parent's
     compiled program (`serialized`), loaded here; without it the model is
@@ -189,11 +189,8 @@ def _pool_setup(program, model_fn, names, core):
             compiled.append(compile_point(model_fn, names))
         compile_s = time.perf_counter() - t0
         n = len(next(iter(cols.values())))
-        results: dict = {}
-        for i in range(n):
-            out = compiled[0](_point(cols, i))
-            for k, v in out.items():
-                results.setdefault(k, np.empty(n))[i] = float(v)
+        results = {k: np.empty(n) for k in out_names}
+        run_points(compiled[0], cols, range(n), results)
         return results, compile_s
 
     return block, None
@@ -232,7 +229,7 @@ def run_pool(program, model_fn, cols: Mapping[str, np.ndarray], indices: np.ndar
     cores = available_cores()
 
     def args_of(i: int) -> tuple:  # worker i on a core of its own
-        return (program, None if program else model_fn, names,
+        return (program, None if program else model_fn, names, list(results),
                 cores[i % len(cores)] if cores else None)
 
     worker.run_pool(workers, _pool_setup, args_of,

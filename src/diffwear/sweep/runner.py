@@ -257,7 +257,7 @@ def _one_at_a_time(model_fn, cols, order, out_names, execution: Looped | Pooled 
     compile_s = time.perf_counter() - t0
     t_run = time.perf_counter()
     done = 0
-    program = None if isinstance(execution, Looped) else serialized(compiled)
+    program = serialized(compiled) if isinstance(execution, Pooled) else None
     if not isinstance(execution, Pooled):
         probe = min(n, 2)  # the first point's run, then one timed alone
         run_points(compiled, cols, order[:1], results, progress)
@@ -265,9 +265,12 @@ def _one_at_a_time(model_fn, cols, order, out_names, execution: Looped | Pooled 
         run_points(compiled, cols, order[1:probe], results, progress)
         per_point = time.perf_counter() - t1 if probe == 2 else t1 - t_run
         done = probe
-        if not (isinstance(execution, Auto) and worker.AVAILABLE
-                and pool_pays(n - done, per_point, workers,
-                              0.0 if program is not None else compile_s)):
+        pays = (isinstance(execution, Auto) and worker.AVAILABLE
+                and pool_pays(n - done, per_point, workers))
+        if pays:  # serialised only now; a program that cannot be sent is compiled there
+            program = serialized(compiled)
+            pays = program is not None or pool_pays(n - done, per_point, workers, compile_s)
+        if not pays:
             run_points(compiled, cols, order[done:], results, progress)
             done = n
     if done < n:

@@ -123,6 +123,12 @@ def _options_from_checkpoint(args: argparse.Namespace, origin: str = "") -> None
             setattr(args, option, int(value) if key == "cycles" else value)
 
 
+# The lines of a Ctrl-C with nothing to resume (the launcher, which runs
+# before the package is imported, prints the first as well).
+INTERRUPTED = "diffwear: interrupted; no results were written"
+INTERRUPTED_AT_THE_END = "diffwear: interrupted as the run ended; its results were written"
+
+
 def _interrupted(args: argparse.Namespace, folders) -> str:
     """One line for Ctrl-C: where the checkpoint is and how to resume."""
     from ..io import CHECKPOINT
@@ -135,7 +141,7 @@ def _interrupted(args: argparse.Namespace, folders) -> str:
                        f"--resume {out.path}")
             return (f"diffwear: interrupted; the checkpoint {out.path / CHECKPOINT} holds the "
                     f"run so far: resume with `{command}`")
-    return "diffwear: interrupted; no results were written"
+    return INTERRUPTED
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -490,8 +496,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         code = args.func(args)
         if interrupt.requested():  # pressed, and lost inside a callback: still an interrupt
-            print("diffwear: interrupted as the run ended; its results were written",
-                  file=sys.stderr)
+            print(INTERRUPTED_AT_THE_END, file=sys.stderr)
             return 130
         return code
     except DiffwearError as err:
@@ -527,7 +532,7 @@ def entry() -> None:
     try:
         code = main()
     except KeyboardInterrupt:  # between main's own handling and the hold below
-        print("diffwear: interrupted; no results were written", file=sys.stderr)
+        print(INTERRUPTED, file=sys.stderr)
         code = 130
     except SystemExit as stop:  # the parser's --help and usage errors
         code = _exit_code(stop)
@@ -535,8 +540,7 @@ def entry() -> None:
         interrupt.hold()
     atexit._run_exitfuncs()
     if code == 0 and interrupt.requested():
-        print("diffwear: interrupted as the run ended; its results were written",
-              file=sys.stderr)
+        print(INTERRUPTED_AT_THE_END, file=sys.stderr)
         code = 130
     for stream in (sys.stdout, sys.stderr):
         try:

@@ -101,9 +101,6 @@ class WorkerProcess:
         self.send_raw(list(sys.path))
         self.send_raw((setup, args))
 
-    def fileno(self) -> int:
-        return self._in.fileno()
-
     def send_raw(self, message) -> None:
         try:
             pickle.dump(message, self._out, protocol=pickle.HIGHEST_PROTOCOL)

@@ -100,15 +100,9 @@ class DynamicCheck:
 
     def _receive(self) -> None:
         """One message from the worker (blocks); a failed build or a dead
-        worker is an error."""
+        worker is a `SolverError` that says so."""
         assert self._worker is not None
-        try:
-            answer = self._worker.receive()
-        except SolverError as err:
-            if "could not start" in str(err):
-                raise SolverError(f"the dynamic model could not be built: "
-                                  f"{str(err).split(': ', 1)[1]}") from None
-            raise
+        answer = self._worker.receive()
         if answer is None:
             self._ready = self._worker.info
             return
@@ -159,9 +153,8 @@ class DynamicCheck:
         r = self._results.pop(entry)
         if self._local is not None:
             r = _evaluate(self._local, r)
-        if isinstance(r, SolverError):  # the worker's message
-            raise SolverError(f"the dynamic model's evaluation failed: "
-                              f"{str(r).split(': ', 1)[1]}")
+        if isinstance(r, SolverError):  # "the dynamic model's worker failed: ..."
+            raise r
         assert isinstance(r, np.ndarray)
         fit.notes[self._note] = r
         return r

@@ -23,7 +23,6 @@ import sys
 import time
 from collections.abc import Callable
 
-import jax
 import numpy as np
 
 from .. import plots
@@ -34,13 +33,16 @@ from ..io import OutputDir
 from ..mechanism import Mechanism
 from ..mechanism_file import (
     Results,
+    Settling,
     check_motion,
     check_size,
     check_step_budget,
     contact_warnings,
     initial_state,
-    integrate,
+    integrate_timed,
     postprocess,
+    settled_part,
+    start_up_transient,
 )
 from ..mechanism_file import wear as mechanism_wear
 from ..report import Block, Bullets, Figure, Report, Section, Table, render
@@ -64,9 +66,13 @@ def _trajectory_columns(mech: Mechanism, r: Results) -> dict:
 
 def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simulate_time: float,
           input_text: str | None = None, started: float | None = None,
-          wear: dict | None = None) -> dict:
-    """Write every output file; returns the summary (also ``summary.json``)."""
+          wear: dict | None = None, compile_time: float = 0.0) -> dict:
+    """Write every output file; returns the summary (also ``summary.json``).
+    ``simulate_time``: the motion's integration [s], ``compile_time`` [s]
+    included."""
     mech, sim = mfile.mechanism, mfile.simulation
+    transient = start_up_transient(mfile, r)
+    settled = settled_part(r.ts, transient)
     if input_text is not None:
         out.text("input.toml", input_text)
     out.csv("trajectory.csv", _trajectory_columns(mech, r))
@@ -81,6 +87,8 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
             "on_body": o.on,
             "max_force_N": float(np.max(np.hypot(w[:, 0], w[:, 1]))),
             "max_abs_moment_Nm": float(np.max(np.abs(w[:, 2]))),
+            "settled_max_force_N": _settled(np.hypot(w[:, 0], w[:, 1]), settled, transient),
+            "settled_max_abs_moment_Nm": _settled(np.abs(w[:, 2]), settled, transient),
             "file": name,
         }
     contacts = {}
@@ -93,6 +101,8 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
         contacts[co.joint] = {
             "max_force_N": float(np.max(h[:, 0])),
             "max_penetration_m": float(np.max(h[:, 3])),
+            "settled_max_force_N": _settled(h[:, 0], settled, transient),
+            "settled_max_penetration_m": _settled(h[:, 3], settled, transient),
             "fraction_in_contact": float(np.mean(h[:, 3] > 0)),
             "file": name,
         }
@@ -125,6 +135,9 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
         "max_constraint_violation_by_joint": by_joint,
         "reactions": reactions,
         "contacts": contacts,
+        "start_up_transient": {
+            "settled": transient.settled, "length_s": transient.time_s,
+            **({"why_not_settled": transient.why} if not transient.settled else {})},
         "integrator_steps": steps,
         "simulate_time_s": simulate_time,
         "wall_time_s": wall,
@@ -133,9 +146,15 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
     }
     if wear is not None:
         summary["joints"] = wear["joints"]
+        # the dynamic wear model compiles its own program (the quasi-static one's
+        # compilation is within its run)
+        compile_time += max((w.get("compile_time_s", 0.0) for w in wear["joints"].values()),
+                            default=0.0)
         if wear["stopped"]:
             summary["wear_stopped"] = wear["stopped"]
         figures.append(out.path / wear["figure"])
+    summary["compile_time_s"] = compile_time
+    summary["run_time_s"] = wall - compile_time
     out.text("report.md", render(_report(mfile, summary, [f.name for f in figures])))
     out.json("summary.json", summary)
     fatal = [w for w, is_fatal in warnings if is_fatal]
@@ -144,8 +163,44 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
     return summary
 
 
+def _settled(values: np.ndarray, settled: np.ndarray, transient: Settling) -> float | None:
+    """The maximum after the start-up transient; None for a run that did not
+    settle (its maxima are the whole run's)."""
+    return float(np.max(values[settled])) if transient.settled else None
+
+
+def _transient_text(s: dict, duration: float) -> str:
+    """What the run's start-up transient was, and so which maxima the tables give."""
+    t = s["start_up_transient"]
+    if not t["settled"]:
+        return (f"**Start-up transient: the run did not settle** ({t['why_not_settled']}); every "
+                "maximum below is over the whole run, incl. the start-up transient.")
+    head = (f"Start-up transient: {t['length_s']:.4g} s of the {duration:g} s run.  A run starts "
+            "from its assembly state, not from the motion the drivers force (a clearance "
+            "joint's pin starts centred and falls across the clearance); the forces reported "
+            "below ring and then settle onto the forced motion.  The transient ends when every "
+            "reported force stays within 1 % of its size (or twice the roughness of the run's "
+            "last quarter) of its smoothed course (`diffwear.mechanism_file.transient`). ")
+    return head + ("The maxima are over the settled part (from "
+                   f"t = {t['length_s']:.4g} s on); the columns marked \"whole run\" include "
+                   "the start-up transient." if t["length_s"] > 0 else
+                   "No transient: the maxima are over the whole run.")
+
+
+def _max_cells(settled: float | None, whole: float, fmt: str, has_transient: bool) -> tuple:
+    """A maximum's table cells: settled, then whole run where they differ in meaning."""
+    if not has_transient:
+        return (format(whole, fmt),)
+    return (format(settled, fmt), format(whole, fmt))
+
+
 def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
     mech, sim = mfile.mechanism, mfile.simulation
+    t = s["start_up_transient"]
+    split = bool(t["settled"] and t["length_s"] > 0)  # a settled part shorter than the run
+    settled_word = " after the transient" if split else (
+        " (whole run)" if not t["settled"] else "")
+    whole = " whole run, incl. the start-up transient"
     blocks: list[Block] = [
         f"Mechanism file: `{mfile.file}` (copy: [input.toml](input.toml))."
         + (f"  Source of the numbers: {mfile.source}." if mfile.source else ""),
@@ -156,32 +211,60 @@ def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
         f"Simulated 0 .. {sim.duration:g} s ({sim.n_save} saved states) with Tsit5, PID step "
         f"control (rtol {sim.rtol:g}, atol {sim.atol:g}), Baumgarte alpha = "
         f"{sim.baumgarte_alpha:g} 1/s, beta = {sim.baumgarte_beta:g} 1/s.",
-        Table(("quantity", "value"), [
+        Table(("quantity", "value", "meaning"), [
             ("max constraint violation",
-             f"{s['max_constraint_violation']:.3e} (m; rad for angle rows)"),
-            ("integrator steps", s["integrator_steps"]),
-            ("the motion's simulation, compilation included", f"{s['simulate_time_s']:.2f} s"),
-            ("the whole run (motion, wear, files and figures)", f"{s['wall_time_s']:.2f} s")]),
+             f"{s['max_constraint_violation']:.3e} (m; rad for angle rows)",
+             "largest residual of the joint equations over the whole run: how far the "
+             "integrated bodies drift from where the joints hold them"),
+            ("integrator steps", s["integrator_steps"],
+             "accepted steps of the Tsit5 integrator over the run"),
+            ("start-up transient",
+             f"{t['length_s']:.4g} s" if t["settled"] else "did not settle",
+             "time the reported forces take to settle onto the forced motion (below)"),
+            ("compile time", f"{s['compile_time_s']:.2f} s",
+             "compiling the motion's integrator"
+             + (" and the dynamic wear model" if s.get("joints") and any(
+                 "compile_time_s" in w for w in s["joints"].values()) else "")),
+            ("run time", f"{s['run_time_s']:.2f} s",
+             "the rest of the run: the motion, "
+             + ("the wear, " if s.get("joints") else "") + "files and figures")]),
+        _transient_text(s, sim.duration),
     ]
     if s["reactions"]:
         blocks.append(Section("Joint reactions", [
             "Wrench the joint exerts **on** the named body: force in global axes, moment about "
-            "that body's centre of mass (for a driver: the driving torque).",
-            Table(("joint", "on body", "max abs(F) [N]", "max abs(M) [N m]", "file"),
-                  [(j, r["on_body"], f"{r['max_force_N']:.4g}", f"{r['max_abs_moment_Nm']:.4g}",
+            "that body's centre of mass (for a driver: the driving torque).  max abs(F): the "
+            "largest magnitude of the force; max abs(M): the largest magnitude of the moment.",
+            Table(("joint", "on body", f"max abs(F) [N]{settled_word}",
+                   *((f"max abs(F) [N],{whole}",) if split else ()),
+                   f"max abs(M) [N m]{settled_word}",
+                   *((f"max abs(M) [N m],{whole}",) if split else ()), "file"),
+                  [(j, r["on_body"],
+                    *_max_cells(r["settled_max_force_N"], r["max_force_N"], ".4g", split),
+                    *_max_cells(r["settled_max_abs_moment_Nm"], r["max_abs_moment_Nm"], ".4g",
+                                split),
                     f"[{r['file']}]({r['file']})") for j, r in s["reactions"].items()])]))
     if s["contacts"]:
         blocks.append(Section("Clearance joints", [
-            "Contact force on the bushing body; penetration > 0 means contact.",
-            Table(("joint", "max abs(F) [N]", "max penetration [m]", "in contact", "file"),
-                  [(j, f"{c['max_force_N']:.4g}", f"{c['max_penetration_m']:.3e}",
+            "Contact force on the bushing body.  Penetration: how far the pin's surface "
+            "overlaps the bushing's (the contact's elastic deformation; > 0 means contact).  "
+            "In contact: the share of the saved states with penetration > 0, over the whole run.",
+            Table(("joint", f"max abs(F) [N]{settled_word}",
+                   *((f"max abs(F) [N],{whole}",) if split else ()),
+                   f"max penetration [m]{settled_word}",
+                   *((f"max penetration [m],{whole}",) if split else ()), "in contact", "file"),
+                  [(j, *_max_cells(c["settled_max_force_N"], c["max_force_N"], ".4g", split),
+                    *_max_cells(c["settled_max_penetration_m"], c["max_penetration_m"], ".3e",
+                                split),
                     f"{100 * c['fraction_in_contact']:.1f} %", f"[{c['file']}]({c['file']})")
                    for j, c in s["contacts"].items()])]))
     if s.get("joints"):
         models = "/".join(sorted({w["model"] for w in s["joints"].values()}))
         blocks.append(Section(f"Wear ({models} model)", [
             "Every clearance joint with a wear law, over the cycles given (one cycle: one "
-            "revolution of the first driver).",
+            "revolution of the first driver).  Max depth: the deepest point of the worn "
+            "bushing profile; volume: the material worn off the bushing; cycles to limit: the "
+            "cycles until the max depth reaches the given limit.",
             Table(("joint", "cycles", "max depth [mm]", "volume [mm^3]", "cycles to limit",
                    "files"),
                   [(j, f"{w['cycles']:,.0f}", f"{w['max_wear_depth_mm']:.4g}",
@@ -232,9 +315,8 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
     check_motion(mfile, y0)
     out = OutputDir(out_dir, overwrite=overwrite, resume=resume)
     log(f"[{mfile.file}] integrating {mfile.simulation.duration:g} s (first run compiles) ...")
-    t0 = time.perf_counter()
-    traj = jax.block_until_ready(integrate(mfile, y0))
-    simulate_time = time.perf_counter() - t0
+    timed = integrate_timed(mfile, y0)
+    traj = timed.trajectory
     results = postprocess(mfile, traj)
     wear = None
     if cycles is not None:
@@ -246,8 +328,10 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
         else:
             evolved = mechanism_wear.evolve_file(mfile, y0, cycles=cycles, limit=limit)
         wear = write_wear(mfile, out, evolved, cycles=cycles, limit=limit)
-    summary = write(mfile, results, out, steps=int(traj.num_steps), simulate_time=simulate_time,
-                    input_text=input_text, started=started, wear=wear)
+    summary = write(mfile, results, out, steps=int(traj.num_steps),
+                    simulate_time=timed.compile_time_s + timed.run_time_s,
+                    compile_time=timed.compile_time_s, input_text=input_text, started=started,
+                    wear=wear)
     for w in summary["warnings"]:
         print(f"diffwear: warning: {w}", file=sys.stderr)
     log(f"[{mfile.file}] max constraint violation {summary['max_constraint_violation']:.2e}; "

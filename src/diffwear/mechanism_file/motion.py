@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import NamedTuple
+import time
+from typing import Any, NamedTuple, cast
 
 import equinox as eqx
 import jax
@@ -35,6 +36,7 @@ from ..errors import InputError
 from ..mechanism import Mechanism
 from ..mechanism.constraints import Driver
 from ..quasistatic.loads import fully_driven, ideal_parent
+from .transient import Settling, run_settling
 
 _consistent_state = eqx.filter_jit(functools.partial(consistent_state, check=False))
 
@@ -62,15 +64,39 @@ def initial_state(mfile: MechanismFile):
 
 
 @eqx.filter_jit
-def _integrate(mech: Mechanism, y0, sim: Simulation) -> Trajectory:
-    return simulate(mech, y0, sim.duration, ts=sim.ts(), baumgarte=sim.baumgarte(),
-                    stepsize_controller=sim.controller(), max_steps=sim.max_steps)
+def _integrate(mech: Mechanism, y0, sim: Simulation, t0) -> Trajectory:
+    return simulate(mech, y0, t0 + sim.duration, t0=t0, ts=t0 + sim.ts(),
+                    baumgarte=sim.baumgarte(), stepsize_controller=sim.controller(),
+                    max_steps=sim.max_steps)
 
 
-def integrate(mfile: MechanismFile, y0) -> Trajectory:
-    """The file's trajectory; `SolverError` (naming the file) if the solve failed."""
-    traj = _integrate(mfile.mechanism, y0, mfile.simulation)
+def integrate(mfile: MechanismFile, y0, t0: float = 0.0) -> Trajectory:
+    """The file's trajectory from ``y0`` at ``t0`` [s] over the file's
+    duration; `SolverError` (naming the file) if the solve failed.  A start
+    other than 0 continues a run from one of its states (the drivers' angles
+    are functions of the time)."""
+    traj = _integrate(mfile.mechanism, y0, mfile.simulation, jax.numpy.asarray(float(t0)))
     return traj.raise_if_failed(mfile.file, mfile.mechanism)
+
+
+class Timed(NamedTuple):
+    trajectory: Trajectory
+    compile_time_s: float   # compiling the integrator's program
+    run_time_s: float       # running the compiled program
+
+
+def integrate_timed(mfile: MechanismFile, y0, t0: float = 0.0) -> Timed:
+    """`integrate`, compiled ahead of the run so that the report can give the
+    compile time and the run time apart."""
+    args = (mfile.mechanism, y0, mfile.simulation, jax.numpy.asarray(float(t0)))
+    start = time.perf_counter()
+    # equinox's jit wrapper lowers ahead of time; its type is hidden by the decorator
+    compiled = cast(Any, _integrate).lower(*args).compile()
+    compiled_at = time.perf_counter()
+    traj = jax.block_until_ready(compiled(*args))
+    done = time.perf_counter()
+    return Timed(traj.raise_if_failed(mfile.file, mfile.mechanism), compiled_at - start,
+                 done - compiled_at)
 
 
 class Results(NamedTuple):
@@ -113,6 +139,32 @@ def postprocess(mfile: MechanismFile, traj: Trajectory) -> Results:
     return Results(np.asarray(traj.ts), np.asarray(q), np.asarray(qd), np.asarray(phi),
                    {k: np.asarray(v) for k, v in wrenches.items()},
                    {k: np.asarray(v) for k, v in contacts.items()})
+
+
+def force_signals(mfile: MechanismFile, r: Results) -> dict[str, np.ndarray]:
+    """The forces whose maxima a run reports, by name: each requested
+    reaction's |F| and |M|, each clearance joint's contact force."""
+    out: dict[str, np.ndarray] = {}
+    for o in mfile.reactions:
+        w = r.reactions[o.joint]
+        out |= {f"reaction {o.joint!r} |F|": np.hypot(w[:, 0], w[:, 1]),
+                f"reaction {o.joint!r} |M|": np.abs(w[:, 2])}
+    for co in mfile.contacts:
+        out[f"contact force of {co.joint!r}"] = r.contacts[co.joint][:, 0]
+    return out
+
+
+def _cycle_period(mechanism: Mechanism) -> float | None:
+    """One revolution of the first driver [s], or None without a turning driver."""
+    driver = first_driver(mechanism)
+    return None if driver is None else 2 * math.pi / abs(float(driver.omega))
+
+
+def start_up_transient(mfile: MechanismFile, r: Results) -> Settling:
+    """How long the reported forces take to settle onto the forced motion
+    (`diffwear.mechanism_file.transient`); a run that reports no force has
+    nothing to settle (0 s)."""
+    return run_settling(r.ts, force_signals(mfile, r), _cycle_period(mfile.mechanism))
 
 
 def first_driver(mechanism: Mechanism) -> Driver | None:
@@ -193,5 +245,6 @@ def check_motion(mfile: MechanismFile, y0) -> None:
     check_cycle_motion(ideal, q0, ts, what=str(mfile.file), driver=f"driver {driver.name!r}")
 
 
-__all__ = ["Results", "check_motion", "check_step_budget", "contact_warnings", "first_driver",
-           "initial_state", "integrate", "postprocess"]
+__all__ = ["Results", "Timed", "check_motion", "check_step_budget", "contact_warnings",
+           "first_driver", "force_signals", "initial_state", "integrate",
+           "integrate_timed", "postprocess", "start_up_transient"]

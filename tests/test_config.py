@@ -358,7 +358,16 @@ def test_cli_run_writes_outputs(cli_run):
     assert math.isclose(summary["reactions"]["crank_rod"]["max_force_N"],
                         np.hypot(data[:, 1], data[:, 2]).max(), rel_tol=1e-9)
     assert summary["wall_time_s"] > 0 and summary["integrator_steps"] > 0
+    assert summary["compile_time_s"] > 0 and summary["run_time_s"] > 0
+    assert math.isclose(summary["compile_time_s"] + summary["run_time_s"],
+                        summary["wall_time_s"], rel_tol=1e-12)
+    # an ideal mechanism started on its constraints has no start-up transient:
+    # the settled maxima are the whole run's
+    assert summary["start_up_transient"] == {"settled": True, "length_s": 0.0}
+    assert summary["reactions"]["crank_rod"]["settled_max_force_N"] == \
+        summary["reactions"]["crank_rod"]["max_force_N"]
     report = (out / "report.md").read_text()
+    assert "| start-up transient | 0 s |" in report and "No transient" in report
     for link in re.findall(r"\]\(([^)]+)\)", report):
         assert (out / link).exists(), link
 

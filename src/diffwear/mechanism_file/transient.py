@@ -21,18 +21,26 @@ Criterion (per signal; the run's transient is the longest over its signals):
 2. |s - p|'s envelope e(t) is its running maximum over the same window (a
    ringing residual crosses zero; its envelope does not).
 3. The threshold is the larger of `TOLERANCE` times the signal's size
-   (max |p|) and `FLOOR_FACTOR` times the envelope's median over the last
-   quarter of the run: the roughness the settled motion keeps (stick-slip,
-   impacts every cycle, the fit's own error) is no transient.
+   (max |p| after the transient) and `FLOOR_FACTOR` times the envelope's
+   median over the last quarter of the run: the roughness the settled motion
+   keeps (stick-slip, impacts every cycle, the fit's own error) is no
+   transient.
 4. The transient ends at the first instant the envelope is below the
    threshold.  From there on s stays within the threshold of p until a
    feature of the forced motion itself, so a maximum over the rest of the run
-   is the forced motion's to within `TOLERANCE`: |max s - max p| <= max |s - p|.
+   is the forced motion's to within the threshold:
+   |max s - max p| <= max |s - p|.
 
-A transient that lasts beyond `MAX_TRANSIENT_OF_RUN` of the run is not told
-apart from the late roughness that sets the threshold: the run is reported as
-not settled, and its maxima as those of the whole run.  A run with fewer than
-`MIN_WINDOWS` windows of saved states cannot be judged either.
+Not settled: a transient that lasts beyond `MAX_TRANSIENT_OF_RUN` of the
+run (it is not told apart from the late roughness that sets the threshold),
+and roughness that grows (above the tolerance in the last quarter and more
+than `FLOOR_FACTOR` times its median of the first quarter: an oscillation
+builds up).  Such a run's maxima are those of the whole run.  A run with
+fewer than `MIN_WINDOWS` windows of saved states is not judged.  Limits: a
+ringing that decays by less than `FLOOR_FACTOR` over the run's last three
+quarters is taken for the settled motion's roughness (its maxima are then
+the whole run's, stated with a transient of 0 s); a ringing slower than the
+window is partly taken for the forced motion.
 """
 
 from __future__ import annotations
@@ -130,14 +138,26 @@ def signal_settling(ts: np.ndarray, s: np.ndarray, period: float | None) -> Sett
     size = float(np.max(np.abs(smooth)))
     if size == 0.0:
         return Settling(0.0)
-    threshold = max(TOLERANCE * size, FLOOR_FACTOR * float(np.median(envelope[late])))
-    below = np.flatnonzero(envelope <= threshold)
-    end = float(ts[below[0]] - ts[0]) if below.size else math.inf
+    floor = float(np.median(envelope[late]))
+    early = float(np.median(envelope[ts <= ts[0] + LATE_FRACTION * span]))
+    if FLOOR_FACTOR * floor > TOLERANCE * size and FLOOR_FACTOR * early < floor:
+        return Settling(None, f"the forces' roughness grows over the run (median "
+                              f"{early:.3g} in its first quarter, {floor:.3g} in its last)")
+    # The size is the smoothed signal's after the transient (the fit follows a
+    # part of the ringing); a later start only shrinks it, which lowers the
+    # threshold and moves the start on: iterate to the fixed point.
+    start = 0
+    while True:
+        threshold = max(TOLERANCE * float(np.max(np.abs(smooth[start:]))), FLOOR_FACTOR * floor)
+        below = np.flatnonzero(envelope[start:] <= threshold)
+        if below.size == 0 or below[0] == 0:
+            break
+        start += int(below[0])
+    end = float(ts[start] - ts[0]) if below.size else math.inf
     if end > MAX_TRANSIENT_OF_RUN * span:
         return Settling(None, f"the forces did not settle within the first "
                               f"{MAX_TRANSIENT_OF_RUN:.0%} of the run ({span:g} s)")
     return Settling(end)
-
 
 
 def run_settling(ts: np.ndarray, signals: Mapping[str, np.ndarray],

@@ -22,7 +22,7 @@ from ..quasistatic import QuasiStatic
 from ..report import Bullets, Report
 from ..wear import worn_volume
 from ..wear.status import STATUS_OK, STATUS_TEXT
-from ._report import comparison_table, peak_line, write_report
+from ._report import COMPARISON_WORDS, comparison_table, peak_line, write_report
 
 JOINT = "crank_rod"
 
@@ -121,15 +121,29 @@ def run(out, *, name, mech, design: WearJointDesign, y0, cycles, period, thesis:
         "Model: quasi-static joint (the pin at the equilibrium of the EFM springs under the "
         "ideal mechanism's joint load; wear integrated in the cycle count).",
         comparison_table("diffwear (quasi-static)", summary, thesis),
+        COMPARISON_WORDS,
         Bullets([
-            f"cycles: {summary['cycles']:.0f} in {summary['wear_steps']} steps of the wear ODE; "
+            f"cycles: {summary['cycles']:.0f} in {summary['wear_steps']} steps of the wear ODE "
+            "(the profile's growth integrated over the cycle count by an adaptive solver); "
             f"status: {STATUS_TEXT[status]}",
             peak_line(summary),
-            f"contact margin (load / load needed to hold the pin on the wall): unworn "
-            f"{margin:.3g}, final profile {margin_worn:.3g}",
-            f"mean |joint force| {summary['mean_joint_force_first_cycle_N']:.1f} N, mean total "
-            f"normal load (unworn) {summary['mean_normal_load_first_cycle_N']:.1f} N",
-            f"wall time {wall_time:.2f} s, compile time {compile_time:.1f} s",
+            f"contact margin: unworn {margin:.3g}, final profile {margin_worn:.3g}.  The "
+            "smallest over the cycle of the joint load divided by m c omega^2, the inward "
+            "force the pin (effective mass m) needs to follow the load around a wall of "
+            "clearance c as the load turns at omega: above 1 the load holds the pin on the "
+            "wall, below 1 the pin may fly across the clearance and this model does not hold; "
+            "a huge value means the load's direction hardly turns",
+            f"mean |joint force| {summary['mean_joint_force_first_cycle_N']:.1f} N (the "
+            "magnitude of the joint's load averaged over a cycle); mean total normal load "
+            f"(unworn) {summary['mean_normal_load_first_cycle_N']:.1f} N (the bushing's "
+            "pressure integrated over the contact arc, averaged over a cycle: above the joint "
+            "force because the pressure spreads over an arc)",
+            "the first- and last-cycle joint force curves (joint_force_first/last_cycle.csv, "
+            "contact_locus_and_force.png) are the same: this model takes the joint load from "
+            "the ideal mechanism, which the wear does not change; the normal load and the "
+            "pin's locus do change with the worn profile",
+            f"run time {wall_time:.2f} s (the compiled wear evolution), compile time "
+            f"{compile_time:.1f} s (compiling it)",
             *warnings]),
         *extra_report])
     write_report(out, report, figs, summary)

@@ -16,6 +16,14 @@ def comparison_table(label: str, summary: dict, thesis: dict) -> Table:
                   for text, key, fmt in quantities])
 
 
+# What the comparison table's rows mean (every wear study's report gives it
+# below the table).
+COMPARISON_WORDS = ("max wear depth: the deepest point of the worn bushing profile; wear "
+                    "volume: the material worn off the bushing (the profile integrated over "
+                    "the bore and the bushing's depth); worn mass: that volume times the "
+                    "bushing material's density.")
+
+
 def peak_line(summary: dict) -> str:
     """Where the profile is deepest, in the bushing frame (a bullet item)."""
     return (f"peak wear at theta = {summary['max_wear_angle_rad']:.3f} rad (bushing frame, "

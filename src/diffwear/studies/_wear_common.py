@@ -23,7 +23,7 @@ from ..wear import wear_cycle, worn_mechanism, worn_volume
 from ..wear.cycle import cycle_integrator
 from ..wear.evolution import ChunkedEvolution, Evolver, load_checkpoint, save_checkpoint
 from ..wear.fem_route import FemEvolver, check_cycle_solver, default_model
-from ._report import comparison_table, peak_line, write_report
+from ._report import COMPARISON_WORDS, comparison_table, peak_line, write_report
 
 JOINT = "crank_rod"
 N_SAVE = 401
@@ -278,11 +278,11 @@ def route_table(fem: dict, efm: dict, ratio: float) -> list[Block]:
     return [
         "FEM route next to the EFM route (both run here, same dynamics):",
         Table(("route", "max depth [mm]", "volume [mm^3]", "k x sum(N ds) [mm^3]",
-               "wall time [s]", "compile [s]"),
+               "run time [s]", "compile time [s]"),
               [(tag, f"{d['max_wear_depth_mm']:.4f}", f"{d['wear_volume_mm3']:.2f}",
                 f"{d['archard_k_times_load_sliding_mm3']:.2f}", f"{d['wall_time_s']:.1f}",
                 f"{d['compile_time_s']:.1f}") for tag, d in (("FEM", fem), ("EFM", efm))]),
-        Bullets([f"wall time FEM / EFM route: {ratio:.2f} (thesis: 11 h / 7 h = 1.6 on the "
+        Bullets([f"run time FEM / EFM route: {ratio:.2f} (thesis: 11 h / 7 h = 1.6 on the "
                  "rig, 162 / 92 min = 1.8 on wear-5000)"])]
 
 
@@ -366,17 +366,26 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
     report = Report(name, [
         description,
         comparison_table(label, summary, thesis),
+        COMPARISON_WORDS,
         Bullets([
             f"cycles: {summary['cycles']:.0f}; dynamic cycles simulated: "
-            f"{summary['dynamic_cycles_simulated']} (method {method}, A/A0 {extrapolation}; "
-            "incl. 1 warm-up cycle whose wear is discarded)",
+            f"{summary['dynamic_cycles_simulated']} (incl. 1 warm-up cycle whose wear is "
+            f"discarded); method {method}, extrapolation A = {extrapolation} (the wear of one "
+            "simulated cycle stands for A cycles; with --method adaptive or error, the first "
+            "A, which the method then changes)",
             f"Archard check: k x sum(N ds) = {summary['archard_k_times_load_sliding_mm3']:.3f} "
-            "mm^3",
+            "mm^3 (the wear coefficient times the normal load integrated over the sliding "
+            "distance, summed over the cycles, each simulated one counted A times: Archard's "
+            "law for the whole volume, to compare with the wear volume above)",
             peak_line(summary),
-            f"mean |joint force| first cycle {summary['mean_joint_force_first_cycle_N']:.1f} N, "
-            f"mean total normal load {summary['mean_normal_load_first_cycle_N']:.1f} N",
-            f"wall time {wall_time:.1f} s, compile time {compile_time:.1f} s; dynamic cycles "
-            f"on {_integrator_label(summary.get('integrator', 'tsit5'))}"]),
+            f"mean |joint force| first cycle {summary['mean_joint_force_first_cycle_N']:.1f} N "
+            "(the magnitude of the joint's contact force averaged over the first cycle after "
+            f"the warm-up), mean total normal load {summary['mean_normal_load_first_cycle_N']:.1f}"
+            " N (the bushing's pressure integrated over the contact arc, averaged the same way: "
+            "above the joint force because the pressure spreads over an arc)",
+            f"run time {wall_time:.1f} s (the compiled wear evolution), compile time "
+            f"{compile_time:.1f} s (compiling it); dynamic cycles on "
+            f"{_integrator_label(summary.get('integrator', 'tsit5'))}"]),
         *extra_report,
         Bullets([f"warning: {w}" for w in warnings])])
     write_report(out, report, figs, summary)

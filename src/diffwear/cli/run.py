@@ -179,8 +179,9 @@ def _transient_text(s: dict, duration: float) -> str:
             "from its assembly state, not from the motion the drivers force (a clearance "
             "joint's pin starts centred and falls across the clearance); the forces reported "
             "below ring and then settle onto the forced motion.  The transient ends when every "
-            "reported force stays within 1 % of its size (or twice the roughness of the run's "
-            "last quarter) of its smoothed course (`diffwear.mechanism_file.transient`). ")
+            "reported force stays in a band about its smoothed course: 1 % of the force's "
+            "largest value, or twice its roughness over the run's last quarter if that is "
+            "larger (`diffwear.mechanism_file.transient`). ")
     return head + ("The maxima are over the settled part (from "
                    f"t = {t['length_s']:.4g} s on); the columns marked \"whole run\" include "
                    "the start-up transient." if t["length_s"] > 0 else
@@ -192,6 +193,18 @@ def _max_cells(settled: float | None, whole: float, fmt: str, has_transient: boo
     if not has_transient:
         return (format(whole, fmt),)
     return (format(settled, fmt), format(whole, fmt))
+
+
+def _run_time_meaning(s: dict) -> str:
+    """What the report's run time covers (the quasi-static wear model's
+    compilation is not timed apart: it falls in the run time)."""
+    joints = s.get("joints") or {}
+    if not joints:
+        return "the rest of the run: the motion, files and figures"
+    untimed = any("compile_time_s" not in w for w in joints.values())
+    return ("the rest of the run: the motion, the wear"
+            + (" (its model's compilation included)" if untimed else "")
+            + ", files and figures")
 
 
 def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
@@ -225,9 +238,7 @@ def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
              "compiling the motion's integrator"
              + (" and the dynamic wear model" if s.get("joints") and any(
                  "compile_time_s" in w for w in s["joints"].values()) else "")),
-            ("run time", f"{s['run_time_s']:.2f} s",
-             "the rest of the run: the motion, "
-             + ("the wear, " if s.get("joints") else "") + "files and figures")]),
+            ("run time", f"{s['run_time_s']:.2f} s", _run_time_meaning(s))]),
         _transient_text(s, sim.duration),
     ]
     if s["reactions"]:

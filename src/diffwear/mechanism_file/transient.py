@@ -33,14 +33,17 @@ Criterion (per signal; the run's transient is the longest over its signals):
 
 Not settled: a transient that lasts beyond `MAX_TRANSIENT_OF_RUN` of the
 run (it is not told apart from the late roughness that sets the threshold),
-and roughness that grows (above the tolerance in the last quarter and more
-than `FLOOR_FACTOR` times its median of the first quarter: an oscillation
-builds up).  Such a run's maxima are those of the whole run.  A run with
+and roughness that grows (above the tolerance in the last quarter, more
+than `FLOOR_FACTOR` times its median of the first quarter, and its median
+rising from quarter to quarter: an oscillation builds up).  Such a run's maxima are those of the whole run.  A run with
 fewer than `MIN_WINDOWS` windows of saved states is not judged.  Limits: a
 ringing that decays by less than `FLOOR_FACTOR` over the run's last three
 quarters is taken for the settled motion's roughness (its maxima are then
 the whole run's, stated with a transient of 0 s); a ringing slower than the
-window is partly taken for the forced motion.
+window is partly taken for the forced motion; impacts the settled motion
+itself has right at the run's start (a pin that leaves the wall every cycle
+at that crank angle) count into the transient, which then makes the settled
+part shorter than it is, its maxima still the settled motion's.
 """
 
 from __future__ import annotations
@@ -139,10 +142,11 @@ def signal_settling(ts: np.ndarray, s: np.ndarray, period: float | None) -> Sett
     if size == 0.0:
         return Settling(0.0)
     floor = float(np.median(envelope[late]))
-    early = float(np.median(envelope[ts <= ts[0] + LATE_FRACTION * span]))
-    if FLOOR_FACTOR * floor > TOLERANCE * size and FLOOR_FACTOR * early < floor:
+    quarters = [float(np.median(q)) for q in np.array_split(envelope, 4)]
+    if (FLOOR_FACTOR * floor > TOLERANCE * size and FLOOR_FACTOR * quarters[0] < floor
+            and all(a <= b for a, b in zip(quarters, quarters[1:]))):
         return Settling(None, f"the forces' roughness grows over the run (median "
-                              f"{early:.3g} in its first quarter, {floor:.3g} in its last)")
+                              f"{quarters[0]:.3g} in its first quarter, {floor:.3g} in its last)")
     # The size is the smoothed signal's after the transient (the fit follows a
     # part of the ringing); a later start only shrinks it, which lowers the
     # threshold and moves the start on: iterate to the fixed point.

@@ -31,19 +31,27 @@ Criterion (per signal; the run's transient is the longest over its signals):
    is the forced motion's to within the threshold:
    |max s - max p| <= max |s - p|.
 
+Checked (tests/test_transient.py): against decaying ringings whose settling
+time is known in closed form, and on the four-bar, rig and clearance
+slider-crank files, whose maxima after the transient are those of a full
+period run on from the first run's end (to 1 %), a run that itself reports
+no transient.
+
 Not settled: a transient that lasts beyond `MAX_TRANSIENT_OF_RUN` of the
 run (it is not told apart from the late roughness that sets the threshold),
 and roughness that grows (above the tolerance in the last quarter, more
 than `FLOOR_FACTOR` times its median of the first quarter, and its median
-rising from quarter to quarter: an oscillation builds up).  Such a run's maxima are those of the whole run.  A run with
-fewer than `MIN_WINDOWS` windows of saved states is not judged.  Limits: a
-ringing that decays by less than `FLOOR_FACTOR` over the run's last three
-quarters is taken for the settled motion's roughness (its maxima are then
-the whole run's, stated with a transient of 0 s); a ringing slower than the
-window is partly taken for the forced motion; impacts the settled motion
-itself has right at the run's start (a pin that leaves the wall every cycle
-at that crank angle) count into the transient, which then makes the settled
-part shorter than it is, its maxima still the settled motion's.
+rising from quarter to quarter: an oscillation builds up).  Such a run's
+maxima are those of the whole run.  A run with fewer than `MIN_WINDOWS`
+windows of saved states is not judged.
+
+Limits: a ringing that decays by less than `FLOOR_FACTOR` over the run's
+last three quarters is taken for the settled motion's roughness (its maxima
+are then the whole run's, stated with a transient of 0 s); a ringing slower
+than the window is partly taken for the forced motion; impacts the settled
+motion itself has right at the run's start (a pin that leaves the wall every
+cycle at that crank angle) count into the transient, which then makes the
+settled part shorter than it is, its maxima still the settled motion's.
 """
 
 from __future__ import annotations

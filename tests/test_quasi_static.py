@@ -302,6 +302,14 @@ def test_wear_study_on_the_quasi_static_model(tmp_path):
     report = (out / "report.md").read_text()
     assert s["thesis"] == {} and "5,000 cycles and this run has 500" in s["thesis_not_compared"]
     assert "not compared" in report and "Table 6-4" not in report.split("\n| quantity")[1]
+    # one run time, one compile time; the contact margin and the unchanged
+    # joint force explained (the force is the ideal mechanism's in every cycle)
+    assert report.count("run time") == 1 and report.count("compile time") == 1
+    assert "wall time" not in report and "the load holds the pin on the wall" in report
+    first = np.loadtxt(out / "joint_force_first_cycle.csv", delimiter=",", skiprows=1)
+    last = np.loadtxt(out / "joint_force_last_cycle.csv", delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(first[:, 1:4], last[:, 1:4])
+    assert "which the wear does not change" in report
 
 
 @pytest.mark.parametrize("extra, word", [(["--method", "adaptive"], "--method"),

@@ -52,8 +52,9 @@ def _display_points(ax, per_segment: int = 40) -> np.ndarray:
 
 
 def _assert_legends_clear(fig):
-    """No legend's box holds a data point of any axes of the figure."""
-    fig.canvas.draw()
+    """No legend's box holds a data point of any axes of the figure, and
+    nothing is cut off at the figure's edge."""
+    _assert_inside_the_figure(fig)
     points = np.concatenate([_display_points(ax) for ax in fig.axes] + [np.zeros((0, 2))])
     legends = [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
     for leg in legends:
@@ -63,6 +64,22 @@ def _assert_legends_clear(fig):
         assert not covered.any(), f"legend {[t.get_text() for t in leg.get_texts()]} " \
                                   f"covers {covered.sum()} data points"
     return legends
+
+
+def _assert_inside_the_figure(fig):
+    """Every axes' labels, title and legend lie within the figure (none cut
+    off at its edge)."""
+    fig.canvas.draw()
+    page = fig.bbox
+    for ax in fig.axes:
+        parts = [ax.xaxis.label, ax.yaxis.label, ax.title, ax.get_legend()]
+        for part in parts:
+            if part is not None and part.get_visible() and (
+                    not hasattr(part, "get_text") or part.get_text()):
+                box = part.get_window_extent()
+                assert (box.x0 >= page.x0 - 0.5 and box.x1 <= page.x1 + 0.5
+                        and box.y0 >= page.y0 - 0.5 and box.y1 <= page.y1 + 0.5), \
+                    (getattr(part, "get_text", lambda: "legend")(), box, page)
 
 
 def _assert_angles_in_degrees(fig):
@@ -109,7 +126,7 @@ def _rig_like_wear():
     theta = 2 * np.pi * np.arange(N_THETA) / N_THETA
     centre = np.radians(170.0)
     gap = np.angle(np.exp(1j * (theta - centre)))
-    depth_mm = 0.445 * np.clip(np.cos(gap * 1.95), 0.0, None) ** 1.5
+    depth_mm = 0.445 * np.clip(np.cos(gap), 0.0, None) ** 1.5  # one pocket, 180 deg wide
     crank = 2 * np.pi * np.arange(90) / 90
     wobble = np.radians(6.0) * np.sin(crank)
     first = (C_MM + 0.002) * np.stack([np.cos(np.pi + wobble), np.sin(np.pi + wobble)], 1)
@@ -151,7 +168,7 @@ def test_the_locus_is_zoomed_on_the_pin_in_its_worn_pocket(study_figures):
     fig.canvas.draw()
     ax = fig.axes[0]
     assert ax.get_aspect() == 1.0
-    circle = _line(ax, "clearance circle")
+    circle = _line(ax, "clearance circle, c = 0.033 mm")
     assert np.hypot(*circle.get_xydata().T) == pytest.approx(C_MM, rel=1e-12)
     outline = _line(ax, "worn bushing")
     r = np.hypot(*outline.get_xydata().T)

@@ -118,8 +118,7 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
         scale, unit, xlabel, xscale = UNIT[s.kind]
         fits.append(plots_calibration.SeriesFit(
             name=s.name, kind=s.kind, unit=unit, xlabel=xlabel, scale=scale, x=s.x * xscale,
-            y=s.y,
-            sigma=s.sigma, holdout=s.holdout, base=c.base.prediction[m],
+            y=s.y, sigma=s.sigma, holdout=s.holdout, base=c.base.prediction[m],
             chosen=None if final is c.base else final.prediction[m],
             chosen_label=_final_label(final), cycles=s.cycles))
     files = [plots_calibration.series_fit(out.file(f"fit_{f.name}.png"), f).name for f in fits]

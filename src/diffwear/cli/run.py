@@ -100,9 +100,10 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
 
     # angles drawn in degrees; a body's coordinate that stays zero (a slider's
     # y and phi) is left out by the figure and named in its title
-    panels = [(f"{c} [{u}]", {b: r.q[:, 3 * i + k] * f for i, b in enumerate(mech.body_names)})
-              for k, (c, u, f) in enumerate((("x", "m", 1.0), ("y", "m", 1.0),
-                                             ("φ", "deg", 180 / math.pi)))]
+    panels = [(f"{c} [{u}]", {b: r.q[:, 3 * i + k] * scale
+                               for i, b in enumerate(mech.body_names)})
+              for k, (c, u, scale) in enumerate((("x", "m", 1.0), ("y", "m", 1.0),
+                                                 ("φ", "deg", 180 / math.pi)))]
     if r.violation.shape[1]:
         panels.append(("max |Φ| [m, rad]", {"all constraints": np.max(np.abs(r.violation),
                                                                       axis=1)}))

@@ -16,9 +16,11 @@ _observers: list[Callable[[Path, Figure], None]] = []
 
 
 def save(fig: Figure, path, *, dpi: int) -> Path:
-    """Tight layout, write ``path`` at ``dpi``, hand the figure to any
-    `captured` block, close it (pyplot forgets it; the object stays readable)."""
-    fig.tight_layout()
+    """Tight layout (unless the figure has its own layout engine), write
+    ``path`` at ``dpi``, hand the figure to any `captured` block, close it
+    (pyplot forgets it; the object stays readable)."""
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
     fig.savefig(path, dpi=dpi)
     for observer in _observers:
         observer(Path(path), fig)

@@ -72,7 +72,9 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
     axes[0].set_title(f"{name}: wear {after} (markers: {markers})", fontsize=10)
     figs.append(save(fig, out.file("wear_history.png"), dpi=120).name)
 
-    fig, axes = plt.subplots(1, 2, figsize=(13, 4.6))
+    # constrained layout: tight layout squeezes the square locus panel with
+    # its legend beside it out of the figure's left edge
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.6), layout="constrained")
     locus_panel(axes[0], {"first cycle": np.asarray(first.offset) * 1e3,
                           "last cycle": np.asarray(last.offset) * 1e3},
                 clearance_mm=clearance_mm, theta=theta, depth_mm=depth_mm)
@@ -96,11 +98,11 @@ def locus_panel(ax: Axes, loci: Mapping[str, np.ndarray], *, clearance_mm: float
     limits on the data with `LOCUS_MARGIN`, legend beside the axes."""
     t = np.linspace(0.0, 2 * np.pi, 361)
     ax.plot(clearance_mm * np.cos(t), clearance_mm * np.sin(t), "k:", lw=0.9,
-            label=f"unworn clearance circle (c = {clearance_mm:.4g} mm)")
+            label=f"clearance circle, c = {clearance_mm:.4g} mm")
     th = np.append(np.asarray(theta, dtype=float), float(theta[0]) + 2 * np.pi)
     r = clearance_mm + np.append(np.asarray(depth_mm, dtype=float), float(depth_mm[0]))
     ax.plot(r * np.cos(th), r * np.sin(th), "-", color="0.45", lw=1.2,
-            label="worn bushing (c + wear depth)")
+            label="worn bushing: c + wear depth")
     for tag, off in loci.items():
         # a marker where the cycle starts: a locus of a few um is a dot at this scale
         ax.plot(off[:, 0], off[:, 1], lw=1.6, marker="o", ms=4, markevery=[0],
@@ -112,7 +114,8 @@ def locus_panel(ax: Axes, loci: Mapping[str, np.ndarray], *, clearance_mm: float
     mid, half = (lo + hi) / 2, (1 + 2 * LOCUS_MARGIN) * float(np.max(hi - lo)) / 2
     ax.set_xlim(mid[0] - half, mid[0] + half)
     ax.set_ylim(mid[1] - half, mid[1] + half)
-    ax.set_aspect("equal", adjustable="box")
+    ax.set_box_aspect(1.0)  # square box: the layout engine sizes it with its labels
+    ax.set_aspect("equal", adjustable="datalim")
     ax.set(xlabel="pin offset x (bushing frame) [mm]", ylabel="pin offset y [mm]",
            title="pin centre locus in the worn bushing")
     ax.grid(alpha=0.3)

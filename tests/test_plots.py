@@ -487,3 +487,37 @@ def test_a_users_file_worn_through_its_wall_has_it_in_its_figures(tmp_path):
         _assert_angles_in_degrees(fig)
         _assert_legends_clear(fig)
     assert math.isfinite(joint["max_wear_depth_mm"])
+
+
+@pytest.mark.long  # ~70 s: the study compiles the quasi-static evolution
+def test_the_rig_studys_locus_shows_the_pin_in_its_worn_pocket(tmp_path):
+    """The Ch. 7 rig on the quasi-static model, 21,400 cycles: the last
+    cycle's pin centre (contact_locus_last_cycle.csv) sits on the drawn worn
+    outline, within the EFM springs' few-um penetration of c + depth at its
+    angle (wear_profile.csv), and the panel is zoomed on the outline with
+    nothing cut off."""
+    out = tmp_path / "rig"
+    with plots.captured() as figures:
+        assert main(["study", "rig-21400", "--model", "quasi-static", "--out", str(out),
+                     "--quiet"]) == 0
+    profile = np.loadtxt(out / "wear_profile.csv", delimiter=",", skiprows=1)
+    locus = np.loadtxt(out / "contact_locus_last_cycle.csv", delimiter=",", skiprows=1)
+    e = locus[:, 1:3]  # offset_x_mm, offset_y_mm
+    angle = np.mod(np.arctan2(e[:, 1], e[:, 0]), 2 * np.pi)
+    reach = C_MM + np.interp(angle, profile[:, 0], profile[:, 1], period=2 * np.pi)
+    assert np.hypot(*e.T) == pytest.approx(reach, abs=0.01)
+    fig = figures["contact_locus_and_force.png"]
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    outline = _line(ax, "worn bushing").get_xydata()
+    assert np.max(np.hypot(*outline.T)) == pytest.approx(C_MM + profile[:, 1].max(), rel=1e-9)
+    assert _line(ax, "last cycle").get_xydata() == pytest.approx(e, rel=1e-6)
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    data = np.concatenate([ln.get_xydata() for ln in ax.get_lines()])
+    assert x0 < data[:, 0].min() and x1 > data[:, 0].max()
+    assert y0 < data[:, 1].min() and y1 > data[:, 1].max()
+    assert max(x1 - x0, y1 - y0) < 1.3 * np.ptp(data, axis=0).max()
+    for fig in figures.values():
+        _assert_legends_clear(fig)
+        _assert_angles_in_degrees(fig)
+        _assert_no_zero_axes(fig)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping
 
 import matplotlib.pyplot as plt
@@ -48,8 +49,8 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
            xticks=np.arange(0, 361, 45))
     ax.grid(alpha=0.3)
     legend_outside(ax)
-    ax.set_title(f"{name}: bushing wear profile {after} (cf. Figs. 5-5/6-9/7-4/7-5)",
-                 fontsize=10)
+    ax.set_title(textwrap.fill(f"{name}: bushing wear profile {after} "
+                               "(cf. Figs. 5-5/6-9/7-4/7-5)", 70), fontsize=10)
     figs = [save(fig, out.file("wear_profile.png"), dpi=120).name]
 
     fig, axes = plt.subplots(2, 1, figsize=(8.6, 5), sharex=True)
@@ -69,12 +70,13 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
     for ax in axes:
         ax.grid(alpha=0.3)
         legend_outside(ax)
-    axes[0].set_title(f"{name}: wear {after} (markers: {markers})", fontsize=10)
+    axes[0].set_title(textwrap.fill(f"{name}: wear {after} (markers: {markers})", 70),
+                      fontsize=10)
     figs.append(save(fig, out.file("wear_history.png"), dpi=120).name)
 
     # constrained layout: tight layout squeezes the square locus panel with
     # its legend beside it out of the figure's left edge
-    fig, axes = plt.subplots(1, 2, figsize=(13, 4.6), layout="constrained")
+    fig, axes = plt.subplots(1, 2, figsize=(14, 4.6), layout="constrained")
     locus_panel(axes[0], {"first cycle": np.asarray(first.offset) * 1e3,
                           "last cycle": np.asarray(last.offset) * 1e3},
                 clearance_mm=clearance_mm, theta=theta, depth_mm=depth_mm)

@@ -71,8 +71,9 @@ def _assert_inside_the_figure(fig):
     off at its edge)."""
     fig.canvas.draw()
     page = fig.bbox
-    for ax in fig.axes:
-        parts = [ax.xaxis.label, ax.yaxis.label, ax.title, ax.get_legend()]
+    for ax in fig.axes + [None]:
+        parts = (list(fig.texts) if ax is None
+                 else [ax.xaxis.label, ax.yaxis.label, ax.title, ax.get_legend()])
         for part in parts:
             if part is not None and part.get_visible() and (
                     not hasattr(part, "get_text") or part.get_text()):
@@ -83,11 +84,13 @@ def _assert_inside_the_figure(fig):
 
 
 def _assert_angles_in_degrees(fig):
-    """Every axis labelled with an angle says deg (never rad)."""
+    """No axis is in radians, and every axis of an angle (its label names an
+    angle or starts with its symbol) says deg."""
     labels = [lab for ax in fig.axes for lab in (ax.get_xlabel(), ax.get_ylabel())]
     for lab in labels:
-        if any(w in lab for w in ("angle", "θ", "φ", "phi")):
-            assert "[deg]" in lab and "rad" not in lab, lab
+        assert "[rad]" not in lab, lab
+        if "angle" in lab or lab.startswith(("θ", "φ", "phi")):
+            assert "[deg]" in lab, lab
 
 
 def _assert_no_zero_axes(fig):
@@ -315,6 +318,42 @@ def test_a_run_that_reached_its_cycles_is_titled_by_them():
                            model="quasi-static")
     assert two == ("f: wear after 30,000 cycles (a), 50,000 cycles (b) "
                    "(stopped: a: wall reached) (quasi-static model)")
+
+
+def test_the_other_figures_keep_their_legends_and_labels_clear(tmp_path):
+    """The pin-pivot, design, contact-locus and sweep figures: legends off
+    the data, nothing cut off, angles in degrees."""
+    from diffwear.plots import design as plots_design
+    from diffwear.plots import pin_pivot as plots_pin_pivot
+    from diffwear.plots import sweep as plots_sweep
+
+    angle = np.linspace(-180.0, 178.0, 180)
+    bump = np.clip(np.cos(np.radians(angle)), 0.0, None)
+    sweeps = np.linspace(1e4, 2e5, 20)
+    d, h = np.linspace(40e-3, 55e-3, 6), np.linspace(10e-3, 40e-3, 7)
+    x = np.array([46.58e-3, 48.60e-3, 37.25e-3, 14.00e-3])  # Table 8-4
+    with plots.captured() as figures:
+        plots_pin_pivot.profile_figure(
+            tmp_path / "pp_profiles.png", angle_deg=angle,
+            simulated={"pin, 200,000 sweeps": 1.2 * bump, "pivot, 200,000 sweeps": 0.4 * bump},
+            direct={"pin (direct)": 1.1 * bump}, pressure=30 * bump, title="pin-pivot")
+        plots_pin_pivot.history_figure(
+            tmp_path / "pp_history.png", sweeps=sweeps, max_pin_mm=sweeps * 6e-6,
+            max_pivot_mm=sweeps * 2e-6, fit_pin=(6e-9, 0.0), fit_pivot=(2e-9, 0.0),
+            target=408000, direct=None, thesis={"model": 1.867, "measured": 2.0},
+            title="pin-pivot")
+        plots_design.life_map(tmp_path / "life.png",
+                              {"d_m": d, "h_m": h, "cyc1": np.outer(d, h) * 1e9}, 1, x, x * 1.01)
+        plots.polar_loci(tmp_path / "loci.png",
+                         {"EFM, c = 0.5 mm": (np.radians(angle) + np.pi, 1 + 0 * bump)},
+                         title="contact locus")
+        plots_sweep.line(tmp_path / "line.png", d, d ** 2, xlabel="d [m]", ylabel="y",
+                         title="a sweep")
+    assert len(figures) == 5
+    for name, fig in figures.items():
+        _assert_legends_clear(fig)
+        _assert_angles_in_degrees(fig)
+        _assert_no_zero_axes(fig)
 
 
 # ----------------------------------------------------------------------------- calibration

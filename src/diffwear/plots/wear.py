@@ -76,7 +76,7 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
 
     # constrained layout: tight layout squeezes the square locus panel with
     # its legend beside it out of the figure's left edge
-    fig, axes = plt.subplots(1, 2, figsize=(14, 4.6), layout="constrained")
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), layout="constrained")
     locus_panel(axes[0], {"first cycle": np.asarray(first.offset) * 1e3,
                           "last cycle": np.asarray(last.offset) * 1e3},
                 clearance_mm=clearance_mm, theta=theta, depth_mm=depth_mm)

@@ -8,19 +8,15 @@ import json
 import math
 from types import SimpleNamespace
 
-import matplotlib
+import numpy as np
+import pytest
+from matplotlib.lines import Line2D
 
-matplotlib.use("Agg")  # files only, as the command chooses
-
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
-
-from diffwear import plots  # noqa: E402
-from diffwear.cli import main  # noqa: E402
-from diffwear.plots import calibration as plots_calibration  # noqa: E402
-from diffwear.plots import wear as plots_wear  # noqa: E402
-from diffwear.wear.status import STATUS_OK, STATUS_PIERCED  # noqa: E402
+from diffwear import plots
+from diffwear.cli import main
+from diffwear.plots import calibration as plots_calibration
+from diffwear.plots import wear as plots_wear
+from diffwear.wear.status import STATUS_OK, STATUS_PIERCED
 
 # ----------------------------------------------------------------------------- readers
 

@@ -40,8 +40,10 @@ REPORT_UNITS = {"wear coefficient": "1/Pa = m^3/(N m)", "length": "m", None: "-"
                 "mass": "kg", "inertia": "kg m^2", "stiffness": "N/m"}
 
 DESCRIPTION = "calibrate the rig model on measured wear data and identify a missing effect"
-UNIT = {"profile": (1e6, "um", "bushing angle [rad]"), "max_depth": (1e3, "mm", "cycles"),
-        "volume": (1e9, "mm^3", "cycles"), "force": (1.0, "N", "crank angle [rad]")}
+# the figures' axes: y scale and unit, x label and scale (angles, SI rad, drawn in deg)
+UNIT = {"profile": (1e6, "um", "bushing angle [deg]", 180 / math.pi),
+        "max_depth": (1e3, "mm", "cycles", 1.0), "volume": (1e9, "mm^3", "cycles", 1.0),
+        "force": (1.0, "N", "crank angle [deg]", 180 / math.pi)}
 
 
 def residual_structure(c: Calibration) -> dict:
@@ -113,10 +115,10 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
     fits = []
     for k, s in enumerate(c.dataset.series):
         m = which == k
-        scale, unit, xlabel = UNIT[s.kind]
+        scale, unit, xlabel, xscale = UNIT[s.kind]
         fits.append(plots_calibration.SeriesFit(
-            name=s.name, kind=s.kind, unit=unit, xlabel=xlabel, scale=scale, x=s.x, y=s.y,
-            sigma=s.sigma, holdout=s.holdout, base=c.base.prediction[m],
+            name=s.name, kind=s.kind, unit=unit, xlabel=xlabel, scale=scale, x=s.x * xscale,
+            y=s.y, sigma=s.sigma, holdout=s.holdout, base=c.base.prediction[m],
             chosen=None if final is c.base else final.prediction[m],
             chosen_label=_final_label(final), cycles=s.cycles))
     files = [plots_calibration.series_fit(out.file(f"fit_{f.name}.png"), f).name for f in fits]

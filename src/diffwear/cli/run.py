@@ -108,11 +108,15 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
         }
         warnings += contact_warnings(mech.element(co.joint), contacts[co.joint])
 
-    panels = [(f"{c} [{u}]", {b: r.q[:, 3 * i + k] for i, b in enumerate(mech.body_names)})
-              for k, (c, u) in enumerate((("x", "m"), ("y", "m"), ("φ", "rad")))]
+    # angles drawn in degrees; a body's coordinate that stays zero (a slider's
+    # y and phi) is left out by the figure and named in its title
+    panels = [(f"{c} [{u}]", {b: r.q[:, 3 * i + k] * scale
+                               for i, b in enumerate(mech.body_names)})
+              for k, (c, u, scale) in enumerate((("x", "m", 1.0), ("y", "m", 1.0),
+                                                 ("φ", "deg", 180 / math.pi)))]
     if r.violation.shape[1]:
-        panels.append(("max |Φ| [m, rad]", {"all constraints": np.max(np.abs(r.violation), axis=1)
-                                             + 1e-300}))
+        panels.append(("max |Φ| [m, rad]", {"all constraints": np.max(np.abs(r.violation),
+                                                                      axis=1)}))
     figures = [plots.stacked(out.file("trajectory.png"), r.ts, panels, xlabel="time [s]",
                              logy=[False, False, False, True][: len(panels)],
                              title=f"{mfile.title or mfile.file}: body coordinates")]
@@ -392,8 +396,12 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
     figure = out.file("wear.png")
     plots.wear_panels(figure, {n: (w["theta"], w["depth"]) for n, w in wear.items()},
                       {n: (w["history_cycles"], w["history_peak"]) for n, w in wear.items()},
-                      title=f"{mfile.title or mfile.file}: wear after {cycles:,.0f} cycles "
-                            f"({models} model)")
+                      title=plots.wear_title(mfile.title or str(mfile.file),
+                                             {n: w["cycles"] for n, w in wear.items()},
+                                             {n: w["status"] for n, w in wear.items()},
+                                             model=models),
+                      walls={n: w["wall"] for n, w in wear.items()}, limit=limit,
+                      lives={n: w["cycles_to_limit"] for n, w in wear.items()})
     return {"joints": joints, "warnings": warnings, "figure": figure.name, "stopped": pierced}
 
 

@@ -3,12 +3,16 @@ plots.  The matplotlib backend is the caller's choice: the ``diffwear``
 command selects Agg (files only); a notebook keeps its inline backend.
 
 `panels`: stacked time series, contact loci, wear profiles (shared);
+`layout`: the rules they share (legends off the data, zero curves left out,
+the bushing wall and the depth limit on depth axes); `files`: where a
+figure becomes a file (`captured` reads the figures back, for tests);
 `wear`: the wear studies; `pin_pivot`: the pin-pivot study; `design`: the
 bushing design's life maps; `calibration`: the calibration's fits, residual
 structure and candidate scores; `sweep`: grids (heatmaps, line plots),
 tornado plots of elasticities, histograms of sampled outputs.
 """
 
-from .panels import polar_loci, stacked, wear_panels
+from .files import captured
+from .panels import polar_loci, stacked, wear_panels, wear_title
 
-__all__ = ["stacked", "polar_loci", "wear_panels"]
+__all__ = ["captured", "stacked", "polar_loci", "wear_panels", "wear_title"]

@@ -9,11 +9,15 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+from .files import save
+from .layout import legend_outside
+
 
 @dataclass(frozen=True)
 class SeriesFit:
     """One measured series and the models' predictions at its points (SI;
-    ``scale`` converts to the plotted ``unit``)."""
+    ``scale`` converts to the plotted ``unit``; ``x`` as plotted, an angle in
+    degrees)."""
 
     name: str
     kind: str
@@ -32,7 +36,7 @@ class SeriesFit:
 
 def series_fit(path: Path, f: SeriesFit) -> Path:
     """The data with error bars against the base fit and the final model."""
-    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    fig, ax = plt.subplots(figsize=(8.4, 3.6))
     ax.errorbar(f.x, f.y * f.scale, yerr=f.sigma * f.scale, fmt=".", ms=3, color="k",
                 label="data", alpha=0.7)
     order = np.argsort(f.x)
@@ -47,7 +51,9 @@ def series_fit(path: Path, f: SeriesFit) -> Path:
                 label="held out")
     title = f.name + (f" (N = {f.cycles:g})" if f.cycles is not None else "")
     ax.set(xlabel=f.xlabel, ylabel=f"{f.kind} [{f.unit}]", title=title)
-    ax.legend(fontsize=8)
+    if "[deg]" in f.xlabel:
+        ax.set_xticks(np.arange(0, 361, 45))
+    legend_outside(ax)
     return _save(fig, path)
 
 
@@ -56,18 +62,17 @@ def residual_structure(path: Path, fits: Sequence[SeriesFit], residuals: Sequenc
     """The base fit's normalised residual against bushing angle (profiles) and
     against cycle count (every series), and the force residual's crank
     orders."""
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
+    fig, axes = plt.subplots(1, 3, figsize=(15, 3.6))
     for f, r, n in zip(fits, residuals, cycles):
         if f.kind == "profile":
             axes[0].plot(f.x, r, ".", ms=3, label=f"N = {f.cycles:g}")
         axes[1].plot(n, r, ".", ms=3, label=f.name)
-    axes[0].set(xlabel="bushing angle [rad]", ylabel="base residual [sigma]",
-                title="profile residual vs angle")
+    axes[0].set(xlabel="bushing angle [deg]", ylabel="base residual [sigma]",
+                title="profile residual vs angle", xticks=np.arange(0, 361, 90))
     axes[1].set(xlabel="cycles", ylabel="base residual [sigma]", title="residual vs cycles")
     for ax in axes[:2]:
         ax.axhline(0, color="0.5", lw=0.8)
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=6)
+        legend_outside(ax, fontsize=6)
     if not any(f.kind == "profile" for f in fits):
         axes[0].text(0.5, 0.5, "no profile measured", ha="center", va="center",
                      transform=axes[0].transAxes, color="0.4")
@@ -83,11 +88,11 @@ def residual_structure(path: Path, fits: Sequence[SeriesFit], residuals: Sequenc
 def candidates(path: Path, effects: Sequence[str], statistics: Sequence[float],
                critical: float) -> Path:
     """The score statistic of each candidate effect against its critical value."""
-    fig, ax = plt.subplots(figsize=(6.4, 3.2))
+    fig, ax = plt.subplots(figsize=(8.4, 3.2))
     ax.barh(list(effects)[::-1], list(statistics)[::-1])
     ax.axvline(critical, color="r", ls="--", lw=1, label="p = 0.001 (a strength)")
     ax.set(xscale="symlog", xlabel="score statistic (chi-square(1) under 'no effect')")
-    ax.legend(fontsize=8)
+    legend_outside(ax)
     return _save(fig, path)
 
 
@@ -105,12 +110,9 @@ def discrepancy(path: Path, x, delta, band, xlabel: str, title: str) -> Path:
     if xlabel.startswith("bushing angle"):
         ax.set_xticks(np.arange(0, 361, 45))
         ax.set_xlim(0, 360)
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    legend_outside(ax)
     return _save(fig, path)
 
 
 def _save(fig, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save(fig, path, dpi=110)

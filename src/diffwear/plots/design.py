@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 
+from .files import save
+from .layout import legend_outside
+
 
 def life_map(path, maps: dict, j: int, answer, thesis) -> None:
     """Cycles to the wear limit of joint ``j`` over its (diameter, depth) map,
@@ -13,11 +16,9 @@ def life_map(path, maps: dict, j: int, answer, thesis) -> None:
     c = ax.contourf(d, h, maps[f"cyc{j}"].T / 1e3, levels=12, cmap="viridis")
     fig.colorbar(c, ax=ax, label=f"cyc{j} [thousand cycles]")
     ax.plot(answer[j - 1] * 1e3, answer[j + 1] * 1e3, "r*", ms=12, label="equal-life answer")
-    ax.plot(thesis[j - 1] * 1e3, thesis[j + 1] * 1e3, "wo", label="thesis Table 8-4")
+    ax.plot(thesis[j - 1] * 1e3, thesis[j + 1] * 1e3, "wo", mec="k", label="thesis Table 8-4")
     ax.set_xlabel(f"bushing diameter d{j} [mm]")
     ax.set_ylabel(f"bushing depth h{j} [mm]")
     ax.set_title(f"Joint {j}: cycles to 2 mm wear")
-    ax.legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    legend_outside(ax, below=True, ncol=2)  # the colour bar is on the right
+    save(fig, path, dpi=120)

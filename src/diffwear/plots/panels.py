@@ -13,6 +13,16 @@ import numpy as np
 from matplotlib.projections.polar import PolarAxes
 from numpy.typing import ArrayLike
 
+from ..wear.status import (
+    STATUS_CONTACT_LOSS,
+    STATUS_OK,
+    STATUS_PIERCED,
+    STATUS_SOLVER,
+    STATUS_TEXT,
+)
+from .files import save
+from .layout import depth_references, legend_outside, nonzero
+
 
 def stacked(
     path: Path,
@@ -22,21 +32,34 @@ def stacked(
     xlabel: str,
     title: str,
     logy: Sequence[bool] | None = None,
-    legend_outside: bool = False,
 ) -> Path:
     """Vertically stacked panels sharing x; each panel maps a label to a curve.
 
-    On a log panel, values below 1e-15 of the panel's largest are not drawn
-    (an exactly assembled start, e.g. a constraint residual of 1e-312 at t = 0,
-    would otherwise stretch the axis over 300 decades).  ``legend_outside``:
-    legends right of the panels, off the data.  Long titles wrap."""
-    width = 8.6 if legend_outside else 7.0
-    fig, axes = plt.subplots(len(panels), 1, figsize=(width, 2.4 * len(panels)), sharex=True)
-    axes = np.atleast_1d(axes)
-    for k, (ax, (ylabel, curves)) in enumerate(zip(axes, panels)):
+    A curve that is zero to round-off (`layout.nonzero`, e.g. a ground-fixed
+    driver's force) is not drawn, a panel left empty is dropped, and the
+    title names what was left out.  On a log panel, values below 1e-15 of
+    the panel's largest are not drawn (an exactly assembled start, e.g. a
+    constraint residual of 1e-312 at t = 0, would otherwise stretch the axis
+    over 300 decades).  Legends right of the panels, off the data; long
+    titles wrap."""
+    kept, omitted = [], []
+    for k, (ylabel, curves) in enumerate(panels):
         log = logy is not None and logy[k]
+        drawn, zero = nonzero(curves, log=log)
+        omitted += [f"{label} ({ylabel})" for label in zero]
+        if drawn:
+            kept.append((ylabel, drawn, log))
+    if omitted:
+        title += "; zero to round-off, not drawn: " + ", ".join(omitted)
+    if not kept:  # a figure that says so, rather than none
+        fig, ax = plt.subplots(figsize=(8.6, 2.4))
+        ax.set_axis_off()
+        ax.set_title(textwrap.fill(title, 70), fontsize=10)
+        return save(fig, path, dpi=120)
+    fig, axes = plt.subplots(len(kept), 1, figsize=(8.6, 0.6 + 2.4 * len(kept)), sharex=True)
+    axes = np.atleast_1d(axes)
+    for ax, (ylabel, curves, log) in zip(axes, kept):
         for label, y in curves.items():
-            y = np.asarray(y, dtype=float)
             if log:
                 top = np.nanmax(np.abs(y)) if np.any(np.isfinite(y)) else 0.0
                 y = np.where(np.abs(y) > 1e-15 * top, y, np.nan)
@@ -45,17 +68,10 @@ def stacked(
         ax.grid(alpha=0.3)
         if log:
             ax.set_yscale("log")
-        if len(curves) > 1:
-            if legend_outside:
-                ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-            else:
-                ax.legend(fontsize=8, loc="best")
+        legend_outside(ax)
     axes[-1].set_xlabel(xlabel)
     axes[0].set_title(textwrap.fill(title, 70), fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=120)
 
 
 def polar_loci(path: Path, loci: Mapping[str, tuple[np.ndarray, np.ndarray]], *,
@@ -75,28 +91,73 @@ def polar_loci(path: Path, loci: Mapping[str, tuple[np.ndarray, np.ndarray]], *,
         ax.set_title(label, fontsize=8)
         ax.tick_params(labelsize=6)
     fig.suptitle(textwrap.fill(title + f"  (radius: {radius_label})", 90), fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=110)
 
 
 def wear_panels(path: Path, profiles: Mapping[str, tuple[np.ndarray, np.ndarray]],
-                histories: Mapping[str, tuple[np.ndarray, np.ndarray]], *, title: str) -> Path:
+                histories: Mapping[str, tuple[np.ndarray, np.ndarray]], *, title: str,
+                walls: Mapping[str, float] | None = None, limit: float | None = None,
+                lives: Mapping[str, float | None] | None = None) -> Path:
     """Per joint: the worn profile against the bushing angle [deg] and the peak
-    depth against cycles, both in mm, legends off the data."""
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 3.6))
+    depth against cycles, both in mm (inputs in m); on both, each joint's
+    bushing wall (``walls`` [m]) and the depth ``limit`` [m] as labelled
+    lines, and on the history the cycles at which each joint reaches the
+    limit (``lives``, where within the run).  Legend off the data."""
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 3.8))
     for name, (theta, depth) in profiles.items():
-        a.plot(np.degrees(theta), depth * 1e3, label=name)
+        a.plot(*closed_profile(theta, np.asarray(depth) * 1e3), label=name)
     for name, (cycles, peak) in histories.items():
-        b.plot(cycles, peak * 1e3, ".-", ms=3, label=name)
-    a.set(xlabel="bushing angle [deg]", ylabel="wear depth [mm]", xlim=(0, 360))
+        b.plot(cycles, np.asarray(peak) * 1e3, ".-", ms=3, label=name)
+    deepest = 1e3 * max([float(np.max(d, initial=0.0)) for _, d in profiles.values()]
+                        + [float(np.max(p, initial=0.0)) for _, p in histories.values()])
+    walls_mm = {k: w * 1e3 for k, w in (walls or {}).items()}
+    limit_mm = None if limit is None else limit * 1e3
+    for ax in (a, b):
+        depth_references(ax, deepest, walls_mm=walls_mm, limit_mm=limit_mm)
+    for name, life in (lives or {}).items():
+        if limit_mm is not None and life is not None and np.isfinite(life) and histories \
+                and life <= max(float(np.max(c, initial=0.0)) for c, _ in histories.values()):
+            b.plot([life], [limit_mm], "v", color="tab:red", ms=7,
+                   label=f"{name} at the limit: {life:,.0f} cycles")
+    a.set(xlabel="bushing angle [deg]", ylabel="wear depth [mm]", xlim=(0, 360),
+          xticks=np.arange(0, 361, 45))
     b.set(xlabel="cycles", ylabel="max wear depth [mm]")
     for ax in (a, b):
         ax.grid(alpha=0.3)
-    b.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    legend_outside(b)
     fig.suptitle(textwrap.fill(title, 100), fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=110)
+
+
+def wear_title(subject: str, reached: Mapping[str, float], status: Mapping[str, int], *,
+               model: str) -> str:
+    """"<subject>: wear after N cycles (<model> model)", the cycles those
+    actually reached, and for a joint whose run stopped short, why (its
+    wear ``status``, `diffwear.wear.status`): "(stopped: wall reached)"."""
+    counts = sorted(set(reached.values()))
+    if len(counts) == 1:
+        text = f"{subject}: wear after {counts[0]:,.0f} cycles"
+    else:
+        text = f"{subject}: wear after " + ", ".join(f"{c:,.0f} cycles ({n})"
+                                                    for n, c in reached.items())
+    why = {n: stop_words(s) for n, s in status.items() if s != STATUS_OK}
+    if why:
+        single = len(set(why.values())) == 1 and len(why) == len(reached)
+        text += " (stopped: " + (next(iter(why.values())) if single else "; ".join(
+            f"{n}: {w}" for n, w in why.items())) + ")"
+    return f"{text} ({model} model)"
+
+
+def stop_words(status: int) -> str:
+    """Why a wear run stopped short, in a few words (a title's)."""
+    return {STATUS_PIERCED: "wall reached", STATUS_SOLVER: "cycle model failed",
+            STATUS_CONTACT_LOSS: "pin leaves the wall"}.get(
+        status, STATUS_TEXT.get(status, f"status {status}"))
+
+
+def closed_profile(theta, depth) -> tuple[np.ndarray, np.ndarray]:
+    """A profile on the bushing grid (theta [rad] from 0, not repeating 2 pi)
+    as angle [deg] and value, closed at 360 deg."""
+    deg = np.degrees(np.asarray(theta, dtype=float))
+    y = np.asarray(depth, dtype=float)
+    return np.append(deg, deg[0] + 360.0), np.append(y, y[0])

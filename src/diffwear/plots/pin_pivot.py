@@ -5,6 +5,9 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
+from .files import save
+from .layout import legend_outside
+
 
 def _closed(angle_deg, y):
     """Profiles on -180 .. 180 deg, the first point repeated at +180."""
@@ -17,14 +20,14 @@ def profile_figure(path, *, angle_deg, simulated, direct, pressure, title):
     direct run, and the contact pressure at mid-stroke at the end."""
     order = np.argsort(angle_deg)
     a = angle_deg[order]
-    fig, axes = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    fig, axes = plt.subplots(2, 1, figsize=(9.5, 6), sharex=True)
     for label, prof in simulated.items():
         axes[0].plot(*_closed(a, prof[order]), "-", lw=1.6, label=label)
     for label, prof in direct.items():
         axes[0].plot(*_closed(a, prof[order]), "--", lw=1.2, label=label)
     axes[0].set_ylabel("wear depth [mm]")
     axes[0].grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
+    legend_outside(axes[0])
     axes[0].set_title(title, fontsize=10)
     axes[1].plot(*_closed(a, pressure[order]), "k-", lw=1.4)
     axes[1].set_ylabel("pressure at φ = 0 [MPa]")
@@ -32,17 +35,14 @@ def profile_figure(path, *, angle_deg, simulated, direct, pressure, title):
     axes[1].set_xlim(-180, 180)
     axes[1].set_xticks(np.arange(-180, 181, 30))
     axes[1].grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=120)
 
 
 def history_figure(path, *, sweeps, max_pin_mm, max_pivot_mm, fit_pin, fit_pivot, target,
                    direct, thesis, title):
     """Max wear of pin and pivot against sweeps (cf. Fig. 4-9), the linear
     extrapolation to ``target`` sweeps, the direct run and the thesis values."""
-    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    fig, ax = plt.subplots(figsize=(10, 4.2))
     s = np.concatenate([[0.0], sweeps])
     ax.plot(s / 1e3, np.concatenate([[0.0], max_pin_mm]), "-", lw=1.8, label="pin (simulated)")
     ax.plot(s / 1e3, np.concatenate([[0.0], max_pivot_mm]), "-", lw=1.8, label="pivot (simulated)")
@@ -59,9 +59,6 @@ def history_figure(path, *, sweeps, max_pin_mm, max_pivot_mm, fit_pin, fit_pivot
     ax.set_xlabel("sweeps [x 1000] (one sweep = -30 -> 30 deg; a test cycle = 2 sweeps)")
     ax.set_ylabel("max wear depth [mm]")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
+    legend_outside(ax, fontsize=7)
     ax.set_title(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=120)

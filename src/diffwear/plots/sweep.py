@@ -10,6 +10,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..errors import InputError
+from .files import save
+from .layout import legend_outside
 
 
 def geometric(v) -> bool:
@@ -39,10 +41,7 @@ def heatmap(path, x, y, z, *, xlabel: str, ylabel: str, title: str, annotate: bo
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=110)
 
 
 def line(path, x, y, *, xlabel: str, ylabel: str, title: str) -> Path:
@@ -55,10 +54,7 @@ def line(path, x, y, *, xlabel: str, ylabel: str, title: str) -> Path:
     if geometric(x):
         ax.set_xscale("log")
     ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save(fig, path, dpi=110)
 
 
 def tornado(path, sens, output: str, *, rel_change: float = 0.1,
@@ -81,10 +77,7 @@ def tornado(path, sens, output: str, *, rel_change: float = 0.1,
     ax.set_title(title or f"sensitivity of {output} ({sens.method})", fontsize=9)
     lim = max([abs(100 * v * rel_change) for v in e.values() if math.isfinite(v)] + [1e-12])
     ax.set_xlim(-1.35 * lim, 1.35 * lim)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save(fig, path, dpi=110)
 
 
 def histogram(path, prop, output: str, *, bins: int = 20, xlabel: str | None = None,
@@ -100,7 +93,7 @@ def histogram(path, prop, output: str, *, bins: int = 20, xlabel: str | None = N
     else:
         x = prop.result[output]
     s = prop.stats[output]
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    fig, ax = plt.subplots(figsize=(8.4, 4.0))
     ax.hist(x, bins=bins, density=True, alpha=0.6, label=f"{len(x)} samples")
     grid = np.linspace(np.min(x), np.max(x), 200)
     if s["std_linear"] > 0:
@@ -111,11 +104,8 @@ def histogram(path, prop, output: str, *, bins: int = 20, xlabel: str | None = N
     ax.axvspan(s["p5"], s["p95"], color="tab:red", alpha=0.08, label="5-95 %")
     ax.set_xlabel(xlabel or output)
     ax.set_ylabel("density")
-    ax.legend(fontsize=8)
+    legend_outside(ax)
     ax.set_title(title or (f"{output}: {prop.name} {prop.distribution}, "
                            f"+-{100 * prop.scatter:.0f} %"),
                  fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save(fig, path, dpi=110)

@@ -2,76 +2,123 @@
 
 from __future__ import annotations
 
+import textwrap
+from collections.abc import Mapping
+
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+
+from ..wear.status import STATUS_OK
+from .files import save
+from .layout import depth_references, legend_outside
+from .panels import closed_profile, stop_words
+
+# Margin around the locus panel's data, as a fraction of its larger span: the
+# curves stay clear of the frame (a line on the frame is half hidden by it).
+LOCUS_MARGIN = 0.08
 
 
 def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, clearance_mm,
-                 thesis, label="diffwear (EFM)", markers="simulated dynamic cycles"):
-    figs = []
-    # wear profile with the thesis maxima drawn in
-    fig, ax = plt.subplots(figsize=(7, 3.6))
-    ax.plot(theta, depth_mm, lw=1.6, label=label)
-    for (label, ref), style in zip(thesis.items(), ("--", ":", "-.")):
-        if "max_wear_depth_mm" in ref:
-            ax.axhline(ref["max_wear_depth_mm"], ls=style, color="k", lw=0.9,
-                       label=f"thesis {label}: max {ref['max_wear_depth_mm']} mm")
-    ax.set_xlabel("bushing angle θ [rad]")
-    ax.set_ylabel("wear depth [mm]")
-    ax.set_xlim(0, 2 * np.pi)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title(f"{name}: bushing wear profile (cf. Figs. 5-5/6-9/7-4/7-5)")
-    fig.tight_layout()
-    fig.savefig(out.file("wear_profile.png"), dpi=120)
-    plt.close(fig)
-    figs.append("wear_profile.png")
+                 thesis, label="diffwear (EFM)", markers="simulated dynamic cycles",
+                 wall_mm: float | None = None, status: int = STATUS_OK) -> list[str]:
+    """The wear profile, the wear against cycles and the contact (the pin's
+    locus in the worn bushing, the joint force) of a wear study; ``history``:
+    (cycles, max depth [mm], volume [mm^3]) at the steps; ``first``/``last``:
+    the contact histories (`diffwear.contact.ContactHistory`) of the first
+    and last cycle over ``crank`` [rad]; ``wall_mm``: the bushing wall;
+    ``status``: the run's wear status (`diffwear.wear.status`), named in the
+    titles when it stopped short."""
+    cycles, dmax, vol = (np.asarray(v, dtype=float) for v in history)
+    reached = float(cycles[-1]) if len(cycles) else 0.0
+    after = f"after {reached:,.0f} cycles" + (
+        f" (stopped: {stop_words(status)})" if status != STATUS_OK else "")
+    walls = {} if wall_mm is None else {"": wall_mm}
+    deepest = float(np.max(depth_mm, initial=0.0))
 
-    cycles, dmax, vol = history
-    fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
-    axes[0].plot(np.concatenate([[0], cycles]), np.concatenate([[0], dmax]), "o-", ms=3)
-    axes[1].plot(np.concatenate([[0], cycles]), np.concatenate([[0], vol]), "o-", ms=3)
-    for (label, ref), mk in zip(thesis.items(), ("s", "^", "D")):
+    # wear profile with the thesis maxima drawn in
+    fig, ax = plt.subplots(figsize=(8.6, 3.6))
+    ax.plot(*closed_profile(theta, depth_mm), lw=1.6, label=label)
+    for (ref_label, ref), style in zip(thesis.items(), ("--", ":", "-.")):
         if "max_wear_depth_mm" in ref:
-            axes[0].plot(cycles[-1] if len(cycles) else 0, ref["max_wear_depth_mm"], mk,
-                         label=f"thesis {label}")
+            ax.axhline(ref["max_wear_depth_mm"], ls=style, color="0.35", lw=0.9,
+                       label=f"thesis {ref_label}: max {ref['max_wear_depth_mm']} mm")
+            deepest = max(deepest, ref["max_wear_depth_mm"])
+    depth_references(ax, deepest, walls_mm=walls)
+    ax.set(xlabel="bushing angle θ [deg]", ylabel="wear depth [mm]", xlim=(0, 360),
+           xticks=np.arange(0, 361, 45))
+    ax.grid(alpha=0.3)
+    legend_outside(ax)
+    ax.set_title(textwrap.fill(f"{name}: bushing wear profile {after} "
+                               "(cf. Figs. 5-5/6-9/7-4/7-5)", 70), fontsize=10)
+    figs = [save(fig, out.file("wear_profile.png"), dpi=120).name]
+
+    fig, axes = plt.subplots(2, 1, figsize=(8.6, 5), sharex=True)
+    axes[0].plot(np.concatenate([[0], cycles]), np.concatenate([[0], dmax]), "o-", ms=3,
+                 label=label)
+    axes[1].plot(np.concatenate([[0], cycles]), np.concatenate([[0], vol]), "o-", ms=3,
+                 label=label)
+    for (ref_label, ref), mk in zip(thesis.items(), ("s", "^", "D")):
+        if "max_wear_depth_mm" in ref:
+            axes[0].plot(reached, ref["max_wear_depth_mm"], mk, label=f"thesis {ref_label}")
         if "wear_volume_mm3" in ref:
-            axes[1].plot(cycles[-1] if len(cycles) else 0, ref["wear_volume_mm3"], mk,
-                         label=f"thesis {label}")
+            axes[1].plot(reached, ref["wear_volume_mm3"], mk, label=f"thesis {ref_label}")
+    depth_references(axes[0], max(float(np.max(dmax, initial=0.0)), deepest), walls_mm=walls)
     axes[0].set_ylabel("max depth [mm]")
     axes[1].set_ylabel("volume [mm³]")
     axes[1].set_xlabel("cycles")
     for ax in axes:
         ax.grid(alpha=0.3)
-        if ax.get_legend_handles_labels()[0]:  # thesis markers only when compared
-            ax.legend(fontsize=8)
-    axes[0].set_title(f"{name}: wear vs cycles (markers: {markers})")
-    fig.tight_layout()
-    fig.savefig(out.file("wear_history.png"), dpi=120)
-    plt.close(fig)
-    figs.append("wear_history.png")
+        legend_outside(ax)
+    axes[0].set_title(textwrap.fill(f"{name}: wear {after} (markers: {markers})", 70),
+                      fontsize=10)
+    figs.append(save(fig, out.file("wear_history.png"), dpi=120).name)
 
-    fig, axes = plt.subplots(1, 2, figsize=(9, 4))
-    for hist, label in ((first, "first cycle"), (last, "last cycle")):
-        off = np.asarray(hist.offset) * 1e3
-        axes[0].plot(off[:, 0], off[:, 1], lw=1, label=label)
+    # constrained layout: tight layout squeezes the square locus panel with
+    # its legend beside it out of the figure's left edge
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), layout="constrained")
+    locus_panel(axes[0], {"first cycle": np.asarray(first.offset) * 1e3,
+                          "last cycle": np.asarray(last.offset) * 1e3},
+                clearance_mm=clearance_mm, theta=theta, depth_mm=depth_mm)
+    for hist, tag in ((first, "first cycle"), (last, "last cycle")):
         axes[1].plot(np.degrees(crank), np.asarray(hist.force_magnitude), lw=1,
-                     label=f"|F| {label}")
-    t = np.linspace(0, 2 * np.pi, 200)
-    axes[0].plot(clearance_mm * np.cos(t), clearance_mm * np.sin(t), "k:", lw=0.8,
-                 label="initial clearance")
-    axes[0].set_aspect("equal")
-    axes[0].set_xlabel("pin offset x (rod frame) [mm]")
-    axes[0].set_ylabel("y [mm]")
-    axes[0].set_title("pin centre locus in the bushing")
-    axes[1].set_xlabel("crank angle [deg]")
-    axes[1].set_ylabel("joint force [N]")
-    axes[1].set_title("crank-rod joint force")
-    for ax in axes:
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out.file("contact_locus_and_force.png"), dpi=120)
-    plt.close(fig)
-    figs.append("contact_locus_and_force.png")
+                     label=f"|F| {tag}")
+    axes[1].set(xlabel="crank angle [deg]", ylabel="joint force [N]", xlim=(0, 360),
+                xticks=np.arange(0, 361, 45), title="crank-rod joint force")
+    axes[1].grid(alpha=0.3)
+    legend_outside(axes[1])
+    figs.append(save(fig, out.file("contact_locus_and_force.png"), dpi=120).name)
     return figs
+
+
+def locus_panel(ax: Axes, loci: Mapping[str, np.ndarray], *, clearance_mm: float, theta,
+                depth_mm) -> None:
+    """The pin centre's loci (offsets [mm], bushing frame) inside the unworn
+    clearance circle and the worn bushing's outline, both as the pin centre's
+    reach: radius clearance + wear depth(theta) at the bushing angle theta
+    (the same frame: theta from the bushing body's x axis).  Equal aspect,
+    limits on the data with `LOCUS_MARGIN`, legend beside the axes."""
+    t = np.linspace(0.0, 2 * np.pi, 361)
+    ax.plot(clearance_mm * np.cos(t), clearance_mm * np.sin(t), "k:", lw=0.9,
+            label=f"clearance circle, c = {clearance_mm:.4g} mm")
+    th = np.append(np.asarray(theta, dtype=float), float(theta[0]) + 2 * np.pi)
+    r = clearance_mm + np.append(np.asarray(depth_mm, dtype=float), float(depth_mm[0]))
+    ax.plot(r * np.cos(th), r * np.sin(th), "-", color="0.45", lw=1.2,
+            label="worn bushing: c + wear depth")
+    for tag, off in loci.items():
+        # a marker where the cycle starts: a locus of a few um is a dot at this scale
+        ax.plot(off[:, 0], off[:, 1], lw=1.6, marker="o", ms=4, markevery=[0],
+                label=f"pin centre, {tag}")
+    # a square frame around the data (equal spans, equal aspect): any shape
+    # of the data stays a square panel, never a strip
+    points = np.concatenate([line.get_xydata() for line in ax.get_lines()])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    mid, half = (lo + hi) / 2, (1 + 2 * LOCUS_MARGIN) * float(np.max(hi - lo)) / 2
+    ax.set_xlim(mid[0] - half, mid[0] + half)
+    ax.set_ylim(mid[1] - half, mid[1] + half)
+    ax.set_box_aspect(1.0)  # square box: the layout engine sizes it with its labels
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set(xlabel="pin offset x (bushing frame) [mm]", ylabel="pin offset y [mm]",
+           title="pin centre locus in the worn bushing")
+    ax.grid(alpha=0.3)
+    legend_outside(ax)

@@ -93,7 +93,8 @@ def run(out, *, name, mech, design: WearJointDesign, y0, cycles, period, thesis:
                                             volumes[1:]),
                                    crank=crank, first=first, last=last,
                                    clearance_mm=float(design.clearance) * 1e3, thesis=thesis,
-                                   label="diffwear (quasi-static)", markers="wear ODE steps")
+                                   label="diffwear (quasi-static)", markers="wear ODE steps",
+                                   wall_mm=float(design.wall) * 1e3, status=int(res.status))
     status = int(res.status)
     margin, margin_worn = float(res.contact_margin[0]), float(res.contact_margin_worn[0])
     summary = {

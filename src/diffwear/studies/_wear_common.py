@@ -342,7 +342,8 @@ def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, 
                                    history=(h["cycles"][valid], h["max_depth"][valid] * 1e3,
                                             h["volume"][valid] * 1e9),
                                    crank=crank, first=hist_first, last=hist_last,
-                                   clearance_mm=float(design.clearance) * 1e3, thesis=thesis)
+                                   clearance_mm=float(design.clearance) * 1e3, thesis=thesis,
+                                   wall_mm=float(design.wall) * 1e3, status=int(res.status))
 
     summary = {
         "study": name,

@@ -131,7 +131,7 @@ def run(out: OutputDir, *, cycles: int = CYCLES, laws=CONTACT_LAWS, clearances=C
         panel = {f"c = {c * 1e3:g} mm": curves[law][c] for c in sorted(curves[law])[::-1]}
         panel["ideal joint"] = f_ideal[last][order]
         plots.stacked(out.file(name), angle_deg[order], [("joint force [N]", panel)],
-                      xlabel="crank angle [deg] (last cycle)", legend_outside=True,
+                      xlabel="crank angle [deg] (last cycle)",
                       title=f"{law.upper()} clearance joint against the ideal joint "
                             "(cf. Figs. 3-7, 6-8)")
     figs.append("fig5_4_contact_locus.png")

@@ -110,9 +110,9 @@ def run(out: OutputDir, *, duration: float = DURATION, log=print) -> dict:
                                      "ax kin": qddk[:, 0]}),
         ], xlabel="time [s]", title="Dynamic analysis: crank COM (cf. thesis Fig. 2-9)"),
         "fig2_10_reaction_crank_rod.png": plots.stacked(
-            out.file("fig2_10_reaction_crank_rod.png"), crank_angle, [
+            out.file("fig2_10_reaction_crank_rod.png"), np.degrees(crank_angle), [
                 ("force on rod [N]", {"Fx": force[:, 0], "Fy": force[:, 1], "|F|": fmag}),
-            ], xlabel="crank angle [rad]",
+            ], xlabel="crank angle [deg]",
             title="Crank-rod joint reaction (cf. thesis Fig. 2-10)"),
     }
 

@@ -1,0 +1,157 @@
+"""The built documentation site shows its figures and the executed examples.
+
+The site is read from ``DIFFWEAR_SITE`` (a folder ``mkdocs build`` wrote, as
+CI passes it); without it the site is built here into a temporary folder
+with ``mkdocs build --strict`` (a minute: only under ``--long``; skipped when
+mkdocs is not installed).  Counted in the HTML, against counts taken from the
+sources:
+
+* the home page, every validation page and every example page hold at least
+  one image, and every page at least as many as its markdown source links;
+* every example page shows as many output images as its stored notebook
+  holds, and executed output cells;
+* every ``<img src>`` that is not inline data resolves to a file in the site.
+
+Without a site, the figure list of ``docs/figures.py`` is checked against
+the pages that link its figures (fast, no build).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import re
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+from urllib.parse import unquote, urlsplit
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
+VALIDATION = sorted((DOCS / "validation").glob("*.md"))
+FIGURE_LINK = re.compile(r"!\[[^\]]*\]\(([^)\s]+)")
+
+
+class _Images(HTMLParser):
+    """The ``src`` of every ``<img>`` of a page."""
+
+    def __init__(self):
+        super().__init__()
+        self.sources: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "img":
+            self.sources.append(dict(attrs).get("src") or "")
+
+
+def _images(html: str) -> list[str]:
+    parser = _Images()
+    parser.feed(html)
+    return parser.sources
+
+
+@pytest.fixture(scope="module")
+def site(request, tmp_path_factory) -> Path:
+    given = os.environ.get("DIFFWEAR_SITE")
+    if given:
+        path = Path(given)
+        assert (path / "index.html").is_file(), f"DIFFWEAR_SITE={given} holds no built site"
+        return path
+    if importlib.util.find_spec("mkdocs") is None:
+        pytest.skip("mkdocs is not installed (pip install -e .[docs]); or set DIFFWEAR_SITE")
+    if not request.config.getoption("--long"):
+        pytest.skip("building the site takes a minute: set DIFFWEAR_SITE to a built site, "
+                    "or run with --long")
+    path = tmp_path_factory.mktemp("site")
+    env = {**os.environ, "NO_MKDOCS_2_WARNING": "1",
+           "PYTHONPATH": os.pathsep.join([str(ROOT / "src"),
+                                          *filter(None, [os.environ.get("PYTHONPATH")])])}
+    build = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict",
+                            "--site-dir", str(path)], cwd=ROOT, env=env,
+                           capture_output=True, text=True)
+    assert build.returncode == 0, build.stderr[-3000:]
+    return path
+
+
+def _page(site: Path, source: Path) -> Path:
+    """The built HTML of docs source ``source`` (directory URLs)."""
+    rel = source.relative_to(DOCS) if source.is_relative_to(DOCS) else \
+        Path("examples") / source.name
+    if rel.name in ("index.md",):
+        return site / rel.parent / "index.html"
+    return site / rel.with_suffix("") / "index.html"
+
+
+def _stored_images(notebook: Path) -> int:
+    nb = json.loads(notebook.read_text())
+    return sum("image/png" in o.get("data", {}) for c in nb["cells"] if c["cell_type"] == "code"
+               for o in c.get("outputs", []))
+
+
+PAGES = [DOCS / "index.md", *VALIDATION]
+
+
+@pytest.mark.parametrize("source", PAGES, ids=[str(p.relative_to(DOCS)) for p in PAGES])
+def test_page_shows_its_figures(site, source):
+    html = _page(site, source).read_text()
+    linked = len(FIGURE_LINK.findall(source.read_text()))
+    shown = _images(html)
+    assert linked >= 1, f"{source.relative_to(ROOT)} links no figure"
+    assert len(shown) >= linked, (f"{source.relative_to(ROOT)}: {linked} figures linked, "
+                                  f"{len(shown)} <img> in the page")
+
+
+@pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_example_page_shows_executed_outputs(site, notebook):
+    html = _page(site, notebook).read_text()
+    stored = _stored_images(notebook)
+    assert stored >= 1, f"{notebook.name} is stored without a figure"
+    inline = [s for s in _images(html) if s.startswith("data:image/png")]
+    assert len(inline) == stored, (f"{notebook.name}: {stored} figures stored, "
+                                   f"{len(inline)} in the page")
+    assert html.count("jp-OutputArea-output") >= 1, f"{notebook.name}: no output cell shown"
+    assert "In&nbsp;[&nbsp;]" not in html and "In [ ]" not in html, \
+        f"{notebook.name}: a code cell shown unexecuted"
+
+
+def test_every_image_resolves_to_a_file(site):
+    broken = []
+    pages = sorted(site.rglob("*.html"))
+    assert len(pages) > 20, f"{site}: only {len(pages)} pages"
+    for page in pages:
+        for src in _images(page.read_text()):
+            if src.startswith("data:"):
+                continue
+            parts = urlsplit(src)
+            if parts.scheme or parts.netloc:
+                broken.append(f"{page.relative_to(site)}: external image {src}")
+                continue
+            target = (page.parent / unquote(parts.path)).resolve()
+            if not target.is_file() or target.stat().st_size == 0:
+                broken.append(f"{page.relative_to(site)}: {src}")
+    assert not broken, "\n".join(broken)
+
+
+def _figures_module():
+    spec = importlib.util.spec_from_file_location("diffwear_docs_figures", DOCS / "figures.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_every_linked_figure_is_drawn_and_every_drawn_one_linked():
+    """No build: the pages' links under figures/ against docs/figures.py."""
+    drawn = set(_figures_module().FIGURES)
+    linked = set()
+    for page in DOCS.rglob("*.md"):
+        for target in FIGURE_LINK.findall(page.read_text()):
+            resolved = os.path.normpath(page.parent.relative_to(DOCS) / target)
+            if resolved.startswith("figures/"):
+                linked.add(resolved)
+    assert linked == drawn, (f"linked, not drawn: {sorted(linked - drawn)}; "
+                             f"drawn, not linked: {sorted(drawn - linked)}")

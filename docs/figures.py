@@ -7,6 +7,8 @@ simulation while the site builds):
   (written by ``design_studies/docs_figure_data.py``);
 * ``design_studies/results/design_two_joint/``, ``rig_sensitivity.json``: the
   Ch. 8 design run and the rig's sensitivity study;
+* ``design_studies/results/studies/sweep-rig-clearance-k/``: the shipped
+  sweep file's results;
 * ``benchmarks/records/agreement.json``: the quasi-static model against the
   dynamic one.
 
@@ -330,6 +332,28 @@ def rig_tornado(output: str) -> Callable[[Path], None]:
     return draw
 
 
+def rig_sweep_heatmap(output: str) -> Callable[[Path], None]:
+    """``<output>.png`` of ``diffwear sweep design_studies/sweep_rig_clearance_k.toml``
+    (stored run on the quasi-static joint model), as the command draws it:
+    `diffwear.plots.sweep.heatmap` with the sweep file's axes and units."""
+    def draw(path: Path) -> None:
+        from diffwear.cli.sweep import label, shown
+        from diffwear.config.sweep import load_sweep
+        from diffwear.plots.sweep import heatmap
+
+        spec = load_sweep(ROOT / "design_studies" / "sweep_rig_clearance_k.toml")
+        rows = read_csv(STUDIES / "sweep-rig-clearance-k" / "results.csv")
+        gy, gx = spec.grid  # the file's first axis down, its second across (grid order)
+        columns = {name: next(c for c in rows if c == name or c.startswith(f"{name}_"))
+                   for name in (gy, gx)}
+        y, x = (np.unique(rows[columns[name]]) for name in (gy, gx))
+        z = rows[output].reshape(y.size, x.size)
+        heatmap(path, shown(spec, gx, x), shown(spec, gy, y), z,
+                xlabel=label(spec, gx), ylabel=label(spec, gy),
+                title=f"rig, 21,400 cycles, quasi-static joint model: {output}")
+    return draw
+
+
 def agreement(path: Path) -> None:
     """The quasi-static model against the dynamic one: relative differences of
     the wear studies' depth and volume and of the Ch. 8 lives."""
@@ -363,38 +387,33 @@ def agreement(path: Path) -> None:
 
 
 def results_against_thesis(path: Path) -> None:
-    """Each chapter's headline quantity, diffwear over the thesis's values."""
+    """The wear studies' depth and volume, diffwear over each of the thesis's
+    values (its EFM and FEM models, the measurement)."""
     plt = _pyplot()
-    from diffwear.studies.pin_pivot import THESIS as PIN_PIVOT
-
     rows = []  # (label, diffwear, {reference: value})
     for run in ("rig-21400", "wear-5000"):
         s = _summary(run)
         for key, unit in (("max_wear_depth_mm", "max depth"), ("wear_volume_mm3", "volume")):
-            refs = {k.split(" (")[0]: v[key] for k, v in s["thesis"].items() if key in v}
+            refs = {k: v[key] for k, v in s["thesis"].items() if key in v}
             rows.append((f"{run}\n{unit}", s[key], refs))
-    pp = _summary("pin-pivot")
-    # the thesis's pin radius is not stated; at fixed projected pressure the
-    # depth scales with R, so the comparison is at the implied radius as well
-    rows.append(("pin-pivot\nmax pin wear (D 10 mm)", pp["max_pin_mm_at_816000"],
-                 {k.split(" (")[0]: v for k, v in PIN_PIVOT.items()}))
-    fig, ax = plt.subplots(figsize=(7.5, 4.2))
-    markers = {"EFM": "s", "FEM": "^", "measured": "D"}
-    for i, (label, ours, refs) in enumerate(rows):
+    styles = {"EFM": ("s", "tab:blue"), "FEM": ("^", "tab:orange"), "measured": ("D", "k")}
+    fig, ax = plt.subplots(figsize=(7.5, 3.6))
+    for i, (_, ours, refs) in enumerate(rows):
         for ref, value in refs.items():
-            kind = next((m for m in markers if ref.startswith(m)), None)
-            ax.plot(ours / value, i, markers.get(kind, "o"), ms=7, color={
-                "EFM": "tab:blue", "FEM": "tab:orange", "measured": "k"}.get(kind, "tab:green"),
-                    label=(kind or "thesis simulation"))
+            kind = next(k for k in styles if ref.startswith(k))
+            marker, color = styles[kind]
+            ax.plot(ours / value, i, marker, ms=8, color=color,
+                    label="the measurement" if kind == "measured" else f"thesis {kind}")
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles))
-    ax.legend(unique.values(), [f"against thesis {n}" for n in unique], fontsize=8,
-              loc="lower right")
+    ax.legend(unique.values(), [f"against {n}" for n in unique], fontsize=8,
+              loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.axvline(1.0, color="k", lw=0.8)
     ax.set_yticks(range(len(rows)), [r[0] for r in rows], fontsize=8)
-    ax.invert_yaxis()
+    ax.set_ylim(len(rows) - 0.5, -0.5)
     ax.set_xlabel("diffwear / thesis")
-    ax.set_title("diffwear against the thesis's models and measurements", fontsize=10)
+    ax.set_title("Wear studies: diffwear over the thesis's models and measurement "
+                 "(Tables 6-4, 7-4..7-6)", fontsize=9)
     ax.grid(alpha=0.3, axis="x")
     fig.tight_layout()
     fig.savefig(path, dpi=DPI)
@@ -419,6 +438,7 @@ FIGURES: dict[str, Callable[[Path], None]] = {
     "figures/ch8_life_map_joint1.png": life_map(1),
     "figures/ch8_life_map_joint2.png": life_map(2),
     "figures/quasi_static_agreement.png": agreement,
+    "figures/rig_sweep_max_depth.png": rig_sweep_heatmap("max_depth_mm"),
     "figures/rig_tornado_max_depth.png": rig_tornado("max_depth_mm"),
     "figures/rig_tornado_volume.png": rig_tornado("volume_mm3"),
 }

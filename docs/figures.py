@@ -137,7 +137,7 @@ def rig_profile_against_thesis(path: Path) -> None:
           ylim=(0, 0.68), title="Rig bushing after 21,400 cycles: profile and maximum depths")
     a.legend(fontsize=7, loc="upper center", ncol=2)  # above the curves: room left by ylim
     a.grid(alpha=0.3)
-    names = ["diffwear\n(calibrated)", *[k.split(" (")[0] for k in s["thesis"]]]
+    names = ["diffwear\nEFM route", *[k.split(" (")[0] for k in s["thesis"]]]
     volumes = [s["wear_volume_mm3"], *[v["wear_volume_mm3"] for v in s["thesis"].values()]]
     depths = [s["max_wear_depth_mm"], *[v["max_wear_depth_mm"] for v in s["thesis"].values()]]
     x = np.arange(len(names))

@@ -155,3 +155,28 @@ def test_every_linked_figure_is_drawn_and_every_drawn_one_linked():
                 linked.add(resolved)
     assert linked == drawn, (f"linked, not drawn: {sorted(linked - drawn)}; "
                              f"drawn, not linked: {sorted(drawn - linked)}")
+
+
+def test_stored_curves_are_thinned_keeping_the_ends(tmp_path):
+    """design_studies/docs_figure_data.py: a 3-cycle series cut to its last
+    cycle, then to at most MAX_ROWS rows, the first and last kept, values to
+    SIGNIFICANT digits."""
+    spec = importlib.util.spec_from_file_location(
+        "diffwear_docs_figure_data", ROOT / "design_studies" / "docs_figure_data.py")
+    data = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(data)
+    t = [0.005 * i for i in range(1201)]  # 6 s: three 2 s cycles
+    source = tmp_path / "force.csv"
+    source.write_text("t_s,force_N\n" + "".join(f"{x!r},{1000 + x / 3!r}\n" for x in t))
+    target = tmp_path / "thin.csv"
+    data.thin_csv(source, target, last_s=2.0)
+    rows = [line.split(",") for line in target.read_text().splitlines()[1:]]
+    times = [float(r[0]) for r in rows]
+    assert times[0] == pytest.approx(4.0) and times[-1] == pytest.approx(6.0)
+    assert len(rows) <= data.MAX_ROWS
+    assert len(rows) == 401  # 401 rows of the last cycle: all kept
+    data.thin_csv(source, target)
+    rows = [line.split(",") for line in target.read_text().splitlines()[1:]]
+    assert len(rows) <= data.MAX_ROWS and float(rows[-1][0]) == pytest.approx(6.0)
+    assert float(rows[0][0]) == 0.0
+    assert rows[-1][1] == f"{1000 + 6.0 / 3:.{data.SIGNIFICANT}g}" == "1002"

@@ -7,7 +7,8 @@ mkdocs is not installed).  Counted in the HTML, against counts taken from the
 sources:
 
 * the home page, every validation page and every example page hold at least
-  one image, and every page at least as many as its markdown source links;
+  one image, and every page at least as many as its markdown source links
+  (the links themselves are checked without a site);
 * every example page shows as many output images as its stored notebook
   holds, and executed output cells;
 * every ``<img src>`` that is not inline data resolves to a file in the site.
@@ -93,17 +94,24 @@ def _stored_images(notebook: Path) -> int:
                for o in c.get("outputs", []))
 
 
-PAGES = [DOCS / "index.md", *VALIDATION]
+# pages that must show a figure: the home page and every validation page
+REQUIRED = [DOCS / "index.md", *VALIDATION]
+PAGES = sorted(p for p in DOCS.rglob("*.md") if not p.is_relative_to(DOCS / "examples"))
+
+
+@pytest.mark.parametrize("source", REQUIRED, ids=[str(p.relative_to(DOCS)) for p in REQUIRED])
+def test_page_links_a_figure(source):
+    assert FIGURE_LINK.findall(source.read_text()), f"{source.relative_to(ROOT)} links no figure"
 
 
 @pytest.mark.parametrize("source", PAGES, ids=[str(p.relative_to(DOCS)) for p in PAGES])
 def test_page_shows_its_figures(site, source):
-    html = _page(site, source).read_text()
     linked = len(FIGURE_LINK.findall(source.read_text()))
-    shown = _images(html)
-    assert linked >= 1, f"{source.relative_to(ROOT)} links no figure"
+    shown = _images(_page(site, source).read_text())
     assert len(shown) >= linked, (f"{source.relative_to(ROOT)}: {linked} figures linked, "
                                   f"{len(shown)} <img> in the page")
+    if source in REQUIRED:
+        assert shown, f"{source.relative_to(ROOT)}: no <img> in the page"
 
 
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
@@ -135,6 +143,19 @@ def test_every_image_resolves_to_a_file(site):
             if not target.is_file() or target.stat().st_size == 0:
                 broken.append(f"{page.relative_to(site)}: {src}")
     assert not broken, "\n".join(broken)
+
+
+def test_drawn_figures_fit_the_page(site):
+    """docs/figures.py's PNGs: figures of 5.5-11 inches at 110-120 dpi are
+    about 600-1300 px wide; a few hundred kB at most each."""
+    figures = sorted((site / "figures").glob("*.png"))
+    assert len(figures) == len(_figures_module().FIGURES)
+    for png in figures:
+        head = png.read_bytes()[:24]
+        assert head[:8] == b"\x89PNG\r\n\x1a\n", png.name
+        width = int.from_bytes(head[16:20], "big")
+        assert 500 <= width <= 1300, f"{png.name}: {width} px wide"
+        assert png.stat().st_size <= 300_000, f"{png.name}: {png.stat().st_size} bytes"
 
 
 def _figures_module():

@@ -9,8 +9,8 @@ sources:
 * the home page, every validation page and every example page hold at least
   one image, and every page at least as many as its markdown source links
   (the links themselves are checked without a site);
-* every example page shows as many output images as its stored notebook
-  holds, and executed output cells;
+* every example page shows as many outputs and output images as its stored
+  notebook holds, and no code cell unexecuted ("In [ ]");
 * every ``<img src>`` that is not inline data resolves to a file in the site.
 
 Without a site, the figure list of ``docs/figures.py`` is checked against
@@ -88,10 +88,18 @@ def _page(site: Path, source: Path) -> Path:
     return site / rel.with_suffix("") / "index.html"
 
 
-def _stored_images(notebook: Path) -> int:
+def _stored_outputs(notebook: Path) -> list[dict]:
     nb = json.loads(notebook.read_text())
-    return sum("image/png" in o.get("data", {}) for c in nb["cells"] if c["cell_type"] == "code"
-               for o in c.get("outputs", []))
+    return [o for c in nb["cells"] if c["cell_type"] == "code" for o in c.get("outputs", [])]
+
+
+def _stored_images(notebook: Path) -> int:
+    return sum("image/png" in o.get("data", {}) for o in _stored_outputs(notebook))
+
+
+# one rendered output of a code cell (a stream, a result, a figure) in
+# mkdocs-jupyter's HTML
+OUTPUT_DIV = re.compile(r'<div class="[^"]*\bjp-OutputArea-output\b')
 
 
 # pages that must show a figure: the home page and every validation page
@@ -122,9 +130,11 @@ def test_example_page_shows_executed_outputs(site, notebook):
     inline = [s for s in _images(html) if s.startswith("data:image/png")]
     assert len(inline) == stored, (f"{notebook.name}: {stored} figures stored, "
                                    f"{len(inline)} in the page")
-    assert html.count("jp-OutputArea-output") >= 1, f"{notebook.name}: no output cell shown"
-    assert "In&nbsp;[&nbsp;]" not in html and "In [ ]" not in html, \
-        f"{notebook.name}: a code cell shown unexecuted"
+    outputs = len(_stored_outputs(notebook))
+    shown = len(OUTPUT_DIV.findall(html))
+    assert outputs >= 1 and shown == outputs, \
+        f"{notebook.name}: {outputs} outputs stored, {shown} shown"
+    assert "In [ ]" not in html, f"{notebook.name}: a code cell shown unexecuted"
 
 
 def test_every_image_resolves_to_a_file(site):

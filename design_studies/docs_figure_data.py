@@ -9,7 +9,7 @@ summary and the curves, long time series thinned to at most
 ``MAX_ROWS`` rows (the figures are ~700 px wide: more points draw nothing
 more).  Rerun it after a change of the model; the figures follow.
 
-    .venv/bin/python design_studies/docs_figure_data.py            # all, ~5 min on 2 cores
+    .venv/bin/python design_studies/docs_figure_data.py            # all: ~17 min on 2 shared cores
     .venv/bin/python design_studies/docs_figure_data.py --only rig-21400
     .venv/bin/python design_studies/docs_figure_data.py --runs DIR  # copy runs already in DIR/NAME
 

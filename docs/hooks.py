@@ -7,7 +7,11 @@ every figure in them comes from the repository.
   kinematic-feedback bound, ``feedback.json``);
 * ``RESULTS_TABLE``: the stored calibration runs,
   ``design_studies/calibration/results/*/summary.json``, against the truth the
-  generator ``design_studies/calibration/make_datasets.py`` recorded.
+  generator ``design_studies/calibration/make_datasets.py`` recorded;
+* ``HEADLINE_TABLE``: the README's headline results, its links made relative
+  to the docs;
+* the figures under ``figures/``: drawn by ``docs/figures.py`` from the stored
+  runs and records when the site builds.
 """
 
 from __future__ import annotations
@@ -213,8 +217,30 @@ CALIBRATION_FIGURES = {
 }
 
 
+def _headline_table() -> str:
+    """The README's "Headline results" section (table and note), its links
+    into docs/ rewritten relative to the docs folder."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Headline results", 1)[1].split("\n## ", 1)[0]
+    return section.strip().replace("](docs/", "](")
+
+
+def _figures() -> dict[str, bytes]:
+    """Every figure of ``docs/figures.py``, drawn now: site path -> PNG."""
+    import importlib.util
+    import tempfile
+
+    spec = importlib.util.spec_from_file_location("diffwear_docs_figures",
+                                                  Path(__file__).with_name("figures.py"))
+    figures = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(figures)
+    with tempfile.TemporaryDirectory() as tmp:
+        return {site: path.read_bytes() for site, path in figures.draw_all(Path(tmp)).items()}
+
+
 def on_files(files, config):
-    """Add the stored runs' figures (`CALIBRATION_FIGURES`) to the site."""
+    """Add the stored runs' figures (`CALIBRATION_FIGURES`) and the figures
+    drawn from the stored runs (``docs/figures.py``) to the site."""
     from mkdocs.structure.files import File
 
     results = ROOT / "design_studies" / "calibration" / "results"
@@ -223,6 +249,8 @@ def on_files(files, config):
             if (results / run / name).is_file():
                 files.append(File.generated(config, f"calibration/{run}/{name}",
                                             abs_src_path=str(results / run / name)))
+    for site_path, png in _figures().items():
+        files.append(File.generated(config, site_path, content=png))
     return files
 
 
@@ -230,7 +258,8 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
     for key, make in (("CLI_REFERENCE", _cli_reference),
                       ("QUASI_STATIC_TABLE", _quasi_static_table),
                       ("AGREEMENT_TABLE", _agreement_table),
-                      ("RESULTS_TABLE", _calibration_table)):
+                      ("RESULTS_TABLE", _calibration_table),
+                      ("HEADLINE_TABLE", _headline_table)):
         if key in markdown:
             markdown = markdown.replace(key, make())
     return markdown

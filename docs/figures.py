@@ -1,0 +1,467 @@
+"""The documentation's figures, drawn at build time from stored data.
+
+Every figure reads the repository's stored runs and records only (no
+simulation while the site builds):
+
+* ``design_studies/results/studies/<run>/``: the thesis studies' curves
+  (written by ``design_studies/docs_figure_data.py``);
+* ``design_studies/results/design_two_joint/``, ``rig_sensitivity.json``: the
+  Ch. 8 design run and the rig's sensitivity study;
+* ``design_studies/results/studies/sweep-rig-clearance-k/``: the shipped
+  sweep file's results;
+* ``benchmarks/records/agreement.json``: the quasi-static model against the
+  dynamic one.
+
+The thesis's reported values come from the study modules, which cite them
+(e.g. `diffwear.studies.rig_21400.THESIS`: Tables 7-4..7-6).  The guides'
+figures are drawn by the package's own plot functions (`diffwear.plots`), so a
+change to them shows here.  `FIGURES` maps the site path of each figure to the
+function that draws it; `draw_all` writes them into a folder.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "design_studies" / "results"
+STUDIES = RESULTS / "studies"
+RECORDS = ROOT / "benchmarks" / "records"
+DPI = 110  # ~770 px for a 7-inch figure: the content column's width
+
+if str(ROOT / "src") not in sys.path:
+    sys.path.insert(0, str(ROOT / "src"))
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def read_csv(path: Path) -> dict[str, np.ndarray]:
+    """A stored CSV as columns by header name."""
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
+
+
+def _summary(run: str) -> dict:
+    return json.loads((STUDIES / run / "summary.json").read_text())
+
+
+class _Folder:
+    """The ``out`` a `diffwear.plots.wear.wear_figures` call writes into."""
+
+    def __init__(self, path: Path):
+        self.path = path
+
+    def file(self, name: str) -> Path:
+        return self.path / name
+
+
+def _wear_study_figures(run: str, folder: Path, clearance_mm: float) -> None:
+    """The wear study's own figures (`diffwear.plots.wear.wear_figures`) from
+    its stored curves: profile, history, first/last cycle's locus and force."""
+    from diffwear.plots.wear import wear_figures
+
+    s = _summary(run)
+    profile = read_csv(STUDIES / run / "wear_profile.csv")
+    history = read_csv(STUDIES / run / "wear_history.csv")
+    later = history["cycles"] > 0  # the stored history starts at the unworn 0
+
+    def cycle(tag):
+        force = read_csv(STUDIES / run / f"joint_force_{tag}_cycle.csv")
+        locus = read_csv(STUDIES / run / f"contact_locus_{tag}_cycle.csv")
+        offset = np.stack([locus["offset_x_mm"], locus["offset_y_mm"]], axis=1) * 1e-3
+        return force["crank_angle_rad"], SimpleNamespace(offset=offset,
+                                                         force_magnitude=force["force_N"])
+
+    crank, first = cycle("first")
+    _, last = cycle("last")
+    wear_figures(_Folder(folder), name=run, theta=profile["theta_rad"],
+                 depth_mm=profile["depth_mm"],
+                 history=(history["cycles"][later], history["max_depth_mm"][later],
+                          history["volume_mm3"][later]),
+                 crank=crank, first=first, last=last, clearance_mm=clearance_mm,
+                 thesis=s["thesis"])
+
+
+_WEAR_STUDY_PNGS: dict[str, dict[str, bytes]] = {}  # run -> its figures, drawn once
+
+
+def wear_study(run: str, figure: str) -> Callable[[Path], None]:
+    """Figure ``figure`` (wear_profile.png, wear_history.png,
+    contact_locus_and_force.png) of the stored wear study ``run``."""
+    def draw(path: Path) -> None:
+        import tempfile
+
+        from diffwear.presets import RIG_JOINT, WEAR_5000
+
+        if run not in _WEAR_STUDY_PNGS:
+            clearance = {"rig-21400": RIG_JOINT, "wear-5000": WEAR_5000}[run].clearance
+            with tempfile.TemporaryDirectory() as tmp:
+                _wear_study_figures(run, Path(tmp), 1e3 * float(clearance))
+                _WEAR_STUDY_PNGS[run] = {p.name: p.read_bytes() for p in Path(tmp).glob("*.png")}
+        path.write_bytes(_WEAR_STUDY_PNGS[run][figure])
+    return draw
+
+
+def rig_profile_against_thesis(path: Path) -> None:
+    """Ch. 7: the rig's worn profile (dynamic model, EFM and FEM routes) with
+    the thesis's models' and the measured bushing's maximum depth at their
+    angle, and the worn volume beside theirs."""
+    plt = _pyplot()
+    efm = read_csv(STUDIES / "rig-21400" / "wear_profile.csv")
+    s = _summary("rig-21400")
+    fem_file = STUDIES / "rig-21400-fem" / "wear_profile.csv"
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.8), gridspec_kw={"width_ratios": [2.2, 1]})
+    a.plot(np.degrees(efm["theta_rad"]), efm["depth_mm"], lw=1.8, label="diffwear, EFM route")
+    if fem_file.is_file():
+        fem = read_csv(fem_file)
+        a.plot(np.degrees(fem["theta_rad"]), fem["depth_mm"], lw=1.4, ls="--",
+               label="diffwear, FEM route")
+    styles = {"EFM (Table 7-4)": "--", "FEM (Table 7-4)": "-.", "measured (Tables 7-5/7-6)": ":"}
+    for label, ref in s["thesis"].items():
+        a.axhline(ref["max_wear_depth_mm"], color="k", lw=1.0, ls=styles.get(label, "--"),
+                  label=f"thesis {label}: max {ref['max_wear_depth_mm']:g} mm")
+    a.set(xlabel="bushing angle θ [deg]", ylabel="wear depth [mm]", xlim=(0, 360),
+          ylim=(0, 0.68), title="Rig bushing after 21,400 cycles: profile and maximum depths")
+    a.legend(fontsize=7, loc="upper center", ncol=2)  # above the curves: room left by ylim
+    a.grid(alpha=0.3)
+    names = ["diffwear\nEFM route", *[k.split(" (")[0] for k in s["thesis"]]]
+    volumes = [s["wear_volume_mm3"], *[v["wear_volume_mm3"] for v in s["thesis"].values()]]
+    depths = [s["max_wear_depth_mm"], *[v["max_wear_depth_mm"] for v in s["thesis"].values()]]
+    x = np.arange(len(names))
+    b.bar(x - 0.2, depths, 0.4, label="max depth [mm]")
+    b2 = b.twinx()
+    b2.bar(x + 0.2, volumes, 0.4, color="tab:orange", label="volume [mm³]")
+    b.set_xticks(x, names, fontsize=7)
+    # the bars in the lower 3/4, the legend above them
+    b.set_ylim(0, 1.35 * max(depths))
+    b2.set_ylim(0, 1.35 * max(volumes))
+    b.set_ylabel("max depth [mm]")
+    b2.set_ylabel("worn volume [mm³]")
+    b.set_title("Tables 7-4..7-6", fontsize=10)
+    b.legend(*[sum(z, []) for z in zip(b.get_legend_handles_labels(),
+                                        b2.get_legend_handles_labels())],
+             loc="upper center", fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
+def rig_joint_force(path: Path) -> None:
+    """The rig's crank-rod joint force over its first and last cycles, with
+    the thesis's Fig. 7-2 range (0-200 N) and its mean of about 130 N."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 3.4))
+    for tag in ("first", "last"):
+        f = read_csv(STUDIES / "rig-21400" / f"joint_force_{tag}_cycle.csv")
+        ax.plot(np.degrees(f["crank_angle_rad"]), f["force_N"], lw=1.4,
+                label=f"diffwear, {tag} cycle (mean {np.mean(f['force_N']):.0f} N)")
+    # thesis Fig. 7-2: the measured joint force spans 0-200 N about a mean of ~130 N
+    ax.axhline(130.0, color="k", ls="--", lw=1.0, label="thesis Fig. 7-2: mean ~130 N")
+    ax.axhspan(0.0, 200.0, color="k", alpha=0.05, label="thesis Fig. 7-2: range 0-200 N")
+    ax.set(xlabel="crank angle [deg]", ylabel="joint force [N]", xlim=(0, 360), ylim=(0, 220),
+           title="Rig crank-rod joint force (slider spring L0 = 0.5479 m, calibrated)")
+    ax.legend(fontsize=7, loc="lower right")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
+def wear_5000_against_thesis(path: Path) -> None:
+    """Ch. 5-6: the wear example's profile with the Table 6-4 maxima, and the
+    depth and volume beside the thesis's EFM and FEM."""
+    wear_study("wear-5000", "wear_profile.png")(path)
+
+
+def ideal_reaction(path: Path) -> None:
+    """Ch. 2: the ideal slider-crank's crank-rod reaction (cf. Fig. 2-10) and
+    the constraint drift against the Baumgarte gains (cf. Fig. 2-8)."""
+    from diffwear import plots
+
+    r = read_csv(STUDIES / "ideal-slider-crank" / "reaction_crank_rod.csv")
+    v = read_csv(STUDIES / "ideal-slider-crank" / "constraint_violation.csv")
+    gains = {k.replace("_m", "").replace("alpha", "α = β = ").split("_beta")[0]: np.abs(v[k])
+             for k in v if k.startswith("alpha")}
+    plots.stacked(path, r["t_s"], [
+        ("force on rod [N]", {"Fx": r["fx_N"], "Fy": r["fy_N"],
+                              "|F|": np.hypot(r["fx_N"], r["fy_N"])}),
+        ("|Φ₂| [m]", {f"{k} 1/s": g for k, g in gains.items()}),
+    ], xlabel="time [s] (one crank revolution)", logy=[False, True], legend_outside=True,
+        title="Table 2-1 slider-crank: crank-rod reaction (cf. Fig. 2-10) and constraint "
+              "drift by Baumgarte gains (cf. Fig. 2-8)")
+
+
+def clearance_forces(path: Path) -> None:
+    """Ch. 3/6: the joint force of each contact law at each Table 3-2
+    clearance against the ideal joint's, over the last cycle (cf. Figs.
+    3-7/6-8)."""
+    from diffwear import plots
+
+    folder = STUDIES / "clearance-sweep"
+    ideal = read_csv(folder / "force_ideal.csv")
+    panels = []
+    for law in ("ln", "kv", "efm"):
+        curves = {}
+        # largest clearance first (drawn under the others), as the study's figures
+        files = sorted(folder.glob(f"force_{law}_*.csv"),
+                       key=lambda p: -float(p.stem.split("_")[-1]))
+        x = None
+        for file in files:
+            c = read_csv(file)
+            angle = np.degrees(c["crank_angle_rad"]) % 360.0
+            order = np.argsort(angle)
+            x = angle[order]
+            curves[f"c = {file.stem.split('_')[-1]} mm"] = c["force_N"][order]
+        if x is None:
+            raise FileNotFoundError(f"{folder}: no force_{law}_*.csv")
+        curves["ideal joint"] = np.interp(x, np.degrees(ideal["crank_angle_rad"]) % 360.0,
+                                          ideal["force_N"], period=360.0)
+        panels.append((f"{law.upper()} |F| [N]", curves))
+    plots.stacked(path, x, panels, xlabel="crank angle [deg] (last cycle)",
+                  legend_outside=True,
+                  title="Crank-rod joint force by contact law and radial clearance, "
+                        "against the ideal joint (cf. Figs. 3-7/6-8)")
+
+
+def clearance_loci(path: Path) -> None:
+    """Ch. 3/5/6: the pin centre in the bushing while in contact, at the
+    largest Table 3-2 clearance, per law (cf. Figs. 5-4/6-7)."""
+    from diffwear import plots
+
+    loci = {}
+    for law in ("ln", "kv", "efm"):
+        for file in sorted((STUDIES / "clearance-sweep").glob(f"locus_{law}_*.csv")):
+            c_mm = float(file.stem.split("_")[-1])
+            c = read_csv(file)
+            touching = c["in_contact"] > 0
+            radius = np.hypot(c["offset_x_m"], c["offset_y_m"]) / (1e-3 * c_mm)
+            loci[f"{law.upper()}, c = {c_mm:g} mm"] = (c["theta_rad"][touching],
+                                                      radius[touching])
+    plots.polar_loci(path, loci, title="Contact locus on the bushing, last cycle (rod frame; "
+                                       "cf. Figs. 5-4, 6-7)",
+                     radius_label="|e| / clearance", radius_scale=1.0)
+
+
+def pin_pivot_history(path: Path) -> None:
+    """Ch. 4: max wear of pin and pivot against sweeps, the linear
+    extrapolation to 408,000 test cycles and the thesis's values (cf. Fig. 4-9)."""
+    from diffwear.plots.pin_pivot import history_figure
+    from diffwear.studies.pin_pivot import TARGET_SWEEPS, THESIS
+    from diffwear.wear.pin_pivot import steady_line
+
+    h = read_csv(STUDIES / "pin-pivot" / "history.csv")
+    history_figure(path, sweeps=h["sweeps"], max_pin_mm=h["max_pin_mm"],
+                   max_pivot_mm=h["max_pivot_mm"],
+                   fit_pin=steady_line(h["sweeps"], h["max_pin_mm"] * 1e-3),
+                   fit_pivot=steady_line(h["sweeps"], h["max_pivot_mm"] * 1e-3),
+                   target=TARGET_SWEEPS, direct=None, thesis=THESIS,
+                   title="pin-pivot: max wear vs sweeps (cf. thesis Fig. 4-9)")
+
+
+def pin_pivot_profiles(path: Path) -> None:
+    """Ch. 4: pin and pivot wear profiles and the contact pressure at mid-stroke."""
+    from diffwear.plots.pin_pivot import profile_figure
+
+    p = read_csv(STUDIES / "pin-pivot" / "profiles.csv")
+    s = _summary("pin-pivot")
+    sweeps = int(s["simulated_sweeps"])
+    profile_figure(path, angle_deg=p["angle_deg"],
+                   simulated={f"pin, {sweeps:,} sweeps": p["pin_depth_mm_simulated"],
+                              f"pivot, {sweeps:,} sweeps": p["pivot_depth_mm_simulated"]},
+                   direct={f"pin, {2 * sweeps:,} sweeps (direct)": p["pin_depth_mm_direct"],
+                           f"pivot, {2 * sweeps:,} sweeps (direct)":
+                               p["pivot_depth_mm_direct"]},
+                   pressure=p["pressure_MPa_mid_stroke_end"],
+                   title=f"pin-pivot: wear profiles (R {1e3 * s['setup']['pin_radius']:g} mm, "
+                         "load fixed to the pivot)")
+
+
+def life_map(joint: int) -> Callable[[Path], None]:
+    """Ch. 8: joint ``joint``'s life over its (diameter, depth) box, with the
+    stored equal-life answer and the thesis's Table 8-4 design."""
+    def draw(path: Path) -> None:
+        from diffwear.design.two_joint import TABLE_8_4
+        from diffwear.plots.design import life_map as draw_map
+
+        folder = RESULTS / "design_two_joint"
+        rows = read_csv(folder / "life_maps.csv")
+        s = json.loads((folder / "summary.json").read_text())
+        maps: dict[str, np.ndarray] = {}
+        for j in (1, 2):
+            mine = rows["joint"] == j
+            d, h = np.unique(rows["d_mm"][mine]), np.unique(rows["h_mm"][mine])
+            grid = np.full((d.size, h.size), np.nan)
+            grid[np.searchsorted(d, rows["d_mm"][mine]),
+                 np.searchsorted(h, rows["h_mm"][mine])] = rows["cycles"][mine]
+            maps.update(d_m=d * 1e-3, h_m=h * 1e-3)
+            maps[f"cyc{j}"] = grid
+        answer = 1e-3 * np.array([s["d1_mm"], s["d2_mm"], s["h1_mm"], s["h2_mm"]])
+        draw_map(path, maps, joint, answer, np.asarray(TABLE_8_4))
+    return draw
+
+
+def rig_tornado(output: str) -> Callable[[Path], None]:
+    """The rig's elasticities of ``output`` by reverse-mode AD (stored study
+    ``rig_sensitivity.json``), as `diffwear.plots.sweep.tornado` draws them."""
+    def draw(path: Path) -> None:
+        from diffwear.plots.sweep import tornado
+        from diffwear.sweep.sensitivity import Sensitivity
+
+        s = json.loads((RESULTS / "rig_sensitivity.json").read_text())
+        y = s["outputs"]
+        # dy/dp back from the stored elasticity e = (p / y) dy/dp
+        gradient = {o: {p: e * y[o] / s["point"][p] for p, e in es.items()}
+                    for o, es in s["elasticity_ad"].items()}
+        settings = s["settings"]
+        tornado(path, Sensitivity(s["point"], y, gradient), output,
+                title=f"rig, {settings['cycles']:,.0f} cycles: sensitivity of {output} "
+                      "(reverse-mode AD)")
+    return draw
+
+
+def rig_sweep_heatmap(output: str) -> Callable[[Path], None]:
+    """``<output>.png`` of ``diffwear sweep design_studies/sweep_rig_clearance_k.toml``
+    (stored run on the quasi-static joint model), as the command draws it:
+    `diffwear.plots.sweep.heatmap` with the sweep file's axes and units."""
+    def draw(path: Path) -> None:
+        from diffwear.cli.sweep import label, shown
+        from diffwear.config.sweep import load_sweep
+        from diffwear.plots.sweep import heatmap
+
+        spec = load_sweep(ROOT / "design_studies" / "sweep_rig_clearance_k.toml")
+        rows = read_csv(STUDIES / "sweep-rig-clearance-k" / "results.csv")
+        gy, gx = spec.grid  # the file's first axis down, its second across (grid order)
+        columns = {name: next(c for c in rows if c == name or c.startswith(f"{name}_"))
+                   for name in (gy, gx)}
+        y, x = (np.unique(rows[columns[name]]) for name in (gy, gx))
+        z = rows[output].reshape(y.size, x.size)
+        heatmap(path, shown(spec, gx, x), shown(spec, gy, y), z,
+                xlabel=label(spec, gx), ylabel=label(spec, gy),
+                title=f"rig, 21,400 cycles, quasi-static joint model: {output}")
+    return draw
+
+
+def agreement(path: Path) -> None:
+    """The quasi-static model against the dynamic one: relative differences of
+    the wear studies' depth and volume and of the Ch. 8 lives."""
+    plt = _pyplot()
+    data = json.loads((RECORDS / "agreement.json").read_text())
+    labels, values = [], []
+    for study, r in data["wear_studies"].items():
+        labels += [f"{study}\nmax depth", f"{study}\nvolume"]
+        values += [r["depth_rel_diff"], r["volume_rel_diff"]]
+    for design, r in data["ch8"]["designs"].items():
+        for j, v in enumerate(r["rel_diff_to_extrapolated"], 1):
+            labels.append(f"Ch. 8 {design}\nlife, joint {j}")
+            values.append(v)
+    fig, ax = plt.subplots(figsize=(7, 0.42 * len(labels) + 1.3))
+    y = np.arange(len(labels))
+    ax.barh(y, 100 * np.asarray(values), color=["tab:blue" if abs(v) < 0.01 else "tab:red"
+                                                 for v in values])
+    ax.axvline(1.0, color="k", ls="--", lw=0.9, label="goal: within 1 %")
+    ax.axvline(-1.0, color="k", ls="--", lw=0.9)
+    ax.axvline(0.0, color="k", lw=0.6)
+    ax.set_yticks(y, labels, fontsize=7)
+    ax.invert_yaxis()
+    ax.set_xlabel("quasi-static minus dynamic, relative [%]")
+    ax.set_title("Quasi-static against dynamic model (benchmarks/records/agreement.json)",
+                 fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, axis="x")
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
+def results_against_thesis(path: Path) -> None:
+    """The wear studies' depth and volume, diffwear over each of the thesis's
+    values (its EFM and FEM models, the measurement)."""
+    plt = _pyplot()
+    rows = []  # (label, diffwear, {reference: value})
+    for run in ("rig-21400", "wear-5000"):
+        s = _summary(run)
+        for key, unit in (("max_wear_depth_mm", "max depth"), ("wear_volume_mm3", "volume")):
+            refs = {k: v[key] for k, v in s["thesis"].items() if key in v}
+            rows.append((f"{run}\n{unit}", s[key], refs))
+    styles = {"EFM": ("s", "tab:blue"), "FEM": ("^", "tab:orange"), "measured": ("D", "k")}
+    fig, ax = plt.subplots(figsize=(7.5, 3.6))
+    for i, (_, ours, refs) in enumerate(rows):
+        for ref, value in refs.items():
+            kind = next(k for k in styles if ref.startswith(k))
+            marker, color = styles[kind]
+            ax.plot(ours / value, i, marker, ms=8, color=color,
+                    label="the measurement" if kind == "measured" else f"thesis {kind}")
+    handles, names = ax.get_legend_handles_labels()
+    unique = dict(zip(names, handles))
+    ax.legend(unique.values(), [f"against {n}" for n in unique], fontsize=8,
+              loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.axvline(1.0, color="k", lw=0.8)
+    ax.set_yticks(range(len(rows)), [r[0] for r in rows], fontsize=8)
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    ax.set_xlabel("diffwear / thesis")
+    ax.set_title("Wear studies: diffwear over the thesis's models and measurement "
+                 "(Tables 6-4, 7-4..7-6)", fontsize=9)
+    ax.grid(alpha=0.3, axis="x")
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
+FIGURES: dict[str, Callable[[Path], None]] = {
+    "figures/results_against_thesis.png": results_against_thesis,
+    "figures/ch2_ideal_reaction.png": ideal_reaction,
+    "figures/ch3_clearance_forces.png": clearance_forces,
+    "figures/ch3_clearance_loci.png": clearance_loci,
+    "figures/ch4_pin_pivot_history.png": pin_pivot_history,
+    "figures/ch4_pin_pivot_profiles.png": pin_pivot_profiles,
+    "figures/ch5_wear_5000_profile.png": wear_5000_against_thesis,
+    "figures/ch5_wear_5000_history.png": wear_study("wear-5000", "wear_history.png"),
+    "figures/ch7_rig_against_thesis.png": rig_profile_against_thesis,
+    "figures/ch7_rig_profile.png": wear_study("rig-21400", "wear_profile.png"),
+    "figures/ch7_rig_history.png": wear_study("rig-21400", "wear_history.png"),
+    "figures/ch7_rig_locus_and_force.png": wear_study("rig-21400",
+                                                      "contact_locus_and_force.png"),
+    "figures/ch7_rig_joint_force.png": rig_joint_force,
+    "figures/ch8_life_map_joint1.png": life_map(1),
+    "figures/ch8_life_map_joint2.png": life_map(2),
+    "figures/quasi_static_agreement.png": agreement,
+    "figures/rig_sweep_max_depth.png": rig_sweep_heatmap("max_depth_mm"),
+    "figures/rig_tornado_max_depth.png": rig_tornado("max_depth_mm"),
+    "figures/rig_tornado_volume.png": rig_tornado("volume_mm3"),
+}
+
+
+def draw_all(folder: Path) -> dict[str, Path]:
+    """Draw every figure into ``folder`` (each in its own subfolder: some plot
+    functions write companion files); site path -> file."""
+    drawn = {}
+    for site_path, draw in FIGURES.items():
+        target = folder / site_path.replace("/", "__")
+        target.mkdir(parents=True, exist_ok=True)
+        path = target / Path(site_path).name
+        draw(path)
+        drawn[site_path] = path
+    return drawn
+
+
+if __name__ == "__main__":
+    import time
+
+    out = Path(sys.argv[1] if len(sys.argv) > 1 else "out/docs-figures")
+    t0 = time.perf_counter()
+    for site_path, path in draw_all(out).items():
+        print(f"{site_path}: {path.stat().st_size / 1e3:.0f} kB")
+    print(f"{time.perf_counter() - t0:.1f} s")

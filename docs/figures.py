@@ -199,7 +199,7 @@ def ideal_reaction(path: Path) -> None:
         ("force on rod [N]", {"Fx": r["fx_N"], "Fy": r["fy_N"],
                               "|F|": np.hypot(r["fx_N"], r["fy_N"])}),
         ("|Φ₂| [m]", {f"{k} 1/s": g for k, g in gains.items()}),
-    ], xlabel="time [s] (one crank revolution)", logy=[False, True], legend_outside=True,
+    ], xlabel="time [s] (one crank revolution)", logy=[False, True],
         title="Table 2-1 slider-crank: crank-rod reaction (cf. Fig. 2-10) and constraint "
               "drift by Baumgarte gains (cf. Fig. 2-8)")
 
@@ -231,7 +231,6 @@ def clearance_forces(path: Path) -> None:
                                           ideal["force_N"], period=360.0)
         panels.append((f"{law.upper()} |F| [N]", curves))
     plots.stacked(path, x, panels, xlabel="crank angle [deg] (last cycle)",
-                  legend_outside=True,
                   title="Crank-rod joint force by contact law and radial clearance, "
                         "against the ideal joint (cf. Figs. 3-7/6-8)")
 

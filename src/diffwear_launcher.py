@@ -28,7 +28,9 @@ def _end_while_starting(signum, frame):  # nothing written yet: nothing to keep
 
 def entry() -> None:
     """Import the command with Ctrl-C ending the process cleanly, then run it."""
-    previous = signal.signal(signal.SIGINT, _end_while_starting)
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is not signal.SIG_IGN:  # a process started immune (nohup, `&`) stays so
+        signal.signal(signal.SIGINT, _end_while_starting)
     try:
         from diffwear.cli import command
     finally:

@@ -1,10 +1,15 @@
 import importlib.util
+import signal
 from pathlib import Path
 
 import jax
 import pytest
 
 jax.config.update("jax_enable_x64", True)
+# The interrupt tests send SIGINT as a terminal's Ctrl-C would; a suite started
+# with SIGINT ignored (nohup, a background job) is put back to Python's default.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 import diffwear  # noqa: E402,F401
 

@@ -633,12 +633,13 @@ def test_a_ctrl_c_lost_as_a_command_ends_is_still_130(tmp_path, capsys, monkeypa
         _lost_interrupt()
         out.json("summary.json", {"files": []})
 
+    import signal
+
+    before = signal.getsignal(signal.SIGINT)
     monkeypatch.setattr(STUDIES[STUDY], "run", finishes)
     assert main(["study", STUDY, "--out", str(tmp_path / "x"), "--quiet"]) == 130
     assert "interrupted as the run ended; its results were written" in capsys.readouterr().err
-    import signal
-
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handler restored
+    assert signal.getsignal(signal.SIGINT) is before  # handler restored
 
 
 def test_an_interrupt_lost_in_a_callback_is_not_printed_but_other_lost_errors_are():
@@ -664,6 +665,7 @@ class Finaliser:
                 pass
         raise ValueError("a lost error")
 
+signal.signal(signal.SIGINT, signal.default_int_handler)  # as from a terminal
 previous = interrupt.install()
 Finaliser(True)
 gc.collect()
@@ -678,6 +680,39 @@ print("restored", signal.getsignal(signal.SIGINT) is signal.default_int_handler)
     assert p.stdout.split() == ["requested", "True", "restored", "True"]
     assert "KeyboardInterrupt" not in p.stderr
     assert p.stderr.count("Exception ignored") == 1 and "ValueError: a lost error" in p.stderr
+
+
+def test_a_command_started_with_sigint_ignored_keeps_ignoring_it(tmp_path):
+    """A process started with SIGINT ignored (``nohup``, a script's background
+    job) is not made interruptible by the command: the console entry run
+    that way finishes a study though SIGINT arrives while it starts and
+    after it ends, with exit 0 and no interrupt line, and `install` /
+    `hold` leave the ignored disposition in place."""
+    import signal
+    import subprocess
+    import sys
+
+    script = f"""
+import os, signal, sys
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+import diffwear_launcher
+from diffwear import interrupt
+previous = interrupt.install()
+os.kill(os.getpid(), signal.SIGINT)
+print("ignored", signal.getsignal(signal.SIGINT) is signal.SIG_IGN)
+interrupt.hold()
+print("held", signal.getsignal(signal.SIGINT) is signal.SIG_IGN)
+interrupt.restore(previous)
+os.kill(os.getpid(), signal.SIGINT)
+sys.argv = ["diffwear", "study", "{STUDY}", "--out", r"{tmp_path / 'x'}", "--quiet"]
+diffwear_launcher.entry()
+"""
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split()[:4] == ["ignored", "True", "held", "True"]
+    assert "interrupted" not in p.stderr and (tmp_path / "x" / "summary.json").is_file()
+    assert signal.getsignal(signal.SIGINT) is not signal.SIG_IGN  # this process untouched
 
 
 @pytest.mark.slow  # three real interrupts of a dynamic file run: about a minute

@@ -9,6 +9,10 @@ the wear loop checks between chunks (after the checkpoint is saved, so the
 run resumes from there), and the command once it returns.  While installed,
 an interrupt lost that way is not printed (the command says it was
 interrupted in its own one line); other lost exceptions still are.
+
+A process started with SIGINT ignored (``nohup``, a background job of a
+script) keeps ignoring it, as Python itself does: neither `install` nor
+`hold` sets a handler there.
 """
 
 from __future__ import annotations
@@ -47,7 +51,10 @@ def install():
         return None
     hook = sys.unraisablehook
     sys.unraisablehook = _unraisable(hook)
-    return signal.signal(signal.SIGINT, _handler), hook
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, _handler)
+    return previous, hook
 
 
 def restore(previous) -> None:
@@ -61,7 +68,8 @@ def hold() -> None:
     """From here on a Ctrl-C is recorded, never raised: for a process whose
     work is over and that is ending (main thread only)."""
     _requested.clear()
-    if threading.current_thread() is threading.main_thread():
+    if (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) is not signal.SIG_IGN):
         signal.signal(signal.SIGINT, _record)
 
 

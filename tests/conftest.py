@@ -16,17 +16,28 @@ import diffwear  # noqa: E402,F401
 
 def pytest_addoption(parser):
     parser.addoption("--long", action="store_true",
-                     help="also run the tests marked slow or long (study reproductions, "
-                          "notebooks, tight-tolerance gradient checks: minutes each)")
+                     help="also run the tests marked slow, long or extended (study "
+                          "reproductions, notebooks, tight-tolerance gradient checks: "
+                          "minutes each)")
+    parser.addoption("--extended", action="store_true",
+                     help="also run the tests marked extended (whole calibrations, dynamic "
+                          "wear of mechanism files, worker processes: half a minute to a "
+                          "minute each on 2 cores); CI runs them after the default run")
 
 
 def pytest_collection_modifyitems(config, items):
+    """Three tiers: the default run (the README's test command, <= 15 min on
+    2 cores), ``--extended`` (CI adds it) and ``--long`` (everything)."""
     if config.getoption("--long"):
         return
-    skip = pytest.mark.skip(reason="slow: runs with pytest --long")
+    slow = pytest.mark.skip(reason="slow: runs with pytest --long")
+    extended = pytest.mark.skip(reason="extended: runs with pytest --extended (CI) or --long")
+    run_extended = config.getoption("--extended")
     for item in items:
         if "long" in item.keywords or "slow" in item.keywords:
-            item.add_marker(skip)
+            item.add_marker(slow)
+        elif "extended" in item.keywords and not run_extended:
+            item.add_marker(extended)
 
 
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"

@@ -218,6 +218,7 @@ def test_a_life_not_computed_has_a_nan_derivative_not_zero():
         assert math.isnan(life(2.0)) and math.isnan(derivative(life)(2.0))
 
 
+@pytest.mark.extended
 def test_a_quasi_static_life_cut_short_has_a_nan_gradient():
     """One wear slot cannot reach the limit: status 'incomplete', the life
     NaN, and its gradient by the design NaN, never a silent 0."""

@@ -254,6 +254,7 @@ def test_refit_recovers_strength_and_shape_from_noise_free_data(small_dataset):
 
 
 # --------------------------------------------------------------- the loop
+@pytest.mark.extended
 def test_calibrate_cli_identifies_guide_friction_on_a_small_campaign(small_dataset, tmp_path):
     out = tmp_path / "out"
     rc = main(["calibrate", str(small_dataset), "--out", str(out), "--n-theta", "60",
@@ -278,6 +279,7 @@ def test_calibrate_cli_identifies_guide_friction_on_a_small_campaign(small_datas
     assert (out / "summary.json").read_bytes() == before
 
 
+@pytest.mark.extended
 def test_dynamic_check_in_its_own_process_equals_the_dynamic_model_here(small_dataset):
     """The worker process's dynamic residual at a fit's numbers against the
     same model evaluated in this process; the worker ends when closed, and a
@@ -384,6 +386,7 @@ def test_shipped_campaigns(name, tmp_path):
     assert check["ok"] and check["chi2_fit"] > 0
 
 
+@pytest.mark.extended
 def test_mechanism_file_dataset_calibrates(tmp_path):
     """A dataset pointing to the rig's mechanism file (the shipped rig.toml)
     and fitting two of its numbers by path calibrates to the campaign's truth

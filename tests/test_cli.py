@@ -448,6 +448,7 @@ def test_four_bar_mechanism_file_wears_from_the_cli_and_from_python(tmp_path):
     assert j["wear_volume_mm3"] * 1e-9 == pytest.approx(archard, rel=0.02)
 
 
+@pytest.mark.extended
 def test_a_mechanism_file_joint_worn_through_its_wall_stops_there(tmp_path, capsys):
     """The four-bar with a 1000x wear coefficient, asked for 1e6 cycles: the
     joint reaches its 4 mm wall (the layer thickness) first; the run stops
@@ -512,6 +513,7 @@ def test_a_run_stopped_at_the_wall_reports_what_it_reached(tmp_path, capsys, mod
 FOUR_BAR = SHIPPED_MECHANISMS / "four_bar_wear.toml"
 
 
+@pytest.mark.extended
 def test_mechanism_file_dynamic_wear_resumes_and_agrees_with_the_quasi_static_model(
         tmp_path, capsys):
     """The four-bar's joint on the dynamic model (50 simulated cycles, A = 400)

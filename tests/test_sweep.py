@@ -188,6 +188,7 @@ def test_auto_keeps_the_points_here_when_the_pool_cannot_take_the_model(monkeypa
         sweep(lambda p: toy(p), BASE, grid, execution=Pooled(workers=2))
 
 
+@pytest.mark.extended
 def test_a_program_with_python_callbacks_is_compiled_in_each_pool_process():
     """XLA cannot serialise a program that calls back into Python (the
     dynamic model's checks do); such a program is not sent, each process

@@ -211,7 +211,7 @@ def _calibration_table() -> str:
 # Stored calibration runs whose figures the calibration guide shows (served
 # under calibration/<run>/ from design_studies/calibration/results/<run>/)
 CALIBRATION_FIGURES = {
-    "campaign_three_lobe_k": ("discrepancy.png", "fit_profile_16050.png"),
+    "campaign_three_lobe_k": ("discrepancy.png",),
     "campaign_run_in_and_creep": ("fit_worn_volume.png",),
     "campaign_pressure_exponent": ("candidates.png",),
 }

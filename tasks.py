@@ -39,6 +39,8 @@ def ensure_env() -> None:
     pyproject = ROOT / "pyproject.toml"
     if STAMP.exists() and STAMP.stat().st_mtime >= pyproject.stat().st_mtime:
         return
+    print("tasks.py: installing diffwear and its dependencies into .venv "
+          "(about a minute; once)", flush=True)
     for cmd in (
         (PY, "-m", "pip", "install", "--quiet", "--upgrade", "pip"),
         (PY, "-m", "pip", "install", "--quiet", "-e", f"{ROOT}[test]"),

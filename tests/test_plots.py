@@ -482,7 +482,7 @@ contact = ["crank_rod"]
 """
 
 
-@pytest.mark.long  # ~80 s: the command compiles the motion, the wear and the life
+@pytest.mark.extended  # ~80 s: the command compiles the motion, the wear and the life
 def test_a_users_file_worn_through_its_wall_has_it_in_its_figures(tmp_path):
     """The run stops at the 1 mm wall (exit 3, outputs written); wear.png's
     title gives the cycles reached (summary.json's), not the 100,000 asked,
@@ -524,7 +524,7 @@ def test_a_users_file_worn_through_its_wall_has_it_in_its_figures(tmp_path):
     assert math.isfinite(joint["max_wear_depth_mm"])
 
 
-@pytest.mark.long  # ~70 s: the study compiles the quasi-static evolution
+@pytest.mark.extended  # ~70 s: the study compiles the quasi-static evolution
 def test_the_rig_studys_locus_shows_the_pin_in_its_worn_pocket(tmp_path):
     """The Ch. 7 rig on the quasi-static model, 21,400 cycles: the last
     cycle's pin centre (contact_locus_last_cycle.csv) sits on the drawn worn

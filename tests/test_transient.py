@@ -190,19 +190,19 @@ def _check_against_settled_rerun(name):
     return transient.time_s
 
 
-@pytest.mark.long  # two 1 s runs of the four-bar and a compilation: ~20 s
+@pytest.mark.extended  # two 1 s runs of the four-bar and a compilation: ~20 s
 def test_four_bar_settled_maxima_are_the_periodic_motions():
     t = _check_against_settled_rerun("four_bar_wear")
     assert 0.04 <= t <= 0.1  # the pin's first impact at 5 ms, rung out in ~60 ms
 
 
-@pytest.mark.long  # two 2 s runs of the rig and a compilation: ~15 s
+@pytest.mark.extended  # two 2 s runs of the rig and a compilation: ~15 s
 def test_rig_settled_maxima_are_the_periodic_motions():
     t = _check_against_settled_rerun("rig")
     assert 0.1 <= t <= 0.3  # the pin's first impact at 10 ms, rung out in ~0.2 s
 
 
-@pytest.mark.long  # two 2 s runs and a compilation: ~15 s
+@pytest.mark.extended  # two 2 s runs and a compilation: ~15 s
 def test_a_pin_that_leaves_the_wall_every_cycle_is_no_transient():
     """The 0.5 mm clearance slider-crank: its pin flies across the clearance
     and strikes the wall in every cycle (roughness of hundreds of N after the

@@ -176,6 +176,68 @@ def test_centred_squeeze_is_an_isotropic_damper():
     np.testing.assert_allclose(np.asarray(film.force), ref, rtol=1e-12)
 
 
+def test_line_of_centres_form_matches_the_offset_form():
+    eps, angle, rate, omega = 0.65, -1.4, np.array([0.8e-3, 1.9e-3]), 75.0
+    e = _polar(eps, angle)
+    n = e / np.linalg.norm(e)
+    eps_dot = n @ rate / C
+    gamma_dot = (n[0] * rate[1] - n[1] * rate[0]) / np.linalg.norm(e)
+    law = ShortBearingFilm(MU, L, C)
+    radial, tangential, torque = law.line_of_centres_forces(eps, eps_dot, gamma_dot, omega, R)
+    film = law.film(_kin(e, rate, omega))
+    assert float(radial) == pytest.approx(float(film.radial), rel=1e-12)
+    assert float(tangential) == pytest.approx(float(film.tangential), rel=1e-12)
+    assert float(torque) == pytest.approx(float(film.torque), rel=1e-12)
+
+
+@pytest.mark.parametrize("eps", [0.2, 0.5, 0.85])
+def test_whirl_without_squeeze_gives_the_classical_dynamic_forces(eps):
+    """eps_dot = 0, gamma_dot != 0: the positive half is the steady one (for
+    omega - 2 gamma_dot > 0) and the forces are the short-bearing dynamic forces
+    with the wedge speed omega - 2 gamma_dot:
+    F_n = -2 K eps^2 (omega - 2 gamma_dot) / (1 - eps^2)^2,
+    F_t = K pi eps (omega - 2 gamma_dot) / (2 (1 - eps^2)^(3/2)), K = mu R L^3 / (2 c^2);
+    at gamma_dot = omega / 2 (half-frequency whirl) the film carries nothing."""
+    law = ShortBearingFilm(MU, L, C)
+    k = MU * R * L**3 / (2 * C**2)
+    omega, gamma_dot = 140.0, 25.0
+    wedge = omega - 2 * gamma_dot
+    radial, tangential, _ = law.line_of_centres_forces(eps, 0.0, gamma_dot, omega, R)
+    assert float(radial) == pytest.approx(-2 * k * eps**2 * wedge / (1 - eps**2) ** 2, rel=1e-12)
+    assert float(tangential) == pytest.approx(
+        k * np.pi * eps * wedge / (2 * (1 - eps**2) ** 1.5), rel=1e-12)
+    radial, tangential, _ = law.line_of_centres_forces(eps, 0.0, omega / 2, omega, R)
+    assert float(radial) == 0.0 and float(tangential) == 0.0
+
+
+@pytest.mark.parametrize("eps", [0.0, 0.4, 0.8])
+def test_pure_squeeze_force_is_the_integral_over_the_approach_half(eps):
+    """omega = gamma_dot = 0, eps_dot > 0: p > 0 on -pi/2 < psi < pi/2, so
+    F_n = -2 K eps_dot int cos^2 psi / (1 - eps cos psi)^3 over that half
+        = -2 K eps_dot [3 eps / beta^4 + (1 + 2 eps^2) (pi + 4 atan(eps / (1 + beta)))
+                        / (2 beta^5)],  beta = sqrt(1 - eps^2),
+    (the antiderivative of `_half_film_integrals`), checked against quadrature
+    too, and more than the steady half's pi (1 + 2 eps^2) / (2 beta^5) for
+    eps > 0: the approach half holds the thin film."""
+    law = ShortBearingFilm(MU, L, C)
+    k = MU * R * L**3 / (2 * C**2)
+    eps_dot = 30.0
+    beta = np.sqrt(1 - eps**2)
+    integral = (3 * eps / beta**4
+                + (1 + 2 * eps**2) * (np.pi + 4 * np.arctan(eps / (1 + beta))) / (2 * beta**5))
+    radial, tangential, _ = law.line_of_centres_forces(eps, eps_dot, 0.0, 0.0, R)
+    assert float(radial) == pytest.approx(-2 * k * eps_dot * integral, rel=1e-12)
+    assert float(tangential) == pytest.approx(0.0, abs=1e-12 * abs(float(radial)))
+    numeric = _quadrature(_polar(eps, 0.0) if eps > 0 else np.zeros(2),
+                          (eps_dot * C, 0.0), 0.0)[0][0]
+    assert float(radial) == pytest.approx(numeric, rel=1e-6)
+    steady_half = np.pi * (1 + 2 * eps**2) / (2 * beta**5)
+    if eps > 0:
+        assert integral > steady_half
+    else:
+        assert integral == pytest.approx(steady_half, rel=1e-14)
+
+
 # ---------------------------------------------------------------- scaling laws
 
 STATE = dict(eps=0.55, angle=1.3, rate_over_c=np.array([8.0, -5.0]), omega=110.0)

@@ -23,12 +23,13 @@ gamma_dot sin psi) at a fixed bushing point, so
     p(psi, z) = 3 mu / c^2 (L^2/4 - z^2) [2 eps_dot cos psi
                 - eps (omega - 2 gamma_dot) sin psi] / (1 - eps cos psi)^3.
 
-This is the short-bearing pressure of Flores, Ambrosio, Claro & Lankarani,
-Mech. Mach. Theory 41 (2006) 247-261 (and of Flores et al., Kinematics and
-dynamics of multibody systems with imperfect joints, Springer 2008, Ch. 6),
-written with psi measured from the minimum film (they measure from the
-maximum, h = c (1 + eps cos theta)); the wedge speed is omega - 2 gamma_dot
-(their omega_i + omega_j - 2 gamma_dot with the bushing at rest).
+This is the short-bearing pressure of a dynamically loaded journal bearing
+used for lubricated revolute joints by Flores, Ambrosio, Claro & Lankarani,
+Mech. Mach. Theory 41 (2006) 247-261 (and Flores et al., Kinematics and
+dynamics of multibody systems with imperfect joints, Springer 2008), written
+here with psi measured from the minimum film; the wedge speed
+omega_journal + omega_bearing - 2 gamma_dot of the inertial-frame form is
+omega - 2 gamma_dot with the bushing at rest.
 
 **Cavitation (Gumbel).**  p is set to zero where it is negative.  Its sign is
 that of the bracket, which does not depend on z:
@@ -37,12 +38,15 @@ that of the bracket, which does not depend on z:
     V = 2 e_dot - omega k x e,
 
 so the pressure is positive on exactly one half of the film, the half centred
-on the direction of V.  In steady running (e_dot = 0) that is the classical
-half pi < psi < 2 pi ahead of the minimum film; in pure squeeze (omega = 0)
-it is the half facing the approach e_dot.  Flores et al. (2006) integrate the
-dynamic forces over the steady half whatever the squeeze; here the half
-follows V, as argued by Daniel, Machado & Cavalca, Mech. Mach. Theory 99
-(2016) 19-36, who integrate over the time-dependent positive region.
+on the direction of V.  In steady running (e_dot = 0, omega > 0) that is the
+classical half pi < psi < 2 pi, from the widest gap to the minimum film; in
+pure squeeze (omega = 0) it is the half facing the approach e_dot.  The
+widely used closed-form dynamic forces integrate over the steady half whatever
+the squeeze (their squeeze term pi (1 + 2 eps^2) / (1 - eps^2)^(5/2) is that
+half's integral of cos^2 psi / (1 - eps cos psi)^3, see
+`_half_film_integrals`); here the half follows V, as Daniel, Machado &
+Cavalca, Mech. Mach. Theory 99 (2016) 19-36, argue for joints of mechanisms:
+integrate over the time-dependent region of positive pressure.
 
 **Forces on the pin** (F = -int int p u(theta) R dtheta dz, int (L^2/4 - z^2)
 dz = L^3 / 6), with K = mu R L^3 / (2 c^2), A = 2 eps_dot,
@@ -243,36 +247,61 @@ class ShortBearingFilm(AbstractContactLaw):
         e = kin.offset
         return self.clearance - jnp.sqrt(e @ e + OFFSET_NORM_WIDTH**2)
 
-    def film(self, kin: PinKinematics) -> FilmForce:
-        """Force and friction torque of the film on the pin (see `FilmForce`)."""
-        c, mu, length = self.clearance, self.viscosity, self.length
-        radius = kin.pin_radius
-        n, dist = _safe_unit(kin.offset)
-        t = perp(n)
-        eps = dist / c
-        # eps saturated at eps_max: min(eps, eps_max) = eps_max - ramp(eps_max - eps),
-        # exact below eps_max - width
-        eps_f = self.max_eccentricity_ratio - smoothing.ramp(
+    def _saturated(self, eps):
+        """min(eps, eps_max) = eps_max - ramp(eps_max - eps): exact below
+        eps_max - saturation_width, C1 across the band."""
+        return self.max_eccentricity_ratio - smoothing.ramp(
             self.max_eccentricity_ratio - eps, self.saturation_width)
-        # A = 2 eps_dot and B = eps (omega - 2 gamma_dot), written without gamma_dot
-        # (singular at e = 0): eps_dot = n . e_dot / c and eps gamma_dot = t . e_dot / c
-        squeeze = 2.0 * (n @ kin.offset_rate) / c
-        wedge = eps_f * kin.omega - 2.0 * (t @ kin.offset_rate) / c
+
+    def _components(self, eps_f, squeeze, wedge, radius):
+        """(F_n, F_t) on the pin along n and t = k x n [N] from the saturated
+        eps, A = 2 eps_dot and B = eps (omega - 2 gamma_dot) [1/s]."""
         # the positive half starts at psi_1 = psi_V - pi/2, psi_V the direction of
         # V ~ (A, -B) from n: cos psi_1 = -B / |V|, sin psi_1 = -A / |V|.  At V = 0
         # the film carries nothing and any half will do (the force is A, B times it).
         v_dir, _ = _safe_unit(jnp.stack([squeeze, wedge]))
         cos1, sin1 = -v_dir[1], -v_dir[0]
         i_cc, i_cs, i_ss = _half_film_integrals(eps_f, cos1, sin1)
-        k = mu * radius * length**3 / (2.0 * c**2)
-        radial = -k * (squeeze * i_cc - wedge * i_cs)
-        tangential = -k * (squeeze * i_cs - wedge * i_ss)
-        force = radial * n + tangential * t
-        couette = (2.0 * jnp.pi * mu * kin.omega * radius**3 * length
-                   / (c * jnp.sqrt(1.0 - eps_f**2)))
-        torque = -couette - 0.5 * eps_f * c * tangential
-        return FilmForce(force=force, torque=torque, radial=radial, tangential=tangential,
-                         eccentricity_ratio=eps, min_film_thickness=self.min_film_thickness(kin))
+        k = self.viscosity * radius * self.length**3 / (2.0 * self.clearance**2)
+        return -k * (squeeze * i_cc - wedge * i_cs), -k * (squeeze * i_cs - wedge * i_ss)
+
+    def _torque(self, eps_f, tangential, omega, radius):
+        """Viscous moment on the pin [N m] (module docstring)."""
+        couette = (2.0 * jnp.pi * self.viscosity * omega * radius**3 * self.length
+                   / (self.clearance * jnp.sqrt(1.0 - eps_f**2)))
+        return -couette - 0.5 * eps_f * self.clearance * tangential
+
+    def line_of_centres_forces(self, eccentricity_ratio, eccentricity_rate, line_rate,
+                               omega, radius):
+        """(F_n, F_t, T): the film force on the pin along the line of centres
+        (F_n, positive away from the bushing centre) and normal to it (F_t,
+        along k x n) [N], and its moment on the pin [N m], from the
+        eccentricity ratio eps, its rate eps_dot [1/s], the line-of-centres
+        angular rate gamma_dot [rad/s], the pin's spin omega relative to the
+        bushing [rad/s] and the journal radius R [m].  The classical form; it
+        needs eps > 0 for gamma_dot to exist (`film` works from the offset and
+        is safe at e = 0)."""
+        eps_f = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
+        squeeze = 2.0 * jnp.asarray(eccentricity_rate, dtype=float)
+        wedge = eps_f * (omega - 2.0 * jnp.asarray(line_rate, dtype=float))
+        radial, tangential = self._components(eps_f, squeeze, wedge, radius)
+        return radial, tangential, self._torque(eps_f, tangential, omega, radius)
+
+    def film(self, kin: PinKinematics) -> FilmForce:
+        """Force and friction torque of the film on the pin (see `FilmForce`)."""
+        n, dist = _safe_unit(kin.offset)
+        t = perp(n)
+        eps = dist / self.clearance
+        eps_f = self._saturated(eps)
+        # A = 2 eps_dot and B = eps (omega - 2 gamma_dot), written without gamma_dot
+        # (singular at e = 0): eps_dot = n . e_dot / c and eps gamma_dot = t . e_dot / c
+        squeeze = 2.0 * (n @ kin.offset_rate) / self.clearance
+        wedge = eps_f * kin.omega - 2.0 * (t @ kin.offset_rate) / self.clearance
+        radial, tangential = self._components(eps_f, squeeze, wedge, kin.pin_radius)
+        return FilmForce(force=radial * n + tangential * t,
+                         torque=self._torque(eps_f, tangential, kin.omega, kin.pin_radius),
+                         radial=radial, tangential=tangential, eccentricity_ratio=eps,
+                         min_film_thickness=self.min_film_thickness(kin))
 
     def evaluate(self, kin: PinKinematics, memory: Float[Array, " m"],
                  profile: BushingProfile, friction: CoulombFriction) -> ContactResult:

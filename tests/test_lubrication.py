@@ -282,6 +282,7 @@ def test_saturates_beyond_the_maximum_eccentricity_ratio():
 
 # ---------------------------------------------------------------- derivatives
 
+@jax.jit
 def _force_of(params):
     mu, c, ex, ey = params
     law = ShortBearingFilm(mu, L, c)
@@ -291,7 +292,7 @@ def _force_of(params):
 @pytest.mark.parametrize("eps", [0.2, 0.75])
 def test_jacobian_matches_central_differences(eps):
     x0 = np.array([MU, C, *_polar(eps, 2.1)])
-    jac = np.asarray(jax.jacfwd(_force_of)(jnp.asarray(x0)))
+    jac = np.asarray(jax.jit(jax.jacfwd(_force_of))(jnp.asarray(x0)))
     steps = 1e-6 * np.array([MU, C, C, C])
     fd = np.empty((2, 4))
     for j, h in enumerate(steps):
@@ -303,17 +304,26 @@ def test_jacobian_matches_central_differences(eps):
     np.testing.assert_array_less(np.abs(jac - fd), 1e-6 * np.broadcast_to(scale, fd.shape))
 
 
+def _centre_outputs(params, rate):
+    ex, ey, mu = params
+    f = ShortBearingFilm(mu, L, C).film(_kin(jnp.stack([ex, ey]), rate, 60.0))
+    return jnp.concatenate([f.force, jnp.atleast_1d(f.torque)])
+
+
+_CENTRE = {"value": jax.jit(_centre_outputs), "jacfwd": jax.jit(jax.jacfwd(_centre_outputs)),
+           "jacrev": jax.jit(jax.jacrev(_centre_outputs))}
+
+
 @pytest.mark.parametrize("rate", [(0.0, 0.0), (1e-3, 0.5e-3)])
 def test_no_nan_at_the_centre(rate):
-    def out(params):
-        ex, ey, mu = params
-        f = ShortBearingFilm(mu, L, C).film(_kin(jnp.stack([ex, ey]), rate, 60.0))
-        return jnp.concatenate([f.force, jnp.atleast_1d(f.torque)])
-
-    x0 = jnp.array([0.0, 0.0, MU])
-    assert np.all(np.isfinite(np.asarray(out(x0))))
-    assert np.all(np.isfinite(np.asarray(jax.jacfwd(out)(x0))))
-    assert np.all(np.isfinite(np.asarray(jax.jacrev(out)(x0))))
+    x0, rate = jnp.array([0.0, 0.0, MU]), jnp.asarray(rate)
+    for name, fun in _CENTRE.items():
+        assert np.all(np.isfinite(np.asarray(fun(x0, rate)))), name
+    # and the value is the centred film: Petroff torque, squeeze damper force
+    value = np.asarray(_CENTRE["value"](x0, rate))
+    np.testing.assert_allclose(value[:2], -np.pi * MU * R * L**3 * np.asarray(rate) / (2 * C**3),
+                               rtol=1e-12, atol=0.0)
+    assert value[2] == pytest.approx(-2 * np.pi * MU * 60.0 * R**3 * L / C, rel=1e-12)
 
 
 # ---------------------------------------------------------------- as a contact law

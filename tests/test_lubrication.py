@@ -2,6 +2,7 @@
 closed forms, a quadrature of the Reynolds pressure field with Gumbel
 cavitation, its scaling laws and finite-difference derivatives."""
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -324,6 +325,57 @@ def test_no_nan_at_the_centre(rate):
     np.testing.assert_allclose(value[:2], -np.pi * MU * R * L**3 * np.asarray(rate) / (2 * C**3),
                                rtol=1e-12, atol=0.0)
     assert value[2] == pytest.approx(-2 * np.pi * MU * 60.0 * R**3 * L / C, rel=1e-12)
+
+
+def test_tiny_offsets_and_rates_stay_finite():
+    """Offsets and rates whose squares underflow (1e-170 m): the film to first
+    order in eps, F = -pi K / c (e_dot - omega k x e / 2) (the eps = 0 part of
+    the forces, K = mu R L^3 / (2 c^2)), with finite derivatives."""
+    e, rate = np.array([1e-170, -3e-170]), np.array([2e-170, 1e-170])
+    x0 = jnp.array([*e, MU])
+    for name, fun in _CENTRE.items():
+        assert np.all(np.isfinite(np.asarray(fun(x0, jnp.asarray(rate))))), name
+    value = np.asarray(_CENTRE["value"](x0, jnp.asarray(rate)))
+    assert value[2] == pytest.approx(-2 * np.pi * MU * 60.0 * R**3 * L / C, rel=1e-12)
+    k = MU * R * L**3 / (2 * C**2)
+    perp_e = np.array([-e[1], e[0]])
+    np.testing.assert_allclose(value[:2], -np.pi * k / C * (rate - 60.0 * perp_e / 2), rtol=1e-12)
+
+
+def test_offset_derivative_has_a_limit_at_the_centre():
+    """Along a ray towards e = 0 the Jacobian in e tends to a limit (the film is
+    linear in e to first order): the same at |e| = 1e-9 c, 1e-20 m and 1e-150 m,
+    with no round-off growing like 1 / |e| from the direction of e."""
+    direction = np.array([1.0, -3.0]) / np.sqrt(10)
+    rate = jnp.array([2e-3, 1e-3])
+    jacs = [np.asarray(_CENTRE["jacfwd"](jnp.array([*(size * direction), MU]), rate))[:2, :2]
+            for size in (1e-9 * C, 1e-20, 1e-150)]
+    for jac in jacs[1:]:
+        np.testing.assert_allclose(jac, jacs[0], rtol=1e-6)
+
+
+def test_centred_spinning_film_has_the_cross_coupled_stiffness():
+    """e_dot = 0 near e = 0: F = pi K omega / (2 c) k x e to first order (the
+    steady F_t = K pi eps omega / (2 (1 - eps^2)^(3/2)) along t, F_n = O(eps^2)),
+    so dF/de = pi K omega / (2 c) [[0, -1], [1, 0]], also at e = 0 exactly."""
+    k = MU * R * L**3 / (2 * C**2)
+    stiffness = np.pi * k * 60.0 / (2 * C)
+    expected = stiffness * np.array([[0.0, -1.0], [1.0, 0.0]])
+    for e in (np.zeros(2), np.array([0.3, -0.2]) * 1e-9 * C):
+        jac = np.asarray(_CENTRE["jacfwd"](jnp.array([*e, MU]), jnp.zeros(2)))[:2, :2]
+        np.testing.assert_allclose(jac, expected, rtol=1e-6, atol=1e-9 * stiffness)
+
+
+def test_parameters_are_float64_leaves_with_exact_module_gradients():
+    """Reverse mode through the module's leaves: F is linear in mu and cubic in
+    L, so dF/dmu = F / mu and dF/dL = 3 F / L."""
+    law = ShortBearingFilm(MU, L, C)
+    assert all(np.asarray(leaf).dtype == np.float64 for leaf in jax.tree_util.tree_leaves(law))
+    kin = _kin(_polar(0.45, 0.6), (0.5e-3, -1e-3), 85.0)
+    grads = eqx.filter_grad(lambda m: m.film(kin).force[1])(law)
+    force_y = float(law.film(kin).force[1])
+    assert float(grads.viscosity) == pytest.approx(force_y / MU, rel=1e-12)
+    assert float(grads.length) == pytest.approx(3 * force_y / L, rel=1e-12)
 
 
 # ---------------------------------------------------------------- as a contact law

@@ -3,12 +3,12 @@
 (half-Sommerfeld) cavitation condition.
 
 The law returns the force and the viscous friction torque of the oil film on
-the pin, in the bushing frame, and the minimum film thickness.  It is a
+the pin, in the bushing frame, and the minimum film thickness.  It is an
 `AbstractContactLaw`, so a `ClearanceJoint` can carry it, but it models the
 film only: no asperity contact (mixed lubrication) and no wear.
 
 Model (derived below, in the notation of `PinKinematics`): the bushing is
-still in its own frame, the pin centre sits at e = eps c n (n the unit vector
+at rest in its own frame, the pin centre sits at e = eps c n (n the unit vector
 along the line of centres, t = k x n, c the radial clearance) and spins at
 omega relative to the bushing.  At the bushing angle theta = gamma + psi the
 film is h = c (1 - eps cos psi) (to first order in c / R).  Dropping the
@@ -90,10 +90,11 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .._checks import check_positive, check_range, concrete
+from .._checks import check_positive, check_range, concrete, float_leaf
 from ..errors import InputError
 from ..mechanism.geometry import perp
 from . import smoothing
@@ -136,52 +137,78 @@ class FilmForce(NamedTuple):
 
 def _safe_unit(v: Float[Array, "2"]) -> tuple[Float[Array, "2"], Float[Array, ""]]:
     """(v / |v|, |v|), with the direction (1, 0) and length 0 at v = 0 and no
-    NaN in the derivatives there ("double where", as in `laws.py`)."""
+    NaN in the derivatives there ("double where", as in `laws.py`).  v is first
+    divided by its largest component, so that a tiny v (|v|^2 below the
+    smallest double, e.g. components of 1e-170) still has a unit direction."""
     is_zero = jnp.all(v == 0.0)
     v_safe = jnp.where(is_zero, jnp.array([1.0, 0.0]), v)
-    norm_safe = jnp.sqrt(v_safe @ v_safe)
-    return v_safe / norm_safe, jnp.where(is_zero, 0.0, norm_safe)
+    # the scale drops out of both results, so its derivative is not needed (and
+    # would divide by scale^2, which underflows for such a v)
+    scale = jax.lax.stop_gradient(jnp.max(jnp.abs(v_safe)))
+    w = v_safe / scale
+    norm_w = jnp.sqrt(w @ w)  # in [1, sqrt 2]
+    return w / norm_w, jnp.where(is_zero, 0.0, scale * norm_w)
 
 
-def _half_film_integrals(eps, cos1, sin1):
-    """(I_cc, I_cs, I_ss): the integrals of cos^2, sin cos and sin^2 of psi over
-    (1 - eps cos psi)^3 on the half psi_1 < psi < psi_1 + pi, with
-    cos1 = cos psi_1, sin1 = sin psi_1 and 0 <= eps < 1.
+def _half_film_excess(eps, cos1, sin1):
+    """(I_cc - pi/2, I_cs, I_ss - pi/2): the integrals of cos^2, sin cos and sin^2
+    of psi over (1 - eps cos psi)^3 on the half psi_1 < psi < psi_1 + pi, less
+    their value pi/2, 0, pi/2 at eps = 0, with cos1 = cos psi_1, sin1 = sin psi_1
+    and 0 <= eps < 1.
 
     Antiderivatives (D = 1 - eps cos psi, beta = sqrt(1 - eps^2); each checked
     by differentiating, and against quadrature in the tests):
 
-        1 / D^3 cos^2:   sin psi (a + b cos psi) / D^2 + k Phi,
-                         a = 3 eps / (2 beta^4), b = (1 - 4 eps^2) / (2 beta^4),
-                         k = (1 + 2 eps^2) / (2 beta^4)
-        1 / D^3 sin cos: -cos^2 psi / (2 D^2)
-        1 / D^3 sin^2:   sin psi (eps - cos psi) / (2 beta^2 D^2) + Phi / (2 beta^2)
-        1 / D:           Phi = (psi + 2 atan(eps sin psi / (1 + beta - eps cos psi))) / beta
+        cos^2 / D^3:   sin psi (a + b cos psi) / D^2 + k Phi,
+                       a = 3 eps / (2 beta^4), b = (1 - 4 eps^2) / (2 beta^4),
+                       k = (1 + 2 eps^2) / (2 beta^4)
+        sin cos / D^3: -cos^2 psi / (2 D^2)
+        sin^2 / D^3:   sin psi (eps - cos psi) / (2 beta^2 D^2) + Phi / (2 beta^2)
+        1 / D:         Phi = (psi + 2 atan(eps sin psi / (1 + beta - eps cos psi))) / beta
 
     (a, b, k from matching the derivative of sin psi (a + b cos psi) / D^2 + k Phi,
     a polynomial in cos psi over D^3, to the integrand.)  Phi is the continuous
     form of 2 / beta atan(sqrt((1 + eps) / (1 - eps)) tan(psi / 2)): its atan
-    argument has the denominator 1 + beta - eps cos psi >= beta + 1 - eps > 0, so
-    it has no branch jump and the half need not avoid psi = pi.  At the far end
-    psi_1 + pi: cos = -cos1, sin = -sin1.  None of the forms divides by eps.
+    argument has the denominator 1 + beta - eps cos psi >= 1 + beta - eps > 0, so
+    it has no branch jump and the half need not avoid psi = pi.
+
+    Between psi_1 and psi_1 + pi (where cos = -cos1, sin = -sin1), with
+    d1, d2 = 1 -+ eps cos1 and P = (d1 d2)^2: 1/d1^2 + 1/d2^2 = 2 (1 + eps^2 cos1^2) / P,
+    1/d1^2 - 1/d2^2 = 4 eps cos1 / P, and Phi grows by (pi + tau) / beta,
+    tau = -2 atan(eps sin1 / (1 + beta + eps cos1)) - 2 atan(eps sin1 / (1 + beta - eps cos1)).
+    The constant parts are taken out exactly:
+    pi k / beta - pi/2 = pi eps^2 (1 / (1 + beta) + 2 (1 + beta) - eps^2 beta) / (2 beta^5)
+    and pi / (2 beta^3) - pi/2 = pi eps^2 (1 + beta + beta^2) / (2 (1 + beta) beta^3)
+    (from 1 - beta = eps^2 / (1 + beta)), so every excess is an explicit multiple
+    of eps: near e = 0 the force's dependence on the direction of e (whose
+    derivative grows like 1 / |e|) is not a difference of large terms.
     """
-    beta2 = 1.0 - eps**2
+    eps2 = eps**2
+    beta2 = 1.0 - eps2
     beta = jnp.sqrt(beta2)
-    d1 = 1.0 - eps * cos1  # film at psi_1, over c
-    d2 = 1.0 + eps * cos1  # film at psi_1 + pi, over c
-    delta_phi = (jnp.pi
-                 - 2.0 * jnp.arctan(eps * sin1 / (1.0 + beta + eps * cos1))
-                 - 2.0 * jnp.arctan(eps * sin1 / (1.0 + beta - eps * cos1))) / beta
+    p = (1.0 - eps2 * cos1**2) ** 2  # (d1 d2)^2
+    tau = (-2.0 * jnp.arctan(eps * sin1 / (1.0 + beta + eps * cos1))
+           - 2.0 * jnp.arctan(eps * sin1 / (1.0 + beta - eps * cos1)))
     a = 3.0 * eps / (2.0 * beta2**2)
-    b = (1.0 - 4.0 * eps**2) / (2.0 * beta2**2)
-    k = (1.0 + 2.0 * eps**2) / (2.0 * beta2**2)
-    i_cc = -sin1 * (a - b * cos1) / d2**2 - sin1 * (a + b * cos1) / d1**2 + k * delta_phi
-    # -cos^2/(2 D^2) from psi_1 to psi_1 + pi: (cos1^2 / 2)(1/d1^2 - 1/d2^2), with
-    # d2^2 - d1^2 = 4 eps cos1
-    i_cs = 2.0 * eps * cos1**3 / (d1 * d2) ** 2
-    i_ss = (-sin1 * (eps + cos1) / d2**2 - sin1 * (eps - cos1) / d1**2
-            + delta_phi) / (2.0 * beta2)
-    return i_cc, i_cs, i_ss
+    b = (1.0 - 4.0 * eps2) / (2.0 * beta2**2)
+    k = (1.0 + 2.0 * eps2) / (2.0 * beta2**2)
+    beta3, beta5 = beta2 * beta, beta2**2 * beta
+    excess_cc = (-sin1 * a * 2.0 * (1.0 + eps2 * cos1**2) / p
+                 - 4.0 * eps * b * sin1 * cos1**2 / p + k * tau / beta
+                 + jnp.pi * eps2 * (1.0 / (1.0 + beta) + 2.0 * (1.0 + beta) - eps2 * beta)
+                 / (2.0 * beta5))
+    integral_cs = 2.0 * eps * cos1**3 / p
+    excess_ss = (eps * sin1 * (4.0 * cos1**2 - 2.0 - 2.0 * eps2 * cos1**2) / (2.0 * beta2 * p)
+                 + tau / (2.0 * beta3)
+                 + jnp.pi * eps2 * (1.0 + beta + beta2) / (2.0 * (1.0 + beta) * beta3))
+    return excess_cc, integral_cs, excess_ss
+
+
+def _half_film_integrals(eps, cos1, sin1):
+    """(I_cc, I_cs, I_ss) over the half psi_1 < psi < psi_1 + pi (see
+    `_half_film_excess`)."""
+    excess_cc, integral_cs, excess_ss = _half_film_excess(eps, cos1, sin1)
+    return 0.5 * jnp.pi + excess_cc, integral_cs, 0.5 * jnp.pi + excess_ss
 
 
 class ShortBearingFilm(AbstractContactLaw):
@@ -189,7 +216,7 @@ class ShortBearingFilm(AbstractContactLaw):
     and Gumbel cavitation (the model, its derivation and its limits are in the
     module docstring and docs/notes/lubricated-joint.md).
 
-    Arguments (each a float64 array leaf: sweep or differentiate them):
+    Arguments (each a float64 array leaf, `float_leaf`: sweep or differentiate them):
         viscosity: dynamic viscosity mu of the oil [Pa s] (> 0)
         length: axial length L of the bearing [m] (> 0; short-bearing theory
             wants L / D < ~0.5)
@@ -236,11 +263,11 @@ class ShortBearingFilm(AbstractContactLaw):
             v = concrete(value)
             if v is not None and v.ndim != 0:
                 raise InputError(f"{what} must be a scalar, got shape {v.shape}")
-        self.viscosity = jnp.asarray(viscosity, dtype=float)
-        self.length = jnp.asarray(length, dtype=float)
-        self.clearance = jnp.asarray(clearance, dtype=float)
-        self.max_eccentricity_ratio = jnp.asarray(max_eccentricity_ratio, dtype=float)
-        self.saturation_width = jnp.asarray(saturation_width, dtype=float)
+        self.viscosity = float_leaf(viscosity)
+        self.length = float_leaf(length)
+        self.clearance = float_leaf(clearance)
+        self.max_eccentricity_ratio = float_leaf(max_eccentricity_ratio)
+        self.saturation_width = float_leaf(saturation_width)
 
     def min_film_thickness(self, kin: PinKinematics) -> Float[Array, ""]:
         """h_min = c - |e| = c (1 - eps) [m] (smooth norm, finite at e = 0)."""
@@ -248,22 +275,36 @@ class ShortBearingFilm(AbstractContactLaw):
         return self.clearance - jnp.sqrt(e @ e + OFFSET_NORM_WIDTH**2)
 
     def _saturated(self, eps):
-        """min(eps, eps_max) = eps_max - ramp(eps_max - eps): exact below
-        eps_max - saturation_width, C1 across the band."""
-        return self.max_eccentricity_ratio - smoothing.ramp(
-            self.max_eccentricity_ratio - eps, self.saturation_width)
+        """min(eps, eps_max), smoothed: eps_max - ramp(eps_max - eps) with the
+        ramp of `smoothing` (width ``saturation_width``: exact below
+        eps_max - width, C1 across the band).  Written as eps minus an excess that
+        is exactly 0 below the band, so that eps_f = eps there to the last bit: a
+        rounded eps_max - (eps_max - eps) would differ from a tiny eps by ~1e-16,
+        which the direction's derivative (~ 1 / |e|) would amplify near e = 0."""
+        width = self.saturation_width
+        over = eps - (self.max_eccentricity_ratio - width)
+        excess = jnp.where(over <= 0.0, 0.0, over - width + smoothing.ramp(width - over, width))
+        return eps - excess
 
-    def _components(self, eps_f, squeeze, wedge, radius):
-        """(F_n, F_t) on the pin along n and t = k x n [N] from the saturated
-        eps, A = 2 eps_dot and B = eps (omega - 2 gamma_dot) [1/s]."""
+    def _film_factor(self, radius):
+        """K = mu R L^3 / (2 c^2) [N s]: the pressure 3 mu / c^2 (L^2/4 - z^2) times
+        the area R dtheta dz, integrated over z (L^3 / 6)."""
+        return self.viscosity * radius * self.length**3 / (2.0 * self.clearance**2)
+
+    def _excess_components(self, eps_f, squeeze, wedge, radius):
+        """The film force along n and t beyond its eps = 0 part
+        -K pi/2 (A n - B t) [N], from the saturated eps, A = 2 eps_dot and
+        B = eps (omega - 2 gamma_dot) [1/s]:
+        F_n = -K (A I_cc - B I_cs), F_t = -K (A I_cs - B I_ss)."""
         # the positive half starts at psi_1 = psi_V - pi/2, psi_V the direction of
         # V ~ (A, -B) from n: cos psi_1 = -B / |V|, sin psi_1 = -A / |V|.  At V = 0
         # the film carries nothing and any half will do (the force is A, B times it).
         v_dir, _ = _safe_unit(jnp.stack([squeeze, wedge]))
         cos1, sin1 = -v_dir[1], -v_dir[0]
-        i_cc, i_cs, i_ss = _half_film_integrals(eps_f, cos1, sin1)
-        k = self.viscosity * radius * self.length**3 / (2.0 * self.clearance**2)
-        return -k * (squeeze * i_cc - wedge * i_cs), -k * (squeeze * i_cs - wedge * i_ss)
+        excess_cc, integral_cs, excess_ss = _half_film_excess(eps_f, cos1, sin1)
+        k = self._film_factor(radius)
+        return (-k * (squeeze * excess_cc - wedge * integral_cs),
+                -k * (squeeze * integral_cs - wedge * excess_ss))
 
     def _torque(self, eps_f, tangential, omega, radius):
         """Viscous moment on the pin [N m] (module docstring)."""
@@ -284,7 +325,10 @@ class ShortBearingFilm(AbstractContactLaw):
         eps_f = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
         squeeze = 2.0 * jnp.asarray(eccentricity_rate, dtype=float)
         wedge = eps_f * (omega - 2.0 * jnp.asarray(line_rate, dtype=float))
-        radial, tangential = self._components(eps_f, squeeze, wedge, radius)
+        excess_n, excess_t = self._excess_components(eps_f, squeeze, wedge, radius)
+        k = self._film_factor(radius)
+        radial = -0.5 * jnp.pi * k * squeeze + excess_n
+        tangential = 0.5 * jnp.pi * k * wedge + excess_t
         return radial, tangential, self._torque(eps_f, tangential, omega, radius)
 
     def film(self, kin: PinKinematics) -> FilmForce:
@@ -297,10 +341,19 @@ class ShortBearingFilm(AbstractContactLaw):
         # (singular at e = 0): eps_dot = n . e_dot / c and eps gamma_dot = t . e_dot / c
         squeeze = 2.0 * (n @ kin.offset_rate) / self.clearance
         wedge = eps_f * kin.omega - 2.0 * (t @ kin.offset_rate) / self.clearance
-        radial, tangential = self._components(eps_f, squeeze, wedge, kin.pin_radius)
-        return FilmForce(force=radial * n + tangential * t,
+        excess_n, excess_t = self._excess_components(eps_f, squeeze, wedge, kin.pin_radius)
+        # the eps = 0 part -K pi/2 (A n - B t) = -K pi/2 (2 e_dot / c - eps_f omega t),
+        # written from e and e_dot (eps t = k x e / c below the saturation), so that it
+        # does not depend on the direction n, which is lost at e -> 0
+        saturation_loss = (eps - eps_f) * t
+        centred = -0.5 * jnp.pi * self._film_factor(kin.pin_radius) * (
+            2.0 * kin.offset_rate / self.clearance
+            - kin.omega * (perp(kin.offset) / self.clearance - saturation_loss))
+        force = centred + excess_n * n + excess_t * t
+        tangential = force @ t
+        return FilmForce(force=force,
                          torque=self._torque(eps_f, tangential, kin.omega, kin.pin_radius),
-                         radial=radial, tangential=tangential, eccentricity_ratio=eps,
+                         radial=force @ n, tangential=tangential, eccentricity_ratio=eps,
                          min_film_thickness=self.min_film_thickness(kin))
 
     def evaluate(self, kin: PinKinematics, memory: Float[Array, " m"],

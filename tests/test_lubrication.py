@@ -29,6 +29,22 @@ def _polar(eps, angle, clearance=C):
     return clearance * eps * np.array([np.cos(angle), np.sin(angle)])
 
 
+@pytest.mark.parametrize("eps", [0.0, 0.35, 0.9])
+@pytest.mark.parametrize("psi_1", [-3.0, -1.2, 0.4, 2.5])
+def test_half_film_integrals_match_quadrature(eps, psi_1):
+    """The closed forms of the three integrals over a half psi_1 .. psi_1 + pi
+    (including halves across psi = pi, where the textbook atan form jumps)."""
+    from scipy.integrate import quad
+
+    from diffwear.contact.lubrication import _half_film_integrals
+
+    closed = _half_film_integrals(jnp.asarray(eps), jnp.cos(psi_1), jnp.sin(psi_1))
+    for value, (f, g) in zip(closed, [(np.cos, np.cos), (np.sin, np.cos), (np.sin, np.sin)]):
+        ref = quad(lambda p: f(p) * g(p) / (1 - eps * np.cos(p)) ** 3, psi_1, psi_1 + np.pi,
+                   epsabs=1e-11, epsrel=1e-12, limit=200)[0]
+        assert float(value) == pytest.approx(ref, rel=1e-10, abs=1e-12)
+
+
 # ---------------------------------------------------------------- steady journal
 
 @pytest.mark.parametrize("eps", np.linspace(0.1, 0.9, 9))
@@ -177,8 +193,11 @@ def test_centred_squeeze_is_an_isotropic_damper():
     np.testing.assert_allclose(np.asarray(film.force), ref, rtol=1e-12)
 
 
-def test_line_of_centres_form_matches_the_offset_form():
-    eps, angle, rate, omega = 0.65, -1.4, np.array([0.8e-3, 1.9e-3]), 75.0
+@pytest.mark.parametrize("eps", [0.65, 1.2])
+def test_line_of_centres_form_matches_the_offset_form(eps):
+    """Also past eps_max (1.2): both evaluate the film at eps_max with the same
+    centre velocity."""
+    angle, rate, omega = -1.4, np.array([0.8e-3, 1.9e-3]), 75.0
     e = _polar(eps, angle)
     n = e / np.linalg.norm(e)
     eps_dot = n @ rate / C

@@ -81,9 +81,10 @@ overestimates the load of longer bearings), an incompressible isoviscous
 Newtonian film, laminar flow, rigid surfaces, an aligned journal and c << R.
 The forces grow like (1 - eps^2)^(-5/2): the film is evaluated at the
 eccentricity ratio min(eps, eps_max) (a C1 blend of width
-``saturation_width`` below eps_max), so it stays finite and differentiable for
-every offset; beyond eps_max the film force stops growing and a contact law
-must carry the load (see docs/notes/lubricated-joint.md).
+``saturation_width`` below eps_max) with the same centre velocity e_dot, so
+it stays finite and differentiable for every offset; beyond eps_max the film
+force stops growing and a contact law must carry the load (see
+docs/notes/lubricated-joint.md).
 """
 
 from __future__ import annotations
@@ -292,10 +293,9 @@ class ShortBearingFilm(AbstractContactLaw):
         return self.viscosity * radius * self.length**3 / (2.0 * self.clearance**2)
 
     def _excess_components(self, eps_f, squeeze, wedge, radius):
-        """The film force along n and t beyond its eps = 0 part
-        -K pi/2 (A n - B t) [N], from the saturated eps, A = 2 eps_dot and
-        B = eps (omega - 2 gamma_dot) [1/s]:
-        F_n = -K (A I_cc - B I_cs), F_t = -K (A I_cs - B I_ss)."""
+        """The parts of F_n = -K (A I_cc - B I_cs) and F_t = -K (A I_cs - B I_ss)
+        [N] beyond their eps = 0 values -K pi/2 A and K pi/2 B, from the
+        saturated eps, A = 2 eps_dot and B = eps omega - 2 eps gamma_dot [1/s]."""
         # the positive half starts at psi_1 = psi_V - pi/2, psi_V the direction of
         # V ~ (A, -B) from n: cos psi_1 = -B / |V|, sin psi_1 = -A / |V|.  At V = 0
         # the film carries nothing and any half will do (the force is A, B times it).
@@ -321,10 +321,12 @@ class ShortBearingFilm(AbstractContactLaw):
         angular rate gamma_dot [rad/s], the pin's spin omega relative to the
         bushing [rad/s] and the journal radius R [m].  The classical form; it
         needs eps > 0 for gamma_dot to exist (`film` works from the offset and
-        is safe at e = 0)."""
-        eps_f = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
+        is safe at e = 0).  Past eps_max the film is that at eps_max with the
+        same centre velocity (eps_dot, eps gamma_dot), as in `film`."""
+        eps = jnp.asarray(eccentricity_ratio, dtype=float)
+        eps_f = self._saturated(eps)
         squeeze = 2.0 * jnp.asarray(eccentricity_rate, dtype=float)
-        wedge = eps_f * (omega - 2.0 * jnp.asarray(line_rate, dtype=float))
+        wedge = eps_f * omega - 2.0 * eps * jnp.asarray(line_rate, dtype=float)
         excess_n, excess_t = self._excess_components(eps_f, squeeze, wedge, radius)
         k = self._film_factor(radius)
         radial = -0.5 * jnp.pi * k * squeeze + excess_n

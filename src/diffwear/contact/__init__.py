@@ -1,4 +1,5 @@
-"""Imperfect revolute joints: clearance, contact laws, friction, wear law, bushing profiles."""
+"""Imperfect revolute joints: clearance, contact laws, the hydrodynamic film, friction,
+wear law, bushing profiles."""
 
 from .archard import ArchardWear
 from .clearance_joint import (
@@ -17,6 +18,7 @@ from .laws import (
     KelvinVoigt,
     LankaraniNikravesh,
 )
+from .lubrication import FilmForce, ShortBearingFilm
 from .materials import PTFE, STEEL, Material
 from .profile import BushingProfile
 
@@ -24,5 +26,6 @@ __all__ = [
     "ClearanceJoint", "ContactHistory", "centred_state", "contact_history", "with_clearance",
     "CoulombFriction", "ArchardWear", "ContactResult", "PinKinematics",
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
-    "LankaraniNikravesh", "PTFE", "STEEL", "Material", "BushingProfile",
+    "LankaraniNikravesh", "FilmForce", "ShortBearingFilm", "PTFE", "STEEL", "Material",
+    "BushingProfile",
 ]

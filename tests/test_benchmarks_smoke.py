@@ -65,6 +65,7 @@ def _run_quick(tmp_path, cases):
     return out
 
 
+@pytest.mark.extended
 def test_quick_benchmark_subprocess_ci_cases(tmp_path):
     """The cheap cases in a subprocess: the JSON has its keys, the numbers are
     sane, and the SciPy peer (an independent NumPy implementation of the rig)

@@ -250,6 +250,7 @@ def _designs(count: int) -> np.ndarray:
     return np.concatenate([corners, 0.5 * (LOWER + UPPER)[None], inner])
 
 
+@pytest.mark.extended
 def test_life_jacobian_matches_central_differences_at_the_2mm_limit():
     """jax.jacfwd of (cyc1, cyc2) w.r.t. (d1, d2, h1, h2) against central
     differences of the same model (relative step 1e-4) within 1e-4 of each
@@ -324,6 +325,7 @@ def test_wear_study_options_of_the_dynamic_model_are_refused(tmp_path, capsys, e
 
 
 # ------------------------------------------------------------ sweep model
+@pytest.mark.extended
 def test_rig_wear_sweep_model_on_the_quasi_static_model():
     """`RigWear(wear_model=QuasiStatic())`: the rig's depth and volume as in the
     study, and exact gradients w.r.t. all six swept parameters (k, clearance,

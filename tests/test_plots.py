@@ -352,6 +352,27 @@ def test_the_other_figures_keep_their_legends_and_labels_clear(tmp_path):
         _assert_no_zero_axes(fig)
 
 
+
+def test_a_sweeps_long_title_is_wrapped_inside_the_figure(tmp_path):
+    """The heatmap and line of a sweep are titled "<file title>: <output>"; the
+    shipped rig sweep file's title makes that wider than the figure, so it
+    is broken into lines that all lie inside it."""
+    from diffwear.plots import sweep as plots_sweep
+
+    title = ("Rig: clearance x wear coefficient (Ch. 7, 21,400 cycles): "
+             "mean_joint_force_N")  # design_studies/sweep_rig_clearance_k.toml's title
+    c, k = np.array([2e-5, 3.3e-5, 5e-5, 1e-4]), np.geomspace(2.525e-13, 7.575e-13, 4)
+    with plots.captured() as figures:
+        plots_sweep.heatmap(tmp_path / "map.png", k, c, np.outer(c, k) * 1e15,
+                            xlabel="k [1/Pa]", ylabel="clearance [m]", title=title)
+        plots_sweep.line(tmp_path / "line.png", c, c ** 2, xlabel="clearance [m]",
+                         ylabel="y", title=title)
+    assert len(figures) == 2
+    for fig in figures.values():
+        text = fig.axes[0].get_title()
+        assert "\n" in text and text.replace("\n", " ") == title
+        _assert_inside_the_figure(fig)
+
 # ----------------------------------------------------------------------------- calibration
 
 

@@ -5,6 +5,7 @@ wall and the depth limit drawn as labelled lines on a wear-depth axis."""
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Mapping
 
 import numpy as np
@@ -19,10 +20,20 @@ from numpy.typing import ArrayLike
 # this small could not be seen on the panel either (a pixel is ~3e-3 of it).
 ROUND_OFF = 1e-9
 
+# Characters of a title line at 9-10 pt over the axes of the 6-8.6 in figures
+# (~5 in beside a legend or colour bar: 360 pt at ~4.7-5 pt a character).
+TITLE_WIDTH = 70
+
 # A bushing wall more than this many times the deepest wear (or the limit)
 # is named in the legend but not drawn to scale: on the same axis the wear
 # would be squeezed into the bottom third of the panel.
 WALL_IN_VIEW = 3.0
+
+
+def wrapped(title: str, width: int = TITLE_WIDTH) -> str:
+    """A title broken into lines that fit its axes (`TITLE_WIDTH`; a figure's
+    suptitle over several axes passes its own width)."""
+    return textwrap.fill(title, width)
 
 
 def legend_outside(ax: Axes, *, fontsize: float = 8, below: bool = False,

@@ -3,7 +3,6 @@ loci, wear profiles (PNG)."""
 
 from __future__ import annotations
 
-import textwrap
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import cast
@@ -21,7 +20,7 @@ from ..wear.status import (
     STATUS_TEXT,
 )
 from .files import save
-from .layout import depth_references, legend_outside, nonzero
+from .layout import depth_references, legend_outside, nonzero, wrapped
 
 
 def stacked(
@@ -54,7 +53,7 @@ def stacked(
     if not kept:  # a figure that says so, rather than none
         fig, ax = plt.subplots(figsize=(8.6, 2.4))
         ax.set_axis_off()
-        ax.set_title(textwrap.fill(title, 70), fontsize=10)
+        ax.set_title(wrapped(title), fontsize=10)
         return save(fig, path, dpi=120)
     fig, axes = plt.subplots(len(kept), 1, figsize=(8.6, 0.6 + 2.4 * len(kept)), sharex=True)
     axes = np.atleast_1d(axes)
@@ -70,7 +69,7 @@ def stacked(
             ax.set_yscale("log")
         legend_outside(ax)
     axes[-1].set_xlabel(xlabel)
-    axes[0].set_title(textwrap.fill(title, 70), fontsize=10)
+    axes[0].set_title(wrapped(title), fontsize=10)
     return save(fig, path, dpi=120)
 
 
@@ -90,7 +89,7 @@ def polar_loci(path: Path, loci: Mapping[str, tuple[np.ndarray, np.ndarray]], *,
             cast(PolarAxes, ax).set_rmax(rmax)
         ax.set_title(label, fontsize=8)
         ax.tick_params(labelsize=6)
-    fig.suptitle(textwrap.fill(title + f"  (radius: {radius_label})", 90), fontsize=9)
+    fig.suptitle(wrapped(title + f"  (radius: {radius_label})", 90), fontsize=9)
     return save(fig, path, dpi=110)
 
 
@@ -125,7 +124,7 @@ def wear_panels(path: Path, profiles: Mapping[str, tuple[np.ndarray, np.ndarray]
     for ax in (a, b):
         ax.grid(alpha=0.3)
     legend_outside(b)
-    fig.suptitle(textwrap.fill(title, 100), fontsize=10)
+    fig.suptitle(wrapped(title, 100), fontsize=10)
     return save(fig, path, dpi=110)
 
 
@@ -155,9 +154,15 @@ def stop_words(status: int) -> str:
         status, STATUS_TEXT.get(status, f"status {status}"))
 
 
+def closed(x, y, period: float) -> tuple[np.ndarray, np.ndarray]:
+    """A periodic curve sampled once over its period (``x`` from its first
+    sample, not repeating it a period on) with the first point repeated one
+    ``period`` on, so that a line drawn through it closes."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    return np.append(x, x[0] + period), np.append(y, y[0])
+
+
 def closed_profile(theta, depth) -> tuple[np.ndarray, np.ndarray]:
     """A profile on the bushing grid (theta [rad] from 0, not repeating 2 pi)
     as angle [deg] and value, closed at 360 deg."""
-    deg = np.degrees(np.asarray(theta, dtype=float))
-    y = np.asarray(depth, dtype=float)
-    return np.append(deg, deg[0] + 360.0), np.append(y, y[0])
+    return closed(np.degrees(np.asarray(theta, dtype=float)), depth, 360.0)

@@ -7,11 +7,7 @@ import numpy as np
 
 from .files import save
 from .layout import legend_outside
-
-
-def _closed(angle_deg, y):
-    """Profiles on -180 .. 180 deg, the first point repeated at +180."""
-    return np.append(angle_deg, angle_deg[0] + 360.0), np.append(y, y[0])
+from .panels import closed  # profiles on -180 .. 180 deg, closed at +180
 
 
 def profile_figure(path, *, angle_deg, simulated, direct, pressure, title):
@@ -22,14 +18,14 @@ def profile_figure(path, *, angle_deg, simulated, direct, pressure, title):
     a = angle_deg[order]
     fig, axes = plt.subplots(2, 1, figsize=(9.5, 6), sharex=True)
     for label, prof in simulated.items():
-        axes[0].plot(*_closed(a, prof[order]), "-", lw=1.6, label=label)
+        axes[0].plot(*closed(a, prof[order], 360.0), "-", lw=1.6, label=label)
     for label, prof in direct.items():
-        axes[0].plot(*_closed(a, prof[order]), "--", lw=1.2, label=label)
+        axes[0].plot(*closed(a, prof[order], 360.0), "--", lw=1.2, label=label)
     axes[0].set_ylabel("wear depth [mm]")
     axes[0].grid(alpha=0.3)
     legend_outside(axes[0])
     axes[0].set_title(title, fontsize=10)
-    axes[1].plot(*_closed(a, pressure[order]), "k-", lw=1.4)
+    axes[1].plot(*closed(a, pressure[order], 360.0), "k-", lw=1.4)
     axes[1].set_ylabel("pressure at φ = 0 [MPa]")
     axes[1].set_xlabel("angle from the load direction [deg] (pin: in the pin's frame)")
     axes[1].set_xlim(-180, 180)

@@ -4,7 +4,6 @@ of a grid, tornado plots of elasticities, histograms of sampled outputs."""
 from __future__ import annotations
 
 import math
-import textwrap
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -12,17 +11,7 @@ import numpy as np
 
 from ..errors import InputError
 from .files import save
-from .layout import legend_outside
-
-# Characters of a title line at 9 pt over the axes of these 6-6.4 in figures
-# (~4.9 in beside a colour bar: 350 pt at ~4.7 pt a character).
-TITLE_WIDTH = 70
-
-
-def _wrapped(title: str) -> str:
-    """A title broken into lines that fit the axes (a sweep's title carries the
-    file's title and the output's name, often wider than the figure)."""
-    return textwrap.fill(title, TITLE_WIDTH)
+from .layout import legend_outside, wrapped
 
 
 def geometric(v) -> bool:
@@ -51,7 +40,7 @@ def heatmap(path, x, y, z, *, xlabel: str, ylabel: str, title: str, annotate: bo
                         color="w")
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.set_title(_wrapped(title), fontsize=9)
+    ax.set_title(wrapped(title), fontsize=9)
     return save(fig, path, dpi=110)
 
 
@@ -64,7 +53,7 @@ def line(path, x, y, *, xlabel: str, ylabel: str, title: str) -> Path:
     ax.grid(alpha=0.3)
     if geometric(x):
         ax.set_xscale("log")
-    ax.set_title(_wrapped(title), fontsize=9)
+    ax.set_title(wrapped(title), fontsize=9)
     return save(fig, path, dpi=110)
 
 
@@ -85,7 +74,7 @@ def tornado(path, sens, output: str, *, rel_change: float = 0.1,
     ax.axvline(0, color="k", lw=0.8)
     ax.set_xlabel(f"change of {output} [%] for p x (1 +- {rel_change:g}) "
                   "(red: +, blue: -; linearised)")
-    ax.set_title(_wrapped(title or f"sensitivity of {output} ({sens.method})"), fontsize=9)
+    ax.set_title(wrapped(title or f"sensitivity of {output} ({sens.method})"), fontsize=9)
     lim = max([abs(100 * v * rel_change) for v in e.values() if math.isfinite(v)] + [1e-12])
     ax.set_xlim(-1.35 * lim, 1.35 * lim)
     return save(fig, path, dpi=110)
@@ -116,7 +105,7 @@ def histogram(path, prop, output: str, *, bins: int = 20, xlabel: str | None = N
     ax.set_xlabel(xlabel or output)
     ax.set_ylabel("density")
     legend_outside(ax)
-    ax.set_title(_wrapped(title or (f"{output}: {prop.name} {prop.distribution}, "
+    ax.set_title(wrapped(title or (f"{output}: {prop.name} {prop.distribution}, "
                                     f"+-{100 * prop.scatter:.0f} %")),
                  fontsize=9)
     return save(fig, path, dpi=110)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import textwrap
 from collections.abc import Mapping
 
 import matplotlib.pyplot as plt
@@ -11,8 +10,8 @@ from matplotlib.axes import Axes
 
 from ..wear.status import STATUS_OK
 from .files import save
-from .layout import depth_references, legend_outside
-from .panels import closed_profile, stop_words
+from .layout import depth_references, legend_outside, wrapped
+from .panels import closed, closed_profile, stop_words
 
 # Margin around the locus panel's data, as a fraction of its larger span: the
 # curves stay clear of the frame (a line on the frame is half hidden by it).
@@ -49,8 +48,8 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
            xticks=np.arange(0, 361, 45))
     ax.grid(alpha=0.3)
     legend_outside(ax)
-    ax.set_title(textwrap.fill(f"{name}: bushing wear profile {after} "
-                               "(cf. Figs. 5-5/6-9/7-4/7-5)", 70), fontsize=10)
+    ax.set_title(wrapped(f"{name}: bushing wear profile {after} "
+                         "(cf. Figs. 5-5/6-9/7-4/7-5)"), fontsize=10)
     figs = [save(fig, out.file("wear_profile.png"), dpi=120).name]
 
     fig, axes = plt.subplots(2, 1, figsize=(8.6, 5), sharex=True)
@@ -70,8 +69,7 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, cle
     for ax in axes:
         ax.grid(alpha=0.3)
         legend_outside(ax)
-    axes[0].set_title(textwrap.fill(f"{name}: wear {after} (markers: {markers})", 70),
-                      fontsize=10)
+    axes[0].set_title(wrapped(f"{name}: wear {after} (markers: {markers})"), fontsize=10)
     figs.append(save(fig, out.file("wear_history.png"), dpi=120).name)
 
     # constrained layout: tight layout squeezes the square locus panel with
@@ -101,8 +99,8 @@ def locus_panel(ax: Axes, loci: Mapping[str, np.ndarray], *, clearance_mm: float
     t = np.linspace(0.0, 2 * np.pi, 361)
     ax.plot(clearance_mm * np.cos(t), clearance_mm * np.sin(t), "k:", lw=0.9,
             label=f"clearance circle, c = {clearance_mm:.4g} mm")
-    th = np.append(np.asarray(theta, dtype=float), float(theta[0]) + 2 * np.pi)
-    r = clearance_mm + np.append(np.asarray(depth_mm, dtype=float), float(depth_mm[0]))
+    th, depth = closed(theta, depth_mm, 2 * np.pi)
+    r = clearance_mm + depth
     ax.plot(r * np.cos(th), r * np.sin(th), "-", color="0.45", lw=1.2,
             label="worn bushing: c + wear depth")
     for tag, off in loci.items():

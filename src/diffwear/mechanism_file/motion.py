@@ -75,8 +75,7 @@ def integrate(mfile: MechanismFile, y0, t0: float = 0.0) -> Trajectory:
     duration; `SolverError` (naming the file) if the solve failed.  A start
     other than 0 continues a run from one of its states (the drivers' angles
     are functions of the time)."""
-    traj = _integrate(mfile.mechanism, y0, mfile.simulation, jax.numpy.asarray(float(t0)))
-    return traj.raise_if_failed(mfile.file, mfile.mechanism)
+    return integrate_timed(mfile, y0, t0).trajectory
 
 
 class Timed(NamedTuple):

@@ -13,6 +13,7 @@ import pytest
 from matplotlib.lines import Line2D
 
 from diffwear import plots
+from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
 from diffwear.plots import calibration as plots_calibration
 from diffwear.plots import wear as plots_wear
@@ -411,96 +412,23 @@ def test_calibration_fits_plot_angles_in_degrees(tmp_path):
 
 # ----------------------------------------------------------------------------- a user's file
 
-# A new user's slider-crank (the Ch. 7 rig's numbers, Tables 7-1, 7-2) with a
-# 1 mm bushing wall and 100x the PTFE wear coefficient: the joint wears
-# through in a few hundred cycles on the quasi-static model.
-THIN_WALL_RIG = """
-title = "thin-walled rig"
+# A new user's slider-crank: the shipped Ch. 7 rig file (Tables 7-1, 7-2)
+# copied and edited, as the README's tour starts one, to a 1 mm bushing wall
+# and 100x the PTFE wear coefficient: the joint wears through in a few
+# hundred cycles on the quasi-static model.
+def _edited(text: str, *edits: tuple[str, str]) -> str:
+    for old, new in edits:
+        assert old in text, old
+        text = text.replace(old, new, 1)
+    return text
 
-[[bodies]]
-name = "crank"
-mass = "0.4045 kg"
-inertia = "204e-6 kg m^2"
 
-[[bodies]]
-name = "rod"
-mass = "0.8175 kg"
-inertia = "5500e-6 kg m^2"
-
-[[bodies]]
-name = "slider"
-mass = "8.5 kg"
-inertia = "1 kg m^2"
-
-[[joints]]
-type = "revolute"
-name = "ground_crank"
-body_i = "crank"
-body_j = "ground"
-point_i = ["-0.0381 m", "0 m"]
-point_j = ["0 m", "0 m"]
-
-[[joints]]
-type = "clearance"
-name = "crank_rod"
-pin_body = "crank"
-pin_point = ["0.0381 m", "0 m"]
-bushing_body = "rod"
-bushing_point = ["-0.1016 m", "0 m"]
-pin_radius = "9.5 mm"
-bushing_radius = "9.533 mm"
-bushing_material = "ptfe"
-friction = { coefficient = 0.13 }
-n_theta = 180
-law = { type = "elastic-foundation", layer_thickness = "1 mm", depth = "13.1 mm" }
-wear = { coefficient = "5.05e-2 mm^3/(N m)" }
-
-[[joints]]
-type = "revolute"
-name = "rod_slider"
-body_i = "rod"
-body_j = "slider"
-point_i = ["0.1016 m", "0 m"]
-point_j = ["0 m", "0 m"]
-
-[[joints]]
-type = "translational"
-name = "slider_guide"
-body_i = "slider"
-body_j = "ground"
-
-[[joints]]
-type = "driver"
-name = "driver"
-body = "crank"
-omega = "30 rpm"
-
-[[forces]]
-type = "gravity"
-
-[[forces]]
-type = "spring"
-name = "slider_spring"
-body_i = "ground"
-point_i = ["1 m", "0 m"]
-body_j = "slider"
-point_j = ["0 m", "0 m"]
-stiffness = "525.4 N/m"
-free_length = "0.5479 m"
-
-[initial]
-crank  = { x = "0.0381 m", y = "0 m", phi = "0 deg" }
-rod    = { x = "0.1778 m", y = "0 m", phi = "0 deg" }
-slider = { x = "0.2794 m", y = "0 m", phi = "0 deg" }
-
-[simulation]
-duration = "2 s"
-n_save = 201
-
-[outputs]
-reactions = ["driver"]
-contact = ["crank_rod"]
-"""
+THIN_WALL_RIG = _edited(
+    (SHIPPED_MECHANISMS / "rig.toml").read_text(),
+    ('layer_thickness = "6.342 mm", depth = "13.1 mm", restitution = 0.8',
+     'layer_thickness = "1 mm", depth = "13.1 mm"'),
+    ('coefficient = "5.05e-4 mm^3/(N m)"', 'coefficient = "5.05e-2 mm^3/(N m)"'),
+    ("n_save = 401", "n_save = 201"))
 
 
 @pytest.mark.extended  # ~80 s: the command compiles the motion, the wear and the life

@@ -8,6 +8,7 @@ constraint writes its Jacobian by hand.
 from __future__ import annotations
 
 import abc
+import math
 from typing import ClassVar
 
 import equinox as eqx
@@ -134,6 +135,13 @@ class Driver(AbstractConstraint):
     @property
     def bodies(self):
         return (self.body,)
+
+    @property
+    def period(self) -> float:
+        """One revolution, 2 pi / |omega| [s], as a number (the cycle that wear
+        and reports count; infinite for a driver at rest)."""
+        speed = abs(float(self.omega))
+        return 2 * math.pi / speed if speed > 0 else math.inf
 
     def residual(self, frames, t):
         return jnp.atleast_1d(frames.pose(self.body)[2] - self.angle0 - self.omega * t)

@@ -12,7 +12,6 @@ which one failed: `initial_state` (assembly; `InputError`), `integrate`
 from __future__ import annotations
 
 import functools
-import math
 import time
 from typing import Any, NamedTuple, cast
 
@@ -156,7 +155,7 @@ def force_signals(mfile: MechanismFile, r: Results) -> dict[str, np.ndarray]:
 def _cycle_period(mechanism: Mechanism) -> float | None:
     """One revolution of the first driver [s], or None without a turning driver."""
     driver = first_driver(mechanism)
-    return None if driver is None else 2 * math.pi / abs(float(driver.omega))
+    return None if driver is None else driver.period
 
 
 def start_up_transient(mfile: MechanismFile, r: Results) -> Settling:
@@ -238,7 +237,7 @@ def check_motion(mfile: MechanismFile, y0) -> None:
     if driver is None or not fully_driven(ideal):
         return
     sim = mfile.simulation
-    span = min(sim.duration, 2 * math.pi / abs(float(driver.omega)))
+    span = min(sim.duration, driver.period)
     q0, _, _ = ideal.split(y0)
     ts = np.linspace(0.0, span, MOTION_SAMPLES)
     check_cycle_motion(ideal, q0, ts, what=str(mfile.file), driver=f"driver {driver.name!r}")

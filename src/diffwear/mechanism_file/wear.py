@@ -55,7 +55,7 @@ def drive(mfile: MechanismFile) -> Driver:
 
 def drive_period(mfile: MechanismFile) -> float:
     """2 pi / |omega| of `drive`: the period of one cycle [s]."""
-    return 2 * math.pi / abs(float(drive(mfile).omega))
+    return drive(mfile).period
 
 
 def bushing_walls(mfile: MechanismFile, joints, limit: float | None = None) -> list[float]:

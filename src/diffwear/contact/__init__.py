@@ -20,12 +20,14 @@ from .laws import (
 )
 from .lubrication import FilmForce, ShortBearingFilm
 from .materials import PTFE, STEEL, Material
+from .mixed import Lubrication, MixedLubrication
 from .profile import BushingProfile
 
 __all__ = [
     "ClearanceJoint", "ContactHistory", "centred_state", "contact_history", "with_clearance",
     "CoulombFriction", "ArchardWear", "ContactResult", "PinKinematics",
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
-    "LankaraniNikravesh", "FilmForce", "ShortBearingFilm", "PTFE", "STEEL", "Material",
+    "LankaraniNikravesh", "FilmForce", "ShortBearingFilm", "Lubrication", "MixedLubrication",
+    "PTFE", "STEEL", "Material",
     "BushingProfile",
 ]

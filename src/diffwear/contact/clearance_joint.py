@@ -26,7 +26,7 @@ from . import smoothing
 from .archard import SLIP_RATE_WIDTH, ArchardWear
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
-from .laws import AbstractContactLaw, ElasticFoundation
+from .laws import AbstractContactLaw
 from .linearised import LinearisedLaw
 from .profile import BushingProfile
 
@@ -65,10 +65,11 @@ class ClearanceJoint(AbstractForceElement):
             )
         if not isinstance(law, AbstractContactLaw):
             raise InputError(f"clearance joint {name!r}: law must be a contact law, got {law!r}")
-        if wear is not None and not isinstance(law, ElasticFoundation):
+        if wear is not None and law.solid_contact is None:
             raise InputError(
                 f"clearance joint {name!r}: wear needs a pressure distribution: use the "
-                "ElasticFoundation contact law"
+                "ElasticFoundation contact law (or MixedLubrication, whose asperities "
+                "carry one)"
             )
         self.pin_radius = jnp.asarray(pin_radius, dtype=float)
         self.bushing_radius = jnp.asarray(bushing_radius, dtype=float)

@@ -59,6 +59,13 @@ class AbstractContactLaw(eqx.Module):
     def initial_memory(self) -> Float[Array, " m"]:
         return jnp.zeros(self.n_memory)
 
+    @property
+    def solid_contact(self) -> "ElasticFoundation | None":
+        """The elastic foundation whose pressure on the bushing grid wears it
+        (Archard), or None: a point law has no pressure distribution and a
+        film alone does not touch the bushing."""
+        return None
+
     @abc.abstractmethod
     def evaluate(
         self,
@@ -268,6 +275,10 @@ class ElasticFoundation(AbstractContactLaw):
         ln_e = jnp.log(restitution)
         zeta = -ln_e / jnp.sqrt(jnp.pi**2 + ln_e**2)
         return 2.0 * zeta / jnp.sqrt(contact_stiffness / mass)
+
+    @property
+    def solid_contact(self) -> "ElasticFoundation":
+        return self
 
     def contact_stiffness(self, radius) -> Float[Array, ""]:
         """Small-penetration radial stiffness of a full half-circle contact,

@@ -37,8 +37,8 @@ from ..wear.life import LifeResult
 from ..wear.model import AbstractWearModel
 from ..wear.profile_ode import ProfileHistory, ProfileSolution, integrate_profile
 from ..wear.status import STATUS_CONTACT_LOSS, STATUS_INCOMPLETE, STATUS_OK, STATUS_SOLVER
-from .joint import QuasiStaticJoint
 from .loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
+from .lubricated import joint_model
 
 
 class QuasiStaticEvolution(eqx.Module):
@@ -127,8 +127,8 @@ class QuasiStatic(AbstractWearModel):
                            warmup_cycles=self.warmup_cycles, rtol=self.load_rtol,
                            atol=self.load_rtol)
 
-    def joints(self, mech: Mechanism, joints) -> tuple[QuasiStaticJoint, ...]:
-        return tuple(QuasiStaticJoint.from_joint(j) for j in clearance_joints(mech, joints))
+    def joints(self, mech: Mechanism, joints) -> tuple:
+        return tuple(joint_model(j) for j in clearance_joints(mech, joints))
 
     def masses(self, mech: Mechanism, joints) -> tuple:
         if self.contact_mass is not None:
@@ -154,7 +154,7 @@ class QuasiStatic(AbstractWearModel):
         walls = (jnp.full(len(models), jnp.inf) if walls is None
                  else jnp.broadcast_to(jnp.asarray(walls, dtype=float), (len(models),)))
 
-        def one(j: QuasiStaticJoint, lo: JointLoads, mass, wall):
+        def one(j, lo: JointLoads, mass, wall):
             def evaluate(h, offsets):
                 # warm start: the pin offsets of the previous step's profile
                 dh, _, eq = j.cycle_wear(h, lo, offsets)

@@ -80,12 +80,13 @@ def clearance_element(mech: Mechanism, joint: str) -> tuple[int, ClearanceJoint]
 
 
 def wear_parts(el: ClearanceJoint) -> tuple[ElasticFoundation, ArchardWear]:
-    """The elastic-foundation law and the Archard wear of a wearing joint
-    (the wear routes read the foundation's bushing depth and stiffness)."""
-    if not isinstance(el.law, ElasticFoundation) or el.wear is None:
+    """The elastic foundation that carries the joint's wearing contact (the
+    dry law, or a lubricated joint's asperities) and its Archard wear (the
+    wear routes read the foundation's bushing depth and stiffness)."""
+    if el.law.solid_contact is None or el.wear is None:
         raise InputError(f"clearance joint {el.name!r}: its wear needs the elastic-foundation "
                          f"law and a wear law, got {type(el.law).__name__} and {el.wear!r}")
-    return el.law, el.wear
+    return el.law.solid_contact, el.wear
 
 
 def reset_wear(mech: Mechanism, joint: str, y: Float[Array, " s"]) -> Float[Array, " s"]:

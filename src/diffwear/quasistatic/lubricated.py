@@ -1,0 +1,251 @@
+"""The lubricated joint at equilibrium: film plus asperities, wear of one cycle.
+
+Quasi-static reduction of a `MixedLubrication` joint.  At each sample of the
+cycle the pin sits where the film and the asperities together carry the
+joint load W (the force the pin exerts on the bushing, bushing frame):
+
+    F_film(e; omega) + F_asperity(e) + W = 0,
+
+with the journal's centre at rest relative to the bushing (e_dot = 0): the
+steadily loaded journal bearing at each instant, whose eccentricity follows
+the classic relation between eps and the Sommerfeld number (for the short
+bearing, W = mu U L^3 eps / (4 c^2 (1 - eps^2)^2) sqrt(16 eps^2 + pi^2 (1 -
+eps^2)), U = omega R).  The squeeze film and the whirl of the line of centres
+are neglected (both are in the dynamic model); so is the film's response to
+a load that turns with the journal.  The asperities carry what the film does
+not where h_min falls to lambda_c sigma (`MixedLubrication`), with the
+foundation's springs and the dry joint's friction, so a rough or thin-film
+joint tends to the dry `QuasiStaticJoint`.
+
+The offset is found by a damped Newton method on the 2 x 2 balance (the film's
+cross-coupled force makes it non-symmetric: no energy to minimise, unlike the
+dry joint) from the better of two starts: the film-only solution of the round
+bore (exact there: the film's load grows monotonically with eps, and its
+direction turns rigidly with e) and the dry equilibrium on the asperity
+summits.  Derivatives by the implicit-function theorem: the converged offset
+is corrected by one Newton step with the Jacobian held constant, which leaves
+its value unchanged to the solver's tolerance and gives it the derivative
+-J^-1 dr/dtheta in forward and reverse mode alike (no unrolled iterations).
+
+Wear per cycle: Archard's law on the asperity pressure, summed over the
+samples as for the dry joint; its response to the profile by forward-mode
+differentiation of that sum (exact, through the implicit derivative).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jax import lax
+from jaxtyping import Array, Bool, Float
+
+from ..contact.clearance_joint import ClearanceJoint
+from ..contact.kinematics import PinKinematics
+from ..contact.mixed import MixedLubrication
+from ..contact.profile import BushingProfile
+from ..errors import InputError
+from ..mechanism.geometry import perp, safe_norm
+from .joint import QuasiStaticJoint, _solve_2x2, pin_offset
+from .loads import JointLoads
+
+# Newton tolerance on the force balance, relative to the load: 1e-10.
+BALANCE_TOL = 1e-10
+_NEWTON_STEPS = 60
+# eccentricity ratios of the film-only start's table (the film's load grows
+# monotonically with eps; the start interpolates it in log-load)
+_START_RATIOS = jnp.concatenate([jnp.linspace(0.0, 0.9, 19)[1:], jnp.linspace(0.91, 0.995, 18)])
+_LOAD_FLOOR = 1e-9  # N: below it the balance is scaled by this floor
+
+
+class LubricatedEquilibrium(eqx.Module):
+    """The lubricated pin at equilibrium at every sample of a cycle.
+
+    offset: pin centre minus bushing centre, bushing frame [m] (S, 2)
+    pressure: asperity pressure p(theta_k) [Pa] (S, n)
+    normal_load: asperity normal load [N] (S,)
+    film_load: |film force| [N] (S,)
+    min_film_thickness: h_min [m] (S,)
+    film_ratio: lambda = h_min / sigma (S,)
+    ok: every Newton solve converged
+    """
+
+    offset: Float[Array, "S 2"]
+    pressure: Float[Array, "S n"]
+    normal_load: Float[Array, " S"]
+    film_load: Float[Array, " S"]
+    min_film_thickness: Float[Array, " S"]
+    film_ratio: Float[Array, " S"]
+    ok: Bool[Array, ""]
+
+    @property
+    def asperity_share(self) -> Float[Array, " S"]:
+        """Asperity load / (asperity + film load) per sample."""
+        total = self.normal_load + self.film_load
+        return self.normal_load / jnp.where(total > 0.0, total, 1.0)
+
+
+class LubricatedQuasiStaticJoint(eqx.Module):
+    """A `MixedLubrication` clearance joint with Archard wear, in the
+    quasi-static reduction (module notes).  ``dry`` is the same joint with its
+    asperities' foundation as the law (it supplies the grid, the sliding rate,
+    the contact check and the dry start)."""
+
+    law: MixedLubrication
+    dry: QuasiStaticJoint
+
+    @classmethod
+    def from_joint(cls, joint: ClearanceJoint) -> "LubricatedQuasiStaticJoint":
+        if not isinstance(joint.law, MixedLubrication):
+            raise InputError(f"clearance joint {joint.name!r} is not lubricated "
+                             f"(law {type(joint.law).__name__})")
+        dry = eqx.tree_at(lambda j: j.law, joint, joint.law.asperity)
+        return cls(law=joint.law, dry=QuasiStaticJoint.from_joint(dry))
+
+    @property
+    def n(self) -> int:
+        return self.dry.n
+
+    def _kinematics(self, offset, omega) -> PinKinematics:
+        return PinKinematics(offset=offset, offset_rate=jnp.zeros(2), omega=omega,
+                             pin_radius=self.dry.pin_radius,
+                             bushing_radius=self.dry.bushing_radius)
+
+    def _profile(self, clearance) -> BushingProfile:
+        return eqx.tree_at(lambda p: p.clearance, BushingProfile.circular(0.0, self.n),
+                           clearance)
+
+    def _parts(self, offset, omega, clearance):
+        return self.law.lubrication(self._kinematics(offset, omega), jnp.zeros(0),
+                                    self._profile(clearance), self.dry.friction)
+
+    def _balance(self, offset, load, omega, clearance):
+        """F_film + F_asperity + W [N]: zero at equilibrium."""
+        parts = self._parts(offset, omega, clearance)
+        return parts.film.force + parts.asperity.force + load
+
+    def _film_start(self, load, omega, clearance):
+        """The film-only equilibrium of a round bore of the mean clearance."""
+        c = jnp.mean(clearance)
+        round_bore = jnp.full_like(clearance, c)
+        film = self.law.local_film(self._kinematics(jnp.array([c, 0.0]), omega),
+                                   self._profile(round_bore))
+        ratios = jnp.minimum(_START_RATIOS, film.max_eccentricity_ratio)
+        forces = jax.vmap(lambda r: film.film(
+            self._kinematics(jnp.array([r * c, 0.0]), omega)).force)(ratios)
+        sizes = jnp.log(safe_norm(forces) + 1e-300)
+        size = jnp.log(jnp.maximum(safe_norm(load), 1e-300))
+        ratio = jnp.interp(size, sizes, ratios)
+        force = film.film(self._kinematics(jnp.array([ratio * c, 0.0]), omega)).force
+        # turn e so that the film's force opposes the load (the steady film of a
+        # round bore turns rigidly with e)
+        want = -load
+        cos_t = force @ want
+        sin_t = force[0] * want[1] - force[1] * want[0]
+        turn = jnp.arctan2(sin_t, cos_t)
+        return ratio * c * jnp.array([jnp.cos(turn), jnp.sin(turn)])
+
+    def _solve(self, load, omega, clearance, guess):
+        """Damped Newton on the balance from the better start (no derivatives)."""
+        scale = jnp.maximum(safe_norm(load), _LOAD_FLOOR)
+        c0 = jnp.mean(clearance)
+
+        def residual(x):
+            return self._balance(c0 * x, load, omega, clearance) / scale
+
+        dry = self.dry
+        kc = dry.foundation.contact_stiffness(dry.bushing_radius)
+        f = dry.friction.factor(dry.pin_radius * omega)
+        w_eff = (load - f * perp(load)) / (1.0 + f * f)
+        summits = clearance - self.law.onset_gap
+        dry_start, _ = pin_offset(summits, w_eff, kc, dry.foundation.penetration_width)
+        starts = jnp.stack([self._film_start(load, omega, clearance), dry_start])
+        if guess is not None:
+            starts = jnp.concatenate([starts, guess[None]])
+        starts = jnp.where(jnp.isfinite(starts), starts, 0.0) / c0
+        sizes = jax.vmap(lambda x: jnp.sum(residual(x) ** 2))(starts)
+        x0 = starts[jnp.argmin(jnp.where(jnp.isfinite(sizes), sizes, jnp.inf))]
+
+        def unfinished(state):
+            x, r, k = state
+            return (k < _NEWTON_STEPS) & (jnp.max(jnp.abs(r)) > BALANCE_TOL)
+
+        def step(state):
+            x, r, k = state
+            jac = jax.jacfwd(residual)(x)
+            ridge = 1e-12 * jnp.max(jnp.abs(jac)) * jnp.eye(2)
+            dx = -_solve_2x2(jac + ridge, r)
+            dx = jnp.where(jnp.all(jnp.isfinite(dx)), dx, -r)
+
+            def too_long(trial):
+                a, r_new = trial
+                return (r_new @ r_new > (1.0 - 1e-4 * a) * (r @ r)) & (a > 1e-10)
+
+            def shorten(trial):
+                a = 0.5 * trial[0]
+                return a, residual(x + a * dx)
+
+            a, r_new = lax.while_loop(too_long, shorten, (jnp.ones(()), residual(x + dx)))
+            return x + a * dx, r_new, k + 1
+
+        x, r, _ = lax.while_loop(unfinished, step, (x0, residual(x0), 0))
+        ok = jnp.max(jnp.abs(r)) <= BALANCE_TOL
+        return c0 * x, ok
+
+    def pin_offset(self, load, omega, clearance, guess=None):
+        """Offset e [m] at equilibrium under ``load`` [N] at spin ``omega``
+        [rad/s] on the bore ``clearance`` [m] (n,), and whether the solve
+        converged; differentiable in every input (module notes)."""
+        stopped = lax.stop_gradient((self, load, omega, clearance, guess))
+        e, ok = stopped[0]._solve(*stopped[1:])
+        jac = jax.jacfwd(lambda x: lax.stop_gradient(self)._balance(
+            x, *lax.stop_gradient((load, omega, clearance))))(e)
+        r = self._balance(e, load, omega, clearance)
+        return e - _solve_2x2(jac, r), ok
+
+    # ----------------------------------------------------------- the cycle
+    def equilibrium(self, depth: Float[Array, " n"], loads: JointLoads,
+                    guess: Float[Array, "S 2"] | None = None) -> LubricatedEquilibrium:
+        """The pin's offset, the film and the asperities over the cycle at
+        wear ``depth`` [m]; ``guess``: starting offsets (e.g. those of a
+        nearby profile)."""
+        c = self.dry.clearance + depth
+        guess = jnp.full_like(loads.force, jnp.nan) if guess is None else guess
+
+        def one(w, omega, g):
+            e, ok = self.pin_offset(w, omega, c, g)
+            parts = self._parts(e, omega, c)
+            return (e, parts.asperity.pressure, parts.asperity_load, parts.film_load,
+                    parts.min_film_thickness, parts.film_ratio, ok)
+
+        e, p, load, film_load, h_min, ratio, ok = jax.vmap(one)(loads.force, loads.omega, guess)
+        return LubricatedEquilibrium(offset=e, pressure=p, normal_load=load, film_load=film_load,
+                                     min_film_thickness=h_min, film_ratio=ratio,
+                                     ok=jnp.all(ok) & jnp.all(jnp.isfinite(e)))
+
+    def cycle_wear(self, depth: Float[Array, " n"], loads: JointLoads, guess=None):
+        """(dh per cycle [m] (n,), integral of asperity load x sliding [N m],
+        `LubricatedEquilibrium`) at wear ``depth``."""
+        eq = self.equilibrium(depth, loads, guess)
+        slide = self.dry.sliding_rate(loads)
+        dh = loads.dt * jnp.sum(self.dry.wear.depth_rate(eq.pressure, slide[:, None]), axis=0)
+        return dh, loads.dt * jnp.sum(eq.normal_load * slide), eq
+
+    def wear_response(self, depth: Float[Array, " n"], loads: JointLoads,
+                      eq: LubricatedEquilibrium | None = None) -> Float[Array, "n n"]:
+        """A = -d(dh per cycle)/d(depth) (n, n), by forward-mode differentiation
+        (warm-started at ``eq``'s offsets)."""
+        guess = None if eq is None else lax.stop_gradient(eq.offset)
+        return -jax.jacfwd(lambda h: self.cycle_wear(h, loads, guess)[0])(depth)
+
+    def contact_margin(self, depth, loads, mass):
+        """The dry joint's check on the loads (`QuasiStaticJoint.contact_margin`):
+        below 1 the load turns too fast for the pin to follow it at equilibrium."""
+        return self.dry.contact_margin(depth, loads, mass)
+
+
+def joint_model(joint: ClearanceJoint):
+    """The quasi-static model of a clearance joint: lubricated or dry."""
+    if isinstance(joint.law, MixedLubrication):
+        return LubricatedQuasiStaticJoint.from_joint(joint)
+    return QuasiStaticJoint.from_joint(joint)

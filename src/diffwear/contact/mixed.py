@@ -12,12 +12,23 @@ Film Lubrication, the film-parameter regimes).
 
 The law here (stated, simple, smooth):
 
-- **Film**: a hydrodynamic film law (`ShortBearingFilm` or `LongBearingFilm`),
-  evaluated on the clearance of the (worn) bore at the line of centres,
-  c_e = c(theta_e), so that h_min = c_e - |e|.  Its smooth-surface Reynolds
-  solution stops being valid at lambda = lambda_c: the film is saturated at
-  eps_max = 1 - lambda_c sigma / c_e (kept within [`MIN_SATURATION`,
-  `MAX_SATURATION`]); past it the film force stops growing.
+- **Film**: a hydrodynamic film law (`ShortBearingFilm` or `LongBearingFilm`)
+  of the unworn round bore (clearance c).  Through the mixed regime it keeps
+  growing as the film thins (the asperities carry beside it); at lambda =
+  lambda_b (1, boundary lubrication: the film no longer separates the
+  surfaces) it is saturated: eps_max = 1 - lambda_b sigma / c (kept within
+  [`MIN_SATURATION`, `MAX_SATURATION`]); past it the film force stops
+  growing.  (Saturating it where the asperities touch, at lambda_c, left a
+  band where neither grows: a film-borne pin settled in the saturation's
+  blend and rang at every load reversal.)  The film of a
+  worn bore is not modelled: where the wear has deepened the bore, the pin
+  sinks into the groove past eps_max and the asperities carry what the
+  saturated film does not.  (A film on the local clearance of the worn bore,
+  c(theta_e), weakens as the groove deepens, ~ 1 / c^2: that feeds the wear
+  back on itself and made the wear's response to the profile indefinite, so
+  the implicit wear steps failed; docs/notes/lubricated-joint.md.)
+- **Film thickness**: h_min = c(theta_e) - |e|, the gap along the line of
+  centres on the worn bore; lambda = h_min / sigma.
 - **Asperities**: the elastic foundation (`ElasticFoundation`) of the bushing
   pressed by the asperity summits, which stand lambda_c sigma above the mean
   surfaces: each spring's penetration is delta_k = e . u_k - (c_k -
@@ -42,12 +53,12 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .._checks import check_positive, float_leaf
+from .._checks import check_positive, concrete, float_leaf
 from ..errors import InputError
 from ..mechanism.geometry import safe_angle
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
-from .laws import AbstractContactLaw, ElasticFoundation, _interp_periodic
+from .laws import OFFSET_NORM_WIDTH, AbstractContactLaw, ElasticFoundation, _interp_periodic
 from .lubrication import FilmForce, _safe_unit
 from .profile import BushingProfile
 
@@ -55,11 +66,14 @@ from .profile import BushingProfile
 # load: 3, the boundary between full-film and mixed lubrication (Hamrock,
 # Schmid & Jacobson, Fundamentals of Fluid Film Lubrication).
 ONSET_FILM_RATIO = 3.0
-# Bounds of the film's saturation eps_max = 1 - lambda_c sigma / c_e: a rough,
-# tight joint (c_e < 6 sigma) still has a film up to eps = 0.5 (the asperities
-# carry beside it), and a smooth one's film is cut at 0.99, where the short
-# bearing's force has grown 2,500-fold from eps = 0 to 0.5's 1.8-fold.
-MIN_SATURATION, MAX_SATURATION = 0.5, 0.99
+# Film parameter below which the film no longer separates the surfaces
+# (boundary lubrication, same source): the film is saturated there.
+BOUNDARY_FILM_RATIO = 1.0
+# Bounds of the film's saturation eps_max = 1 - lambda_b sigma / c: a rough,
+# tight joint (c < 2 sigma) still has a film up to eps = 0.5 (the asperities
+# carry beside it), and a smooth one's film is cut at 0.995, where the short
+# bearing's steady load has grown ~ 10,000-fold from its value at eps = 0.5.
+MIN_SATURATION, MAX_SATURATION = 0.5, 0.995
 
 
 class Lubrication(NamedTuple):
@@ -93,21 +107,24 @@ class MixedLubrication(AbstractContactLaw):
     (module notes).
 
     Arguments:
-        film: the film law (`ShortBearingFilm` or `LongBearingFilm`); its
-            viscosity and length are used, its clearance and saturation are
-            replaced at each evaluation by the worn bore's and lambda_c's
+        film: the film law (`ShortBearingFilm` or `LongBearingFilm`) of the
+            unworn bore; its saturation is replaced by lambda_c's
         asperity: the `ElasticFoundation` of the bushing (the dry law)
         roughness: combined RMS roughness sigma of pin and bushing [m] (> 0)
         onset_ratio: lambda_c, the film parameter where the asperities touch
             (> 0, default 3)
+        boundary_ratio: lambda_b, the film parameter where the film is
+            saturated (> 0, at most lambda_c; default 1)
     """
 
     film: AbstractContactLaw
     asperity: ElasticFoundation
     roughness: Float[Array, ""]
     onset_ratio: Float[Array, ""]
+    boundary_ratio: Float[Array, ""]
 
-    def __init__(self, film, asperity, roughness, onset_ratio=ONSET_FILM_RATIO):
+    def __init__(self, film, asperity, roughness, onset_ratio=ONSET_FILM_RATIO,
+                 boundary_ratio=BOUNDARY_FILM_RATIO):
         if not all(hasattr(film, f) for f in ("film", "clearance", "max_eccentricity_ratio")):
             raise InputError(f"the film of a lubricated joint must be a film law "
                              f"(ShortBearingFilm, LongBearingFilm), got {film!r}")
@@ -116,10 +133,16 @@ class MixedLubrication(AbstractContactLaw):
                              f"ElasticFoundation, got {type(asperity).__name__}")
         check_positive("combined RMS roughness sigma [m]", roughness)
         check_positive("film ratio at the asperity onset lambda_c", onset_ratio)
+        check_positive("film ratio at the film's saturation lambda_b", boundary_ratio)
+        lc, lb = concrete(onset_ratio), concrete(boundary_ratio)
+        if lc is not None and lb is not None and lb > lc:
+            raise InputError(f"film ratio at the film's saturation lambda_b = {float(lb)} must "
+                             f"not exceed the asperity onset lambda_c = {float(lc)}")
         self.film = film
         self.asperity = asperity
         self.roughness = float_leaf(roughness)
         self.onset_ratio = float_leaf(onset_ratio)
+        self.boundary_ratio = float_leaf(boundary_ratio)
 
     # the bushing's axial depth and its foundation, as the dry law's (the wear
     # routes read them)
@@ -140,22 +163,26 @@ class MixedLubrication(AbstractContactLaw):
         """The profile of the asperity summits: the bore less lambda_c sigma."""
         return eqx.tree_at(lambda p: p.clearance, profile, profile.clearance - self.onset_gap)
 
-    def local_film(self, kin: PinKinematics, profile: BushingProfile) -> AbstractContactLaw:
-        """The film law on the bore's clearance at the line of centres, saturated
-        where lambda reaches lambda_c."""
+    def saturated_film(self) -> AbstractContactLaw:
+        """The film law, saturated where lambda reaches lambda_b on the unworn
+        bore: eps_max = 1 - lambda_b sigma / c (module notes)."""
+        eps_max = jnp.clip(1.0 - self.boundary_ratio * self.roughness / self.film.clearance,
+                           MIN_SATURATION, MAX_SATURATION)
+        return eqx.tree_at(lambda f: f.max_eccentricity_ratio, self.film, eps_max)
+
+    def min_film_thickness(self, kin: PinKinematics, profile: BushingProfile):
+        """h_min = c(theta_e) - |e| [m]: the gap along the line of centres, on
+        the (worn) bore."""
         c_e = _interp_periodic(profile.clearance, safe_angle(kin.offset))
-        eps_max = jnp.clip(1.0 - self.onset_gap / c_e, MIN_SATURATION, MAX_SATURATION)
-        return eqx.tree_at(lambda f: (f.clearance, f.max_eccentricity_ratio), self.film,
-                           (c_e, eps_max))
+        return c_e - jnp.sqrt(kin.offset @ kin.offset + OFFSET_NORM_WIDTH**2)
 
     def lubrication(self, kin: PinKinematics, memory: Float[Array, " m"],
                     profile: BushingProfile, friction: CoulombFriction) -> Lubrication:
         """The film's and the asperities' parts (see `Lubrication`)."""
-        local = self.local_film(kin, profile)
-        film = local.film(kin)
+        film = self.saturated_film().film(kin)
         asperity = self.asperity.evaluate(kin, memory, self.summits(profile), friction)
         _, film_load = _safe_unit(film.force)
-        h_min = film.min_film_thickness
+        h_min = self.min_film_thickness(kin, profile)
         return Lubrication(film=film, asperity=asperity, film_load=film_load,
                            asperity_load=asperity.normal_load, min_film_thickness=h_min,
                            film_ratio=h_min / self.roughness)

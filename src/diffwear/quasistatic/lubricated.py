@@ -19,13 +19,15 @@ joint tends to the dry `QuasiStaticJoint`.
 
 The offset is found by a damped Newton method on the 2 x 2 balance (the film's
 cross-coupled force makes it non-symmetric: no energy to minimise, unlike the
-dry joint) from the better of two starts: the film-only solution of the round
-bore (exact there: the film's load grows monotonically with eps, and its
-direction turns rigidly with e) and the dry equilibrium on the asperity
-summits.  Derivatives by the implicit-function theorem: the converged offset
-is corrected by one Newton step with the Jacobian held constant, which leaves
-its value unchanged to the solver's tolerance and gives it the derivative
--J^-1 dr/dtheta in forward and reverse mode alike (no unrolled iterations).
+dry joint), followed from each of these starts, the best root kept: the
+film-only solution of the round bore (exact there: the film's load grows
+monotonically with eps, and its direction turns rigidly with e), the dry
+equilibrium on the asperity summits, and a warm start when given.
+Derivatives by the implicit-function theorem, de = -J^-1 dr/dtheta, as a
+custom JVP rule written in terms of the solution itself, so that it can be
+differentiated again (the wear response A is a derivative of the wear, and a
+life's derivative carries A's) and transposed for reverse mode; no unrolled
+iterations.
 
 Wear per cycle: Archard's law on the asperity pressure, summed over the
 samples as for the dry joint; its response to the profile by forward-mode
@@ -124,12 +126,10 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         parts = self._parts(offset, omega, clearance)
         return parts.film.force + parts.asperity.force + load
 
-    def _film_start(self, load, omega, clearance):
-        """The film-only equilibrium of a round bore of the mean clearance."""
-        c = jnp.mean(clearance)
-        round_bore = jnp.full_like(clearance, c)
-        film = self.law.local_film(self._kinematics(jnp.array([c, 0.0]), omega),
-                                   self._profile(round_bore))
+    def _film_start(self, load, omega):
+        """The film-only equilibrium (the film is the unworn round bore's)."""
+        film = self.law.saturated_film()
+        c = film.clearance
         ratios = jnp.minimum(_START_RATIOS, film.max_eccentricity_ratio)
         forces = jax.vmap(lambda r: film.film(
             self._kinematics(jnp.array([r * c, 0.0]), omega)).force)(ratios)
@@ -159,12 +159,10 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         w_eff = (load - f * perp(load)) / (1.0 + f * f)
         summits = clearance - self.law.onset_gap
         dry_start, _ = pin_offset(summits, w_eff, kc, dry.foundation.penetration_width)
-        starts = jnp.stack([self._film_start(load, omega, clearance), dry_start])
+        starts = jnp.stack([self._film_start(load, omega), dry_start])
         if guess is not None:
             starts = jnp.concatenate([starts, guess[None]])
         starts = jnp.where(jnp.isfinite(starts), starts, 0.0) / c0
-        sizes = jax.vmap(lambda x: jnp.sum(residual(x) ** 2))(starts)
-        x0 = starts[jnp.argmin(jnp.where(jnp.isfinite(sizes), sizes, jnp.inf))]
 
         def unfinished(state):
             x, r, k = state
@@ -188,20 +186,36 @@ class LubricatedQuasiStaticJoint(eqx.Module):
             a, r_new = lax.while_loop(too_long, shorten, (jnp.ones(()), residual(x + dx)))
             return x + a * dx, r_new, k + 1
 
-        x, r, _ = lax.while_loop(unfinished, step, (x0, residual(x0), 0))
-        ok = jnp.max(jnp.abs(r)) <= BALANCE_TOL
-        return c0 * x, ok
+        def newton(x0):
+            x, r, _ = lax.while_loop(unfinished, step, (x0, residual(x0), 0))
+            return x, jnp.max(jnp.abs(r))
+
+        # the starts are followed in the order of their residuals until one
+        # reaches the root: a start can stall where the saturated film turns
+        # without growing (a pin inside a worn groove, no spring touching)
+        sizes = jax.vmap(lambda x: jnp.max(jnp.abs(residual(x))))(starts)
+        starts = starts[jnp.argsort(jnp.where(jnp.isfinite(sizes), sizes, jnp.inf))]
+
+        def untried(state):
+            k, _, error = state
+            return (k < starts.shape[0]) & ~(error <= BALANCE_TOL)
+
+        def try_next(state):
+            k, x_best, error_best = state
+            x, error = newton(starts[k])
+            better = jnp.isfinite(error) & ~(error >= error_best)
+            return k + 1, jnp.where(better, x, x_best), jnp.where(better, error, error_best)
+
+        _, x, error = lax.while_loop(untried, try_next, (0, starts[0], jnp.asarray(jnp.inf)))
+        return c0 * x, error <= BALANCE_TOL
 
     def pin_offset(self, load, omega, clearance, guess=None):
         """Offset e [m] at equilibrium under ``load`` [N] at spin ``omega``
-        [rad/s] on the bore ``clearance`` [m] (n,), and whether the solve
-        converged; differentiable in every input (module notes)."""
-        stopped = lax.stop_gradient((self, load, omega, clearance, guess))
-        e, ok = stopped[0]._solve(*stopped[1:])
-        jac = jax.jacfwd(lambda x: lax.stop_gradient(self)._balance(
-            x, *lax.stop_gradient((load, omega, clearance))))(e)
-        r = self._balance(e, load, omega, clearance)
-        return e - _solve_2x2(jac, r), ok
+        [rad/s] on the bore ``clearance`` [m] (n,), and 1.0 if the solve
+        converged (else 0.0); differentiable in every input, to any order
+        (module notes)."""
+        guess = jnp.full(2, jnp.nan) if guess is None else lax.stop_gradient(guess)
+        return _offset(self, load, omega, clearance, guess)
 
     # ----------------------------------------------------------- the cycle
     def equilibrium(self, depth: Float[Array, " n"], loads: JointLoads,
@@ -214,6 +228,7 @@ class LubricatedQuasiStaticJoint(eqx.Module):
 
         def one(w, omega, g):
             e, ok = self.pin_offset(w, omega, c, g)
+            ok = ok > 0.5
             parts = self._parts(e, omega, c)
             return (e, parts.asperity.pressure, parts.asperity_load, parts.film_load,
                     parts.min_film_thickness, parts.film_ratio, ok)
@@ -242,6 +257,29 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         """The dry joint's check on the loads (`QuasiStaticJoint.contact_margin`):
         below 1 the load turns too fast for the pin to follow it at equilibrium."""
         return self.dry.contact_margin(depth, loads, mass)
+
+
+@jax.custom_jvp
+def _offset(joint, load, omega, clearance, guess):
+    e, ok = joint._solve(load, omega, clearance, guess)
+    return e, ok.astype(e.dtype)
+
+
+@_offset.defjvp
+def _offset_jvp(primals, tangents):
+    """de = -J^-1 (dr/dtheta . dtheta) at the root of the balance r(e, theta),
+    J = dr/de (2 x 2, closed form).  ``e`` here is the primal output of
+    `_offset` itself, so derivatives of this rule (second derivatives of the
+    offset, e.g. of the wear response in a life's tangent) are exact too."""
+    joint, load, omega, clearance, _ = primals
+    e, ok = _offset(*primals)
+
+    def balance(j, w, om, c):
+        return j._balance(e, w, om, c)
+
+    _, dr = jax.jvp(balance, primals[:4], tangents[:4])
+    jac = jax.jacfwd(lambda x: joint._balance(x, load, omega, clearance))(e)
+    return (e, ok), (-_solve_2x2(jac, dr), jnp.zeros_like(ok))
 
 
 def joint_model(joint: ClearanceJoint):

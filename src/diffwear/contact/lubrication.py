@@ -89,6 +89,7 @@ docs/notes/lubricated-joint.md).
 
 from __future__ import annotations
 
+import abc
 from typing import NamedTuple
 
 import jax
@@ -214,31 +215,13 @@ def _half_film_integrals(eps, cos1, sin1):
     return 0.5 * jnp.pi + excess_cc, integral_cs, 0.5 * jnp.pi + excess_ss
 
 
-class ShortBearingFilm(AbstractContactLaw):
-    """Short-bearing (Ocvirk) hydrodynamic film with squeeze and wedge action
-    and Gumbel cavitation (the model, its derivation and its limits are in the
-    module docstring and docs/notes/lubricated-joint.md).
-
-    Arguments (each a float64 array leaf, `float_leaf`: sweep or differentiate them):
-        viscosity: dynamic viscosity mu of the oil [Pa s] (> 0)
-        length: axial length L of the bearing [m] (> 0; short-bearing theory
-            wants L / D < ~0.5)
-        clearance: radial clearance c of the round bore [m] (> 0); the film
-            uses it, not a worn `BushingProfile`
-        max_eccentricity_ratio: eps_max in (0, 1), default 0.95; the film is
-            evaluated at min(eps, eps_max) (C1 blend of ``saturation_width``)
-        saturation_width: width of that blend, in (0, eps_max), default 0.01
-
-    Journal radius R: the pin radius of the `PinKinematics` (wedge speed
-    U = omega R and film area 2 pi R L; the bore radius differs by c << R).
-
-    References: Flores, Ambrosio, Claro & Lankarani, Mech. Mach. Theory 41
-    (2006) 247-261 (short-bearing pressure and forces of a dynamically loaded
-    journal bearing in a multibody joint); Daniel, Machado & Cavalca, Mech.
-    Mach. Theory 99 (2016) 19-36 (positive-pressure region that moves with the
-    squeeze); Hamrock, Schmid & Jacobson, Fundamentals of Fluid Film
-    Lubrication (steady short-bearing load, attitude and friction).
-    """
+class AbstractFilm(AbstractContactLaw):
+    """What the journal-bearing films share: the oil and bore parameters (float64
+    array leaves, `float_leaf`), their checks, the saturation of the eccentricity
+    ratio at eps_max, the minimum film thickness and the film as a contact law.
+    A subclass gives `film`, which must read the parameters from the fields on
+    every call (a mixed-lubrication law swaps ``clearance`` and
+    ``max_eccentricity_ratio`` with `eqx.tree_at`)."""
 
     viscosity: Float[Array, ""]
     length: Float[Array, ""]
@@ -289,6 +272,56 @@ class ShortBearingFilm(AbstractContactLaw):
         excess = jnp.where(over <= 0.0, 0.0, over - width + smoothing.ramp(width - over, width))
         return eps - excess
 
+    def _torque(self, eps_f, tangential, omega, radius):
+        """Viscous moment on the pin [N m] from the film's tangential force
+        F_t [N]: the Couette shear over the whole circumference plus the Poiseuille
+        part, -(e / 2) F_t, the same for both films (module docstrings)."""
+        couette = (2.0 * jnp.pi * self.viscosity * omega * radius**3 * self.length
+                   / (self.clearance * jnp.sqrt(1.0 - eps_f**2)))
+        return -couette - 0.5 * eps_f * self.clearance * tangential
+
+    @abc.abstractmethod
+    def film(self, kin: PinKinematics) -> FilmForce:
+        """Force and friction torque of the film on the pin (see `FilmForce`)."""
+
+    def evaluate(self, kin: PinKinematics, memory: Float[Array, " m"],
+                 profile: BushingProfile, friction: CoulombFriction) -> ContactResult:
+        """The film as a contact law: its force and viscous torque; normal_load
+        is the film's load |F| [N]; pressure is zero (no solid contact on the
+        bushing grid, so no wear); the profile and Coulomb friction are not
+        used (the film's friction is viscous)."""
+        f = self.film(kin)
+        _, load = _safe_unit(f.force)
+        return ContactResult(force=f.force, torque=f.torque, normal_load=load,
+                             pressure=jnp.zeros(profile.n), memory_rate=jnp.zeros(0))
+
+
+class ShortBearingFilm(AbstractFilm):
+    """Short-bearing (Ocvirk) hydrodynamic film with squeeze and wedge action
+    and Gumbel cavitation (the model, its derivation and its limits are in the
+    module docstring and docs/notes/lubricated-joint.md).
+
+    Arguments (each a float64 array leaf, `float_leaf`: sweep or differentiate them):
+        viscosity: dynamic viscosity mu of the oil [Pa s] (> 0)
+        length: axial length L of the bearing [m] (> 0; short-bearing theory
+            wants L / D < ~0.5)
+        clearance: radial clearance c of the round bore [m] (> 0); the film
+            uses it, not a worn `BushingProfile`
+        max_eccentricity_ratio: eps_max in (0, 1), default 0.95; the film is
+            evaluated at min(eps, eps_max) (C1 blend of ``saturation_width``)
+        saturation_width: width of that blend, in (0, eps_max), default 0.01
+
+    Journal radius R: the pin radius of the `PinKinematics` (wedge speed
+    U = omega R and film area 2 pi R L; the bore radius differs by c << R).
+
+    References: Flores, Ambrosio, Claro & Lankarani, Mech. Mach. Theory 41
+    (2006) 247-261 (short-bearing pressure and forces of a dynamically loaded
+    journal bearing in a multibody joint); Daniel, Machado & Cavalca, Mech.
+    Mach. Theory 99 (2016) 19-36 (positive-pressure region that moves with the
+    squeeze); Hamrock, Schmid & Jacobson, Fundamentals of Fluid Film
+    Lubrication (steady short-bearing load, attitude and friction).
+    """
+
     def _film_factor(self, radius):
         """K = mu R L^3 / (2 c^2) [N s]: the pressure 3 mu / c^2 (L^2/4 - z^2) times
         the area R dtheta dz, integrated over z (L^3 / 6)."""
@@ -307,12 +340,6 @@ class ShortBearingFilm(AbstractContactLaw):
         k = self._film_factor(radius)
         return (-k * (squeeze * excess_cc - wedge * integral_cs),
                 -k * (squeeze * integral_cs - wedge * excess_ss))
-
-    def _torque(self, eps_f, tangential, omega, radius):
-        """Viscous moment on the pin [N m] (module docstring)."""
-        couette = (2.0 * jnp.pi * self.viscosity * omega * radius**3 * self.length
-                   / (self.clearance * jnp.sqrt(1.0 - eps_f**2)))
-        return -couette - 0.5 * eps_f * self.clearance * tangential
 
     def line_of_centres_forces(self, eccentricity_ratio, eccentricity_rate, line_rate,
                                omega, radius):
@@ -359,14 +386,3 @@ class ShortBearingFilm(AbstractContactLaw):
                          torque=self._torque(eps_f, tangential, kin.omega, kin.pin_radius),
                          radial=force @ n, tangential=tangential, eccentricity_ratio=eps,
                          min_film_thickness=self.min_film_thickness(kin))
-
-    def evaluate(self, kin: PinKinematics, memory: Float[Array, " m"],
-                 profile: BushingProfile, friction: CoulombFriction) -> ContactResult:
-        """The film as a contact law: its force and viscous torque; normal_load
-        is the film's load |F| [N]; pressure is zero (no solid contact on the
-        bushing grid, so no wear); the profile and Coulomb friction are not
-        used (the film's friction is viscous)."""
-        f = self.film(kin)
-        _, load = _safe_unit(f.force)
-        return ContactResult(force=f.force, torque=f.torque, normal_load=load,
-                             pressure=jnp.zeros(profile.n), memory_rate=jnp.zeros(0))

@@ -18,7 +18,6 @@ import pytest
 
 from diffwear.contact import (
     ArchardWear,
-    BushingProfile,
     ClearanceJoint,
     CoulombFriction,
     ElasticFoundation,

@@ -18,7 +18,8 @@ from .laws import (
     KelvinVoigt,
     LankaraniNikravesh,
 )
-from .lubrication import FilmForce, ShortBearingFilm
+from .long_bearing import LongBearingFilm
+from .lubrication import AbstractFilm, FilmForce, ShortBearingFilm
 from .materials import PTFE, STEEL, Material
 from .mixed import Lubrication, MixedLubrication
 from .profile import BushingProfile
@@ -27,7 +28,8 @@ __all__ = [
     "ClearanceJoint", "ContactHistory", "centred_state", "contact_history", "with_clearance",
     "CoulombFriction", "ArchardWear", "ContactResult", "PinKinematics",
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
-    "LankaraniNikravesh", "FilmForce", "ShortBearingFilm", "Lubrication", "MixedLubrication",
+    "LankaraniNikravesh", "AbstractFilm", "FilmForce", "ShortBearingFilm", "LongBearingFilm",
+    "Lubrication", "MixedLubrication",
     "PTFE", "STEEL", "Material",
     "BushingProfile",
 ]

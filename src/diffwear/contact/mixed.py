@@ -59,7 +59,7 @@ from ..mechanism.geometry import safe_angle
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
 from .laws import OFFSET_NORM_WIDTH, AbstractContactLaw, ElasticFoundation, _interp_periodic
-from .lubrication import FilmForce, _safe_unit
+from .lubrication import AbstractFilm, FilmForce, _safe_unit
 from .profile import BushingProfile
 
 # Film parameter lambda = h_min / sigma at which the asperities start to carry
@@ -117,7 +117,7 @@ class MixedLubrication(AbstractContactLaw):
             saturated (> 0, at most lambda_c; default 1)
     """
 
-    film: AbstractContactLaw
+    film: AbstractFilm
     asperity: ElasticFoundation
     roughness: Float[Array, ""]
     onset_ratio: Float[Array, ""]
@@ -125,7 +125,7 @@ class MixedLubrication(AbstractContactLaw):
 
     def __init__(self, film, asperity, roughness, onset_ratio=ONSET_FILM_RATIO,
                  boundary_ratio=BOUNDARY_FILM_RATIO):
-        if not all(hasattr(film, f) for f in ("film", "clearance", "max_eccentricity_ratio")):
+        if not isinstance(film, AbstractFilm):
             raise InputError(f"the film of a lubricated joint must be a film law "
                              f"(ShortBearingFilm, LongBearingFilm), got {film!r}")
         if not isinstance(asperity, ElasticFoundation):
@@ -163,7 +163,7 @@ class MixedLubrication(AbstractContactLaw):
         """The profile of the asperity summits: the bore less lambda_c sigma."""
         return eqx.tree_at(lambda p: p.clearance, profile, profile.clearance - self.onset_gap)
 
-    def saturated_film(self) -> AbstractContactLaw:
+    def saturated_film(self) -> AbstractFilm:
         """The film law, saturated where lambda reaches lambda_b on the unworn
         bore: eps_max = 1 - lambda_b sigma / c (module notes)."""
         eps_max = jnp.clip(1.0 - self.boundary_ratio * self.roughness / self.film.clearance,

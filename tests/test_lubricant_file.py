@@ -163,3 +163,24 @@ def test_the_dynamic_wear_model_refuses_a_lubricated_joint_up_front(tmp_path, ca
     err = capsys.readouterr().err
     assert "'crank_rod' is lubricated" in err and "--model quasi-static" in err
     assert not out.exists()
+
+
+def test_the_film_figure_draws_the_onset_line_over_the_crank_angle(tmp_path):
+    from diffwear import plots
+
+    crank = np.arange(180) * 2.0
+    h = 2e-6 + 1e-6 * np.cos(np.radians(crank))
+    share = np.clip(1.5e-6 - h, 0.0, None) / 1e-6
+    with plots.captured() as figures:
+        plots.film_panels(tmp_path / "film_j.png", crank, {"unworn": (h, share),
+                                                            "worn": (h + 2e-7, share / 2)},
+                          onset=1.95e-6, onset_ratio=3.0, roughness=0.65e-6, title="j")
+    top, bottom = figures["film_j.png"].axes
+    assert bottom.get_xlabel() == "crank angle [deg]" and bottom.get_xlim() == (0.0, 360.0)
+    onset = [line for line in top.get_lines() if "onset" in line.get_label()]
+    assert len(onset) == 1 and np.allclose(onset[0].get_ydata(), 1.95)  # um
+    assert "3 × 0.65 µm" in onset[0].get_label()
+    assert np.isclose(np.min(top.get_lines()[0].get_ydata()), 1.0)  # h_min drawn in um
+    assert [t.get_text() for t in bottom.get_legend().get_texts()] == ["unworn", "worn"]
+    for ax in (top, bottom):  # legends right of the data
+        assert ax.get_legend().get_window_extent().x0 > ax.get_window_extent().x1

@@ -22,6 +22,7 @@ import math
 import sys
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -475,7 +476,7 @@ def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> 
         title=f"{mfile.title or mfile.file}: lubricated joint {name} "
               f"(μ = {film['viscosity']:g} Pa s, σ = {film['roughness'] * 1e6:.3g} µm), "
               "quasi-static equilibrium over the cycle, unworn and worn bushing")
-    keys = {}
+    keys: dict[str, Any] = {}
     for case, suffix in (("unworn", ""), ("worn", "_worn")):
         f = film[case]
         keys |= {f"min_film_thickness_um{suffix}": float(np.min(f["min_film_thickness"])) * 1e6,

@@ -22,6 +22,7 @@ import math
 import sys
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -157,6 +158,8 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
         if wear["stopped"]:
             summary["wear_stopped"] = wear["stopped"]
         figures.append(out.path / wear["figure"])
+        figures += [out.path / f"film_{j}.png" for j, w in wear["joints"].items()
+                    if "lubricant" in w]
     summary["compile_time_s"] = compile_time
     summary["run_time_s"] = wall - compile_time
     out.text("report.md", render(_report(mfile, summary, [f.name for f in figures])))
@@ -287,6 +290,9 @@ def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
                     f"[profile](wear_profile_{j}.csv), [history](wear_history_{j}.csv)")
                    for j, w in s["joints"].items()]),
             Bullets([f"stopped: {why}" for why in s.get("wear_stopped", [])], strong=True)]))
+    lubricated = {j: w for j, w in (s.get("joints") or {}).items() if "lubricant" in w}
+    if lubricated:
+        blocks.append(_lubrication_section(lubricated))
     if s.get("warnings"):
         blocks.append(Section("Warnings", [Bullets(s["warnings"], strong=True)]))
     blocks.append(Section("Files", [Bullets([
@@ -294,6 +300,44 @@ def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
         "[trajectory.csv](trajectory.csv): t_s; every body's x_m, y_m, phi_rad (centre of "
         "mass), then vx_m_s, vy_m_s, omega_rad_s"]), *(Figure(f) for f in figures)]))
     return Report(mfile.title or str(mfile.file), blocks)
+
+
+def regime(ratio: float) -> str:
+    """The lubrication regime of a minimum film parameter lambda = h_min / sigma
+    (Hamrock, Schmid & Jacobson: > 3 full film, 1-3 mixed, < 1 boundary)."""
+    if ratio > 3.0:
+        return ("full film: the oil carries the whole load and the surfaces never touch, "
+                "so the bushing does not wear")
+    if ratio >= 1.0:
+        return ("mixed: film and asperities share the load; the bushing wears where the "
+                "asperities touch, less than dry")
+    return ("boundary: the asperities carry the load where the film is thinnest; there the "
+            "bushing wears as if dry")
+
+
+def _lubrication_section(joints: dict) -> Section:
+    rows = []
+    for j, w in joints.items():
+        lube = w["lubricant"]
+        worst = min(w["film_ratio_min"], w["film_ratio_min_worn"])
+        rows.append((j, f"{lube['viscosity_Pa_s']:.4g}", f"{lube['roughness_um']:.3g}",
+                     f"{w['min_film_thickness_um']:.3g} / {w['min_film_thickness_um_worn']:.3g}",
+                     f"{w['film_ratio_min']:.3g} / {w['film_ratio_min_worn']:.3g}",
+                     f"{100 * w['asperity_load_share']:.3g} % / "
+                     f"{100 * w['asperity_load_share_worn']:.3g} %",
+                     f"{regime(worst).capitalize()}.", f"[film]({w['film_file']})"))
+    return Section("Lubrication", [
+        "Lubricated clearance joints: the oil film (short-bearing Reynolds film) and the "
+        "surfaces' asperities share the load.  h min: the thinnest film over the cycle; "
+        "lambda = h min / sigma (sigma: the combined RMS roughness); asperity share: the "
+        "asperities' part of the load, averaged over the cycle; each on the unworn / the worn "
+        "bushing.  lambda > 3: full film, no wear; 1-3: mixed lubrication, wear where the "
+        "asperities touch; < 1: boundary lubrication, wear as dry (a negative h min: the "
+        "asperities are pressed past the mean surfaces).  These numbers are the pin's "
+        "quasi-static equilibrium of film and asperities under the cycle's loads (the "
+        "quasi-static wear model's; the dynamic model does not take a lubricated joint).",
+        Table(("joint", "viscosity [Pa s]", "roughness [um]", "h min [um]", "lambda min",
+               "asperity share", "meaning (smallest lambda)", "file"), rows)])
 
 
 def _to_limit(w: dict) -> str:
@@ -392,6 +436,13 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
         elif w.get("contact_margin_worn", math.inf) < 1.0:
             warnings.append(f"clearance joint {name!r}: on the worn profile the pin may lift "
                             f"off the wall (contact margin {w['contact_margin_worn']:.2g})")
+        if "film" in w:
+            joints[name] |= _write_film(mfile, out, name, w["film"])
+            if not (w["film"]["loads_ok"] and w["film"]["unworn"]["ok"]
+                    and w["film"]["worn"]["ok"]):
+                warnings.append(f"clearance joint {name!r}: the film's equilibrium did not "
+                                "converge at every sample of the cycle: its film numbers are "
+                                "not reliable")
     models = "/".join(sorted({w["model"] for w in wear.values()}))
     figure = out.file("wear.png")
     plots.wear_panels(figure, {n: (w["theta"], w["depth"]) for n, w in wear.items()},
@@ -403,6 +454,38 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                       walls={n: w["wall"] for n, w in wear.items()}, limit=limit,
                       lives={n: w["cycles_to_limit"] for n, w in wear.items()})
     return {"joints": joints, "warnings": warnings, "figure": figure.name, "stopped": pierced}
+
+
+def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> dict:
+    """``film_<joint>.csv`` and ``.png`` of a lubricated joint (its film over
+    the cycle, unworn and worn bushing); returns its summary.json keys."""
+    cols = {"crank_angle_deg": film["crank_angle_deg"]}
+    for case, suffix in (("unworn", ""), ("worn", "_worn")):
+        f = film[case]
+        cols |= {f"h_min_um{suffix}": f["min_film_thickness"] * 1e6,
+                 f"film_ratio{suffix}": f["film_ratio"],
+                 f"asperity_share{suffix}": f["asperity_share"],
+                 f"film_load_N{suffix}": f["film_load"],
+                 f"asperity_load_N{suffix}": f["asperity_load"]}
+    out.csv(f"film_{name}.csv", cols)
+    plots.film_panels(
+        out.file(f"film_{name}.png"), film["crank_angle_deg"],
+        {case: (film[case]["min_film_thickness"], film[case]["asperity_share"])
+         for case in ("unworn", "worn")},
+        onset=film["onset_gap"], onset_ratio=film["onset_ratio"], roughness=film["roughness"],
+        title=f"{mfile.title or mfile.file}: lubricated joint {name} "
+              f"(μ = {film['viscosity']:g} Pa s, σ = {film['roughness'] * 1e6:.3g} µm), "
+              "quasi-static equilibrium over the cycle, unworn and worn bushing")
+    keys: dict[str, Any] = {}
+    for case, suffix in (("unworn", ""), ("worn", "_worn")):
+        f = film[case]
+        keys |= {f"min_film_thickness_um{suffix}": float(np.min(f["min_film_thickness"])) * 1e6,
+                 f"film_ratio_min{suffix}": float(np.min(f["film_ratio"])),
+                 f"asperity_load_share{suffix}": float(np.mean(f["asperity_share"]))}
+    keys["lubricant"] = {"viscosity_Pa_s": film["viscosity"],
+                         "roughness_um": film["roughness"] * 1e6, "bearing": film["bearing"]}
+    keys["film_file"] = f"film_{name}.csv"
+    return keys
 
 
 def check_wear_options(model: str, method: str, resume: bool) -> None:

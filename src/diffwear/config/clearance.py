@@ -22,8 +22,11 @@ from ..contact import (
     KelvinVoigt,
     LankaraniNikravesh,
     Material,
+    MixedLubrication,
+    ShortBearingFilm,
 )
 from ..contact.friction import DEFAULT_SLIP_WIDTH
+from ..contact.mixed import ONSET_FILM_RATIO
 from ..mechanism import RevoluteJoint
 from ..wear import ArchardWear
 from .elements import NAME, ElementType, FieldError
@@ -35,6 +38,7 @@ from .schema import (
     Quantity,
     Table,
     Tagged,
+    Text,
     Vector,
     check_table,
     read_table,
@@ -99,6 +103,24 @@ LAWS = {
     },
 }
 
+BEARINGS = {"short": ShortBearingFilm}
+"""Film models of ``lubricant.bearing``, by name: the short (Ocvirk) bearing
+(`ShortBearingFilm`).  A film law with the same constructor (viscosity,
+length, clearance) is one more entry here."""
+MAX_VISCOSITY = 10.0
+"""Pa s: the most viscous lubricant a joint takes (honey is ~10 Pa s; above
+that the fluid does not flow into the clearance as a lubricating film)."""
+LUBRICANT = Table(fields={
+    "viscosity": Quantity(dimension="viscosity", low=0.0, high=MAX_VISCOSITY, low_open=True,
+                          doc="dynamic viscosity at the running temperature"),
+    "roughness": Quantity(dimension="length", low=0.0, low_open=True,
+                          doc="combined RMS roughness sigma of pin and bushing; below "
+                              "clearance / 3"),
+    "bearing": Text(default="short", choices=tuple(BEARINGS), doc="film model"),
+    "length": Quantity(dimension="length", default=None, low=0.0, low_open=True,
+                       doc="axial length of the film; default: law.depth"),
+}, default=None)
+
 FIELDS = {
     "name": NAME,
     "pin_body": BodyRef(), "pin_point": Vector(dimension="length"),
@@ -118,6 +140,7 @@ FIELDS = {
     "n_theta": Integer(default=360, low=8, high=100_000),
     "wear": Table(fields={"coefficient": Quantity(dimension="wear coefficient", low=0.0)},
                   default=None),
+    "lubricant": LUBRICANT,
 }
 
 
@@ -181,13 +204,36 @@ def _law(v, rp, rb, bodies):
     return efm_law(bushing, rb, law["layer_thickness"], law["depth"], law["restitution"], mass)
 
 
+def _lubricated(lube, law, rp, rb):
+    """The `MixedLubrication` of ``lube`` (the file's ``lubricant`` table) on the
+    elastic-foundation ``law``: the film of ``lubricant.bearing`` and the
+    foundation's asperities (`diffwear.contact.mixed`)."""
+    c, sigma = rb - rp, lube["roughness"]
+    if ONSET_FILM_RATIO * sigma >= c:
+        raise FieldError("lubricant.roughness",
+                         f"{sigma * 1e6:g} um: the asperities touch at a film of "
+                         f"{ONSET_FILM_RATIO:g} sigma = {ONSET_FILM_RATIO * sigma * 1e6:g} um, "
+                         f"which does not fit in the radial clearance {c * 1e6:g} um (no film "
+                         "at all)", f"> 0 and < clearance / {ONSET_FILM_RATIO:g} = "
+                         f"{c / ONSET_FILM_RATIO * 1e6:g} um")
+    length = law.depth if lube["length"] is None else lube["length"]
+    film = BEARINGS[lube["bearing"]](lube["viscosity"], length, c)
+    return MixedLubrication(film, law, sigma)
+
+
 def build(v, bodies) -> ClearanceJoint:
     rp, rb = _radii(v)
     if v["wear"] is not None and v["law"]["type"] != EFM:
         raise FieldError("wear", f"wear needs the pressure distribution of the {EFM!r} law, "
                          f"not the {v['law']['type']!r} point law",
                          f"law.type = {EFM!r}, or no wear key")
+    if v["lubricant"] is not None and v["law"]["type"] != EFM:
+        raise FieldError("lubricant", f"a lubricated joint's asperity contact is the {EFM!r} "
+                         f"law, not the {v['law']['type']!r} law",
+                         f"law.type = {EFM!r}, or no lubricant key")
     law = _law(v, rp, rb, bodies)
+    if v["lubricant"] is not None:
+        law = _lubricated(v["lubricant"], law, rp, rb)
     friction = CoulombFriction(v["friction"]["coefficient"], v["friction"]["slip_width"])
     wear = None if v["wear"] is None else ArchardWear(v["wear"]["coefficient"])
     return ClearanceJoint(v["name"], v["pin_body"], v["pin_point"], v["bushing_body"],

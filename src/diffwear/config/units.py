@@ -89,6 +89,12 @@ DIMENSIONS: dict[str, Dimension] = {
     "density": Dimension("kg/m^3", {
         "kg/m^3": Unit(_F(1)), "g/cm^3": Unit(_F(1000)), "kg/dm^3": Unit(_F(1000)),
     }, "2.25 g/cm^3"),
+    # dynamic viscosity of a lubricant; 1 cP (centipoise) = 1 mPa s, 1 P (poise) =
+    # 0.1 Pa s (CGS unit, 1 g/(cm s))
+    "viscosity": Dimension("Pa s", {
+        "Pa s": Unit(_F(1)), "mPa s": Unit(_F(1, 1000)), "cP": Unit(_F(1, 1000)),
+        "P": Unit(_F(1, 10)),
+    }, "0.05 Pa s"),
     # Hertz contact stiffness K of F = K delta^1.5 (Lankarani-Nikravesh law)
     "contact stiffness": Dimension("N/m^1.5", {"N/m^1.5": Unit(_F(1))}, "7e10 N/m^1.5"),
     # Archard k: worn volume per (normal load x sliding distance); 1/Pa = m^3/(N m)

@@ -6,8 +6,10 @@ crank revolutions (the first driver's period) with the quasi-static wear model
 at the equilibrium of the EFM springs, the profile integrated in the cycle
 count), and, with a depth ``limit``, the revolutions until each joint's peak
 wear reaches it.  The joints must use the elastic-foundation law (a pressure
-distribution to wear).  Per joint: the worn profile, the peak-depth history
-and the worn volume (`diffwear.cli.run` writes them).
+distribution to wear), lubricated or not.  Per joint: the worn profile, the
+peak-depth history and the worn volume, and for a lubricated joint its film
+over the cycle (`film_cycle`) on the unworn and the worn bushing
+(`diffwear.cli.run` writes them).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import numpy as np
 from .._checks import require_float64
 from ..config import MechanismFile
 from ..contact.clearance_joint import ClearanceJoint
+from ..contact.mixed import MixedLubrication
 from ..errors import InputError
 from ..io import OutputDir
 from ..mechanism.constraints import Driver
@@ -128,6 +131,70 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
             "cycles_to_limit": (float(life.cycles[k]) if life is not None else None),
             "model": model.name,
         }
+    for name, film in film_cycle(mfile, y0, {n: out[n]["depth"] for n in joints}).items():
+        out[name]["film"] = film
+    return out
+
+
+def lubricated_joints(mfile: MechanismFile, joints) -> tuple[str, ...]:
+    """Those of ``joints`` whose law is a `MixedLubrication` (a ``lubricant`` key)."""
+    return tuple(n for n in joints
+                 if isinstance(mfile.mechanism.element(n).law, MixedLubrication))
+
+
+def bearing_name(law: MixedLubrication) -> str:
+    """The ``lubricant.bearing`` name of a lubricated law's film model."""
+    from ..config.clearance import BEARINGS
+
+    return next((k for k, cls in BEARINGS.items() if type(law.film) is cls),
+                type(law.film).__name__)
+
+
+def film_cycle(mfile: MechanismFile, y0, depths: dict, model: QuasiStatic | None = None) -> dict:
+    """Per lubricated joint named in ``depths`` ({name: wear depth [m] on the
+    bushing grid}): the film and the asperities over one cycle at the pin's
+    quasi-static equilibrium (`LubricatedQuasiStaticJoint.equilibrium`), on
+    the unworn bushing and on the worn one, with the loads of the ideal
+    mechanism as the quasi-static wear model takes them (``model``'s samples,
+    default `QuasiStatic`'s)."""
+    names = lubricated_joints(mfile, tuple(depths))
+    if not names:
+        return {}
+    model = QuasiStatic() if model is None else model
+    mech, period = mfile.mechanism, drive_period(mfile)
+    worn = tuple(jnp.asarray(depths[n], dtype=float) for n in names)
+
+    def parts(eq):
+        return {"min_film_thickness": eq.min_film_thickness, "film_ratio": eq.film_ratio,
+                "asperity_share": eq.asperity_share, "film_load": eq.film_load,
+                "asperity_load": eq.normal_load, "ok": eq.ok}
+
+    @jax.jit
+    def evaluate(y, worn):
+        loads = model.loads(mech, names, y, period)
+        out = []
+        for j, lo, h in zip(model.joints(mech, names), loads.joints, worn):
+            unworn = j.equilibrium(jnp.zeros(j.n), lo)
+            out.append((parts(unworn), parts(j.equilibrium(h, lo, unworn.offset))))
+        return out, loads.ok
+
+    per_joint, ok = evaluate(y0, worn)
+    driver = drive(mfile)
+    samples = int(per_joint[0][0]["film_ratio"].shape[0])
+    t = period * np.arange(samples) / samples
+    crank = np.degrees(float(driver.angle0) + float(driver.omega) * t)
+    out = {}
+    for name, (unworn, worn_parts) in zip(names, per_joint):
+        law = mech.element(name).law
+        out[name] = {
+            "crank_angle_deg": crank,
+            "unworn": {k: np.asarray(v) for k, v in unworn.items()},
+            "worn": {k: np.asarray(v) for k, v in worn_parts.items()},
+            "loads_ok": bool(ok),
+            "viscosity": float(law.film.viscosity), "roughness": float(law.roughness),
+            "bearing": bearing_name(law), "onset_gap": float(law.onset_gap),
+            "onset_ratio": float(law.onset_ratio),
+        }
     return out
 
 
@@ -139,8 +206,18 @@ DYNAMIC_CYCLES = 50
 
 def dynamic_wear_joint(mfile: MechanismFile) -> tuple[str, ...]:
     """The one wearing joint the dynamic model evolves; `InputError` if the
-    file has more."""
+    file has more, or a lubricated one (its squeeze film is too stiff for the
+    dynamic model's explicit integrator: the quasi-static model wears it)."""
     joints = wearing_joints(mfile)
+    oiled = lubricated_joints(mfile, joints)
+    if oiled:
+        raise InputError(f"{mfile.file}: clearance joint {oiled[0]!r} is lubricated: the "
+                         "dynamic wear model integrates its oil film with the explicit "
+                         "integrator, and the squeeze film's damping makes the motion so stiff "
+                         "(on the lubricated Ch. 7 rig ~1e6 steps per simulated second) that "
+                         f"its {DYNAMIC_CYCLES} simulated cycles do not fit the step budget; "
+                         "allowed: --model quasi-static (the pin at the equilibrium of film "
+                         "and asperities)")
     if len(joints) > 1:
         raise InputError(f"{mfile.file}: the dynamic wear model evolves one clearance joint over "
                          f"a fixed number of cycles; this file wears {len(joints)} "

@@ -2,7 +2,8 @@
 plots.  The matplotlib backend is the caller's choice: the ``diffwear``
 command selects Agg (files only); a notebook keeps its inline backend.
 
-`panels`: stacked time series, contact loci, wear profiles (shared);
+`panels`: stacked time series, contact loci, wear profiles, a lubricated
+joint's film over the cycle (shared);
 `layout`: the rules they share (legends off the data, zero curves left out,
 the bushing wall and the depth limit on depth axes); `files`: where a
 figure becomes a file (`captured` reads the figures back, for tests);
@@ -13,6 +14,6 @@ tornado plots of elasticities, histograms of sampled outputs.
 """
 
 from .files import captured
-from .panels import polar_loci, stacked, wear_panels, wear_title
+from .panels import film_panels, polar_loci, stacked, wear_panels, wear_title
 
-__all__ = ["captured", "stacked", "polar_loci", "wear_panels", "wear_title"]
+__all__ = ["captured", "stacked", "polar_loci", "wear_panels", "wear_title", "film_panels"]

@@ -1,0 +1,186 @@
+"""A lubricated clearance joint in a mechanism file (``lubricant = {...}``):
+its units, its checks, the shipped lubricated rig, and what ``diffwear run
+--cycles`` reports of its film."""
+
+import csv
+import json
+import math
+
+import jax
+import numpy as np
+import pytest
+
+from diffwear.choices import SHIPPED_MECHANISMS
+from diffwear.cli import main
+from diffwear.config import load
+from diffwear.config import units as U
+from diffwear.contact import MixedLubrication, ShortBearingFilm
+
+LUBRICATED = SHIPPED_MECHANISMS / "rig_lubricated.toml"
+OIL = 'lubricant = { viscosity = "0.06 Pa s", roughness = "0.65 um", bearing = "short" }'
+FILM_KEYS = ("min_film_thickness_um", "film_ratio_min", "asperity_load_share")
+
+
+def _file(tmp_path, name, *edits, text=None):
+    """The shipped lubricated rig with ``edits`` (old, new), on a 90-node grid
+    and a short motion (the wear and the film come from the cycle's loads,
+    not from the motion)."""
+    text = LUBRICATED.read_text() if text is None else text
+    for old, new in (("n_theta = 180", "n_theta = 90"),
+                     ('duration = "0.5 s"', 'duration = "0.01 s"'),
+                     ("n_save = 101", "n_save = 11"), *edits):
+        assert old in text, old
+        text = text.replace(old, new)
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text)
+    return path
+
+
+def test_viscosity_units():
+    assert U.parse_quantity("1 cP", "viscosity") == 1e-3
+    assert U.parse_quantity("1 mPa s", "viscosity") == 1e-3
+    assert U.parse_quantity("1 P", "viscosity") == 0.1
+    assert U.parse_quantity("68 mPa*s", "viscosity") == 0.068
+    assert U.to_si(50, "cP", "viscosity") == 0.05
+    with pytest.raises(Exception, match="'Pa' is a pressure unit, not viscosity"):
+        U.parse_quantity("0.05 Pa", "viscosity")
+
+
+def test_the_shipped_lubricated_rig_is_the_rig_with_its_oil():
+    el = load("rig_lubricated").mechanism.element("crank_rod")
+    dry = load("rig").mechanism.element("crank_rod")
+    assert isinstance(el.law, MixedLubrication) and isinstance(el.law.film, ShortBearingFilm)
+    assert float(el.law.film.viscosity) == 0.06  # Pa s
+    assert float(el.law.roughness) == 0.65e-6  # m
+    assert float(el.law.film.length) == float(dry.law.depth) == 0.0131
+    assert float(el.law.film.clearance) == pytest.approx(33e-6, rel=1e-9)
+    # its asperities are the dry rig's foundation, leaf by leaf
+    for a, b in zip(jax.tree.leaves(el.law.asperity), jax.tree.leaves(dry.law), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """``diffwear run --cycles 2000`` on the lubricated rig at 0.02 and
+    0.2 Pa s, and on the same file without its oil."""
+    tmp = tmp_path_factory.mktemp("lubricant")
+    cases = {"thin": _file(tmp, "thin", (OIL, OIL.replace("0.06 Pa s", "0.02 Pa s"))),
+             "thick": _file(tmp, "thick", (OIL, OIL.replace("0.06 Pa s", "0.2 Pa s"))),
+             "dry": _file(tmp, "dry", (OIL, ""))}
+    out = {}
+    for name, path in cases.items():
+        folder = tmp / f"out-{name}"
+        assert main(["run", str(path), "--cycles", "2000", "--out", str(folder),
+                     "--quiet"]) == 0, name
+        out[name] = folder
+    return out
+
+
+def _joint(folder):
+    return json.loads((folder / "summary.json").read_text())["joints"]["crank_rod"]
+
+
+def test_a_thicker_oil_keeps_a_thicker_film_and_wears_less_than_dry(runs):
+    thin, thick, dry = (_joint(runs[k]) for k in ("thin", "thick", "dry"))
+    assert thick["min_film_thickness_um"] > thin["min_film_thickness_um"]
+    assert thick["asperity_load_share"] < thin["asperity_load_share"]
+    assert thick["max_wear_depth_mm"] < thin["max_wear_depth_mm"]
+    for oiled in (thin, thick):
+        assert dry["max_wear_depth_mm"] >= oiled["max_wear_depth_mm"]
+        assert dry["wear_volume_mm3"] >= oiled["wear_volume_mm3"]
+    assert "lubricant" not in dry and "min_film_thickness_um" not in dry
+    assert thin["lubricant"] == {"viscosity_Pa_s": 0.02, "roughness_um": 0.65,
+                                 "bearing": "short"}
+    for w in (thin, thick):
+        for key in FILM_KEYS:
+            for k in (key, key + "_worn"):
+                assert isinstance(w[k], float) and math.isfinite(w[k]), k
+        assert 0.0 <= w["asperity_load_share"] <= 1.0
+
+
+def test_the_film_files_and_the_report(runs):
+    folder = runs["thin"]
+    summary = json.loads((folder / "summary.json").read_text())
+    assert {"film_crank_rod.csv", "film_crank_rod.png"} <= set(summary["files"])
+    with open(folder / "film_crank_rod.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == ["crank_angle_deg", "h_min_um", "film_ratio", "asperity_share",
+                       "film_load_N", "asperity_load_N", "h_min_um_worn", "film_ratio_worn",
+                       "asperity_share_worn", "film_load_N_worn", "asperity_load_N_worn"]
+    data = np.array(rows[1:], dtype=float)
+    assert data.shape == (180, 11) and np.all(np.isfinite(data))
+    assert data[0, 0] == 0.0 and data[-1, 0] == pytest.approx(358.0)
+    w = summary["joints"]["crank_rod"]
+    assert np.min(data[:, 1]) == pytest.approx(w["min_film_thickness_um"])
+    assert np.mean(data[:, 3]) == pytest.approx(w["asperity_load_share"])
+    assert (folder / "film_crank_rod.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    report = (folder / "report.md").read_text()
+    assert "## Lubrication" in report and "(film_crank_rod.png)" in report
+    assert "boundary" in report  # lambda < 1 at 0.02 Pa s
+
+
+@pytest.mark.parametrize("old, new, words", [
+    ('viscosity = "0.06 Pa s"', 'viscosity = "0 Pa s"',
+     ["joints[1].lubricant.viscosity", "'0 Pa s'", "out of range", "(0, 10] Pa s"]),
+    ('viscosity = "0.06 Pa s"', 'viscosity = "-1 Pa s"',
+     ["joints[1].lubricant.viscosity", "'-1 Pa s'", "(0, 10] Pa s"]),
+    ('viscosity = "0.06 Pa s"', 'viscosity = "20 Pa s"',
+     ["joints[1].lubricant.viscosity", "'20 Pa s'", "(0, 10] Pa s"]),
+    ('viscosity = "0.06 Pa s"', 'viscosity = "0.05 m"',
+     ["joints[1].lubricant.viscosity", "'m' is a length unit, not viscosity",
+      "Pa s, mPa s, cP, P"]),
+    ('roughness = "0.65 um"', 'roughness = "12 um"',
+     ["joints[1].lubricant.roughness", "12 um", "radial clearance 33 um",
+      "< clearance / 3 = 11 um"]),
+    ('bearing = "short"', 'bearing = "short", viscocity = "1 cP"',
+     ["joints[1].lubricant.viscocity", "unknown key", "did you mean 'viscosity'"]),
+    ('bearing = "short"', 'bearing = "long"',
+     ["joints[1].lubricant.bearing", "'long' is not allowed", "'short'"]),
+    ('law = { type = "elastic-foundation", layer_thickness = "6.342 mm", depth = "13.1 mm", '
+     'restitution = 0.8 }\nwear = { coefficient = "5.05e-4 mm^3/(N m)" }   # Table 7-2',
+     'law = { type = "lankarani-nikravesh" }\npin_material = "steel"',
+     ["joints[1].lubricant", "'lankarani-nikravesh'", "law.type = 'elastic-foundation'"]),
+])
+def test_a_bad_lubricant_exits_2_naming_the_key_and_the_range(tmp_path, capsys, old, new,
+                                                               words):
+    path = _file(tmp_path, "bad", (old, new))
+    before = path.read_bytes()
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--cycles", "2000", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err
+    for w in words:
+        assert w in err, (w, err)
+    assert not out.exists()
+    assert path.read_bytes() == before  # the user's file is left as it was
+
+
+def test_the_dynamic_wear_model_refuses_a_lubricated_joint_up_front(tmp_path, capsys):
+    path = _file(tmp_path, "dyn")
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--cycles", "2000", "--model", "dynamic", "--out", str(out),
+                 "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "'crank_rod' is lubricated" in err and "--model quasi-static" in err
+    assert not out.exists()
+
+
+def test_the_film_figure_draws_the_onset_line_over_the_crank_angle(tmp_path):
+    from diffwear import plots
+
+    crank = np.arange(180) * 2.0
+    h = 2e-6 + 1e-6 * np.cos(np.radians(crank))
+    share = np.clip(1.5e-6 - h, 0.0, None) / 1e-6
+    with plots.captured() as figures:
+        plots.film_panels(tmp_path / "film_j.png", crank, {"unworn": (h, share),
+                                                            "worn": (h + 2e-7, share / 2)},
+                          onset=1.95e-6, onset_ratio=3.0, roughness=0.65e-6, title="j")
+    top, bottom = figures["film_j.png"].axes
+    assert bottom.get_xlabel() == "crank angle [deg]" and bottom.get_xlim() == (0.0, 360.0)
+    onset = [line for line in top.get_lines() if "onset" in line.get_label()]
+    assert len(onset) == 1 and np.allclose(onset[0].get_ydata(), 1.95)  # um
+    assert "3 × 0.65 µm" in onset[0].get_label()
+    assert np.isclose(np.min(top.get_lines()[0].get_ydata()), 1.0)  # h_min drawn in um
+    assert [t.get_text() for t in bottom.get_legend().get_texts()] == ["unworn", "worn"]
+    for ax in (top, bottom):  # legends right of the data
+        assert ax.get_legend().get_window_extent().x0 > ax.get_window_extent().x1

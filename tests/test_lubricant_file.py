@@ -134,8 +134,8 @@ def test_the_film_files_and_the_report(runs):
       "< clearance / 3 = 11 um"]),
     ('bearing = "short"', 'bearing = "short", viscocity = "1 cP"',
      ["joints[1].lubricant.viscocity", "unknown key", "did you mean 'viscosity'"]),
-    ('bearing = "short"', 'bearing = "long"',
-     ["joints[1].lubricant.bearing", "'long' is not allowed", "'short'"]),
+    ('bearing = "short"', 'bearing = "journal"',
+     ["joints[1].lubricant.bearing", "'journal' is not allowed", "'short'", "'long'"]),
     ('law = { type = "elastic-foundation", layer_thickness = "6.342 mm", depth = "13.1 mm", '
      'restitution = 0.8 }\nwear = { coefficient = "5.05e-4 mm^3/(N m)" }   # Table 7-2',
      'law = { type = "lankarani-nikravesh" }\npin_material = "steel"',

@@ -21,6 +21,7 @@ from ..contact import (
     CoulombFriction,
     KelvinVoigt,
     LankaraniNikravesh,
+    LongBearingFilm,
     Material,
     MixedLubrication,
     ShortBearingFilm,
@@ -103,10 +104,10 @@ LAWS = {
     },
 }
 
-BEARINGS = {"short": ShortBearingFilm}
+BEARINGS = {"short": ShortBearingFilm, "long": LongBearingFilm}
 """Film models of ``lubricant.bearing``, by name: the short (Ocvirk) bearing
-(`ShortBearingFilm`).  A film law with the same constructor (viscosity,
-length, clearance) is one more entry here."""
+(`ShortBearingFilm`, L / D below ~0.5) and the long (Sommerfeld) one
+(`LongBearingFilm`, L / D above ~2)."""
 MAX_VISCOSITY = 10.0
 """Pa s: the most viscous lubricant a joint takes (honey is ~10 Pa s; above
 that the fluid does not flow into the clearance as a lubricating film)."""

@@ -17,7 +17,7 @@ from diffwear.config import units as U
 from diffwear.contact import MixedLubrication, ShortBearingFilm
 
 LUBRICATED = SHIPPED_MECHANISMS / "rig_lubricated.toml"
-OIL = 'lubricant = { viscosity = "0.06 Pa s", roughness = "0.65 um", bearing = "short" }'
+OIL = 'lubricant = { viscosity = "8.5 mPa s", roughness = "0.65 um", bearing = "short" }'
 FILM_KEYS = ("min_film_thickness_um", "film_ratio_min", "asperity_load_share")
 
 
@@ -50,7 +50,7 @@ def test_the_shipped_lubricated_rig_is_the_rig_with_its_oil():
     el = load("rig_lubricated").mechanism.element("crank_rod")
     dry = load("rig").mechanism.element("crank_rod")
     assert isinstance(el.law, MixedLubrication) and isinstance(el.law.film, ShortBearingFilm)
-    assert float(el.law.film.viscosity) == 0.06  # Pa s
+    assert float(el.law.film.viscosity) == pytest.approx(8.5e-3, rel=1e-12)  # Pa s
     assert float(el.law.roughness) == 0.65e-6  # m
     assert float(el.law.film.length) == float(dry.law.depth) == 0.0131
     assert float(el.law.film.clearance) == pytest.approx(33e-6, rel=1e-9)
@@ -61,11 +61,11 @@ def test_the_shipped_lubricated_rig_is_the_rig_with_its_oil():
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    """``diffwear run --cycles 2000`` on the lubricated rig at 0.02 and
-    0.2 Pa s, and on the same file without its oil."""
+    """``diffwear run --cycles 2000`` on the lubricated rig at 3 and
+    60 mPa s, and on the same file without its oil."""
     tmp = tmp_path_factory.mktemp("lubricant")
-    cases = {"thin": _file(tmp, "thin", (OIL, OIL.replace("0.06 Pa s", "0.02 Pa s"))),
-             "thick": _file(tmp, "thick", (OIL, OIL.replace("0.06 Pa s", "0.2 Pa s"))),
+    cases = {"thin": _file(tmp, "thin", (OIL, OIL.replace("8.5 mPa s", "3 mPa s"))),
+             "thick": _file(tmp, "thick", (OIL, OIL.replace("8.5 mPa s", "60 mPa s"))),
              "dry": _file(tmp, "dry", (OIL, ""))}
     out = {}
     for name, path in cases.items():
@@ -80,6 +80,7 @@ def _joint(folder):
     return json.loads((folder / "summary.json").read_text())["joints"]["crank_rod"]
 
 
+@pytest.mark.extended
 def test_a_thicker_oil_keeps_a_thicker_film_and_wears_less_than_dry(runs):
     thin, thick, dry = (_joint(runs[k]) for k in ("thin", "thick", "dry"))
     assert thick["min_film_thickness_um"] > thin["min_film_thickness_um"]
@@ -89,7 +90,7 @@ def test_a_thicker_oil_keeps_a_thicker_film_and_wears_less_than_dry(runs):
         assert dry["max_wear_depth_mm"] >= oiled["max_wear_depth_mm"]
         assert dry["wear_volume_mm3"] >= oiled["wear_volume_mm3"]
     assert "lubricant" not in dry and "min_film_thickness_um" not in dry
-    assert thin["lubricant"] == {"viscosity_Pa_s": 0.02, "roughness_um": 0.65,
+    assert thin["lubricant"] == {"viscosity_Pa_s": 0.003, "roughness_um": 0.65,
                                  "bearing": "short"}
     for w in (thin, thick):
         for key in FILM_KEYS:
@@ -98,6 +99,7 @@ def test_a_thicker_oil_keeps_a_thicker_film_and_wears_less_than_dry(runs):
         assert 0.0 <= w["asperity_load_share"] <= 1.0
 
 
+@pytest.mark.extended
 def test_the_film_files_and_the_report(runs):
     folder = runs["thin"]
     summary = json.loads((folder / "summary.json").read_text())
@@ -116,17 +118,17 @@ def test_the_film_files_and_the_report(runs):
     assert (folder / "film_crank_rod.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     report = (folder / "report.md").read_text()
     assert "## Lubrication" in report and "(film_crank_rod.png)" in report
-    assert "boundary" in report  # lambda < 1 at 0.02 Pa s
+    assert "boundary" in report  # lambda < 1 at 3 mPa s
 
 
 @pytest.mark.parametrize("old, new, words", [
-    ('viscosity = "0.06 Pa s"', 'viscosity = "0 Pa s"',
+    ('viscosity = "8.5 mPa s"', 'viscosity = "0 Pa s"',
      ["joints[1].lubricant.viscosity", "'0 Pa s'", "out of range", "(0, 10] Pa s"]),
-    ('viscosity = "0.06 Pa s"', 'viscosity = "-1 Pa s"',
+    ('viscosity = "8.5 mPa s"', 'viscosity = "-1 Pa s"',
      ["joints[1].lubricant.viscosity", "'-1 Pa s'", "(0, 10] Pa s"]),
-    ('viscosity = "0.06 Pa s"', 'viscosity = "20 Pa s"',
+    ('viscosity = "8.5 mPa s"', 'viscosity = "20 Pa s"',
      ["joints[1].lubricant.viscosity", "'20 Pa s'", "(0, 10] Pa s"]),
-    ('viscosity = "0.06 Pa s"', 'viscosity = "0.05 m"',
+    ('viscosity = "8.5 mPa s"', 'viscosity = "0.05 m"',
      ["joints[1].lubricant.viscosity", "'m' is a length unit, not viscosity",
       "Pa s, mPa s, cP, P"]),
     ('roughness = "0.65 um"', 'roughness = "12 um"',

@@ -184,5 +184,8 @@ def test_the_film_figure_draws_the_onset_line_over_the_crank_angle(tmp_path):
     assert "3 × 0.65 µm" in onset[0].get_label()
     assert np.isclose(np.min(top.get_lines()[0].get_ydata()), 1.0)  # h_min drawn in um
     assert [t.get_text() for t in bottom.get_legend().get_texts()] == ["unworn", "worn"]
+    # the share in percent, its axis scaled to the largest share
+    assert np.isclose(np.max(bottom.get_lines()[0].get_ydata()), 100.0 * share.max())
+    assert bottom.get_ylim()[1] == pytest.approx(1.08 * 100.0 * share.max())
     for ax in (top, bottom):  # legends right of the data
         assert ax.get_legend().get_window_extent().x0 > ax.get_window_extent().x1

@@ -134,16 +134,20 @@ def film_panels(path: Path, crank_deg: np.ndarray,
     """A lubricated joint over the crank angle [deg]: the minimum film
     thickness (inputs in m, drawn in um) with the asperities' onset lambda_c
     sigma (``onset`` [m]) as a labelled line, and the asperities' share of
-    the load; one curve per case of ``cases`` ({label: (h_min, share)}, e.g.
+    the load (drawn in percent); one curve per case of ``cases`` ({label: (h_min, share)}, e.g.
     the unworn and the worn bushing).  Legends off the data."""
     fig, (a, b) = plt.subplots(2, 1, figsize=(8.6, 5.4), sharex=True)
     for label, (h_min, share) in cases.items():
         a.plot(crank_deg, np.asarray(h_min) * 1e6, lw=1.2, label=label)
-        b.plot(crank_deg, share, lw=1.2, label=label)
+        b.plot(crank_deg, 100.0 * np.asarray(share), lw=1.2, label=label)
     a.axhline(onset * 1e6, color="tab:red", ls="--", lw=1.0,
               label=f"asperity onset λc σ = {onset_ratio:g} × {roughness * 1e6:.3g} µm")
     a.set_ylabel("min film thickness [µm]")
-    b.set(xlabel="crank angle [deg]", ylabel="asperity share of load [-]", ylim=(-0.04, 1.04))
+    # in percent, scaled to the largest share (a mixed film's few percent are
+    # invisible on a 0..100 % axis)
+    top = max(float(np.max(100.0 * np.asarray(s))) for _, s in cases.values())
+    b.set(xlabel="crank angle [deg]", ylabel="asperity share of load [%]",
+          ylim=(0.0, 1.08 * top if top > 0.0 else 1.0))
     first, last = float(np.min(crank_deg)), float(np.max(crank_deg))
     b.set_xlim(first, last + (last - first) / max(len(crank_deg) - 1, 1))
     for ax in (a, b):

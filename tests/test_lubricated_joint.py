@@ -263,3 +263,35 @@ def test_life_derivative_in_viscosity_matches_central_differences(rig_life):
           - float(life(jnp.asarray(mu - h)).cycles[0])) / (2 * h)
     assert float(dlife) > 0.0
     assert float(dlife) == pytest.approx(fd, rel=1e-4)
+
+
+def test_dynamic_wear_cycle_comes_from_the_asperities_only():
+    """One crank revolution of the lubricated slider-crank on the dynamic
+    model's wear cycle (`wear_cycle`, Rodas4 at 1e-8): no wear while the
+    film carries (0.5 Pa s), wear once the asperities touch (0.02 Pa s), and
+    the dry joint wears more than either; the wear's Archard bookkeeping
+    (load x sliding) is the asperities'."""
+    from diffwear.dynamics.rosenbrock import Rodas4
+    from diffwear.presets import clearance_slider_crank
+    from diffwear.wear import wear_cycle
+
+    mech, y0 = clearance_slider_crank("efm", clearance=0.1e-3, n_theta=90,
+                                      wear=ArchardWear(5.05e-13))
+    el = mech.element("crank_rod")
+    c = float(el.bushing_radius - el.pin_radius)
+
+    @eqx.filter_jit
+    def cycle(m):
+        return wear_cycle(m, "crank_rod", y0, 0.0, 2.0, rtol=1e-8, atol=1e-8, solver=Rodas4())
+
+    def lubricated(mu):
+        law = MixedLubrication(ShortBearingFilm(mu, el.law.depth, c), el.law, 1e-6)
+        return eqx.tree_at(lambda m: m.element("crank_rod").law, mech, law)
+
+    thick, thin, dry = cycle(lubricated(0.5)), cycle(lubricated(0.02)), cycle(mech)
+    assert bool(thick.ok) and bool(thin.ok) and bool(dry.ok)
+    assert float(jnp.max(thick.depth_increment)) == 0.0
+    assert float(thick.load_sliding) == 0.0
+    assert float(jnp.max(thin.depth_increment)) > 0.0
+    assert float(jnp.max(dry.depth_increment)) > float(jnp.max(thin.depth_increment))
+    assert float(dry.load_sliding) > float(thin.load_sliding) > 0.0

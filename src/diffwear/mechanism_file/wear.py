@@ -206,18 +206,20 @@ DYNAMIC_CYCLES = 50
 
 def dynamic_wear_joint(mfile: MechanismFile) -> tuple[str, ...]:
     """The one wearing joint the dynamic model evolves; `InputError` if the
-    file has more, or a lubricated one (its squeeze film is too stiff for the
-    dynamic model's explicit integrator: the quasi-static model wears it)."""
+    file has more, or a lubricated one: a file's dynamic wear cycles run at
+    the wear routes' tolerance (1e-4 on Rodas4, 1e-6 on Tsit5, on the whole
+    state in SI units), coarser than an oil film of a micrometre, whose
+    forces then ring (the film needs ~1e-8 m: tests/test_lubricated_joint.py
+    runs it there, at ~10,000 steps a rig cycle); the quasi-static model
+    wears it."""
     joints = wearing_joints(mfile)
     oiled = lubricated_joints(mfile, joints)
     if oiled:
         raise InputError(f"{mfile.file}: clearance joint {oiled[0]!r} is lubricated: the "
-                         "dynamic wear model integrates its oil film with the explicit "
-                         "integrator, and the squeeze film's damping makes the motion so stiff "
-                         "(on the lubricated Ch. 7 rig ~1e6 steps per simulated second) that "
-                         f"its {DYNAMIC_CYCLES} simulated cycles do not fit the step budget; "
-                         "allowed: --model quasi-static (the pin at the equilibrium of film "
-                         "and asperities)")
+                         "dynamic wear model integrates a file's wear cycles at a tolerance "
+                         "coarser than its oil film (micrometres), where the film's forces are "
+                         "not resolved; allowed: --model quasi-static (the pin at the "
+                         "equilibrium of film and asperities)")
     if len(joints) > 1:
         raise InputError(f"{mfile.file}: the dynamic wear model evolves one clearance joint over "
                          f"a fixed number of cycles; this file wears {len(joints)} "

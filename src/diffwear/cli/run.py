@@ -327,7 +327,8 @@ def _lubrication_section(joints: dict) -> Section:
                      f"{100 * w['asperity_load_share_worn']:.3g} %",
                      f"{regime(worst).capitalize()}.", f"[film]({w['film_file']})"))
     return Section("Lubrication", [
-        "Lubricated clearance joints: the oil film (short-bearing Reynolds film) and the "
+        "Lubricated clearance joints: the oil film (the short- or long-bearing Reynolds film "
+        "of the file's lubricant.bearing) and the "
         "surfaces' asperities share the load.  h min: the thinnest film over the cycle; "
         "lambda = h min / sigma (sigma: the combined RMS roughness); asperity share: the "
         "asperities' part of the load, averaged over the cycle; each on the unworn / the worn "

@@ -108,6 +108,15 @@ class LubricatedQuasiStaticJoint(eqx.Module):
     def n(self) -> int:
         return self.dry.n
 
+    @property
+    def clearance(self) -> Float[Array, " n"]:
+        """The unworn bore's clearance c0(theta_k) [m]."""
+        return self.dry.clearance
+
+    @property
+    def directions(self) -> Float[Array, "n 2"]:
+        return self.dry.directions
+
     def _kinematics(self, offset, omega) -> PinKinematics:
         return PinKinematics(offset=offset, offset_rate=jnp.zeros(2), omega=omega,
                              pin_radius=self.dry.pin_radius,

@@ -15,7 +15,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..contact import ContactHistory
+from ..contact import ContactHistory, MixedLubrication
 from ..mechanism.geometry import safe_angle
 from ..presets import PTFE_DENSITY, WearJointDesign
 from ..quasistatic import QuasiStatic
@@ -119,8 +119,10 @@ def run(out, *, name, mech, design: WearJointDesign, y0, cycles, period, thesis:
                         "check with the dynamic model (--model dynamic)")
     report = Report(name, [
         description,
-        "Model: quasi-static joint (the pin at the equilibrium of the EFM springs under the "
-        "ideal mechanism's joint load; wear integrated in the cycle count).",
+        "Model: quasi-static joint (the pin at the equilibrium of "
+        + ("the oil film and the asperities (the EFM springs at the summit height)"
+           if isinstance(el.law, MixedLubrication) else "the EFM springs")
+        + " under the ideal mechanism's joint load; wear integrated in the cycle count).",
         comparison_table("diffwear (quasi-static)", summary, thesis),
         COMPARISON_WORDS,
         Bullets([

@@ -28,9 +28,10 @@ Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
     PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py
     PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py --only life rig
 
-Run time on the 2-core CPU (compiles included): steady films and Sommerfeld
-~10 s, life against viscosity ~3 min, slider-crank ~2 min, the rig run
-~1.5 min; all ~7 min.
+Run time on the 2-core CPU, compiles included (measured part by part):
+steady films 5 s, Sommerfeld 7 s, life against viscosity 2.5-5 min (14
+lives and 4 tangents; the longer with other jobs on the cores),
+slider-crank 1 min, the rig run 72 s; all ~6 min.
 """
 
 from __future__ import annotations

@@ -11,6 +11,9 @@ simulation while the site builds):
   sweep file's results;
 * ``benchmarks/records/agreement.json``: the quasi-static model against the
   dynamic one;
+* ``design_studies/results/studies/lubrication/``: the lubricated joint's
+  checks and the lubricated rig's run (written by
+  ``design_studies/lubrication_figure_data.py``);
 * ``design_studies/calibration/results/<campaign>/``: the stored calibrations'
   residuals (``residuals.csv``), redrawn in degrees.
 
@@ -457,6 +460,215 @@ def calibration_fit(campaign: str, series: str) -> Callable[[Path], None]:
     return draw
 
 
+# ---------------------------------------------------------------- lubrication
+# design_studies/lubrication_figure_data.py writes these
+LUBRICATION = STUDIES / "lubrication"
+
+
+def _short_steady(eps):
+    """The short bearing's steady load over mu omega R L^3 / c^2 and its
+    attitude [deg] (Hamrock, Schmid & Jacobson, the short-width journal
+    bearing)."""
+    w = eps / (4.0 * (1.0 - eps**2) ** 2) * np.sqrt(16.0 * eps**2 + np.pi**2 * (1.0 - eps**2))
+    return w, np.degrees(np.arctan2(np.pi * np.sqrt(1.0 - eps**2), 4.0 * eps))
+
+
+def _long_steady(eps):
+    """The long (half-Sommerfeld) bearing's steady load over
+    mu omega R^3 L / c^2 and its attitude [deg] (same source)."""
+    w_r = 12.0 * eps**2 / ((2.0 + eps**2) * (1.0 - eps**2))
+    w_t = 6.0 * np.pi * eps / ((2.0 + eps**2) * np.sqrt(1.0 - eps**2))
+    return np.hypot(w_r, w_t), np.degrees(np.arctan2(w_t, w_r))
+
+
+def lubrication_short_bearing(path: Path) -> None:
+    """The short- and long-bearing films at steady states (the laws'
+    ``film``, stored) against their closed-form load and attitude."""
+    plt = _pyplot()
+    d = read_csv(LUBRICATION / "steady_films.csv")
+    m = json.loads((LUBRICATION / "steady_films.json").read_text())
+    mu, omega, r, c = m["viscosity_Pa_s"], m["omega_rad_s"], m["pin_radius_m"], m["clearance_m"]
+    scales = {"short": mu * omega * r * m["short_length_m"] ** 3 / c**2,
+              "long": mu * omega * r**3 * m["long_length_m"] / c**2}
+    closed = {"short": _short_steady, "long": _long_steady}
+    words = {"short": f"short bearing (L/D = {m['short_length_m'] / (2 * r):g}), "
+                      "W / (μωRL³/c²)",
+             "long": f"long bearing (L/D = {m['long_length_m'] / (2 * r):g}), W / (μωR³L/c²)"}
+    eps = d["eps"]
+    line = np.linspace(0.01, 0.96, 300)
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.9))
+    for (name, color) in (("short", "tab:blue"), ("long", "tab:orange")):
+        load, attitude = closed[name](line)
+        a.plot(line, load, color=color, lw=1.3, label=f"{words[name]}: closed form")
+        b.plot(line, attitude, color=color, lw=1.3, label=f"{name} bearing: closed form")
+        radial, tangential = d[f"{name}_radial_N"], d[f"{name}_tangential_N"]
+        a.plot(eps, np.hypot(radial, tangential) / scales[name], "o", ms=4.5, mfc="none",
+               color=color, label=f"{name} bearing: the law (`film`)")
+        b.plot(eps, np.degrees(np.arctan2(tangential, -radial)), "o", ms=4.5, mfc="none",
+               color=color, label=f"{name} bearing: the law (`film`)")
+    a.set(yscale="log", xlabel="eccentricity ratio ε", ylabel="dimensionless load",
+          xlim=(0, 1), title="Steady load")
+    b.set(xlabel="eccentricity ratio ε", ylabel="attitude angle φ [deg]", xlim=(0, 1),
+          ylim=(0, 95), title="Attitude (load line to line of centres)")
+    a.legend(fontsize=7, loc="upper left")
+    b.legend(fontsize=7, loc="upper right")
+    for ax in (a, b):
+        ax.grid(alpha=0.3, which="both")
+    fig.suptitle("Steady films against Hamrock, Schmid & Jacobson's closed forms "
+                 f"(R {1e3 * r:g} mm, c {1e6 * c:g} µm, μ {mu:g} Pa s, ω {omega:g} rad/s)",
+                 fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
+def lubrication_sommerfeld(path: Path) -> None:
+    """The quasi-static equilibrium of a film-borne journal (stored) against
+    the short bearing's closed-form eccentricity and attitude against the
+    Sommerfeld number."""
+    plt = _pyplot()
+    d = read_csv(LUBRICATION / "sommerfeld.csv")
+    m = json.loads((LUBRICATION / "steady_films.json").read_text())
+    mu, omega, r, c, length = (m["viscosity_Pa_s"], m["omega_rad_s"], m["pin_radius_m"],
+                               m["clearance_m"], m["short_length_m"])
+    eps = np.linspace(0.005, 0.985, 400)
+    load, attitude = _short_steady(eps)
+    load = load * mu * omega * r * length**3 / c**2
+    s = (r / c) ** 2 * mu * omega / (2 * np.pi) * 2 * r * length / load
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.8))
+    a.plot(s, eps, lw=1.3, label="short bearing, closed form ε(S)")
+    a.plot(d["sommerfeld"], d["eps_quasi_static"], "o", ms=4.5, mfc="none",
+           label="LubricatedQuasiStaticJoint.pin_offset")
+    b.plot(s, attitude, lw=1.3, label="short bearing, closed form φ(S)")
+    b.plot(d["sommerfeld"], d["attitude_deg"], "o", ms=4.5, mfc="none",
+           label="LubricatedQuasiStaticJoint.pin_offset")
+    a.set(xscale="log", xlabel="Sommerfeld number S = (R/c)² μN / P", ylim=(0, 1),
+          ylabel="eccentricity ratio ε", title="Eccentricity of the equilibrium")
+    b.set(xscale="log", xlabel="Sommerfeld number S = (R/c)² μN / P", ylim=(0, 95),
+          ylabel="attitude angle φ [deg]", title="Attitude of the equilibrium")
+    a.legend(fontsize=7, loc="upper right")
+    b.legend(fontsize=7, loc="lower right")
+    for ax in (a, b):
+        ax.grid(alpha=0.3, which="both")
+    fig.suptitle(f"Film-borne journal under a steady load {d['load_N'].min():.1g} .. "
+                 f"{d['load_N'].max():.0f} N (σ = 1 nm: no asperity contact; N in rev/s, "
+                 "P = W / 2RL)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
+def lubrication_life_viscosity(path: Path) -> None:
+    """The Ch. 7 rig's quasi-static life to 50 µm against the viscosity
+    (stored), the dry life and the forward-mode slopes d(life)/d(mu)."""
+    plt = _pyplot()
+    s = json.loads((LUBRICATION / "life_viscosity.json").read_text())
+    mu = np.array([r["viscosity_Pa_s"] for r in s["lives"]])
+    life = np.array([r["life_cycles"] for r in s["lives"]])
+    done = np.isfinite(life)
+    fig, ax = plt.subplots(figsize=(7.5, 4.0))
+    ax.plot(mu[done], life[done], "o-", ms=4, lw=1.2, label="lubricated, quasi-static life")
+    ax.axhline(s["dry"]["life_cycles"], color="k", ls="--", lw=1.0,
+               label=f"dry joint: {s['dry']['life_cycles']:,.0f} cycles")
+    for k, t in enumerate(s["tangents"]):
+        x0, y0, slope = t["viscosity_Pa_s"], t["life_cycles"], t["dlife_dmu_cycles_per_Pa_s"]
+        x = x0 * np.array([0.7, 1.0 / 0.7])
+        ax.plot(x, y0 + slope * (x - x0), color="tab:red", lw=2.2, alpha=0.8,
+                label="d(life)/dμ by jax.jvp (tangent)" if k == 0 else None)
+    top = float(np.nanmax(life[done])) if done.any() else s["dry"]["life_cycles"]
+    for x in mu[~done]:
+        ax.annotate("", xy=(x, 1.12 * top), xytext=(x, 0.97 * top),
+                    arrowprops={"arrowstyle": "->", "color": "tab:green", "lw": 1.5})
+    if (~done).any():
+        ax.plot([], [], color="tab:green", marker=r"$\uparrow$", ls="none", ms=9,
+                label=f"runs in: 50 µm never reached (μ ≥ {mu[~done].min():g} Pa s)")
+    st = s["settings"]
+    ax.set(xscale="log", xlabel="viscosity μ [Pa s]", ylabel="cycles to 50 µm wear",
+           ylim=(0, 1.18 * top),
+           title=f"Ch. 7 rig, crank-rod joint lubricated (short-bearing film, σ = "
+                 f"{1e6 * st['roughness_m']:g} µm): life against viscosity")
+    ax.title.set_fontsize(9)
+    ax.legend(fontsize=7, loc="upper left")
+    ax.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
+def lubrication_slider_crank(path: Path) -> None:
+    """The lubricated Table 2-1 slider-crank over one crank revolution
+    (stored dynamic runs): the film parameter and the journal orbit."""
+    plt = _pyplot()
+    from matplotlib.ticker import FixedLocator, ScalarFormatter
+
+    d = read_csv(LUBRICATION / "slider_crank.csv")
+    m = json.loads((LUBRICATION / "slider_crank.json").read_text())
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10.5, 4.6),
+                               gridspec_kw={"width_ratios": [1.5, 1]})
+    colors = ["tab:blue", "tab:orange"]
+    for mu, color in zip(m["viscosities_Pa_s"], colors):
+        tag = f"mu_{1e3 * mu:g}mPas"  # as design_studies/lubrication_figure_data.py
+        a.plot(d["t_s"], d[f"{tag}_film_ratio"], color=color, lw=1.2, label=f"μ = {mu:g} Pa s")
+        b.plot(d[f"{tag}_x_over_c"], d[f"{tag}_y_over_c"], color=color, lw=1.1,
+               label=f"μ = {mu:g} Pa s")
+    a.axhline(3.0, color="tab:red", ls="--", lw=1.0, label="λ = 3: asperities touch")
+    a.axhline(1.0, color="k", ls=":", lw=1.0, label="λ = 1: boundary")
+    # linear up to 3 (a thin film's lambda falls below 0: the pin pressed past
+    # the mean surfaces into the asperities), logarithmic above
+    a.set_yscale("symlog", linthresh=3.0, linscale=1.5)
+    a.yaxis.set_major_locator(FixedLocator([-2, 0, 1, 2, 3, 10, 30, 100]))
+    a.yaxis.set_major_formatter(ScalarFormatter())
+    a.set(xlabel="time [s] (one crank revolution, pin centred at t = 0)",
+          ylabel="film parameter λ = h_min / σ", xlim=(0, m["duration_s"]), ylim=(-3.5, 130),
+          title=f"Film parameter (σ = {1e6 * m['roughness_m']:g} µm, "
+                f"c = {1e3 * m['clearance_m']:g} mm)")
+    a.legend(fontsize=7, loc="upper center", ncol=2)
+    reach = 1.0
+    if "dry_x_over_c" in d:
+        b.plot(d["dry_x_over_c"], d["dry_y_over_c"], color="0.45", lw=0.8, ls="--",
+               label="dry (EFM): impacts")
+        reach = float(np.max(np.hypot(d["dry_x_over_c"], d["dry_y_over_c"])))
+    circle = np.linspace(0.0, 2.0 * np.pi, 200)
+    b.plot(np.cos(circle), np.sin(circle), color="k", lw=0.8, label="clearance circle")
+    lim = 1.05 * max(reach, 1.0)
+    b.set(aspect="equal", xlim=(-lim, lim), ylim=(-lim, lim), xlabel="x / c",
+          ylabel="y / c", title="Journal orbit e / c in the bushing (rod frame)")
+    b.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    for ax in (a, b):
+        ax.grid(alpha=0.3)
+    a.title.set_fontsize(9)
+    b.title.set_fontsize(9)
+    fig.suptitle("Table 2-1 slider-crank, crank-rod joint lubricated (dynamic model, "
+                 "Rodas4, rtol = atol = 1e-8)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
+def lubrication_rig_film(path: Path) -> None:
+    """``film_crank_rod.png`` of the stored ``diffwear run rig_lubricated
+    --cycles 21400``, drawn by `diffwear.plots.film_panels` from its
+    ``film_crank_rod.csv``."""
+    from diffwear.contact.mixed import ONSET_FILM_RATIO
+    from diffwear.plots import film_panels
+
+    folder = LUBRICATION / "rig"
+    s = json.loads((folder / "summary.json").read_text())
+    joint = s["joints"]["crank_rod"]
+    f = read_csv(folder / "film_crank_rod.csv")
+    sigma = joint["lubricant"]["roughness_um"] * 1e-6
+    cycles = joint["cycles"]
+    film_panels(path, f["crank_angle_deg"],
+                {"unworn bushing": (f["h_min_um"] * 1e-6, f["asperity_share"]),
+                 f"worn, {cycles:,.0f} cycles": (f["h_min_um_worn"] * 1e-6,
+                                                 f["asperity_share_worn"])},
+                onset=ONSET_FILM_RATIO * sigma, onset_ratio=ONSET_FILM_RATIO, roughness=sigma,
+                title=f"rig_lubricated, crank-rod joint (μ = "
+                      f"{joint['lubricant']['viscosity_Pa_s'] * 1e3:g} mPa s, σ = "
+                      f"{joint['lubricant']['roughness_um']:g} µm): quasi-static equilibrium "
+                      "over the cycle, unworn and worn bushing")
+
+
 FIGURES: dict[str, Callable[[Path], None]] = {
     "figures/results_against_thesis.png": results_against_thesis,
     "figures/ch2_ideal_reaction.png": ideal_reaction,
@@ -480,6 +692,11 @@ FIGURES: dict[str, Callable[[Path], None]] = {
     "figures/rig_tornado_volume.png": rig_tornado("volume_mm3"),
     "figures/calibration_three_lobe_k_profile_16050.png":
         calibration_fit("campaign_three_lobe_k", "profile_16050"),
+    "figures/lubrication_short_bearing.png": lubrication_short_bearing,
+    "figures/lubrication_sommerfeld.png": lubrication_sommerfeld,
+    "figures/lubrication_life_viscosity.png": lubrication_life_viscosity,
+    "figures/lubrication_slider_crank.png": lubrication_slider_crank,
+    "figures/lubrication_rig_film.png": lubrication_rig_film,
 }
 
 

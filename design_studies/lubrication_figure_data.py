@@ -1,0 +1,326 @@
+#!/usr/bin/env python3
+"""Stored data of the lubricated joint's validation figures
+(docs/guide/lubrication.md, drawn at build time by ``docs/figures.py``).
+
+Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
+
+* ``steady_films.csv``: the short- and long-bearing films (`ShortBearingFilm`,
+  `LongBearingFilm` ``.film``) at steady states, eps = 0.05 .. 0.95: the load
+  along and across the line of centres, to set against the closed forms of
+  Hamrock, Schmid & Jacobson (short bearing; half-Sommerfeld long bearing);
+* ``sommerfeld.csv``: the quasi-static equilibrium of a film-borne journal
+  (`LubricatedQuasiStaticJoint.pin_offset`, roughness 1 nm, so the
+  asperities never touch) under steady loads over five decades, and the
+  short bearing's closed-form eps for each load;
+* ``life_viscosity.json``: the Ch. 7 rig's crank-rod joint lubricated
+  (`MixedLubrication(ShortBearingFilm(mu, depth, c), foundation, 0.4 um)`),
+  its quasi-static life to 50 um against the viscosity, the dry life and the
+  derivative d(life)/d(mu) by forward-mode autodiff (`jax.jvp`) at a few
+  viscosities;
+* ``slider_crank.csv``: the Table 2-1 slider-crank (c = 0.1 mm, EFM) with its
+  crank-rod joint lubricated (sigma 1 um) at 0.5 and 0.02 Pa s, and dry, over
+  one crank revolution on Rodas4 (rtol = atol = 1e-8): the pin's offset in
+  the bushing over the clearance, the film parameter and the asperity load;
+* ``rig/``: ``diffwear run rig_lubricated --cycles 21400`` (the shipped file):
+  its ``summary.json`` (its ``file`` the repository path) and
+  ``film_crank_rod.csv``.
+
+    PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py
+    PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py --only life rig
+
+Run time on the 2-core CPU, compiles included (measured part by part):
+steady films 5 s, Sommerfeld 7 s, life against viscosity 2.5-5 min (14
+lives and 4 tangents; the longer with other jobs on the cores),
+slider-crank 1 min, the rig run 72 s; all ~6 min.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+STORE = ROOT / "design_studies" / "results" / "studies" / "lubrication"
+SIGNIFICANT = 7
+
+# the film-only checks (a, b): a connecting-rod-like pin, as tests/test_lubrication.py
+# and tests/test_lubricated_joint.py: R = 10 mm, L = 8 mm (short, L/D = 0.4),
+# c = 50 um, mu = 0.04 Pa s, omega = 100 rad/s; the long bearing L = 80 mm (L/D = 4)
+MU, R, C, OMEGA = 0.04, 0.010, 50e-6, 100.0
+L_SHORT, L_LONG = 0.008, 0.080
+KF = 1e13  # PTFE-like foundation [Pa/m], as tests/test_lubricated_joint.py
+
+# the rig's life against viscosity (c): the settings of tests/test_lubricated_joint.py
+RIG_ROUGHNESS = 0.4e-6
+RIG_LIMIT = 0.05e-3
+RIG_STEPS, RIG_SAMPLES = 10, 60
+VISCOSITIES = [1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 2e-4, 4e-4, 7e-4, 1e-3, 1.25e-3, 1.5e-3,
+               1.75e-3, 2e-3, 3e-3]
+TANGENTS_AT = [1e-4, 2e-4, 4e-4, 1e-3]
+
+# the lubricated slider-crank (d)
+SC_CLEARANCE, SC_ROUGHNESS = 0.1e-3, 1e-6
+SC_VISCOSITIES = [0.5, 0.02]
+
+
+def _jax():
+    sys.path.insert(0, str(ROOT / "src"))
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    return jax
+
+
+def _write_csv(path: Path, columns: dict[str, list]) -> None:
+    names = list(columns)
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(names)
+        for row in zip(*(columns[n] for n in names)):
+            w.writerow([f"{float(v):.{SIGNIFICANT}g}" for v in row])
+
+
+def steady_films() -> None:
+    """(a) Each film at steady states (e_dot = 0): load along (radial) and
+    across (tangential) the line of centres."""
+    _jax()
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.contact import PinKinematics, ShortBearingFilm
+    from diffwear.contact.long_bearing import LongBearingFilm
+
+    eps = np.round(np.arange(0.05, 0.951, 0.05), 2)
+    cols = {"eps": list(eps)}
+    for name, film in (("short", ShortBearingFilm(MU, L_SHORT, C)),
+                       ("long", LongBearingFilm(MU, L_LONG, C))):
+        radial, tangential = [], []
+        for e in eps:
+            kin = PinKinematics(offset=jnp.array([e * C, 0.0]), offset_rate=jnp.zeros(2),
+                                omega=jnp.asarray(OMEGA), pin_radius=jnp.asarray(R),
+                                bushing_radius=jnp.asarray(R + C))
+            f = film.film(kin)
+            radial.append(float(f.radial))
+            tangential.append(float(f.tangential))
+        cols[f"{name}_radial_N"] = radial
+        cols[f"{name}_tangential_N"] = tangential
+    _write_csv(STORE / "steady_films.csv", cols)
+    meta = {"viscosity_Pa_s": MU, "pin_radius_m": R, "clearance_m": C, "omega_rad_s": OMEGA,
+            "short_length_m": L_SHORT, "long_length_m": L_LONG}
+    (STORE / "steady_films.json").write_text(json.dumps(meta, indent=1) + "\n")
+
+
+def _short_eps(load: float) -> float:
+    """The short bearing's steady eps for a load [N] (closed form, bisection)."""
+    def w(eps):
+        return (MU * OMEGA * R * L_SHORT**3 * eps / (4 * C**2 * (1 - eps**2) ** 2)
+                * math.sqrt(16 * eps**2 + math.pi**2 * (1 - eps**2)))
+    lo, hi = 0.0, 1.0 - 1e-12
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if w(mid) < load else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def sommerfeld() -> None:
+    """(b) The film-borne journal's quasi-static eccentricity under a steady
+    load, and the closed-form eps(S)."""
+    _jax()
+    import equinox as eqx
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.contact import (
+        ArchardWear,
+        ClearanceJoint,
+        CoulombFriction,
+        ElasticFoundation,
+        MixedLubrication,
+        ShortBearingFilm,
+    )
+    from diffwear.quasistatic import LubricatedQuasiStaticJoint
+
+    law = MixedLubrication(ShortBearingFilm(MU, L_SHORT, C), ElasticFoundation(KF, L_SHORT),
+                           1e-9)
+    joint = ClearanceJoint("j", "a", [0.0, 0.0], "b", [0.0, 0.0], R, R + C, law,
+                           friction=CoulombFriction(0.1), wear=ArchardWear(1e-14), n_theta=180)
+    qs = LubricatedQuasiStaticJoint.from_joint(joint)
+    solve = eqx.filter_jit(lambda w: qs.pin_offset(w, jnp.asarray(OMEGA), qs.dry.clearance))
+    loads = np.logspace(-1.0, 3.7, 25)  # 0.1 N .. 5 kN: eps 0.015 .. 0.98
+    angle = 0.4
+    eps, attitude, ok = [], [], []
+    for w in loads:
+        e, good = solve(w * jnp.array([math.cos(angle), math.sin(angle)]))
+        eps.append(float(jnp.linalg.norm(e)) / C)
+        turn = math.atan2(float(e[1]), float(e[0])) - angle
+        attitude.append(math.degrees((turn + math.pi) % (2 * math.pi) - math.pi))
+        ok.append(float(good))
+    closed = [_short_eps(w) for w in loads]
+    # Sommerfeld number S = (R / c)^2 mu N / P, N in rev/s, P = W / (2 R L) the
+    # load per projected area (Raimondi & Boyd; Hamrock, Schmid & Jacobson)
+    n_rps = OMEGA / (2 * math.pi)
+    s = [(R / C) ** 2 * MU * n_rps * 2 * R * L_SHORT / w for w in loads]
+    _write_csv(STORE / "sommerfeld.csv", {"load_N": list(loads), "sommerfeld": s,
+                                          "eps_quasi_static": eps, "eps_closed_form": closed,
+                                          "attitude_deg": attitude, "converged": ok})
+
+
+def life_viscosity() -> None:
+    """(c) The rig's quasi-static life to 50 um against the viscosity, and its
+    forward-mode derivative."""
+    jax = _jax()
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from diffwear.contact import MixedLubrication, ShortBearingFilm
+    from diffwear.quasistatic import QuasiStatic
+    from diffwear.studies import rig_21400
+
+    _, mech, y0 = rig_21400._setup()
+    el = mech.element("crank_rod")
+    c = el.bushing_radius - el.pin_radius
+    model = QuasiStatic(steps=RIG_STEPS, samples=RIG_SAMPLES)
+
+    def lubricated(mu):
+        law = MixedLubrication(ShortBearingFilm(mu, el.law.depth, c), el.law, RIG_ROUGHNESS)
+        return eqx.tree_at(lambda m: m.element("crank_rod").law, mech, law)
+
+    def life(mu):
+        r = model.life(lubricated(mu), ("crank_rod",), y0, period=2.0, limit=RIG_LIMIT)
+        return r.cycles[0], r.status
+
+    t0 = time.perf_counter()
+    dry = model.life(mech, ("crank_rod",), y0, period=2.0, limit=RIG_LIMIT)
+    fast = eqx.filter_jit(life)
+    rows = []
+    for mu in VISCOSITIES:
+        cycles, status = fast(jnp.asarray(mu))
+        rows.append({"viscosity_Pa_s": mu, "life_cycles": float(cycles),
+                     "status": int(status)})
+        print(f"  mu {mu:.3g} Pa s: life {float(cycles):.6g} (status {int(status)})",
+              flush=True)
+    slope = eqx.filter_jit(lambda m: jax.jvp(lambda x: life(x)[0], (m,), (jnp.ones(()),)))
+    tangents = []
+    for mu in TANGENTS_AT:
+        value, d = slope(jnp.asarray(mu))
+        tangents.append({"viscosity_Pa_s": mu, "life_cycles": float(value),
+                         "dlife_dmu_cycles_per_Pa_s": float(d)})
+        print(f"  d(life)/d(mu) at {mu:.3g} Pa s: {float(d):.6g}", flush=True)
+    out = {"settings": {"model": f"QuasiStatic(steps={RIG_STEPS}, samples={RIG_SAMPLES})",
+                        "limit_m": RIG_LIMIT, "roughness_m": RIG_ROUGHNESS,
+                        "clearance_m": float(c), "length_m": float(el.law.depth),
+                        "film": "ShortBearingFilm", "period_s": 2.0},
+           "dry": {"life_cycles": float(dry.cycles[0]), "status": int(dry.status)},
+           "lives": rows, "tangents": tangents,
+           "wall_s": round(time.perf_counter() - t0, 1)}
+    (STORE / "life_viscosity.json").write_text(json.dumps(out, indent=1) + "\n")
+
+
+def _tag(mu: float) -> str:
+    """The column prefix of viscosity ``mu`` [Pa s] in slider_crank.csv."""
+    return f"mu_{1e3 * mu:g}mPas"
+
+
+def slider_crank() -> None:
+    """(d) The lubricated Table 2-1 slider-crank over one crank revolution."""
+    _jax()
+    import diffrax
+    import equinox as eqx
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.contact import MixedLubrication, ShortBearingFilm, contact_history
+    from diffwear.dynamics import simulate
+    from diffwear.dynamics.rosenbrock import Rodas4
+    from diffwear.presets import clearance_slider_crank
+
+    mech, y0 = clearance_slider_crank("efm", clearance=SC_CLEARANCE, n_theta=90)
+    el = mech.element("crank_rod")
+    c = float(el.bushing_radius - el.pin_radius)
+    ts = jnp.linspace(0.0, 2.0, 401)
+
+    def run(m):
+        tr = simulate(m, y0, 2.0, ts=ts, solver=Rodas4(),
+                      stepsize_controller=diffrax.PIDController(rtol=1e-8, atol=1e-8))
+        h = contact_history(m, "crank_rod", tr.ys)
+        return h.offset, h.normal_load, tr.result
+
+    @eqx.filter_jit
+    def lubricated(mu):
+        law = MixedLubrication(ShortBearingFilm(mu, el.law.depth, c), el.law, SC_ROUGHNESS)
+        return run(eqx.tree_at(lambda m: m.element("crank_rod").law, mech, law))
+
+    cols: dict[str, list] = {"t_s": list(np.asarray(ts))}
+    cases = [(_tag(mu), lambda mu=mu: lubricated(jnp.asarray(mu))) for mu in SC_VISCOSITIES]
+    cases.append(("dry", lambda: eqx.filter_jit(run)(mech)))
+    for tag, go in cases:
+        t0 = time.perf_counter()
+        offset, load, result = go()
+        if result != diffrax.RESULTS.successful:
+            raise RuntimeError(f"slider-crank {tag}: the integration failed ({result})")
+        offset = np.asarray(offset)
+        cols[f"{tag}_x_over_c"] = list(offset[:, 0] / c)
+        cols[f"{tag}_y_over_c"] = list(offset[:, 1] / c)
+        if tag != "dry":
+            cols[f"{tag}_film_ratio"] = list((c - np.hypot(offset[:, 0], offset[:, 1]))
+                                             / SC_ROUGHNESS)
+        cols[f"{tag}_asperity_load_N"] = list(np.asarray(load))
+        print(f"  {tag}: {time.perf_counter() - t0:.0f} s", flush=True)
+    _write_csv(STORE / "slider_crank.csv", cols)
+    meta = {"clearance_m": c, "roughness_m": SC_ROUGHNESS, "viscosities_Pa_s": SC_VISCOSITIES,
+            "length_m": float(el.law.depth), "pin_radius_m": float(el.pin_radius),
+            "solver": "Rodas4, rtol = atol = 1e-8", "duration_s": 2.0}
+    (STORE / "slider_crank.json").write_text(json.dumps(meta, indent=1) + "\n")
+
+
+def rig(runs: Path | None = None) -> None:
+    """(e) ``diffwear run rig_lubricated --cycles 21400``: its summary and film."""
+    target = STORE / "rig"
+    target.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        source = runs
+        if source is None:
+            source = Path(tmp) / "rig"
+            subprocess.run([sys.executable, "-m", "diffwear.cli", "run", "rig_lubricated",
+                            "--out", str(source), "--cycles", "21400", "--quiet"], check=True,
+                           env={**os.environ, "PYTHONPATH": str(ROOT / "src")})
+        shutil.copyfile(source / "film_crank_rod.csv", target / "film_crank_rod.csv")
+        summary = json.loads((source / "summary.json").read_text())
+        # the shipped file by its place in the repository, not this machine's path
+        summary["file"] = "src/diffwear/config/mechanisms/rig_lubricated.toml"
+        (target / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+
+
+PARTS = {"steady": steady_films, "sommerfeld": sommerfeld, "life": life_viscosity,
+         "slider-crank": slider_crank, "rig": rig}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--only", nargs="+", choices=list(PARTS), help="these parts only")
+    parser.add_argument("--rig-run", type=Path,
+                        help="copy this finished `diffwear run rig_lubricated` folder "
+                             "instead of running it")
+    args = parser.parse_args(argv)
+    STORE.mkdir(parents=True, exist_ok=True)
+    for name in args.only or PARTS:
+        t0 = time.perf_counter()
+        if name == "rig":
+            rig(args.rig_run)
+        else:
+            PARTS[name]()
+        print(f"{name}: {time.perf_counter() - t0:.0f} s", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

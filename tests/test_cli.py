@@ -398,7 +398,7 @@ def test_penetration_through_the_bushing_is_fatal():
 
     from diffwear.mechanism_file import contact_warnings
 
-    joint = SimpleNamespace(name="j", pin_radius=0.0095)
+    joint = SimpleNamespace(name="j", pin_radius=0.0095, law=None)
     ok = contact_warnings(joint, {"fraction_in_contact": 0.9, "max_penetration_m": 2e-6})
     assert ok == []
     (msg, fatal), = contact_warnings(joint, {"fraction_in_contact": 0.9,

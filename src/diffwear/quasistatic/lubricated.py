@@ -39,6 +39,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import lax
 from jaxtyping import Array, Bool, Float
 
@@ -56,7 +57,7 @@ BALANCE_TOL = 1e-10
 _NEWTON_STEPS = 60
 # eccentricity ratios of the film-only start's table (the film's load grows
 # monotonically with eps; the start interpolates it in log-load)
-_START_RATIOS = jnp.concatenate([jnp.linspace(0.0, 0.9, 19)[1:], jnp.linspace(0.91, 0.995, 18)])
+_START_RATIOS = np.concatenate([np.linspace(0.0, 0.9, 19)[1:], np.linspace(0.91, 0.995, 18)])
 _LOAD_FLOOR = 1e-9  # N: below it the balance is scaled by this floor
 
 

@@ -124,11 +124,8 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from ..mechanism.geometry import perp
-from .kinematics import PinKinematics
 from .lubrication import (
     AbstractFilm,
-    FilmForce,
     _half_film_excess,
     _safe_unit,
 )
@@ -220,48 +217,3 @@ class LongBearingFilm(AbstractFilm):
         excess_t = k * (wedge * (excess_cc - 3.0 * eps_f * integral_c / (2.0 + eps2))
                         + squeeze * integral_cs)
         return excess_n, excess_t
-
-    def line_of_centres_forces(self, eccentricity_ratio, eccentricity_rate, line_rate,
-                               omega, radius):
-        """(F_n, F_t, T): the film force on the pin along the line of centres
-        (F_n, positive away from the bushing centre) and normal to it (F_t,
-        along k x n) [N], and its moment on the pin [N m], from the
-        eccentricity ratio eps, its rate eps_dot [1/s], the line-of-centres
-        angular rate gamma_dot [rad/s], the pin's spin omega relative to the
-        bushing [rad/s] and the journal radius R [m].  The classical form; it
-        needs eps > 0 for gamma_dot to exist (`film` works from the offset and
-        is safe at e = 0).  Past eps_max the film is that at eps_max with the
-        same centre velocity (eps_dot, eps gamma_dot), as in `film`."""
-        eps = jnp.asarray(eccentricity_ratio, dtype=float)
-        eps_f = self._saturated(eps)
-        squeeze = 2.0 * jnp.asarray(eccentricity_rate, dtype=float)
-        wedge = eps_f * omega - 2.0 * eps * jnp.asarray(line_rate, dtype=float)
-        excess_n, excess_t = self._excess_components(eps_f, squeeze, wedge, radius)
-        k = self._film_factor(radius)
-        radial = -0.5 * jnp.pi * k * squeeze + excess_n
-        tangential = 0.5 * jnp.pi * k * wedge + excess_t
-        return radial, tangential, self._torque(eps_f, tangential, omega, radius)
-
-    def film(self, kin: PinKinematics) -> FilmForce:
-        """Force and friction torque of the film on the pin (see `FilmForce`)."""
-        n, dist = _safe_unit(kin.offset)
-        t = perp(n)
-        eps = dist / self.clearance
-        eps_f = self._saturated(eps)
-        # A = 2 eps_dot and B = eps (omega - 2 gamma_dot), written without gamma_dot
-        # (singular at e = 0): eps_dot = n . e_dot / c and eps gamma_dot = t . e_dot / c
-        squeeze = 2.0 * (n @ kin.offset_rate) / self.clearance
-        wedge = eps_f * kin.omega - 2.0 * (t @ kin.offset_rate) / self.clearance
-        excess_n, excess_t = self._excess_components(eps_f, squeeze, wedge, kin.pin_radius)
-        # the eps = 0 part -K_L pi/2 (A n - B t), from e and e_dot (no direction n),
-        # as in ShortBearingFilm.film
-        saturation_loss = (eps - eps_f) * t
-        centred = -0.5 * jnp.pi * self._film_factor(kin.pin_radius) * (
-            2.0 * kin.offset_rate / self.clearance
-            - kin.omega * (perp(kin.offset) / self.clearance - saturation_loss))
-        force = centred + excess_n * n + excess_t * t
-        tangential = force @ t
-        return FilmForce(force=force,
-                         torque=self._torque(eps_f, tangential, kin.omega, kin.pin_radius),
-                         radial=force @ n, tangential=tangential, eccentricity_ratio=eps,
-                         min_film_thickness=self.min_film_thickness(kin))

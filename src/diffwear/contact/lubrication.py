@@ -219,9 +219,11 @@ class AbstractFilm(AbstractContactLaw):
     """What the journal-bearing films share: the oil and bore parameters (float64
     array leaves, `float_leaf`), their checks, the saturation of the eccentricity
     ratio at eps_max, the minimum film thickness and the film as a contact law.
-    A subclass gives `film`, which must read the parameters from the fields on
-    every call (a mixed-lubrication law swaps ``clearance`` and
-    ``max_eccentricity_ratio`` with `eqx.tree_at`)."""
+    The force in the line-of-centres frame (`film`, `line_of_centres_forces`)
+    is shared too; a subclass gives its scale `_film_factor` and its part beyond
+    eps = 0, `_excess_components`, and must read the parameters from the fields
+    on every call (a mixed-lubrication law swaps ``max_eccentricity_ratio`` with
+    `eqx.tree_at`)."""
 
     viscosity: Float[Array, ""]
     length: Float[Array, ""]
@@ -281,8 +283,61 @@ class AbstractFilm(AbstractContactLaw):
         return -couette - 0.5 * eps_f * self.clearance * tangential
 
     @abc.abstractmethod
+    def _film_factor(self, radius):
+        """K [N s]: the film's scale, its eps = 0 forces being -K pi/2 (A n - B t)
+        with A = 2 eps_dot, B = eps (omega - 2 gamma_dot)."""
+
+    @abc.abstractmethod
+    def _excess_components(self, eps_f, squeeze, wedge, radius):
+        """The film force along n and t [N] beyond its eps = 0 values, from the
+        saturated eps, A = 2 eps_dot and B = eps omega - 2 eps gamma_dot [1/s]."""
+
+    def line_of_centres_forces(self, eccentricity_ratio, eccentricity_rate, line_rate,
+                               omega, radius):
+        """(F_n, F_t, T): the film force on the pin along the line of centres
+        (F_n, positive away from the bushing centre) and normal to it (F_t,
+        along k x n) [N], and its moment on the pin [N m], from the
+        eccentricity ratio eps, its rate eps_dot [1/s], the line-of-centres
+        angular rate gamma_dot [rad/s], the pin's spin omega relative to the
+        bushing [rad/s] and the journal radius R [m].  The classical form; it
+        needs eps > 0 for gamma_dot to exist (`film` works from the offset and
+        is safe at e = 0).  Past eps_max the film is that at eps_max with the
+        same centre velocity (eps_dot, eps gamma_dot), as in `film`."""
+        eps = jnp.asarray(eccentricity_ratio, dtype=float)
+        eps_f = self._saturated(eps)
+        squeeze = 2.0 * jnp.asarray(eccentricity_rate, dtype=float)
+        wedge = eps_f * omega - 2.0 * eps * jnp.asarray(line_rate, dtype=float)
+        excess_n, excess_t = self._excess_components(eps_f, squeeze, wedge, radius)
+        k = self._film_factor(radius)
+        radial = -0.5 * jnp.pi * k * squeeze + excess_n
+        tangential = 0.5 * jnp.pi * k * wedge + excess_t
+        return radial, tangential, self._torque(eps_f, tangential, omega, radius)
+
     def film(self, kin: PinKinematics) -> FilmForce:
         """Force and friction torque of the film on the pin (see `FilmForce`)."""
+        n, dist = _safe_unit(kin.offset)
+        t = perp(n)
+        eps = dist / self.clearance
+        eps_f = self._saturated(eps)
+        # A = 2 eps_dot and B = eps (omega - 2 gamma_dot), written without gamma_dot
+        # (singular at e = 0): eps_dot = n . e_dot / c and eps gamma_dot = t . e_dot / c
+        squeeze = 2.0 * (n @ kin.offset_rate) / self.clearance
+        wedge = eps_f * kin.omega - 2.0 * (t @ kin.offset_rate) / self.clearance
+        excess_n, excess_t = self._excess_components(eps_f, squeeze, wedge, kin.pin_radius)
+        # the eps = 0 part -K pi/2 (A n - B t) = -K pi/2 (2 e_dot / c - eps_f omega t)
+        # (K the film's `_film_factor`),
+        # written from e and e_dot (eps t = k x e / c below the saturation), so that it
+        # does not depend on the direction n, which is lost at e -> 0
+        saturation_loss = (eps - eps_f) * t
+        centred = -0.5 * jnp.pi * self._film_factor(kin.pin_radius) * (
+            2.0 * kin.offset_rate / self.clearance
+            - kin.omega * (perp(kin.offset) / self.clearance - saturation_loss))
+        force = centred + excess_n * n + excess_t * t
+        tangential = force @ t
+        return FilmForce(force=force,
+                         torque=self._torque(eps_f, tangential, kin.omega, kin.pin_radius),
+                         radial=force @ n, tangential=tangential, eccentricity_ratio=eps,
+                         min_film_thickness=self.min_film_thickness(kin))
 
     def evaluate(self, kin: PinKinematics, memory: Float[Array, " m"],
                  profile: BushingProfile, friction: CoulombFriction) -> ContactResult:
@@ -340,49 +395,3 @@ class ShortBearingFilm(AbstractFilm):
         k = self._film_factor(radius)
         return (-k * (squeeze * excess_cc - wedge * integral_cs),
                 -k * (squeeze * integral_cs - wedge * excess_ss))
-
-    def line_of_centres_forces(self, eccentricity_ratio, eccentricity_rate, line_rate,
-                               omega, radius):
-        """(F_n, F_t, T): the film force on the pin along the line of centres
-        (F_n, positive away from the bushing centre) and normal to it (F_t,
-        along k x n) [N], and its moment on the pin [N m], from the
-        eccentricity ratio eps, its rate eps_dot [1/s], the line-of-centres
-        angular rate gamma_dot [rad/s], the pin's spin omega relative to the
-        bushing [rad/s] and the journal radius R [m].  The classical form; it
-        needs eps > 0 for gamma_dot to exist (`film` works from the offset and
-        is safe at e = 0).  Past eps_max the film is that at eps_max with the
-        same centre velocity (eps_dot, eps gamma_dot), as in `film`."""
-        eps = jnp.asarray(eccentricity_ratio, dtype=float)
-        eps_f = self._saturated(eps)
-        squeeze = 2.0 * jnp.asarray(eccentricity_rate, dtype=float)
-        wedge = eps_f * omega - 2.0 * eps * jnp.asarray(line_rate, dtype=float)
-        excess_n, excess_t = self._excess_components(eps_f, squeeze, wedge, radius)
-        k = self._film_factor(radius)
-        radial = -0.5 * jnp.pi * k * squeeze + excess_n
-        tangential = 0.5 * jnp.pi * k * wedge + excess_t
-        return radial, tangential, self._torque(eps_f, tangential, omega, radius)
-
-    def film(self, kin: PinKinematics) -> FilmForce:
-        """Force and friction torque of the film on the pin (see `FilmForce`)."""
-        n, dist = _safe_unit(kin.offset)
-        t = perp(n)
-        eps = dist / self.clearance
-        eps_f = self._saturated(eps)
-        # A = 2 eps_dot and B = eps (omega - 2 gamma_dot), written without gamma_dot
-        # (singular at e = 0): eps_dot = n . e_dot / c and eps gamma_dot = t . e_dot / c
-        squeeze = 2.0 * (n @ kin.offset_rate) / self.clearance
-        wedge = eps_f * kin.omega - 2.0 * (t @ kin.offset_rate) / self.clearance
-        excess_n, excess_t = self._excess_components(eps_f, squeeze, wedge, kin.pin_radius)
-        # the eps = 0 part -K pi/2 (A n - B t) = -K pi/2 (2 e_dot / c - eps_f omega t),
-        # written from e and e_dot (eps t = k x e / c below the saturation), so that it
-        # does not depend on the direction n, which is lost at e -> 0
-        saturation_loss = (eps - eps_f) * t
-        centred = -0.5 * jnp.pi * self._film_factor(kin.pin_radius) * (
-            2.0 * kin.offset_rate / self.clearance
-            - kin.omega * (perp(kin.offset) / self.clearance - saturation_loss))
-        force = centred + excess_n * n + excess_t * t
-        tangential = force @ t
-        return FilmForce(force=force,
-                         torque=self._torque(eps_f, tangential, kin.omega, kin.pin_radius),
-                         radial=force @ n, tangential=tangential, eccentricity_ratio=eps,
-                         min_film_thickness=self.min_film_thickness(kin))

@@ -13,9 +13,8 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 from scipy.sparse.linalg import spsolve
 
-from diffwear.contact import BushingProfile, CoulombFriction, PinKinematics, ShortBearingFilm
+from diffwear.contact import PinKinematics, ShortBearingFilm
 from diffwear.contact.long_bearing import LongBearingFilm
-from diffwear.errors import InputError
 
 # A long plain bearing: R = 10 mm, L = 80 mm (L/D = 4), c = 50 um, an SAE 30
 # oil near 60 C (mu ~ 0.04 Pa s).
@@ -331,84 +330,7 @@ def test_film_reads_clearance_and_eps_max_from_its_leaves():
 
 
 # ---------------------------------------------------------------- derivatives
-
-@jax.jit
-def _force_of(params):
-    mu, c, ex, ey = params
-    law = LongBearingFilm(mu, L, c)
-    return law.film(_kin(jnp.stack([ex, ey]), (1.2e-3, -0.4e-3), 95.0)).force
-
-
-@pytest.mark.parametrize("eps", [0.2, 0.75])
-def test_jacobian_matches_central_differences(eps):
-    x0 = np.array([MU, C, *_polar(eps, 2.1)])
-    jac = np.asarray(jax.jit(jax.jacfwd(_force_of))(jnp.asarray(x0)))
-    steps = 1e-6 * np.array([MU, C, C, C])
-    fd = np.empty((2, 4))
-    for j, h in enumerate(steps):
-        dx = np.zeros(4)
-        dx[j] = h
-        fd[:, j] = (np.asarray(_force_of(jnp.asarray(x0 + dx)))
-                    - np.asarray(_force_of(jnp.asarray(x0 - dx)))) / (2 * h)
-    scale = np.abs(fd).max(axis=0)
-    np.testing.assert_array_less(np.abs(jac - fd), 1e-6 * np.broadcast_to(scale, fd.shape))
-
-
-def _centre_outputs(params, rate):
-    ex, ey, mu = params
-    f = LongBearingFilm(mu, L, C).film(_kin(jnp.stack([ex, ey]), rate, 60.0))
-    return jnp.concatenate([f.force, jnp.atleast_1d(f.torque)])
-
-
-_CENTRE = {"value": jax.jit(_centre_outputs), "jacfwd": jax.jit(jax.jacfwd(_centre_outputs)),
-           "jacrev": jax.jit(jax.jacrev(_centre_outputs))}
-
-
-@pytest.mark.parametrize("rate", [(0.0, 0.0), (1e-3, 0.5e-3)])
-def test_no_nan_at_the_centre(rate):
-    x0, rate = jnp.array([0.0, 0.0, MU]), jnp.asarray(rate)
-    for name, fun in _CENTRE.items():
-        assert np.all(np.isfinite(np.asarray(fun(x0, rate)))), name
-    value = np.asarray(_CENTRE["value"](x0, rate))
-    np.testing.assert_allclose(value[:2], -np.pi * K_L * np.asarray(rate) / C,
-                               rtol=1e-12, atol=0.0)
-    assert value[2] == pytest.approx(-2 * np.pi * MU * 60.0 * R**3 * L / C, rel=1e-12)
-
-
-def test_tiny_offsets_and_rates_stay_finite():
-    """Offsets and rates whose squares underflow (1e-170 m): the film to first
-    order in eps, F = -pi K_L / c (e_dot - omega k x e / 2), finite derivatives."""
-    e, rate = np.array([1e-170, -3e-170]), np.array([2e-170, 1e-170])
-    x0 = jnp.array([*e, MU])
-    for name, fun in _CENTRE.items():
-        assert np.all(np.isfinite(np.asarray(fun(x0, jnp.asarray(rate))))), name
-    value = np.asarray(_CENTRE["value"](x0, jnp.asarray(rate)))
-    assert value[2] == pytest.approx(-2 * np.pi * MU * 60.0 * R**3 * L / C, rel=1e-12)
-    perp_e = np.array([-e[1], e[0]])
-    np.testing.assert_allclose(value[:2], -np.pi * K_L / C * (rate - 60.0 * perp_e / 2),
-                               rtol=1e-12)
-
-
-def test_offset_derivative_has_a_limit_at_the_centre():
-    """Along a ray towards e = 0 the Jacobian in e tends to a limit: the same at
-    |e| = 1e-9 c, 1e-20 m and 1e-150 m (no round-off growing like 1 / |e|)."""
-    direction = np.array([1.0, -3.0]) / np.sqrt(10)
-    rate = jnp.array([2e-3, 1e-3])
-    jacs = [np.asarray(_CENTRE["jacfwd"](jnp.array([*(size * direction), MU]), rate))[:2, :2]
-            for size in (1e-9 * C, 1e-20, 1e-150)]
-    for jac in jacs[1:]:
-        np.testing.assert_allclose(jac, jacs[0], rtol=1e-6)
-
-
-def test_centred_spinning_film_has_the_cross_coupled_stiffness():
-    """e_dot = 0 near e = 0: F = pi K_L omega / (2 c) k x e to first order (the
-    steady F_t = K_L pi eps omega / ((2 + eps^2) sqrt(1 - eps^2)), F_n = O(eps^2))."""
-    stiffness = np.pi * K_L * 60.0 / (2 * C)
-    expected = stiffness * np.array([[0.0, -1.0], [1.0, 0.0]])
-    for e in (np.zeros(2), np.array([0.3, -0.2]) * 1e-9 * C):
-        jac = np.asarray(_CENTRE["jacfwd"](jnp.array([*e, MU]), jnp.zeros(2)))[:2, :2]
-        np.testing.assert_allclose(jac, expected, rtol=1e-6, atol=1e-9 * stiffness)
-
+# (the derivatives both films share, at the centre too: tests/test_films.py)
 
 def test_parameters_are_float64_leaves_with_exact_module_gradients():
     """Reverse mode through the module's leaves: F is linear in mu and in L and
@@ -425,35 +347,3 @@ def test_parameters_are_float64_leaves_with_exact_module_gradients():
     fd = (float(LongBearingFilm(MU, L, C + h).film(kin).force[1])
           - float(LongBearingFilm(MU, L, C - h).film(kin).force[1])) / (2 * h)
     assert float(grads.clearance) == pytest.approx(fd, rel=1e-6)
-
-
-# ---------------------------------------------------------------- as a contact law
-
-def test_evaluate_returns_the_film_force_and_no_contact_pressure():
-    law = LongBearingFilm(MU, L, C)
-    kin = _kin(_polar(0.5, 0.3), (1e-3, 0.0), 100.0)
-    res = law.evaluate(kin, law.initial_memory(), BushingProfile.circular(C, 36),
-                       CoulombFriction())
-    film = law.film(kin)
-    np.testing.assert_array_equal(np.asarray(res.force), np.asarray(film.force))
-    assert float(res.torque) == float(film.torque)
-    assert float(res.normal_load) == pytest.approx(float(jnp.linalg.norm(film.force)), rel=1e-14)
-    assert np.all(np.asarray(res.pressure) == 0.0) and res.pressure.shape == (36,)
-
-
-# ---------------------------------------------------------------- bad inputs
-
-@pytest.mark.parametrize("kwargs, words", [
-    (dict(viscosity=0.0), "viscosity"),
-    (dict(viscosity=-0.1), "viscosity"),
-    (dict(length=0.0), "length"),
-    (dict(clearance=-1e-5), "clearance"),
-    (dict(clearance=float("nan")), "clearance"),
-    (dict(max_eccentricity_ratio=1.0), "eccentricity ratio"),
-    (dict(saturation_width=0.96), "saturation width"),
-    (dict(viscosity=[0.04, 0.05]), "viscosity"),
-])
-def test_bad_inputs_are_refused_naming_the_quantity(kwargs, words):
-    args = dict(viscosity=MU, length=L, clearance=C) | kwargs
-    with pytest.raises(InputError, match=words):
-        LongBearingFilm(**args)

@@ -76,6 +76,13 @@ BOUNDARY_FILM_RATIO = 1.0
 MIN_SATURATION, MAX_SATURATION = 0.5, 0.995
 
 
+def asperity_share(asperity_load, film_load):
+    """asperity load / (asperity + film load): 0 for a full film, 1 dry (0
+    where neither carries anything)."""
+    total = asperity_load + film_load
+    return asperity_load / jnp.where(total > 0.0, total, 1.0)
+
+
 class Lubrication(NamedTuple):
     """The film and the asperities of a lubricated joint at one instant.
 
@@ -97,9 +104,8 @@ class Lubrication(NamedTuple):
 
     @property
     def asperity_share(self) -> Float[Array, ""]:
-        """asperity load / (asperity + film load): 0 for a full film, 1 dry."""
-        total = self.asperity_load + self.film_load
-        return self.asperity_load / jnp.where(total > 0.0, total, 1.0)
+        """See `asperity_share`."""
+        return asperity_share(self.asperity_load, self.film_load)
 
 
 class MixedLubrication(AbstractContactLaw):

@@ -45,7 +45,7 @@ from jaxtyping import Array, Bool, Float
 
 from ..contact.clearance_joint import ClearanceJoint
 from ..contact.kinematics import PinKinematics
-from ..contact.mixed import MixedLubrication
+from ..contact.mixed import MixedLubrication, asperity_share
 from ..contact.profile import BushingProfile
 from ..errors import InputError
 from ..mechanism.geometry import perp, safe_norm
@@ -83,9 +83,8 @@ class LubricatedEquilibrium(eqx.Module):
 
     @property
     def asperity_share(self) -> Float[Array, " S"]:
-        """Asperity load / (asperity + film load) per sample."""
-        total = self.normal_load + self.film_load
-        return self.normal_load / jnp.where(total > 0.0, total, 1.0)
+        """Asperity load / (asperity + film load) per sample (`asperity_share`)."""
+        return asperity_share(self.normal_load, self.film_load)
 
 
 class LubricatedQuasiStaticJoint(eqx.Module):

@@ -259,10 +259,15 @@ class QuasiStaticJoint(eqx.Module):
     # ------------------------------------------------------------ statics
     def effective_load(self, loads: JointLoads) -> Float[Array, "S 2"]:
         """W' = (I + f P)^-1 W: the load with the friction traction taken out."""
-        f = self.friction.factor(self.pin_radius * loads.omega)
-        w = loads.force
-        turned = jnp.stack([-w[:, 1], w[:, 0]], axis=-1)  # P W
-        return (w - f[:, None] * turned) / (1.0 + f * f)[:, None]
+        return self.without_friction(loads.force, loads.omega)
+
+    def without_friction(self, force: Float[Array, "... 2"], omega) -> Float[Array, "... 2"]:
+        """W' = (I + f P)^-1 W of loads ``force`` [N] at spins ``omega`` [rad/s]
+        (any leading shape): the springs' friction traction taken out (module
+        notes)."""
+        f = self.friction.factor(self.pin_radius * omega)[..., None]
+        turned = jnp.stack([-force[..., 1], force[..., 0]], axis=-1)  # P W
+        return (force - f * turned) / (1.0 + f * f)
 
     def equilibrium(self, depth: Float[Array, " n"], loads: JointLoads,
                     guess: Float[Array, "S 2"] | None = None) -> Equilibrium:

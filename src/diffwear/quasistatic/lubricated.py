@@ -48,7 +48,7 @@ from ..contact.kinematics import PinKinematics
 from ..contact.mixed import MixedLubrication, asperity_share
 from ..contact.profile import BushingProfile
 from ..errors import InputError
-from ..mechanism.geometry import perp, safe_norm
+from ..mechanism.geometry import safe_norm
 from .joint import QuasiStaticJoint, _solve_2x2, pin_offset
 from .loads import JointLoads
 
@@ -155,7 +155,8 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         return ratio * c * jnp.array([jnp.cos(turn), jnp.sin(turn)])
 
     def _solve(self, load, omega, clearance, guess):
-        """Damped Newton on the balance from the better start (no derivatives)."""
+        """Damped Newton on the balance from its starts (module notes): (e [m],
+        converged); no derivatives (`_offset` gives them)."""
         scale = jnp.maximum(safe_norm(load), _LOAD_FLOOR)
         c0 = jnp.mean(clearance)
 
@@ -164,13 +165,11 @@ class LubricatedQuasiStaticJoint(eqx.Module):
 
         dry = self.dry
         kc = dry.foundation.contact_stiffness(dry.bushing_radius)
-        f = dry.friction.factor(dry.pin_radius * omega)
-        w_eff = (load - f * perp(load)) / (1.0 + f * f)
         summits = clearance - self.law.onset_gap
-        dry_start, _ = pin_offset(summits, w_eff, kc, dry.foundation.penetration_width)
-        starts = jnp.stack([self._film_start(load, omega), dry_start])
-        if guess is not None:
-            starts = jnp.concatenate([starts, guess[None]])
+        dry_start, _ = pin_offset(summits, dry.without_friction(load, omega), kc,
+                                  dry.foundation.penetration_width)
+        # a guess of NaN (none given) starts at the centre
+        starts = jnp.stack([self._film_start(load, omega), dry_start, guess])
         starts = jnp.where(jnp.isfinite(starts), starts, 0.0) / c0
 
         def unfinished(state):

@@ -176,12 +176,12 @@ def test_a_checkpoint_write_cut_short_keeps_the_previous_one_and_leaves_no_file(
     """Ctrl-C while the checkpoint is written: the previous checkpoint stays
     whole and readable, and no temporary file is left in the folder (which
     the next run would otherwise find there)."""
-    from diffwear.wear import Checkpoint, EvolutionState, load_checkpoint, save_checkpoint
+    from diffwear.wear import Checkpoint, load_checkpoint, save_checkpoint
+    from diffwear.wear.engine import initial_state
 
     path = tmp_path / "checkpoint.npz"
-    zero = np.asarray(0.0)
-    state = EvolutionState(h=np.zeros(3), y=np.zeros(2), t=zero, n=zero, dyn=np.asarray(0),
-                           ls=zero, status=np.asarray(0), fail_n=zero, fail_h=zero)
+    state = jax.tree.map(np.asarray, initial_state((np.zeros(3),),
+                                                   {"y": np.zeros(2), "t": np.asarray(0.0)}))
     ck = Checkpoint(state, {"cycles": np.zeros(1)}, 1)
     save_checkpoint(path, ck, {"cycles": 1})
 

@@ -27,14 +27,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax import lax
+from jaxtyping import Array, Float
 
 from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state
@@ -50,8 +49,12 @@ from ..presets import (
     rig_slider_crank,
     with_wear_joint,
 )
-from ..wear import smooth_max, wear_cycle, worn_mechanism, worn_volume
+from ..wear import smooth_max, worn_volume
 from ..wear.cycle import clearance_element
+from ..wear.dynamic_term import CycleSettings, DynamicWear
+from ..wear.engine import CycleWear, Stop, initial_state, integrate
+from ..wear.extrapolation import Constant
+from ..wear.status import STATUS_OK
 from .effects import GUIDE_SLIP_WIDTH, EffectValues, rate_factor, wear_law
 from .parameters import NAMES
 
@@ -193,32 +196,21 @@ class RigHistory(eqx.Module):
     def __call__(self, base: dict, effects: EffectValues) -> History:
         mech, y0 = self.mechanism(base, effects)
         el = mech.element(JOINT)
-        period, a = self.period, self.extrapolation
         # forward-mode adjoint: the calibration differentiates with jacfwd
         # (few parameters, many residuals)
-        kw: dict[str, Any] = dict(rtol=self.cycle_rtol, atol=self.cycle_atol,
-                                  adjoint=diffrax.ForwardMode())
-        warm = wear_cycle(mech, JOINT, y0, 0.0, period, **kw)
-        n = self.n_theta
-        creep = effects["creep"]
-
-        def step(c, j):
-            h, delta, y, t, ok = c
-            worn = worn_mechanism(mech, JOINT, h + delta)
-            r = wear_cycle(worn, JOINT, y, t, period, n_save=self.force_samples, **kw)
-            volume = worn_volume(h, el.bushing_radius, el.law.depth)
-            dh = a * rate_factor(effects, h, volume, j * a, a, el.profile.theta,
-                                 self.cycles) * r.depth_increment
-            force = contact_history(worn, JOINT, r.ys).force_magnitude
-            ok = ok & r.ok
-            h = jnp.where(ok, h + dh, h)
-            delta = jnp.where(ok, delta + creep * dh, delta)
-            return (h, delta, r.y_end, t + period, ok), (h, delta, force)
-
-        zeros = jnp.zeros(n)
-        init = (zeros, zeros, warm.y_end, jnp.asarray(period), warm.ok)
-        (_, _, _, _, ok), (hs, ds, forces) = lax.scan(
-            step, init, jnp.arange(self.dynamic_cycles, dtype=float))
+        settings = CycleSettings(self.cycle_rtol, self.cycle_atol,
+                                 adjoint=diffrax.ForwardMode())
+        term = _RigDynamicWear(mech, (JOINT,), jnp.asarray(self.period), settings,
+                               saves=self.force_samples, effects=effects,
+                               grow=1.0 + effects["creep"], total_cycles=self.cycles)
+        memory, ok = term.warm_up(y0, 1)
+        stop = Stop(cycles=self.cycles)
+        solver = Constant(self.extrapolation)
+        end, hist = integrate(term, solver, initial_state(term.zeros(), memory, ok=ok),
+                              stop=stop, slots=self.dynamic_cycles, keep_profiles=True,
+                              keep_memory=True)
+        zeros = jnp.zeros(self.n_theta)
+        hs, forces = hist["depth"][0], hist["memory"]["force"]
         crank0 = mech.frames(mech.split(y0)[0]).pose("crank")[2]
         # The samples span [a0, a0 + 2 pi]; drop the first: the cycle starts on
         # the profile just deepened by A cycles' wear, so the pin is
@@ -226,12 +218,45 @@ class RigHistory(eqx.Module):
         # full turn later, stands for the angle a0.
         angle = crank0 + jnp.linspace(0.0, 2 * jnp.pi, self.force_samples)[1:]
         angle, forces = sorted_trace(angle, forces[:, 1:])
+        a = self.extrapolation
+        wear = jnp.concatenate([zeros[None], hs])
         return History(
             cycles=a * jnp.arange(self.dynamic_cycles + 1, dtype=float),
-            wear=jnp.concatenate([zeros[None], hs]), creep=jnp.concatenate([zeros[None], ds]),
+            wear=wear, creep=(term.grow - 1.0) * wear,
             force=forces, force_cycles=a * jnp.arange(self.dynamic_cycles, dtype=float),
             force_angle=angle, theta=el.profile.theta,
-            bushing_radius=el.bushing_radius, bushing_depth=el.law.depth, ok=ok)
+            bushing_radius=el.bushing_radius, bushing_depth=el.law.depth,
+            ok=end.status == STATUS_OK)
+
+
+class _RigDynamicWear(DynamicWear):
+    """The rig joint's dynamic wear with the effects: each cycle at the
+    clearance profile c0 + (1 + s_c) h (creep), its rate scaled by the
+    effects' rate factor over the step; the memory keeps the cycle's |joint
+    force| trace (``saves`` samples)."""
+
+    effects: EffectValues | None = None
+    grow: Float[Array, ""] | None = None
+    total_cycles: float = eqx.field(static=True, default=1.0)
+
+    def warm_up(self, y0, cycles: int):
+        memory, ok = super().warm_up(y0, cycles)
+        assert self.saves is not None
+        return dict(memory, force=jnp.zeros(self.saves)), ok
+
+    def cycle(self, h, memory) -> CycleWear:
+        profile = (self.grow * h[0],)
+        r, after, worn = self.run(profile, memory, self.saves)
+        force = contact_history(worn, JOINT, r.ys).force_magnitude
+        return CycleWear(rate=tuple(r.depth_increment), ok=r.ok, memory=dict(after, force=force),
+                         load_sliding=jnp.stack(r.load_sliding))
+
+    def modulate(self, cw: CycleWear, h, n, dn) -> CycleWear:
+        el = clearance_element(self.mech, JOINT)[1]
+        volume = worn_volume(h[0], el.bushing_radius, el.law.depth)
+        g = rate_factor(self.effects, h[0], volume, n, dn, el.profile.theta, self.total_cycles)
+        return CycleWear(rate=(g * cw.rate[0],), ok=cw.ok, memory=cw.memory,
+                         load_sliding=cw.load_sliding)
 
 
 # ------------------------------------------------------------------ observation

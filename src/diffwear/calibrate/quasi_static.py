@@ -29,14 +29,17 @@ import math
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
-from jax import lax
+from jaxtyping import Array, Float
 
 from ..errors import InputError
 from ..mechanism.geometry import safe_norm
 from ..presets import TABLE_7_1, SliderCrankParameters
 from ..quasistatic.joint import QuasiStaticJoint
-from ..quasistatic.loads import cycle_loads
+from ..quasistatic.loads import JointLoads, cycle_loads
 from ..wear import worn_volume
+from ..wear.engine import AbstractWearTerm, CycleWear, Stop, initial_state, integrate
+from ..wear.implicit import CycleGrid
+from ..wear.status import STATUS_OK
 from .effects import EffectValues, rate_factor
 from .model import (
     JOINT,
@@ -111,34 +114,47 @@ class QuasiStaticRigHistory(eqx.Module):
     def __call__(self, base: dict, effects: EffectValues) -> History:
         mech, y0 = self.mechanism(base, effects)
         el = mech.element(self.joint)
-        joint = QuasiStaticJoint.from_joint(el)
         loads = cycle_loads(mech, (self.joint,), y0, self.period, samples=self.samples)
         lo = loads.joints[0]
-        n = joint.n
-        eye = jnp.eye(n)
-        grow = 1.0 + effects["creep"]
-        grid = jnp.asarray(self.grid)
-
-        def step(c, span):
-            h, guess, ok = c
-            n0, dn = span
-            dw, _, eq = joint.cycle_wear(grow * h, lo, guess)
-            a = joint.wear_response(grow * h, lo, eq)
-            volume = worn_volume(h, el.bushing_radius, el.law.depth)
-            g = rate_factor(effects, h, volume, n0, dn, el.profile.theta, self.cycles)
-            dh = jnp.linalg.solve(eye + dn * grow * g[:, None] * a, dn * g * dw)
-            ok = ok & eq.ok & jnp.all(jnp.isfinite(dh))
-            h = jnp.where(ok, h + dh, h)
-            return (h, eq.offset, ok), h
-
-        zeros = jnp.zeros(n)
-        init = (zeros, jnp.full_like(lo.force, jnp.nan), loads.ok)
-        (_, _, ok), hs = lax.scan(step, init, (grid[:-1], jnp.diff(grid)))
-        wear = jnp.concatenate([zeros[None], hs])
+        term = _RigWear(QuasiStaticJoint.from_joint(el), lo, effects, 1.0 + effects["creep"],
+                        el.profile.theta, el.bushing_radius, el.law.depth, self.cycles)
+        solver = CycleGrid(jnp.asarray(self.grid))
+        zeros = jnp.zeros(term.joint.n)
+        state = initial_state((zeros,), jnp.full_like(lo.force, jnp.nan), ok=loads.ok)
+        end, history = integrate(term, solver, state, stop=Stop(cycles=self.grid[-1]),
+                                 slots=solver.slots(Stop(cycles=self.grid[-1]), None),
+                                 keep_profiles=True)
+        wear = jnp.concatenate([zeros[None], history["depth"][0]])
         angle = self.crank_angle(mech, y0) + 2 * jnp.pi * jnp.arange(self.samples) / self.samples
         angle, force = sorted_trace(angle, safe_norm(lo.force)[None])
         return History(
-            cycles=grid, wear=wear, creep=(grow - 1.0) * wear, force=force,
+            cycles=solver.grid, wear=wear, creep=(term.grow - 1.0) * wear, force=force,
             force_cycles=jnp.zeros(1), force_angle=angle, theta=el.profile.theta,
-            bushing_radius=el.bushing_radius, bushing_depth=el.law.depth, ok=ok)
+            bushing_radius=el.bushing_radius, bushing_depth=el.law.depth,
+            ok=end.status == STATUS_OK)
 
+
+class _RigWear(AbstractWearTerm):
+    """The rig joint's quasi-static wear with the effects: the rate at the
+    clearance profile c0 + (1 + s_c) h (creep), scaled by the effects' rate
+    factor over each step (module notes)."""
+
+    joint: QuasiStaticJoint
+    loads: JointLoads
+    effects: EffectValues
+    grow: Float[Array, ""]
+    theta: Float[Array, " n"]
+    bushing_radius: Float[Array, ""]
+    bushing_depth: Float[Array, ""]
+    cycles: float = eqx.field(static=True)
+
+    def cycle(self, h, memory) -> CycleWear:
+        dw, _, eq = self.joint.cycle_wear(self.grow * h[0], self.loads, memory)
+        a = self.joint.wear_response(self.grow * h[0], self.loads, eq)
+        return CycleWear(rate=(dw,), ok=eq.ok, memory=eq.offset, response=(a,))
+
+    def modulate(self, cw: CycleWear, h, n, dn) -> CycleWear:
+        volume = worn_volume(h[0], self.bushing_radius, self.bushing_depth)
+        g = rate_factor(self.effects, h[0], volume, n, dn, self.theta, self.cycles)
+        return CycleWear(rate=(g * cw.rate[0],), ok=cw.ok, memory=cw.memory,
+                         response=(self.grow * g[:, None] * cw.response[0],))

@@ -9,6 +9,8 @@ from .cycle import (
     wear_cycle,
     wear_cycle_joints,
 )
+from .dynamic_term import CycleSettings, DynamicWear
+from .engine import WearState
 from .evolution import (
     Checkpoint,
     ChunkedEvolution,
@@ -39,7 +41,6 @@ from .model import (
 from .peak import (
     peak_depth,
 )
-from .state import EvolutionState
 from .status import (
     STATUS_TEXT,
 )
@@ -51,6 +52,6 @@ __all__ = [
     "STATUS_TEXT",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "AbstractExtrapolation", "Constant", "Adaptive", "ErrorControlled",
-    "Evolver", "EvolutionState", "ChunkedEvolution", "Checkpoint", "save_checkpoint",
-    "load_checkpoint",
+    "Evolver", "WearState", "CycleSettings", "DynamicWear", "ChunkedEvolution", "Checkpoint",
+    "save_checkpoint", "load_checkpoint",
 ]

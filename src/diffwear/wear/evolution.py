@@ -43,7 +43,6 @@ the evolution stops updating, keeps the results so far and reports ``status``;
 
 from __future__ import annotations
 
-import functools
 import json
 import math
 import os
@@ -55,16 +54,16 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax import lax
 from jaxtyping import Array, Float
 
 from .._checks import require_float64
 from ..errors import InputError, SolverError
 from ..mechanism import Mechanism
-from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle, wear_parts
+from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_parts
+from .dynamic_term import CycleSettings, DynamicWear
+from .engine import Engine, Stop, WearState, initial_state
 from .extrapolation import extrapolation_method
-from .state import EvolutionState
-from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_PIERCED, STATUS_SOLVER
+from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_PIERCED
 
 
 class WearLimitError(SolverError):
@@ -105,7 +104,7 @@ class EvolutionResult(eqx.Module):
     fail_cycles: Float[Array, ""]       # real cycles done when it stopped
     fail_depth: Float[Array, ""]        # max depth when it stopped [m]
     history: dict
-    state: EvolutionState | None = None  # evolution state at the end (`Evolver`): resumable
+    state: WearState | None = None  # engine state at the end (`Evolver`): resumable
 
     def check(self, what: str = "wear evolution") -> "EvolutionResult":
         """Raise `WearLimitError` (carrying this result) if the run stopped early."""
@@ -159,7 +158,7 @@ def evolve(
     adjoint=None,
     max_steps: int = 200_000,
     cycle_solver=None,
-    start: EvolutionState | None = None,
+    start: WearState | None = None,
     slots: int | None = None,
 ) -> EvolutionResult:
     """Evolve the wear of clearance joint ``joint`` over ``cycles`` real cycles.
@@ -175,10 +174,10 @@ def evolve(
     ``cycle_solver`` (default Tsit5; `diffwear.wear.cycle.CYCLE_INTEGRATORS`),
     ``adjoint``, ``max_steps``: each dynamic cycle's integration.
 
-    Resuming: ``start`` is an evolution state (``EvolutionResult.state`` of an
+    Resuming: ``start`` is an engine state (``EvolutionResult.state`` of an
     earlier call, or `Evolver.init`); the warm-up is then skipped and ``y0``
     ignored.  ``slots`` scan slots are run (default: all of the method's).  See
-    `evolve_in_chunks` for a checkpointing driver.
+    `ChunkedEvolution` for a checkpointing driver.
     """
     require_float64("evolve")
     ev = Evolver(mech, joint, cycles, period=period, method=method,
@@ -192,17 +191,13 @@ def evolve(
 
 
 class Evolver:
-    """The wear evolution as an explicit state machine: `init` (warm-up, the
-    initial `EvolutionState`), `run` (``lax.scan`` over scan slots from a
-    state, each slot one step of the extrapolation strategy), `result`.
-
-    The strategy keeps its memory in ``EvolutionState.memory`` (``a``,
-    ``dh_prev`` for `Adaptive`; ``dn``, ``have_k1``, ``k1``, ``ls1`` for
-    `ErrorControlled`).  Running the slots in several scans, each from the
-    state the previous one returned, computes exactly what one scan does.
-    Pure Python bookkeeping around pure functions: build it inside a jitted
-    function from traced mechanism leaves.
-    """
+    """One joint's wear evolution on the wear engine (`diffwear.wear.engine`):
+    the dynamic term (`DynamicWear`), the extrapolation solver and the stop at
+    ``cycles`` (or the wall).  `init` (warm-up, the initial state), `run`
+    (``length`` scan slots from a state), `result`.  Running the slots in
+    several pieces, each from the state the previous one returned, computes
+    exactly what one scan does.  Build it inside a jitted function from
+    traced mechanism leaves."""
 
     def __init__(self, mech: Mechanism, joint: str, cycles, *, period, method="constant",
                  extrapolation=1.0, max_dynamic=None, rtol=1e-2, atol=1e-7,
@@ -211,111 +206,58 @@ class Evolver:
                  max_steps=200_000, cycle_solver=None):
         self.strategy = extrapolation_method(method, extrapolation=extrapolation, rtol=rtol,
                                              atol=atol, adaptive=adaptive)
-        self.index, el = clearance_element(mech, joint)
-        self.mech, self.joint, self.period = mech, joint, period
-        self.warmup_cycles = warmup_cycles
-        self.cycle_kw = dict(rtol=cycle_rtol, atol=cycle_atol, adjoint=adjoint,
-                             max_steps=max_steps, solver=cycle_solver)
-        self.n_slots = self.strategy.slots(cycles, max_dynamic)
-        self.c_base = el.profile.clearance
-        law, wear = wear_parts(el)
-        self.radius, self.bdepth, self.k = el.bushing_radius, law.depth, wear.coefficient
-        self.wall = (jnp.inf if wall_thickness is None
-                     else jnp.asarray(wall_thickness, dtype=float))
+        _, el = clearance_element(mech, joint)
+        law, _ = wear_parts(el)
+        self.radius, self.bdepth = el.bushing_radius, law.depth
+        settings = CycleSettings(cycle_rtol, cycle_atol, cycle_solver, adjoint, max_steps)
+        self.term = self.make_term(mech, joint, jnp.asarray(period, dtype=float), settings)
+        self.warmup_cycles = int(warmup_cycles)
         self.cycles_arr = jnp.asarray(cycles, dtype=float)
+        stop = Stop(cycles=cycles, wall=wall_thickness)
+        self.n_slots = self.strategy.slots(stop, max_dynamic)
+        self.engine = Engine(self.term, self.strategy, stop, slots=self.n_slots,
+                             keep_profiles=True)
 
-    # ---------------------------------------------------------------- helpers
-    def run_cycle(self, h, y, t, n_save=None):
-        return wear_cycle(_with_profile(self.mech, self.index, self.c_base + h), self.joint,
-                          y, t, self.period, n_save=n_save, **self.cycle_kw)
+    def make_term(self, mech, joint, period, settings) -> DynamicWear:
+        """The wear term of one dynamic cycle (the FEM route's is another)."""
+        return DynamicWear(mech, (joint,), period, settings)
 
-    def advance(self, c: EvolutionState, a):
-        """One dynamic cycle from ``c`` and the profile step it gives for A = ``a``
-        real cycles: (depth step, load-sliding step, end state, ok, memory
-        updates).  Linear in the cycle's wear here; the FEM route overrides it."""
-        r = self.run_cycle(c.h, c.y, c.t)
-        return a * r.depth_increment, a * r.load_sliding, r.y_end, r.ok, {}
+    def init(self, y0) -> WearState:
+        """Warm-up cycles (wear discarded), then the initial engine state."""
+        memory, ok = self.term.warm_up(y0, self.warmup_cycles)
+        state = initial_state(self.term.zeros(), memory, evaluations=self.warmup_cycles, ok=ok)
+        return self.engine.init(state)
 
-    def finish(self, c: EvolutionState, h_new, y_new, t_new, dn, dls, ok) -> EvolutionState:
-        """Accept a step unless it failed (then stop, keep the old state).  A
-        step that wears through the wall is cut to the fraction of it at which
-        the first node reaches the wall (the step is linear in its length), and
-        the evolution stops there: it reports the cycles and depth at the wall."""
-        dh = h_new - c.h
-        # double where: no infinite wall in the division (its gradient is NaN)
-        room = jnp.where(jnp.isfinite(self.wall), self.wall - c.h, 0.0)
-        pierced = ok & (jnp.max(h_new) >= self.wall)
-        rising = dh > 0.0
-        fraction = jnp.clip(jnp.min(jnp.where(rising, room / jnp.where(rising, dh, 1.0),
-                                              jnp.inf)), 0.0, 1.0)
-        f = jnp.where(pierced, fraction, 1.0)
-        status = jnp.where(~ok, STATUS_SOLVER, jnp.where(pierced, STATUS_PIERCED, STATUS_OK))
-        h = jnp.where(ok, c.h + f * dh, c.h)
-        n = jnp.where(ok, c.n + f * dn, c.n)
-        return c.replace(
-            h=h, y=jnp.where(ok, y_new, c.y), t=jnp.where(ok, t_new, c.t), n=n,
-            ls=jnp.where(ok, c.ls + f * dls, c.ls), status=status,
-            fail_n=jnp.where(~ok, c.n + dn, jnp.where(pierced, n, 0.0)),
-            fail_h=jnp.where(~ok, jnp.max(h_new), jnp.where(pierced, jnp.max(h), 0.0)))
+    def _history(self, h: dict) -> dict:
+        return dict(cycles=h["cycles"], max_depth=h["max_depth"][..., 0],
+                    volume=worn_volume(h["depth"][0], self.radius, self.bdepth),
+                    extrapolation=h["step"], valid=h["valid"], dynamic_cycles=h["evaluations"])
 
-    def record(self, c, a, valid):
-        """One history entry (one per scan slot)."""
-        return dict(cycles=c.n, max_depth=jnp.max(c.h),
-                    volume=worn_volume(c.h, self.radius, self.bdepth), extrapolation=a,
-                    valid=valid, dynamic_cycles=c.dyn)
-
-    def idle_record(self, c):
-        """The history entry of a slot after the end (what `run` records there)."""
-        return self.record(c, jnp.zeros(()), jnp.array(False))
-
-    def active(self, c):
-        return (c.status == STATUS_OK) & (c.n < self.cycles_arr - 1e-9)
-
-    def when_active(self, do, c):
-        """``do(c) -> (state, A)`` if the evolution is still running, else a
-        no-op: (new state, A used, whether this slot ran)."""
-        go = self.active(c)
-        c2, a_i = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
-        return c2, a_i, go
-
-    # ------------------------------------------------------------------ state
-    def init(self, y0) -> EvolutionState:
-        """Warm-up cycles (wear discarded), then the initial evolution state."""
-        h0 = jnp.zeros_like(self.c_base)
-        y, t = y0, jnp.zeros(())
-        warm_ok = jnp.array(True)
-        for _ in range(self.warmup_cycles):
-            r = self.run_cycle(h0, y, t)
-            y, t, warm_ok = r.y_end, t + self.period, warm_ok & r.ok
-        c = EvolutionState(h=h0, y=y, t=t, n=jnp.zeros(()), dyn=jnp.asarray(self.warmup_cycles),
-                           ls=jnp.zeros(()), status=jnp.where(warm_ok, STATUS_OK, STATUS_SOLVER),
-                           fail_n=jnp.zeros(()), fail_h=jnp.zeros(()))
-        return self.strategy.init(self, c)
-
-    def run(self, state: EvolutionState, length: int):
+    def run(self, state: WearState, length: int):
         """``length`` scan slots from ``state``: (new state, history of these slots)."""
-        return lax.scan(functools.partial(self.strategy.step, self), state, None,
-                        length=int(length))
+        state, hist = self.engine.run(state, length)
+        return state, self._history(hist)
 
-    def result(self, final: EvolutionState, hist: dict) -> EvolutionResult:
-        # all scan slots used before reaching ``cycles``: say so, never return a short run
-        short = (final.status == STATUS_OK) & (final.n < self.cycles_arr - 1e-6)
+    def idle_record(self, state: WearState) -> dict:
+        """The history entry of a slot after the end (what `run` records there)."""
+        return self._history(self.engine.idle_record(state))
+
+    def result(self, final: WearState, hist: dict) -> EvolutionResult:
+        done = self.engine.finish(final)
         return EvolutionResult(
-            depth=final.h, y=final.y, t=final.t, cycles=final.n, dynamic_cycles=final.dyn,
-            load_sliding=final.ls, status=jnp.where(short, STATUS_INCOMPLETE, final.status),
-            fail_cycles=jnp.where(short, final.n, final.fail_n),
-            fail_depth=jnp.where(short, jnp.max(final.h), final.fail_h), history=hist,
-            state=final,
-        )
+            depth=done.h[0], y=done.memory["y"], t=done.memory["t"], cycles=done.n,
+            dynamic_cycles=done.evaluations, load_sliding=done.load_sliding[0],
+            status=done.status, fail_cycles=done.fail_n, fail_depth=done.fail_h, history=hist,
+            state=final)
 
 
 # ------------------------------------------------------- chunks and checkpoints
 class Checkpoint(NamedTuple):
-    """Where a chunked evolution stands: ``state`` (`EvolutionState`, numpy),
+    """Where a chunked evolution stands: ``state`` (`WearState`, numpy),
     ``history`` (per-slot history of the slots run so far, numpy) and
     ``slots_done`` (scan slots run, possibly past the end on the last chunk)."""
 
-    state: EvolutionState
+    state: WearState
     history: dict
     slots_done: int
 
@@ -414,7 +356,7 @@ def load_checkpoint(path) -> tuple[Checkpoint, dict]:
     """Read a checkpoint written by `save_checkpoint`: (checkpoint, meta)."""
     try:
         with np.load(path, allow_pickle=False) as z:
-            state = EvolutionState.from_dict(
+            state = WearState.from_dict(
                 {k[6:]: z[k] for k in z.files if k.startswith("state.")})
             hist = {k[8:]: z[k] for k in z.files if k.startswith("history.")}
             slots, meta = int(z["slots_done"]), json.loads(str(z["meta"]))

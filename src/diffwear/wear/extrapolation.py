@@ -1,15 +1,15 @@
-"""How the wear evolution extrapolates one simulated crank cycle over many
-real ones: strategy objects passed to `evolve` / `Evolver` as ``method=``, as
-diffrax takes a solver object.
+"""The wear engine's explicit solvers: one simulated crank cycle extrapolated
+over many real ones (`diffwear.wear.engine`; passed to `evolve` as
+``method=``, as diffrax takes a solver object).
 
 `Constant` (thesis Eq. 4-19): every simulated cycle stands for A real ones.
 `Adaptive` (thesis Eq. 4-20): A grows while the wear increment stays smooth
 and shrinks when it changes.  `ErrorControlled`: the profile as an ODE in the
 cycle count, integrated by an embedded Heun-Euler pair with step-size control.
 
-Each strategy owns its scan step and the memory it keeps in the evolution
-state (`init`); `Evolver` owns the shared bookkeeping (`run_cycle`, `finish`,
-`record`, `when_active`).  The names ``"constant"``, ``"adaptive"`` and
+Each solver owns its step and the memory it keeps in the engine's state
+(`init`); the engine owns the shared bookkeeping (the scan, the status, the
+cut at the wall, the history).  The names ``"constant"``, ``"adaptive"`` and
 ``"error"`` (the command line's ``--method``) map onto them through
 `extrapolation_method`.  Settings are static: a new value recompiles.
 """
@@ -17,62 +17,37 @@ state (`init`); `Evolver` owns the shared bookkeeping (`run_cycle`, `finish`,
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar, Protocol
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
 from jax import lax
-from jaxtyping import Array
 
 from ..choices import WEAR_METHODS
 from ..errors import InputError
-from .state import EvolutionState
-
-
-class EvolutionDriver(Protocol):
-    """What a strategy uses of the evolution that drives it
-    (`diffwear.wear.evolution.Evolver`)."""
-
-    cycles_arr: Array
-    period: Any
-    radius: Any
-    k: Any
-
-    def run_cycle(self, h, y, t, n_save=None) -> Any: ...
-
-    def advance(self, c: EvolutionState, a) -> tuple: ...
-
-    def finish(self, c: EvolutionState, h_new, y_new, t_new, dn, dls, ok
-               ) -> EvolutionState: ...
-
-    def record(self, c: EvolutionState, a, valid) -> dict: ...
-
-    def when_active(self, do, c: EvolutionState) -> tuple: ...
-
+from .engine import AbstractWearSolver, CycleWear, Proposal, Stop, WearState
 
 ADAPTIVE_CRITERIA = ("increment_change", "pressure_jump")
 
 
-class AbstractExtrapolation(eqx.Module):
-    """A rule that advances the evolution by one scan slot."""
+def _advance(term, s: WearState, cw: CycleWear, dn):
+    return term.advance(s.h, cw, dn)
+
+
+class AbstractExtrapolation(AbstractWearSolver):
+    """An explicit rule that extrapolates one simulated cycle over many real ones."""
 
     name: ClassVar[str]
 
-    def slots(self, cycles, max_dynamic) -> int:
-        """Scan slots the evolution over ``cycles`` needs (static)."""
-        if max_dynamic is None:
+    def slots(self, stop: Stop, max_slots) -> int:
+        if max_slots is None:
             raise InputError(f"method {self.name!r} needs max_dynamic (scan slots)")
-        if int(max_dynamic) < 1:
-            raise InputError(f"max_dynamic must be >= 1, got {max_dynamic}")
-        return int(max_dynamic)
+        if int(max_slots) < 1:
+            raise InputError(f"max_dynamic must be >= 1, got {max_slots}")
+        return int(max_slots)
 
-    def init(self, ev: EvolutionDriver, c: EvolutionState) -> EvolutionState:
-        """The strategy's memory added to the initial evolution state."""
-        return c
-
-    def step(self, ev: EvolutionDriver, c: EvolutionState, _):
-        """One scan slot: (new state, history entry)."""
-        raise NotImplementedError
+    def init(self, term, state: WearState, stop: Stop) -> WearState:
+        return state
 
 
 class Constant(AbstractExtrapolation):
@@ -87,20 +62,18 @@ class Constant(AbstractExtrapolation):
         if not (float(self.a) >= 1.0 and math.isfinite(float(self.a))):
             raise InputError(f"extrapolation factor A must be >= 1, got {self.a}")
 
-    def slots(self, cycles, max_dynamic) -> int:
+    def slots(self, stop: Stop, max_slots) -> int:
+        cycles = stop.cycles
         if float(cycles) <= 0:
             raise InputError(f"cycles must be > 0, got {cycles}")
         return int(math.ceil(float(cycles) / float(self.a) - 1e-9))
 
-    def step(self, ev: EvolutionDriver, c: EvolutionState, _):
-        def do(c):
-            a_i = jnp.minimum(float(self.a), ev.cycles_arr - c.n)
-            step, ls, y_end, ok, memory = ev.advance(c, a_i)
-            out = ev.finish(c, c.h + step, y_end, c.t + ev.period, a_i, ls, ok)
-            return out.replace(dyn=c.dyn + 1, **memory), a_i
-
-        c2, a_i, go = ev.when_active(do, c)
-        return c2, ev.record(c2, a_i, go)
+    def step(self, term, state: WearState, stop: Stop) -> Proposal:
+        a_i = jnp.minimum(float(self.a), jnp.asarray(stop.end, dtype=float) - state.n)
+        cw = term.modulate(term.cycle(state.h, state.memory), state.h, state.n, a_i)
+        h, ls, memory, ok = _advance(term, state, cw, a_i)
+        return Proposal(h=h, dn=a_i, ok=ok, memory=memory, load_sliding=ls, evaluations=1,
+                        solver={})
 
 
 class Adaptive(AbstractExtrapolation):
@@ -135,38 +108,34 @@ class Adaptive(AbstractExtrapolation):
             raise InputError(f"adaptive criterion must be 'increment_change' or "
                              f"'pressure_jump', got {self.criterion!r}")
 
-    def init(self, ev: EvolutionDriver, c: EvolutionState) -> EvolutionState:
-        a0 = (jnp.maximum(jnp.round(self.a0_fraction * ev.cycles_arr), 1.0)
+    def init(self, term, state: WearState, stop: Stop) -> WearState:
+        end = jnp.asarray(stop.end, dtype=float)
+        a0 = (jnp.maximum(jnp.round(self.a0_fraction * end), 1.0)
               if self.a0 in (None, 1.0) else jnp.asarray(self.a0, dtype=float))
-        return c.replace(a=a0, dh_prev=jnp.zeros_like(c.h))
+        return state.replace(a=a0, dh_prev=jnp.zeros_like(state.h[0]))
 
-    def step(self, ev: EvolutionDriver, c: EvolutionState, _):
-        ca = ev.cycles_arr
+    def step(self, term, state: WearState, stop: Stop) -> Proposal:
+        ca = jnp.asarray(stop.end, dtype=float)
         a_inc = jnp.maximum(jnp.round(self.inc_fraction * ca), 1.0)
         a_dec = jnp.maximum(jnp.round(self.dec_fraction * ca), 1.0)
-
-        def do(c):
-            a_i = jnp.minimum(c.memory["a"], ca - c.n)
-            r = ev.run_cycle(c.h, c.y, c.t)
-            dh = r.depth_increment
-            if self.criterion == "pressure_jump":
-                # sliding-weighted mean pressure of the cycle at each node [Pa]
-                s_cycle = 2 * jnp.pi * ev.radius  # relative rotation 2 pi per crank cycle
-                p = dh / (ev.k * s_cycle)
-                jump = jnp.max(jnp.abs(jnp.roll(p, -1) - p))
-                smooth = jump < self.p_crit_fraction * jnp.max(p)
-            else:
-                change = jnp.max(jnp.abs(dh - c.memory["dh_prev"]))
-                smooth = change < self.change_fraction * jnp.max(jnp.abs(dh))
-            out = ev.finish(c, c.h + a_i * dh, r.y_end, c.t + ev.period, a_i,
-                            a_i * r.load_sliding, r.ok)
-            return out.replace(
-                dyn=c.dyn + 1, dh_prev=dh,
-                a=jnp.where(smooth, c.memory["a"] + a_inc,
-                            jnp.maximum(c.memory["a"] - a_dec, 1.0))), a_i
-
-        c2, a_i, go = ev.when_active(do, c)
-        return c2, ev.record(c2, a_i, go)
+        c = state.solver
+        a_i = jnp.minimum(c["a"], ca - state.n)
+        cw = term.cycle(state.h, state.memory)
+        dh = cw.rate[0]
+        if self.criterion == "pressure_jump":
+            # sliding-weighted mean pressure of the cycle at each node [Pa]
+            radius, _, k = term.bushing()
+            s_cycle = 2 * jnp.pi * radius  # relative rotation 2 pi per crank cycle
+            p = dh / (k * s_cycle)
+            jump = jnp.max(jnp.abs(jnp.roll(p, -1) - p))
+            smooth = jump < self.p_crit_fraction * jnp.max(p)
+        else:
+            change = jnp.max(jnp.abs(dh - c["dh_prev"]))
+            smooth = change < self.change_fraction * jnp.max(jnp.abs(dh))
+        a_next = jnp.where(smooth, c["a"] + a_inc, jnp.maximum(c["a"] - a_dec, 1.0))
+        h, ls, memory, ok = _advance(term, state, cw, a_i)
+        return Proposal(h=h, dn=a_i, ok=ok, memory=memory, load_sliding=ls, evaluations=1,
+                        solver=dict(a=a_next, dh_prev=dh))
 
 
 class ErrorControlled(AbstractExtrapolation):
@@ -181,43 +150,40 @@ class ErrorControlled(AbstractExtrapolation):
     dn0: float | None = eqx.field(default=None, static=True)
     name: ClassVar[str] = "error"
 
-    def init(self, ev: EvolutionDriver, c: EvolutionState) -> EvolutionState:
-        dn0 = (jnp.maximum(0.01 * ev.cycles_arr, 1.0) if self.dn0 in (None, 1.0)
+    def init(self, term, state: WearState, stop: Stop) -> WearState:
+        end = jnp.asarray(stop.end, dtype=float)
+        dn0 = (jnp.maximum(0.01 * end, 1.0) if self.dn0 in (None, 1.0)
                else jnp.asarray(self.dn0, dtype=float))
-        return c.replace(dn=dn0, have_k1=jnp.array(False), k1=jnp.zeros_like(c.h),
-                         ls1=jnp.zeros(()))
+        return state.replace(dn=dn0, have_k1=jnp.array(False), k1=jnp.zeros_like(state.h[0]),
+                             ls1=jnp.zeros(()))
 
-    def step(self, ev: EvolutionDriver, c: EvolutionState, _):
-        period, rtol, atol = ev.period, self.rtol, self.atol
+    def step(self, term, state: WearState, stop: Stop) -> Proposal:
+        c = state.solver
 
-        def do(c):
-            def stage1(c):
-                r = ev.run_cycle(c.h, c.y, c.t)
-                return r.depth_increment, r.load_sliding, r.y_end, c.t + period, r.ok, 1
+        def stage1():
+            cw = term.cycle(state.h, state.memory)
+            return cw.rate[0], cw.load_sliding[0], cw.memory, cw.ok, 1
 
-            def cached(c):
-                return c.memory["k1"], c.memory["ls1"], c.y, c.t, jnp.array(True), 0
+        def cached():
+            return c["k1"], c["ls1"], state.memory, jnp.array(True), 0
 
-            k1, ls1, y1, t1, ok1, n1 = lax.cond(c.memory["have_k1"], cached, stage1, c)
-            dn = jnp.minimum(c.memory["dn"], ev.cycles_arr - c.n)
-            r2 = ev.run_cycle(c.h + dn * k1, y1, t1)
-            k2 = r2.depth_increment
-            h_new = c.h + 0.5 * dn * (k1 + k2)
-            err = 0.5 * dn * jnp.max(jnp.abs(k2 - k1))
-            tol = atol + rtol * jnp.max(jnp.abs(h_new))
-            ratio = err / tol
-            accept = ratio <= 1.0
-            ok = ok1 & r2.ok
-            factor = jnp.clip(0.9 * jnp.where(ratio > 0, ratio, 1e-10) ** -0.5, 0.3, 4.0)
-            dls = 0.5 * dn * (ls1 + r2.load_sliding)
-            out = ev.finish(c, jnp.where(accept, h_new, c.h), r2.y_end, t1 + period,
-                            jnp.where(accept, dn, 0.0), jnp.where(accept, dls, 0.0), ok)
-            out = out.replace(dyn=c.dyn + n1 + 1, dn=dn * factor, have_k1=~accept, k1=k1,
-                              ls1=ls1)
-            return out, jnp.where(accept, dn, 0.0)
-
-        c2, a_i, go = ev.when_active(do, c)
-        return c2, ev.record(c2, a_i, go & (a_i > 0))
+        k1, ls1, memory1, ok1, n1 = lax.cond(c["have_k1"], cached, stage1)
+        dn = jnp.minimum(c["dn"], jnp.asarray(stop.end, dtype=float) - state.n)
+        h = state.h[0]
+        cw2 = term.cycle((h + dn * k1,), memory1)
+        k2 = cw2.rate[0]
+        h_new = h + 0.5 * dn * (k1 + k2)
+        err = 0.5 * dn * jnp.max(jnp.abs(k2 - k1))
+        tol = self.atol + self.rtol * jnp.max(jnp.abs(h_new))
+        ratio = err / tol
+        accept = ratio <= 1.0
+        factor = jnp.clip(0.9 * jnp.where(ratio > 0, ratio, 1e-10) ** -0.5, 0.3, 4.0)
+        dls = 0.5 * dn * (ls1 + cw2.load_sliding[0])
+        return Proposal(
+            h=(jnp.where(accept, h_new, h),), dn=jnp.where(accept, dn, 0.0), ok=ok1 & cw2.ok,
+            memory=cw2.memory, load_sliding=jnp.where(accept, dls, 0.0)[None],
+            evaluations=n1 + 1,
+            solver=dict(dn=dn * factor, have_k1=~accept, k1=k1, ls1=ls1))
 
 
 def extrapolation_method(method, *, extrapolation=1.0, rtol=1e-2, atol=1e-7,

@@ -82,8 +82,10 @@ from ..fem.condense import inner_compliance, tributary_lengths
 from ..fem.contact import TOL
 from ..mechanism import Mechanism
 from ..mechanism.geometry import grid_angles, safe_norm
-from .cycle import CycleResult, clearance_element, wear_cycle, wear_parts
-from .evolution import EvolutionResult, EvolutionState, Evolver, _with_profile
+from .cycle import clearance_element, wear_parts
+from .dynamic_term import DynamicWear
+from .engine import CycleWear
+from .evolution import EvolutionResult, Evolver
 from .extrapolation import AbstractExtrapolation, Constant
 
 FORCE_MODES = ("resultant", "normal")
@@ -310,11 +312,63 @@ def check_cycle_solver(solver) -> None:
                          f"force is off")
 
 
+class FemWear(DynamicWear):
+    """The FEM route's wear term: the dynamic cycle (EFM dynamics) sampled at
+    ``n_samples + 1`` times, its wear from the FE ring's contact pressure
+    (`fem_increment`), and the profile step of `implicit_step` (`advance`).
+    Its memory adds the compliance ``fem_C``, the wear cycles since it was
+    built, ``fem_age``, and the cycles that fell back to the explicit step,
+    ``fem_explicit``."""
+
+    fem: FemWearModel | None = None
+    tributary: Float[Array, " n"] | None = None
+
+    def element(self):
+        return clearance_element(self.mech, self.joints[0])[1]
+
+    def compliance(self, h):
+        return ring_compliance(self.fem, self.element().bushing_radius, h)
+
+    def warm_up(self, y0, cycles: int):
+        """EFM warm-up cycles (`DynamicWear.warm_up`), then the unworn ring's
+        compliance."""
+        memory, ok = super().warm_up(y0, cycles)
+        h0 = self.zeros()[0]
+        return dict(memory, fem_C=self.compliance(h0), fem_age=jnp.zeros(()),
+                    fem_explicit=jnp.zeros(())), ok
+
+    def cycle(self, h, memory) -> CycleWear:
+        fem, el = self.fem, self.element()
+        assert fem is not None and self.tributary is not None
+        (depth,) = h
+        stale = memory["fem_age"] >= fem.refresh_interval
+        cmat = lax.cond(stale, self.compliance, lambda h: memory["fem_C"], depth)
+        age = jnp.where(stale, 0.0, memory["fem_age"]) + 1.0
+        r, after, worn = self.run(h, memory, fem.n_samples + 1)
+        assert r.ys is not None and r.ts is not None  # saved: n_save is given
+        samples = joint_samples(worn, self.joints[0], r.ys, fem.force)
+        contact = ring_contact(cmat, self.tributary, el.bushing_radius, el.pin_radius, depth,
+                               wear_parts(el)[0].depth)
+        inc = fem_increment(contact, samples, r.ts, self.bushing()[2])
+        return CycleWear(
+            rate=(inc.depth_increment,), ok=r.ok & inc.ok,
+            memory=dict(after, fem_C=cmat, fem_age=age),
+            load_sliding=inc.load_sliding[None], extra=(contact, samples, r.ts, inc))
+
+    def advance(self, h, cw: CycleWear, dn):
+        """The FE increment's linearly implicit profile step for A = ``dn``
+        (`implicit_step`)."""
+        assert self.fem is not None
+        contact, samples, ts, inc = cw.extra
+        step, ls, fallback = implicit_step(contact, samples, ts, inc, self.bushing()[2], dn,
+                                           self.fem.jacobian_samples)
+        memory = dict(cw.memory, fem_explicit=cw.memory["fem_explicit"] + fallback)
+        return (h[0] + step,), ls[None], memory, cw.ok & jnp.all(jnp.isfinite(step))
+
+
 class FemEvolver(Evolver):
-    """`Evolver` (method "constant") whose depth increments come from the FE
-    ring; the evolution state carries the compliance ``fem_C`` and the wear
-    cycles since it was built, ``fem_age``, and the cycles that fell back to the
-    explicit step, ``fem_explicit``."""
+    """`Evolver` (method "constant") whose wear term is the FE ring's
+    (`FemWear`)."""
 
     def __init__(self, mech: Mechanism, joint: str, cycles, *, fem: FemWearModel,
                  method: str | AbstractExtrapolation = "constant", **kw):
@@ -324,49 +378,17 @@ class FemEvolver(Evolver):
         if not isinstance(fem, FemWearModel):
             raise InputError(f"fem must be a FemWearModel, got {type(fem).__name__}")
         check_cycle_solver(kw.get("cycle_solver"))
-        super().__init__(mech, joint, cycles, method=method, **kw)
         _, el = clearance_element(mech, joint)
         rb, b = concrete(el.bushing_radius), concrete(fem.outer_radius)
         if rb is not None and b is not None and not b > rb:
             raise InputError(f"FEM route: bushing outer radius {float(b)!r} m must exceed the "
                              f"bore radius {float(rb)!r} m")
-        self.fem, self.el = fem, el
-        self.w0 = unworn_tributary(fem, el.bushing_radius, el.profile.n)
+        self.fem = fem
+        self.tributary = unworn_tributary(fem, el.bushing_radius, el.profile.n)
+        super().__init__(mech, joint, cycles, method=method, **kw)
 
-    def compliance(self, h):
-        return ring_compliance(self.fem, self.el.bushing_radius, h)
-
-    def fem_cycle(self, c, a_i) -> tuple[CycleResult, FemIncrement, tuple, dict]:
-        """One dynamic cycle at profile ``c.h`` with its FE wear, the implicit
-        profile step for A = ``a_i``, and the refreshed compliance state."""
-        fem, el = self.fem, self.el
-        stale = c.memory["fem_age"] >= fem.refresh_interval
-        cmat = lax.cond(stale, lambda h: self.compliance(h), lambda h: c.memory["fem_C"], c.h)
-        age = jnp.where(stale, 0.0, c.memory["fem_age"]) + 1.0
-        mech = _with_profile(self.mech, self.index, self.c_base + c.h)
-        r = wear_cycle(mech, self.joint, c.y, c.t, self.period,
-                       n_save=fem.n_samples + 1, **self.cycle_kw)
-        assert r.ys is not None  # saved: n_save is given
-        samples = joint_samples(mech, self.joint, r.ys, fem.force)
-        contact = ring_contact(cmat, self.w0, el.bushing_radius, el.pin_radius, c.h,
-                               wear_parts(el)[0].depth)
-        inc = fem_increment(contact, samples, r.ts, self.k)
-        step, ls, fallback = implicit_step(contact, samples, r.ts, inc, self.k, a_i,
-                                           fem.jacobian_samples)
-        return r, inc, (step, ls), {"fem_C": cmat, "fem_age": age,
-                                    "fem_explicit": c.memory["fem_explicit"] + fallback}
-
-    def init(self, y0) -> EvolutionState:
-        c = super().init(y0)
-        return c.replace(fem_C=self.compliance(c.h), fem_age=jnp.zeros(()),
-                         fem_explicit=jnp.zeros(()))
-
-    def advance(self, c: EvolutionState, a):
-        """The FE increment's implicit profile step for A = ``a`` (else as
-        `Evolver.advance`), and the refreshed compliance."""
-        r, inc, (step, ls), fem_state = self.fem_cycle(c, a)
-        ok = r.ok & inc.ok & jnp.all(jnp.isfinite(step))
-        return step, ls, r.y_end, ok, fem_state
+    def make_term(self, mech, joint, period, settings) -> FemWear:
+        return FemWear(mech, (joint,), period, settings, fem=self.fem, tributary=self.tributary)
 
 
 def evolve_fem(mech: Mechanism, joint: str, y0, cycles, *, period, fem: FemWearModel,
@@ -394,5 +416,5 @@ def default_model(design, *, refresh_interval=DEFAULT_REFRESH, n_samples=DEFAULT
 
 
 __all__ = ["FORCE_MODES", "MIN_JOINT_FORCE", "FemWearModel", "JointSamples", "joint_samples",
-           "FemIncrement", "fem_increment", "FemEvolver", "evolve_fem", "default_model",
+           "FemIncrement", "fem_increment", "FemEvolver", "FemWear", "evolve_fem", "default_model",
            "ring_compliance", "ring_contact", "unworn_tributary", "trapezoid_weights"]

@@ -96,31 +96,19 @@ averages over the roughness).
 
 from __future__ import annotations
 
-from typing import Any
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-from jax import lax
 from jaxtyping import Array, Float
 
 from ..errors import InputError
 from ..mechanism import Mechanism
-from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle_joints, wear_parts
-from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_SOLVER
+from .cycle import CYCLE_ATOL, CYCLE_RTOL
+from .dynamic_term import CycleSettings, DynamicWear
+from .engine import Stop, initial_state, integrate
+from .implicit import DepthGain
 
 SCHEMES = ("implicit", "euler")
-
-# A per-cycle depth increment below this [m] counts as "not wearing" (1e-18 m
-# per cycle is 1 nm per billion cycles): such a joint sets no step size.
-_NO_WEAR_RATE = 1e-18
-_MAX_STEP_CYCLES = 1e12  # cap on dN when no active joint wears at all
-# Ridge added to M = U^T D U (units: grid nodes in contact) in `wear_operator`.
-# Without it M^-1 is singular in free flight and its derivative (through the
-# contact indicator D) swamps the gradient; 0.01 of a node changes the
-# projection by < 0.1 % for a contact arc of >= 10 nodes.
-OPERATOR_RIDGE = 1e-2
-
 
 class LifeResult(eqx.Module):
     """Per-joint cycles to the limit and the evolution that found them.
@@ -151,55 +139,6 @@ def not_computed_is_nan(cycles, inputs):
     probe = sum((jnp.sum(jnp.where(jnp.isfinite(v), v, 0.0)) for v in leaves),
                 jnp.zeros(()))
     return cycles + jnp.where(jnp.isnan(cycles), jnp.nan, 0.0) * probe
-
-
-def _with_profiles(mech: Mechanism, indices, bases, depths) -> Mechanism:
-    for i, base, h in zip(indices, bases, depths):
-        mech = eqx.tree_at(lambda m: m.forces[i].profile.clearance, mech, base + h)
-    return mech
-
-
-def wear_operator(mech: Mechanism, joint: str, ys: Float[Array, "T s"], period,
-                  width=1e-6) -> Float[Array, "n n"]:
-    """The cycle-integrated linear response A of the wear increment to the
-    profile, d(dh)/dh ~ -A, of an elastic-foundation joint (see module notes).
-
-    At every saved state (``ys``, equally spaced over one cycle, both ends
-    included) the nodes in contact, D = diag(step(delta_k, width)), respond to a
-    deeper profile with a pressure drop k_f (I - U M^-1 U^T D) dh, where the
-    pin translation U M^-1 U^T D dh (M = U^T D U, U = [cos, sin]) keeps the
-    contact resultant, i.e. the joint force, unchanged.  Weighted by the
-    sliding increment ds and by k, and summed over the cycle (trapezoid rule).
-    """
-    from ..contact import smoothing
-
-    _, el = clearance_element(mech, joint)
-    theta = el.profile.theta
-    u = jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)  # (n, 2)
-    n = theta.shape[0]
-
-    def sample(y):
-        q, qd, _ = mech.split(y)
-        kin = el.kinematics(mech.frames(q, qd))
-        d = smoothing.step(u @ kin.offset - el.profile.clearance, width)
-        m = u.T @ (d[:, None] * u) + OPERATOR_RIDGE * jnp.eye(2)
-        follow = u @ jnp.linalg.solve(m, u.T * d[None, :])  # (n, n) pin translation
-        response = d[:, None] * (jnp.eye(n) - follow)
-        return response, el.sliding_rate(kin)
-
-    responses, rates = jax.vmap(sample)(ys)
-    w = period * jnp.ones(ys.shape[0]).at[0].set(0.5).at[-1].set(0.5) / (ys.shape[0] - 1)
-    law, wear = wear_parts(el)
-    return wear.coefficient * law.stiffness * jnp.einsum("t,tij->ij", w * rates, responses)
-
-
-def _cycles_to_gain(h, dh, target):
-    """The dN at which max_k (h_k + dN dh_k) first reaches ``target`` (>= max h):
-    min over wearing nodes of (target - h_k) / dh_k (exact: the maximum of
-    lines is reached first by the line that gets there first)."""
-    wearing = dh > _NO_WEAR_RATE
-    safe = jnp.where(wearing, dh, 1.0)  # double where: no 1/0 in the gradient
-    return jnp.min(jnp.where(wearing, (target - h) / safe, _MAX_STEP_CYCLES))
 
 
 def dynamic_cycles_to_limit(
@@ -241,79 +180,21 @@ def dynamic_cycles_to_limit(
         raise InputError("cycles_to_limit needs at least one wearing joint")
     if scheme not in SCHEMES:
         raise InputError(f"scheme must be one of {SCHEMES}, got {scheme!r}")
-    if int(steps) < 1:
-        raise InputError(f"steps must be >= 1, got {steps}")
-    n_slots = 3 * int(steps) + 4 if slots is None else int(slots)
+    solver = DepthGain(int(steps), implicit=scheme == "implicit")
+    stop = Stop(limit=jnp.asarray(limit, dtype=float))
+    n_slots = solver.slots(stop, slots)
     if n_slots < 1:
         raise InputError(f"slots must be >= 1, got {slots}")
-    found = [clearance_element(mech, j) for j in joints]
-    indices = [i for i, _ in found]
-    bases = [el.profile.clearance for _, el in found]
-    limit = jnp.asarray(limit, dtype=float)
-    dh_target = limit / steps
-    n_j = len(joints)
-    kw = dict(rtol=cycle_rtol, atol=cycle_atol, adjoint=adjoint, max_steps=max_steps,
-              solver=cycle_solver)
-
-    def run_cycle(hs, y, t, n_save=None):
-        return wear_cycle_joints(_with_profiles(mech, indices, bases, hs), joints, y, t,
-                                 period, n_save=n_save, **kw)
-
-    zeros = tuple(jnp.zeros_like(b) for b in bases)
-    y, t, ok = y0, jnp.zeros(()), jnp.array(True)
-    for _ in range(warmup_cycles):
-        r = run_cycle(zeros, y, t)
-        y, t, ok = r.y_end, t + period, ok & r.ok
-    state = dict(h=zeros, y=y, t=t, n=jnp.zeros(()), life=jnp.full((n_j,), jnp.nan),
-                 done=jnp.zeros((n_j,), bool), dyn=jnp.asarray(warmup_cycles),
-                 status=jnp.where(ok, STATUS_OK, STATUS_SOLVER))
-
-    def active(c):
-        return (c["status"] == STATUS_OK) & ~jnp.all(c["done"])
-
-    def do(c):
-        implicit = scheme == "implicit"
-        # the state a slot starts from carries no derivative (module notes)
-        r = run_cycle(c["h"], lax.stop_gradient(c["y"]), c["t"],
-                      n_save=operator_samples if implicit else None)
-        m_old = jnp.stack([jnp.max(h) for h in c["h"]])
-        dn_joint = jnp.stack([_cycles_to_gain(h, dh, m + dh_target)
-                              for h, dh, m in zip(c["h"], r.depth_increment, m_old)])
-        dn = jnp.min(jnp.where(c["done"], _MAX_STEP_CYCLES, dn_joint))
-        rate = r.depth_increment
-        if implicit:  # linearly implicit Euler: (I + dN A) dh_step = dN f(h)
-            worn = _with_profiles(mech, indices, bases, c["h"])
-            rate = tuple(jnp.linalg.solve(jnp.eye(dh.shape[0]) + dn * wear_operator(
-                worn, j, r.ys, period, operator_width), dh) for j, dh in zip(joints, rate))
-        h_new = tuple(jnp.where(d, h, h + dn * dh) for d, h, dh in zip(c["done"], c["h"], rate))
-        m_new = jnp.stack([jnp.max(h) for h in h_new])
-        cross = ~c["done"] & (m_new >= limit)
-        gain = jnp.where(cross, m_new - m_old, 1.0)
-        n_cross = c["n"] + dn * (limit - m_old) / gain
-        bad = ~r.ok
-        out = dict(c)
-        out["h"] = tuple(jnp.where(bad, h, hn) for h, hn in zip(c["h"], h_new))
-        out["y"] = jnp.where(bad, c["y"], r.y_end)
-        out["t"] = c["t"] + period
-        out["n"] = jnp.where(bad, c["n"], c["n"] + dn)
-        out["life"] = jnp.where(cross & ~bad, n_cross, c["life"])
-        out["done"] = c["done"] | (cross & ~bad)
-        out["dyn"] = c["dyn"] + 1
-        out["status"] = jnp.where(bad, STATUS_SOLVER, c["status"])
-        return out, dn
-
-    def step(c, _):
-        go = active(c)
-        c2, dn = lax.cond(go, do, lambda c: (c, jnp.zeros(())), c)
-        rec = dict(cycles=c2["n"], max_depth=jnp.stack([jnp.max(h) for h in c2["h"]]),
-                   step=dn, valid=go)
-        return c2, rec
-
-    final: dict[str, Any]
-    final, hist = lax.scan(step, state, None, length=n_slots)
-    short = (final["status"] == STATUS_OK) & ~jnp.all(final["done"])
+    settings = CycleSettings(cycle_rtol, cycle_atol, cycle_solver, adjoint, max_steps)
+    implicit = scheme == "implicit"
+    # the state a slot starts from carries no derivative (module notes)
+    term = DynamicWear(mech, joints, jnp.asarray(period, dtype=float), settings,
+                       saves=operator_samples if implicit else None, response=implicit,
+                       operator_width=operator_width, fresh_state=True)
+    memory, ok = term.warm_up(y0, warmup_cycles)
+    state = initial_state(term.zeros(), memory, evaluations=warmup_cycles, ok=ok)
+    final, hist = integrate(term, solver, state, stop=stop, slots=n_slots)
     return LifeResult(
-        cycles=final["life"], depth=final["h"],
-        status=jnp.where(short, STATUS_INCOMPLETE, final["status"]),
-        dynamic_cycles=final["dyn"], history=hist,
-    )
+        cycles=final.life, depth=final.h, status=final.status,
+        dynamic_cycles=final.evaluations,
+        history={k: hist[k] for k in ("cycles", "max_depth", "step", "valid")})

@@ -175,7 +175,7 @@ def test_design_two_joint_small_case(tmp_path):
 
 
 def test_map_trend_reads_monotonicity_and_ratios():
-    from diffwear.cli.design import map_trend
+    from diffwear.design.life_maps import map_trend
     d, h = np.linspace(20, 70, 3), np.linspace(10, 50, 4)
     maps = {"d_m": d, "h_m": h,
             "cyc1": 1e4 * h[None, :] * (d[:, None] / 20) ** -0.1,   # falls with d

@@ -61,7 +61,7 @@ def test_the_calibration_report_names_the_declaration():
     from types import SimpleNamespace
 
     from diffwear.calibrate.dataset import Series
-    from diffwear.cli.calibrate import frame_warnings
+    from diffwear.calibrate.frame_check import frame_warnings
 
     profile = Series("bore", "profile", "bore.csv", 1000, THETA, noisy(groove(-THETA)), SIGMA)
     mass = Series("mass", "volume", "mass.csv", None, [1000.0, 2000.0], [1e-9, 2e-9], 1e-10,

@@ -10,14 +10,19 @@ fits much better: chi-square lower by the factor `FACTOR` and by at least
 `MIN_DROP` (so noise alone does not trigger it), with the manifest keys that
 declare that frame (`diffwear.calibrate.dataset`, ``[rig]``
 ``bushing_angle_zero`` / ``bushing_angle_sense``).  A warning: the user
-decides, the fit is not changed.
+decides, the fit is not changed.  `frame_warnings` checks every profile of a
+calibration.
 """
 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .identify import Calibration
 
 STEP_DEG = 5.0
 FACTOR = 2.0
@@ -67,3 +72,34 @@ def frame_check(theta, y, sigma, prediction) -> dict | None:
         f", zero at {z:g} deg" if z or sense == "counter-clockwise" else "")
     return {"chi2_as_given": given, "chi2": c, "zero_deg": float(z), "sense": sense,
             "transform": what}
+
+
+def frame_warnings(c: Calibration) -> list[dict]:
+    """The profiles of a calibration that fit its base model much better in
+    another angle frame (`frame_check`), with the manifest keys that would
+    declare that frame.
+
+    **Arguments:**
+
+    - ``c``: a finished calibration (`diffwear.calibrate.identify.calibrate`);
+      each profile series is compared with the base fit's prediction.
+
+    **Returns:** one dict per such profile: `frame_check`'s result plus
+    ``series`` (its name) and ``message`` (the warning in words, naming
+    ``bushing_angle_zero`` and ``bushing_angle_sense`` for ``[rig]``).
+    """
+    found = []
+    for k, s in enumerate(c.dataset.series):
+        if s.kind != "profile":
+            continue
+        f = frame_check(s.x, s.y, s.sigma, c.base.prediction[c.problem.series_of_point == k])
+        if f is None:
+            continue
+        f["series"] = s.name
+        f["message"] = (
+            f"profile {s.name!r} fits the base model much better {f['transform']} (chi2 "
+            f"{f['chi2']:.0f} against {f['chi2_as_given']:.0f} as given): if it was measured "
+            f"in that frame, declare it in [rig]: bushing_angle_zero = \"{f['zero_deg']:g} deg\", "
+            f"bushing_angle_sense = \"{f['sense']}\"")
+        found.append(f)
+    return found

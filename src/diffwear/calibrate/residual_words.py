@@ -1,7 +1,7 @@
 """The base fit's residual structure, in words for the report.
 
 Each sentence states a measured number and what such a structure usually
-means; the numbers come from `study.residual_structure`.  Thresholds: a
+means; the numbers come from `residual_structure`.  Thresholds: a
 series is "at the noise" when its RMS residual is below `NOISE_RMS` sigma; a
 harmonic "dominates" when it carries more than `DOMINANT_SHARE` of the
 residual's harmonic power.

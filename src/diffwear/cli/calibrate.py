@@ -12,7 +12,6 @@ angle, against cycle count, and the force residual's harmonic spectrum),
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np  # noqa: E402
 
@@ -21,7 +20,7 @@ from ..calibrate.dataset import PARAMETERS, Dataset  # noqa: E402
 from ..calibrate.discrepancy import VARIABLES
 from ..calibrate.effects import EFFECTS  # noqa: E402
 from ..calibrate.fit import ModelSettings  # noqa: E402
-from ..calibrate.frame_check import frame_check  # noqa: E402
+from ..calibrate.frame_check import frame_warnings  # noqa: E402
 from ..calibrate.identify import (  # noqa: E402
     GOF_SIGMAS,
     LR_CRITICAL,
@@ -29,6 +28,7 @@ from ..calibrate.identify import (  # noqa: E402
     Calibration,
     calibrate,
 )
+from ..calibrate.residual_structure import residual_structure, series_rms
 from ..calibrate.residual_words import describe_residuals  # noqa: E402
 from ..io import OutputDir  # noqa: E402
 from ..plots import calibration as plots_calibration
@@ -44,67 +44,6 @@ DESCRIPTION = "calibrate the rig model on measured wear data and identify a miss
 UNIT = {"profile": (1e6, "um", "bushing angle [deg]", 180 / math.pi),
         "max_depth": (1e3, "mm", "cycles", 1.0), "volume": (1e9, "mm^3", "cycles", 1.0),
         "force": (1.0, "N", "crank angle [deg]", 180 / math.pi)}
-
-
-def residual_structure(c: Calibration) -> dict:
-    """Where the base fit's residual sits (numbers for the report)."""
-    p, r = c.problem, c.base.residual
-    out: dict[str, Any] = {}
-    kinds = [s.kind for s in c.dataset.series]
-    which = p.series_of_point
-    prof = np.isin(which, [k for k, kd in enumerate(kinds) if kd == "profile"])
-    if prof.any():
-        theta = np.concatenate([s.x for s in c.dataset.series if s.kind == "profile"])
-        bins = np.linspace(0, 2 * np.pi, 13)
-        idx = np.clip(np.digitize(theta, bins) - 1, 0, 11)
-        rp = r[prof]
-        out["profile_rms_by_30deg_sector"] = [
-            float(np.sqrt(np.mean(rp[idx == b] ** 2))) if np.any(idx == b) else None
-            for b in range(12)]
-        if theta.size >= 16:
-            # theta-harmonic content of the profile residual (orders 1..8, least
-            # squares on cos/sin; the mean of each series taken out)
-            orders = np.arange(1, 9)
-            basis = np.column_stack([f(o * theta) for o in orders for f in (np.cos, np.sin)])
-            coef, *_ = np.linalg.lstsq(basis, rp - rp.mean(), rcond=None)
-            amp = np.hypot(coef[0::2], coef[1::2])
-            out["profile_residual_harmonics"] = {int(o): float(a) for o, a in zip(orders, amp)}
-    cyc = np.concatenate([s.cycle_counts for s in c.dataset.series])
-    for kind in ("profile", "volume", "max_depth", "force"):
-        m = np.isin(which, [k for k, kd in enumerate(kinds) if kd == kind])
-        if not m.any():
-            continue
-        levels = np.unique(cyc[m])
-        out[f"{kind}_mean_residual_by_cycles"] = {
-            f"{n:g}": float(np.mean(r[m & (cyc == n)])) for n in levels[:40]}
-    force = [k for k, kd in enumerate(kinds) if kd == "force"]
-    if force:
-        k = force[0]
-        m = which == k
-        x = c.dataset.series[k].x
-        if x.size >= 8:
-            # harmonic content of the residual (crank orders), uneven angles
-            # allowed: least squares on cos/sin of orders 1..8
-            orders = np.arange(1, min(9, x.size // 2))
-            basis = np.column_stack([f(o * x) for o in orders for f in (np.cos, np.sin)])
-            coef, *_ = np.linalg.lstsq(basis, r[m] - r[m].mean(), rcond=None)
-            amp = np.hypot(coef[0::2], coef[1::2])
-            out["force_residual_harmonics"] = {int(o): float(a) for o, a in zip(orders, amp)}
-            # slider reversal: crank angle 0 and pi (+-20 deg) vs elsewhere
-            near = np.minimum(np.abs(np.angle(np.exp(1j * x))),
-                              np.abs(np.angle(np.exp(1j * (x - np.pi))))) < np.radians(20)
-            rr = r[m]
-            out["force_residual_rms_near_reversal"] = float(np.sqrt(np.mean(rr[near] ** 2))) \
-                if near.any() else None
-            out["force_residual_rms_elsewhere"] = float(np.sqrt(np.mean(rr[~near] ** 2))) \
-                if (~near).any() else None
-    if any(s.kind == "volume" and s.basis == "mass" for s in c.dataset.series) and prof.any():
-        # data-only check: volume of the measured profiles vs weighed volume
-        out["note_mass_vs_profile"] = ("compare the 'volume' residual (mass-based) with the "
-                                       "profile residual: a profile that grows without mass "
-                                       "loss (creep) shows as a positive profile residual and "
-                                       "an unbiased mass residual")
-    return out
 
 
 def _plots(out: OutputDir, c: Calibration) -> list[str]:
@@ -288,26 +227,6 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
     return Report(f"Calibration: {d.name}", blocks)
 
 
-def frame_warnings(c: Calibration) -> list[dict]:
-    """Profiles that fit the base model much better in another angle frame
-    (`frame_check`), with the manifest keys that would declare it."""
-    found = []
-    for k, s in enumerate(c.dataset.series):
-        if s.kind != "profile":
-            continue
-        f = frame_check(s.x, s.y, s.sigma, c.base.prediction[c.problem.series_of_point == k])
-        if f is None:
-            continue
-        f["series"] = s.name
-        f["message"] = (
-            f"profile {s.name!r} fits the base model much better {f['transform']} (chi2 "
-            f"{f['chi2']:.0f} against {f['chi2_as_given']:.0f} as given): if it was measured "
-            f"in that frame, declare it in [rig]: bushing_angle_zero = \"{f['zero_deg']:g} deg\", "
-            f"bushing_angle_sense = \"{f['sense']}\"")
-        found.append(f)
-    return found
-
-
 def _shape_text(entry: dict) -> str:
     shape = next(e.shape for e in EFFECTS if e.name == entry["name"])
     assert shape is not None  # called for effects with a fitted shape only
@@ -363,16 +282,6 @@ def _suspect_verdict(s: dict) -> str:
     return (f"; refitted, {s['name']} = {_fmt(s['refit_value'])} +- {_fmt(s['refit_std'], 2)} "
             + ("explains the data (residuals at the noise)" if s["explains"] else
                f"leaves chi2 {s['refit_chi2_fit']:.1f}: part of the residual only"))
-
-
-def series_rms(c: Calibration, final) -> dict:
-    """RMS residual per series [sigma] before (base) and after (final model)."""
-    out = {}
-    for k, s in enumerate(c.dataset.series):
-        m = c.problem.series_of_point == k
-        out[s.name] = (float(np.sqrt(np.mean(c.base.residual[m] ** 2))),
-                       float(np.sqrt(np.mean(final.residual[m] ** 2))))
-    return out
 
 
 def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSettings(),

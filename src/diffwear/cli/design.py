@@ -17,25 +17,13 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from .._checks import check_int_option
-from ..design.optimise import (
-    LONGEST_LIFE_CORNER,
-    AtTarget,
-    equal_life,
-    jacobian,
-    jacobian_method,
-    least_material,
-    life_gap,
-    life_of,
-    longest_common_life,
-    space_mapped,
-)
-from ..design.robust import monte_carlo_check, percentile_of, robust_least_material
-from ..design.two_joint import LOWER, SWEEP_MODEL, TABLE_8_4, TABLE_8_5, UPPER, TwoJointLife
+from ..design.life_maps import life_maps, map_batch, map_trend
+from ..design.optimise import jacobian, jacobian_method, life_of
+from ..design.problems import START, solve_problems
+from ..design.two_joint import SWEEP_MODEL, TABLE_8_4, TABLE_8_5, TwoJointLife
 from ..errors import InputError
 from ..io import OutputDir
 from ..plots import design as plots_design
@@ -48,8 +36,6 @@ DESCRIPTION = ("Ch. 8: bushing diameters and depths of two wearing joints for eq
                "(optimistix on the quasi-static model with exact gradients, corrected on "
                "the dynamic model)")
 
-START = np.array([45.0e-3, 45.0e-3, 30.0e-3, 30.0e-3])  # m: the centre of the Table 8-3 box
-MC_SAMPLES = 1000  # model runs of the robust design's Monte-Carlo check
 PROBLEMS = ("equal-life", "longest-common-life", "least-material", "robust")
 MODELS = ("quasi-static", "dynamic")
 # steps: the quasi-static model's wear steps to the limit; dynamic_steps: the
@@ -66,7 +52,6 @@ SAMPLES = 90
 # are too crude for the dynamic correction to converge (measured: residual
 # stuck at 27 %); from 10 steps it converges in 2-3 rounds
 LIMITS = dict(steps=(5, 400), dynamic_steps=(1, 100), map_points=(2, 50), n_theta=(12, 720))
-MAX_DYNAMIC_RUNS = 6  # space-mapping rounds per problem
 
 
 def settings(*, quick: bool = False, problems: str | None = None, model: str | None = None,
@@ -112,119 +97,11 @@ def models(settings: dict) -> tuple:
     return fast, reference
 
 
-def map_batch(model: TwoJointLife, points: int):
-    """The compiled map evaluation: lives of ``points``^2 designs at once."""
-    # the dynamic model: lax.map, not vmap (under vmap the scan's lax.cond
-    # becomes a select and every point runs all 3 x steps + 4 slots: the full
-    # 5 x 5 maps ran > 17 min); the quasi-static model's slots are few: vmap
-    if getattr(model, "exact_gradients", False):
-        batch = jax.jit(jax.vmap(lambda x: model(x)))
-    else:
-        batch = jax.jit(lambda xs: jax.lax.map(model, xs))
-    return batch.lower(jax.ShapeDtypeStruct((points * points, 4), jnp.float64)).compile()
-
-
-def life_maps(model: TwoJointLife, x, points: int, batch=None) -> dict:
-    """cyc_j over (d_j, h_j) on a points x points grid, the other joint at ``x``
-    (the model mapped over the grid, one compiled call per joint; ``batch``:
-    `map_batch` of the model, compiled beforehand)."""
-    d = np.linspace(LOWER[0], UPPER[0], points)
-    h = np.linspace(LOWER[2], UPPER[2], points)
-    dd, hh = np.meshgrid(d, h, indexing="ij")
-    batch = map_batch(model, points) if batch is None else batch
-    maps = {"d_m": d, "h_m": h}
-    for j in (0, 1):
-        xs = np.repeat(np.asarray(x)[None], dd.size, axis=0)
-        xs[:, j], xs[:, j + 2] = dd.ravel(), hh.ravel()
-        maps[f"cyc{j + 1}"] = np.asarray(batch(jnp.asarray(xs)))[:, j].reshape(dd.shape)
-    return maps
-
-
-def map_trend(maps: dict) -> dict:
-    """The thesis's trend check (Figs. 8-7/8-8: life "rises strongly with depth
-    and falls weakly with diameter") read off the life maps, i.e. over the
-    whole Table 8-3 box rather than from a local derivative: at the default
-    cycle tolerance the model's life carries ~3e-4 relative noise, which
-    central differences at 1e-3 relative step turn into ~400 cycles/mm, more
-    than the diameter slope itself (measured on the coarse model).
-
-    Per joint: ``depth_life_ratio`` (life at the deepest over the shallowest
-    bushing, least over the diameters), ``diameter_relative_change`` (life at
-    the largest minus the smallest diameter, over their mean, the extreme over
-    the depths), and whether every grid line is monotone."""
-    out: dict[str, Any] = {"rises_with_depth": [], "falls_with_diameter": [],
-                           "depth_life_ratio": [], "diameter_relative_change": []}
-    for j in (1, 2):
-        c = maps[f"cyc{j}"]  # [d, h]
-        out["rises_with_depth"].append(bool(np.all(np.diff(c, axis=1) > 0)))
-        out["falls_with_diameter"].append(bool(np.all(np.diff(c, axis=0) < 0)))
-        out["depth_life_ratio"].append(float(np.min(c[:, -1] / c[:, 0])))
-        change = (c[-1] - c[0]) / (0.5 * (c[-1] + c[0]))
-        out["diameter_relative_change"].append(float(change[np.argmax(np.abs(change))]))
-    out["life_rises_with_depth"] = all(out["rises_with_depth"])
-    out["life_falls_with_diameter"] = all(out["falls_with_diameter"])
-    return out
-
-
 def _describe(model) -> str:
     """One line naming a life model and its resolution."""
     m = model.wear_model
     return (f"{m.name} model, {m.steps} wear steps, {getattr(m, 'samples', '-')} load samples, "
             f"{model.n_theta} profile nodes")
-
-
-def _solve_problems(fast, reference, settings: dict, log) -> dict:
-    """Each chosen problem on ``fast``, corrected on ``reference`` (space
-    mapping) unless they are the same model.  Returns {key: DesignResult}."""
-    corrected = fast is not reference
-
-    def solve(name, problem, residual):
-        log(f"[{NAME}] {name} ...")
-        if not corrected:
-            return problem(fast)
-        return space_mapped(problem, fast, reference, residual,
-                            max_reference_runs=MAX_DYNAMIC_RUNS, log=log)
-
-    solved = {"equal_life": solve("equal life", lambda m: equal_life(m, START), life_gap)}
-    if "longest-common-life" in settings["problems"]:
-        solved["longest_common_life"] = solve("longest common life", longest_common_life,
-                                              life_gap)
-    if "least-material" in settings["problems"] or "robust" in settings["problems"]:
-        # the thesis's life if the model can reach it with d = 20 mm, else the
-        # equal-life answer's (reachable: life hardly depends on d)
-        corner = life_of(fast, LONGEST_LIFE_CORNER)
-        target = float(TABLE_8_5["surrogate_cycles"])
-        why = "thesis Table 8-5"
-        if min(corner) < target:
-            why = (f"the equal-life answer's life; the thesis's {target:,.0f} cycles is out of "
-                   f"reach: {min(corner):,.0f} at d = 20 mm, h = 50 mm")
-            target = float(np.mean(solved["equal_life"].cycles))
-        if "least-material" in settings["problems"]:
-            res = solve(f"least material at {target:,.0f} cycles ({why})",
-                        lambda m: least_material(m, target, corner_cycles=life_of(
-                            m, LONGEST_LIFE_CORNER)), AtTarget(jnp.asarray(target)))
-            res.notes["target_source"] = why
-            solved["least_material"] = res
-        if "robust" in settings["problems"]:
-            log(f"[{NAME}] robust least material: P10 of the weaker joint's life >= "
-                f"{target:,.0f} cycles under +-50 % k scatter ...")
-            res = robust_least_material(fast, target, log=log)
-            res.notes["target_source"] = why
-            # the deterministic least-material design at the same target, and
-            # its reliability, for comparison
-            nominal = least_material(fast, res.notes["target_cycles"],
-                                     corner_cycles=life_of(fast, LONGEST_LIFE_CORNER))
-            res.notes["deterministic"] = {
-                **nominal.summary(),
-                "percentile": percentile_of(nominal.cycles)["percentile"]}
-            log(f"[{NAME}] robust: Monte-Carlo check, the model at {MC_SAMPLES} sampled k "
-                "pairs ...")
-            mc = monte_carlo_check(fast, res.x, n=MC_SAMPLES)
-            claimed = res.notes["percentile_check"]["percentile"]
-            mc["confirms"] = bool(mc["interval"][0] <= claimed <= mc["interval"][1])
-            res.notes["monte_carlo_check"] = mc
-            solved["robust"] = res
-    return solved
 
 
 def run(out: OutputDir, *, settings: dict | None = None, log=print) -> dict:
@@ -250,7 +127,11 @@ def run(out: OutputDir, *, settings: dict | None = None, log=print) -> dict:
     with ThreadPoolExecutor(max_workers=1) as pool:
         thesis_job = pool.submit(life_of, reference, TABLE_8_4)
         maps_job = pool.submit(map_setup)
-        solved = _solve_problems(fast, reference, settings, log)
+        chosen = settings["problems"]
+        solved = solve_problems(fast, reference,
+                                with_longest_common_life="longest-common-life" in chosen,
+                                with_least_material="least-material" in chosen,
+                                with_robust="robust" in chosen, log=log, prefix=f"[{NAME}] ")
         log(f"[{NAME}] Table 8-4 check ...")
         thesis_cycles = thesis_job.result()
         map_model, batch = maps_job.result()

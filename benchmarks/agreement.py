@@ -82,8 +82,7 @@ def ch8_lives(quick: bool) -> dict:
 
     from diffwear.design import TwoJointLife
     from diffwear.design.two_joint import LOWER, TABLE_8_4, UPPER
-    from diffwear.quasistatic import QuasiStatic
-    from diffwear.wear import Dynamic
+    from diffwear.models import Dynamic, QuasiStatic
 
     designs = {"Table 8-4": TABLE_8_4}
     if not quick:

@@ -41,8 +41,8 @@ def main(argv=None) -> int:
 
     from diffwear.design import TwoJointLife
     from diffwear.design.two_joint import TABLE_8_4
+    from diffwear.models import QuasiStatic
     from diffwear.presets import RIG_CYCLES, RIG_JOINT, TABLE_2_1, TABLE_7_1
-    from diffwear.quasistatic import QuasiStatic
     from diffwear.studies.rig_21400 import PERIOD, _setup
     from diffwear.wear import worn_volume
 

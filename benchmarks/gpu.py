@@ -108,7 +108,7 @@ def main(argv=None) -> int:
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    from diffwear.quasistatic import QuasiStatic
+    from diffwear.models import QuasiStatic
     from diffwear.sweep.models import RigWear
 
     backend = jax.default_backend()

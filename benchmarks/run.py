@@ -132,17 +132,13 @@ def rig_21400(repeats: int, integrator: str = "tsit5") -> dict:
     from diffwear.wear import worn_volume
 
     mech0, mech, y0 = _setup()
-    a = common.default_constant_a(RIG_CYCLES, TARGET_DYNAMIC)
     mech_of_p = common.mech_builder(mech0, RIG_JOINT, N_THETA)
     import jax
 
-    from diffwear.wear import evolve
-    from diffwear.wear.cycle import cycle_integrator
-
-    solver, tol = cycle_integrator(integrator)
-    fn = jax.jit(lambda p, y: evolve(mech_of_p(p), common.JOINT, y, RIG_CYCLES, period=PERIOD,
-                                     extrapolation=a, wall_thickness=RIG_JOINT.wall,
-                                     cycle_solver=solver, cycle_rtol=tol, cycle_atol=tol))
+    model = common.dynamic_model(RIG_CYCLES, TARGET_DYNAMIC, integrator)
+    fn = jax.jit(lambda p, y: model.evolve(mech_of_p(p), (common.JOINT,), y, period=PERIOD,
+                                           cycles=RIG_CYCLES,
+                                           wall_thickness=RIG_JOINT.wall).detail)
     res, metrics = time_jitted(fn, (common.params_of(RIG_JOINT), y0), min(repeats, 2))
     res.check("benchmark rig-21400")
     dyn = int(res.dynamic_cycles)
@@ -211,23 +207,24 @@ def rig_21400_fem_route(repeats: int) -> dict:
     wear cycle) next to the EFM route, each compiled once and run once (a run is
     30-90 s); ``ratio_fem_to_efm`` is the route's cost measure (target < 5;
     thesis 11 h / 7 h = 1.6)."""
+    from diffwear.models import FemRoute
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
     from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, TARGET_DYNAMIC, _setup
     from diffwear.wear.fem_route import default_model
 
     mech0, _, y0 = _setup()
-    a = common.default_constant_a(RIG_CYCLES, TARGET_DYNAMIC)
     mech_of_p = common.mech_builder(mech0, RIG_JOINT, N_THETA)
-
-    kw = dict(method="constant", extrapolation=a, max_dynamic=4 * TARGET_DYNAMIC,
-              wall=RIG_JOINT.wall, n_theta=N_THETA)
+    efm = common.dynamic_model(RIG_CYCLES, TARGET_DYNAMIC, "tsit5")
+    fem = FemRoute(fem=default_model(RIG_JOINT), extrapolation=efm.extrapolation,
+                   cycle=efm.cycle, dynamic_cycles=efm.dynamic_cycles)
     p = common.params_of(RIG_JOINT)
     out = {}
-    for tag, fem in (("efm", None), ("fem", default_model(RIG_JOINT))):
-        res, ct, wt, _ = common.run_evolution(mech_of_p, p, y0, RIG_CYCLES, PERIOD, fem=fem, **kw)
-        res.check(f"benchmark rig-21400 {tag} route")
-        nums = common.route_numbers(res, RIG_JOINT, wt, ct)
+    for tag, model in (("efm", efm), ("fem", fem)):
+        res, times = model.run(mech_of_p, p, (common.JOINT,), y0, period=PERIOD,
+                               cycles=RIG_CYCLES, wall_thickness=RIG_JOINT.wall)
+        res.detail.check(f"benchmark rig-21400 {tag} route")
+        nums = common.route_numbers(res, RIG_JOINT, times)
         out.update({f"{tag}_{k}": v for k, v in nums.items()})
     return {"compile_s": out["fem_compile_time_s"], "run_s": out["fem_wall_time_s"],
             "dynamic_cycles": out["fem_dynamic_cycles_simulated"],
@@ -336,7 +333,7 @@ def rig_gradient(repeats: int, integrator: str = "tsit5", rtol: float | None = N
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
     from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, _setup
-    from diffwear.wear import evolve, smooth_max, worn_volume
+    from diffwear.wear import Constant, CycleSettings, evolve, smooth_max, worn_volume
     from diffwear.wear.cycle import cycle_integrator
 
     quick = repeats <= QUICK_REPEATS
@@ -352,8 +349,8 @@ def rig_gradient(repeats: int, integrator: str = "tsit5", rtol: float | None = N
             p = p0 * (1.0 + x)
             m = mech_of_p(p)
             r = evolve(m, common.JOINT, y0, RIG_CYCLES, period=PERIOD,
-                       extrapolation=RIG_CYCLES / dyn, wall_thickness=RIG_JOINT.wall,
-                       adjoint=adjoint, cycle_solver=solver, cycle_rtol=tol, cycle_atol=tol)
+                       method=Constant(RIG_CYCLES / dyn), wall_thickness=RIG_JOINT.wall,
+                       cycle=CycleSettings(tol, tol, solver, adjoint))
             el = m.element(common.JOINT)
             # RigWear's outputs: smooth max (temperature 0.1 um) and volume
             return jnp.stack([smooth_max(r.depth, 1e-7) * 1e3,
@@ -655,7 +652,7 @@ def scipy_peer(repeats: int) -> dict:
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
     from diffwear.studies.rig_21400 import PERIOD, RIG_JOINT, _setup
-    from diffwear.wear import evolve, wear_cycle, worn_volume
+    from diffwear.wear import Constant, evolve, wear_cycle, worn_volume
 
     peer = _load_peer("scipy_rig")
     quick = repeats <= QUICK_REPEATS
@@ -717,7 +714,7 @@ def scipy_peer(repeats: int) -> dict:
     el = mech.element(common.JOINT)
     a = RIG_CYCLES / SCIPY_DYNAMIC
     evo = jax.jit(lambda m, y: evolve(m, common.JOINT, y, RIG_CYCLES, period=PERIOD,
-                                      extrapolation=a, wall_thickness=RIG_JOINT.wall))
+                                      method=Constant(a), wall_thickness=RIG_JOINT.wall))
     res, de = time_jitted(evo, (mech, y0), 1)
     res.check("benchmark scipy-peer evolution")
     depth_dw = float(res.depth.max()) * 1e3
@@ -992,8 +989,8 @@ def rig_21400_quasi_static(repeats: int) -> dict:
     route's figure is the ``rig-21400 (constant A)`` case."""
     import jax
 
+    from diffwear.models import QuasiStatic
     from diffwear.presets import RIG_CYCLES
-    from diffwear.quasistatic import QuasiStatic
     from diffwear.studies.rig_21400 import PERIOD, RIG_JOINT, _setup
     from diffwear.wear import worn_volume
 
@@ -1050,7 +1047,7 @@ def quasi_static_life_sweep(repeats: int) -> dict:
 
     from diffwear.design import SWEEP_MODEL, TwoJointLife
     from diffwear.design.two_joint import LOWER, TABLE_8_4, UPPER
-    from diffwear.wear import Dynamic
+    from diffwear.models import Dynamic
 
     quick = repeats <= QUICK_REPEATS
     n = SWEEP_DESIGNS_QUICK if quick else SWEEP_DESIGNS
@@ -1112,11 +1109,10 @@ def cpu_sweep(model_name: str) -> Callable[[int], dict]:
     import jax
     import numpy as np
 
-    from diffwear.quasistatic import QuasiStatic
+    from diffwear.models import QuasiStatic
     from diffwear.sweep import Auto, Batched, Looped, Pooled, sweep
     from diffwear.sweep.execution import cpu_cores
     from diffwear.sweep.models import RigWear
-    from diffwear.wear import Dynamic
 
     def case(repeats: int) -> dict:
         quick = repeats <= QUICK_REPEATS
@@ -1124,8 +1120,7 @@ def cpu_sweep(model_name: str) -> Callable[[int], dict]:
         if model_name == "quasi-static":
             model = RigWear(wear_model=QuasiStatic(), **settings)
         else:
-            model = RigWear(wear_model=Dynamic(), dynamic_cycles=1 if quick else 50,
-                            **settings)
+            model = RigWear(dynamic_cycles=1 if quick else 50, **settings)
         n_c, n_k = CPU_SWEEP_GRID_QUICK if quick else CPU_SWEEP_GRID[model_name]
         base = model.defaults
         grid = {"clearance": np.geomspace(0.02e-3, 0.1e-3, n_c),

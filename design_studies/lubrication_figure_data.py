@@ -182,7 +182,7 @@ def life_viscosity() -> None:
     import jax.numpy as jnp
 
     from diffwear.contact import MixedLubrication, ShortBearingFilm
-    from diffwear.quasistatic import QuasiStatic
+    from diffwear.models import QuasiStatic
     from diffwear.studies import rig_21400
 
     _, mech, y0 = rig_21400._setup()

@@ -29,7 +29,7 @@ jax.config.update("jax_enable_x64", True)  # diffwear computes in float64
 
 from diffwear.studies import _wear_common as common
 from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, _setup, with_wear_joint
-from diffwear.wear import evolve, worn_volume
+from diffwear.wear import Adaptive, Constant, ErrorControlled, evolve, worn_volume
 
 
 def main() -> None:
@@ -46,11 +46,11 @@ def main() -> None:
         return with_wear_joint(mech0, common.design_of(p, RIG_JOINT), n_theta=N_THETA)
 
     runs = {
-        "every cycle (A = 1)": dict(method="constant", extrapolation=1.0),
-        "constant A = n/50": dict(method="constant", extrapolation=n / 50),
-        "adaptive": dict(method="adaptive", extrapolation=1.0, max_dynamic=n),
-        "error-controlled": dict(method="error", extrapolation=1.0, max_dynamic=n,
-                                 rtol=1e-2, atol=1e-6),
+        "every cycle (A = 1)": dict(method=Constant(1.0)),
+        "constant A = n/50": dict(method=Constant(n / 50)),
+        "adaptive": dict(method=Adaptive(a0=1.0), max_dynamic=n),
+        "error-controlled": dict(method=ErrorControlled(rtol=1e-2, atol=1e-6, dn0=1.0),
+                                 max_dynamic=n),
     }
     rows = {}
     for name, opts in runs.items():

@@ -225,7 +225,7 @@ def test_a_quasi_static_life_cut_short_has_a_nan_gradient():
     import jax
 
     from diffwear.design import TwoJointLife
-    from diffwear.quasistatic import QuasiStatic
+    from diffwear.models import QuasiStatic
     from diffwear.wear.status import STATUS_INCOMPLETE
 
     model = TwoJointLife(wear_model=QuasiStatic(samples=36, steps=16, max_steps=1),

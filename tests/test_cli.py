@@ -87,7 +87,7 @@ def _run_interrupted(out, args=("study", WEAR, "--cycles", "3")) -> int:
     """``diffwear ARGS --out OUT --quiet`` (default: a 3-cycle wear-5000 run)
     with Ctrl-C pressed right after its first checkpoint was saved; its exit
     code."""
-    from diffwear.studies import _wear_common as common
+    from diffwear.wear import chunked as common
 
     real = common.save_checkpoint
 
@@ -230,7 +230,7 @@ def test_a_checkpoint_without_an_integrator_resumes_on_tsit5(interrupted_dir, tm
     import argparse
 
     from diffwear.cli.command import _options_from_checkpoint
-    from diffwear.wear.evolution import load_checkpoint, save_checkpoint
+    from diffwear.wear.chunked import load_checkpoint, save_checkpoint
 
     out = _copy(interrupted_dir, tmp_path / "run")
     ckpt, meta = load_checkpoint(out / "checkpoint.npz")
@@ -417,7 +417,7 @@ def test_four_bar_mechanism_file_wears_from_the_cli_and_from_python(tmp_path):
     from diffwear.config import load
     from diffwear.mechanism_file import initial_state
     from diffwear.mechanism_file import wear as mechanism_wear
-    from diffwear.quasistatic import QuasiStatic
+    from diffwear.models import QuasiStatic
 
     path = SHIPPED_MECHANISMS / "four_bar_wear.toml"
     out = tmp_path / "fb"
@@ -607,7 +607,7 @@ def test_a_ctrl_c_lost_in_a_callback_still_ends_the_run_with_130(tmp_path, capsy
     """A wear run whose Ctrl-C was swallowed stops at the next chunk, after
     its checkpoint (resumable, the resume line printed), never finishing
     with exit 0."""
-    from diffwear.studies import _wear_common as common
+    from diffwear.wear import chunked as common
 
     real = common.save_checkpoint
     calls = []

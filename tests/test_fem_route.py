@@ -16,6 +16,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from diffwear import cli  # noqa: E402
+from diffwear.cli.objects import check_contact  # noqa: E402
 from diffwear.errors import InputError  # noqa: E402
 from diffwear.presets import (  # noqa: E402
     RIG_JOINT,
@@ -26,8 +27,8 @@ from diffwear.presets import (  # noqa: E402
 )
 from diffwear.studies import _wear_common as common  # noqa: E402
 from diffwear.studies.rig_21400 import PERIOD  # noqa: E402
+from diffwear.wear import CycleSettings, wear_cycle, worn_volume  # noqa: E402
 from diffwear.wear import fem_route as fr  # noqa: E402
-from diffwear.wear import wear_cycle, worn_volume  # noqa: E402
 
 N = 72  # profile grid = FE inner-surface nodes (5 deg)
 SAMPLES = 128  # quadrature intervals of the saved cycle (subsampled below)
@@ -164,7 +165,7 @@ def test_refresh_interval_agrees_with_every_cycle_rebuild():
         model = fr.FemWearModel(base.youngs_modulus, base.poisson_ratio, base.outer_radius,
                                 refresh_interval=m, n_samples=32)
         return fr.evolve_fem(mech, JOINT, y0, 9000, period=PERIOD, fem=model,
-                             extrapolation=3000.0, cycle_rtol=1e-5, cycle_atol=1e-5)
+                             extrapolation=3000.0, cycle=CycleSettings(1e-5, 1e-5))
 
     el = mech.element(JOINT)
     out = {}
@@ -202,7 +203,8 @@ def test_fem_route_refuses_a_linearly_implicit_cycle_solver():
     mech = with_wear_joint(mech0, RIG_JOINT, n_theta=N)
     model = fr.default_model(RIG_JOINT)
     with pytest.raises(InputError, match="Tsit5 only .*got Rodas4"):
-        fr.FemEvolver(mech, JOINT, 100, fem=model, period=PERIOD, cycle_solver=Rodas4())
+        fr.FemEvolver(mech, JOINT, 100, fem=model, period=PERIOD,
+                      cycle=CycleSettings(solver=Rodas4()))
     assert fr.FemEvolver(mech, JOINT, 100, fem=model, period=PERIOD).fem is model
 
 
@@ -215,15 +217,17 @@ def test_bad_contact_option(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and "--contact" in err and "efm" in err and "fem" in err
     with pytest.raises(InputError, match="--contact must be one of efm, fem"):
-        common.check_contact("FEM")
+        check_contact("FEM")
     assert cli.main(["study", "ideal-slider-crank", "--contact", "fem", "--out",
                      str(tmp_path / "y")]) == 2
     assert "does not take --contact" in capsys.readouterr().err
     assert cli.main(["study", "rig-21400", "--contact", "fem", "--method", "adaptive",
                      "--cycles", "10", "--out", str(tmp_path / "z"), "--quiet"]) == 2
     assert "--method constant only" in capsys.readouterr().err
-    import inspect
-
+    from diffwear.cli.command import study_model
+    from diffwear.models import Dynamic, FemRoute
     from diffwear.studies import STUDIES
     for name in ("rig-21400", "wear-5000"):  # both wear studies take the option
-        assert inspect.signature(STUDIES[name].run).parameters["contact"].default == "efm"
+        study = STUDIES[name]
+        assert type(study_model(study, 10, {})) is Dynamic  # efm by default
+        assert isinstance(study_model(study, 10, {"contact": "fem"}), FemRoute)

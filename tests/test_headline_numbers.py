@@ -33,9 +33,10 @@ def _numbers(text: str) -> list[float]:
 def _quasi_static_wear_study(name: str, folder: Path) -> dict:
     """The summary of wear study ``name`` on the quasi-static model (seconds)."""
     from diffwear.io import OutputDir
+    from diffwear.models import QuasiStatic
     from diffwear.studies import STUDIES
 
-    return STUDIES[name].run(OutputDir(folder / name), model="quasi-static",
+    return STUDIES[name].run(OutputDir(folder / name), model=QuasiStatic(),
                              log=lambda *a: None)
 
 

@@ -92,6 +92,7 @@ LAYERS = (
     ("dynamics", "contact", "fem"),       # integration; contact laws; FEM contact
     ("wear",),                            # Archard wear, the profile, the evolution
     ("quasistatic",),                     # the quasi-static joint model
+    ("models",),                          # the wear models: dynamic, quasi-static, FEM
     ("presets",),                         # the thesis mechanisms in code
     ("sweep", "plots"),                   # the sweep engine; figures from plain data
     ("studies",),                         # the thesis studies

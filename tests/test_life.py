@@ -8,6 +8,7 @@ settings (2 cores: the file runs in about two minutes, 125 s measured).
 
 from __future__ import annotations
 
+import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -17,7 +18,8 @@ import pytest
 from diffwear.contact import centred_state
 from diffwear.design.two_joint import JOINTS, TwoJointLife
 from diffwear.dynamics import consistent_state
-from diffwear.wear import Dynamic, cycles_to_limit
+from diffwear.models import Dynamic, cycles_to_limit
+from diffwear.wear import CycleSettings
 from diffwear.wear.cycle import clearance_element, wear_cycle_joints
 
 X = jnp.array([45e-3, 45e-3, 30e-3, 30e-3])  # the centre of the Table 8-3 box [m]
@@ -33,12 +35,12 @@ def test_crossing_matches_a_hand_calculation():
     the life interpolates the maximum depth linearly, which equals it while
     the deepest node stays the deepest (checked within 1e-3)."""
     limit = 0.05e-3
-    model = TwoJointLife(wear_model=Dynamic(steps=1, scheme="euler"), n_theta=45, limit=limit)
+    model = TwoJointLife(wear_model=Dynamic(steps=1, implicit=False), n_theta=45, limit=limit)
     ideal, q_guess, mech = model.mechanism(X)
     y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
     period = model.period
     res = eqx.filter_jit(lambda: cycles_to_limit(mech, JOINTS, y0, period=period, limit=limit,
-                                                 steps=1, scheme="euler"))()
+                                                 model=Dynamic(steps=1, implicit=False)))()
     assert int(res.status) == 0
 
     found = [clearance_element(mech, j) for j in JOINTS]
@@ -76,8 +78,8 @@ def test_life_jacfwd_matches_central_differences_while_wear_is_shallow():
     their grooves) and a tight cycle tolerance (1e-8; at the default 1e-6 the
     integrator's error is a visible part of the derivative).  At the 2 mm
     limit of Ch. 8 this does not hold (see `diffwear.wear.life`)."""
-    model = TwoJointLife(wear_model=Dynamic(steps=2, cycle_rtol=1e-8, cycle_atol=1e-8,
-                                            forward_mode=True), limit=0.2e-3, n_theta=45)
+    model = TwoJointLife(wear_model=Dynamic(steps=2, cycle=CycleSettings(
+        1e-8, 1e-8, adjoint=diffrax.ForwardMode())), limit=0.2e-3, n_theta=45)
     jac = np.asarray(eqx.filter_jit(lambda x: jax.jacfwd(model)(x))(X))
     assert np.all(np.isfinite(jac))
     f = eqx.filter_jit(model)

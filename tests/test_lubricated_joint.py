@@ -214,7 +214,7 @@ def test_lubricated_slider_crank_keeps_its_film_at_high_viscosity_and_touches_at
 def rig_life():
     """Life of the Ch. 7 rig's lubricated joint to 50 um against the
     viscosity (quasi-static model, coarse settings), compiled once."""
-    from diffwear.quasistatic import QuasiStatic
+    from diffwear.models import QuasiStatic
     from diffwear.studies import rig_21400
 
     _, mech, y0 = rig_21400._setup()

@@ -152,7 +152,8 @@ def study_figures(tmp_path_factory):
     with plots.captured() as figures:
         names = plots_wear.wear_figures(
             out, name="rig", theta=theta, depth_mm=depth_mm, history=history, crank=crank,
-            first=first, last=last, clearance_mm=C_MM, thesis=thesis, wall_mm=6.342)
+            first=first, last=last, thesis=thesis,
+            lines=plots_wear.Lines(clearance_mm=C_MM, wall_mm=6.342))
     assert sorted(names) == sorted(figures) and all((folder / n).is_file() for n in names)
     return figures, SimpleNamespace(theta=theta, depth_mm=depth_mm, first=first, last=last)
 

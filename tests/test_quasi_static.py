@@ -15,8 +15,9 @@ import pytest
 
 from diffwear.contact import PinKinematics
 from diffwear.design.two_joint import LOWER, TABLE_8_4, UPPER, TwoJointLife
+from diffwear.models import QuasiStatic
 from diffwear.presets import clearance_slider_crank
-from diffwear.quasistatic import JointLoads, QuasiStatic, QuasiStaticJoint
+from diffwear.quasistatic import JointLoads, QuasiStaticJoint
 from diffwear.quasistatic.joint import pin_offset
 from diffwear.studies import rig_21400
 from diffwear.wear import ArchardWear, peak_depth, worn_volume

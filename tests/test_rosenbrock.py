@@ -490,10 +490,15 @@ def test_wear_studies_on_rosenbrock_keep_the_recorded_wear(tmp_path, integrator,
     max depth and volume within 0.5 % of the recorded Tsit5 run (rtol 1e-6),
     and within twice the measured distance (at least 5e-4: other CPUs may
     round differently and so step differently)."""
+    import inspect
+
+    from diffwear.cli.command import study_model
     from diffwear.io import OutputDir
     from diffwear.studies import STUDIES
 
-    summary = STUDIES[study].run(OutputDir(tmp_path / study), integrator=integrator,
+    cycles = inspect.signature(STUDIES[study].run).parameters["cycles"].default
+    model = study_model(STUDIES[study], cycles, {"integrator": integrator})
+    summary = STUDIES[study].run(OutputDir(tmp_path / study), model=model,
                                  log=lambda *a: None)
     record = AGREEMENT["wear_studies"][study]["dynamic"]
     name = type(cycle_integrator(integrator)[0]).__name__
@@ -506,10 +511,6 @@ def test_wear_studies_on_rosenbrock_keep_the_recorded_wear(tmp_path, integrator,
                                              rel=max(2.0 * MEASURED[integrator, study], 5e-4))
 
 
-class _Chosen(Exception):
-    """Raised by a stand-in evolution: carries the integrator it was given."""
-
-
 @pytest.mark.parametrize("study, contact, given, chosen", [
     ("rig-21400", "efm", None, "rodas4"), ("rig-21400", "efm", "tsit5", "tsit5"),
     ("rig-21400", "fem", None, "tsit5"),
@@ -517,28 +518,21 @@ class _Chosen(Exception):
 def test_each_wear_study_runs_its_own_integrator_unless_told(tmp_path, monkeypatch, study,
                                                              contact, given, chosen):
     """The rig's settled contact runs on Rodas4, wear-5000 and every FEM route
-    on Tsit5; an explicit integrator wins; the quasi-static model takes none."""
-    from diffwear.io import OutputDir
+    on Tsit5; an explicit integrator wins; the quasi-static model takes none
+    (the study's model as the command builds it from its options)."""
+    from diffwear.cli.command import study_model
     from diffwear.studies import STUDIES
-    from diffwear.studies import _wear_common as common
+    from diffwear.wear.cycle import integrator_name
 
-    def evolution(*args, integrator, **kwargs):
-        raise _Chosen(integrator)
-
-    monkeypatch.setattr(common, "run_evolution", evolution)
     kw = {} if given is None else {"integrator": given}
-    with pytest.raises(_Chosen) as info:
-        STUDIES[study].run(OutputDir(tmp_path / "dyn"), contact=contact, log=lambda *a: None,
-                           **kw)
-    assert info.value.args == (chosen,)
+    model = study_model(STUDIES[study], 10, {"contact": contact, **kw})
+    assert integrator_name(model.cycle.solver) == chosen
     if contact == "efm" and given == "rodas4":
         with pytest.raises(InputError, match="FEM wear route runs its dynamic cycles on Tsit5"):
-            STUDIES[study].run(OutputDir(tmp_path / "fem"), contact="fem", log=lambda *a: None,
-                               **kw)
+            study_model(STUDIES[study], 10, {"contact": "fem", **kw})
     if given is not None:
         with pytest.raises(InputError, match=f"--integrator {given} belongs to the dynamic"):
-            STUDIES[study].run(OutputDir(tmp_path / "qs"), model="quasi-static",
-                               log=lambda *a: None, **kw)
+            study_model(STUDIES[study], 10, {"model": "quasi-static", **kw})
 
 
 def test_bad_settings_are_refused():

@@ -117,7 +117,7 @@ def test_a_sweep_too_big_for_memory_is_chunked_to_fit(full, monkeypatch):
 def _small_rig():
     """A ready-made model (it pickles, so a pool can take it): the quasi-static
     rig wear over 2,000 cycles on a 60-node profile."""
-    from diffwear.quasistatic import QuasiStatic
+    from diffwear.models import QuasiStatic
     from diffwear.sweep.models import RigWear
 
     model = RigWear(cycles=2000.0, n_theta=60, wear_model=QuasiStatic())

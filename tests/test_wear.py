@@ -14,10 +14,19 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from diffwear.cli.objects import extrapolation_method
 from diffwear.errors import InputError
 from diffwear.presets import WEAR_5000, WearJointDesign, slider_crank, with_wear_joint
 from diffwear.studies import _wear_common as common
-from diffwear.wear import ArchardWear, WearLimitError, evolve, smooth_max, worn_volume
+from diffwear.wear import (
+    ArchardWear,
+    Constant,
+    CycleSettings,
+    WearLimitError,
+    evolve,
+    smooth_max,
+    worn_volume,
+)
 
 N_THETA = 36
 PERIOD = 2.0
@@ -52,7 +61,7 @@ def short_run(problem):
     shared by the bookkeeping and wear-through tests (one compilation)."""
     mech_of, p, y0 = problem
     return jax.jit(lambda p, y, wall: evolve(mech_of(p), "crank_rod", y, 6, period=PERIOD,
-                                             extrapolation=2.0, wall_thickness=wall))
+                                             method=Constant(2.0), wall_thickness=wall))
 
 
 def test_archard_bookkeeping(problem, short_run):
@@ -73,9 +82,9 @@ def test_extrapolation_converges(problem):
     n = 16
 
     def run(method, a, max_dyn=None):
+        solver = extrapolation_method(method, extrapolation=a, rtol=2e-3, atol=1e-8)
         f = jax.jit(lambda p, y: evolve(mech_of(p), "crank_rod", y, n, period=PERIOD,
-                                        method=method, extrapolation=a, max_dynamic=max_dyn,
-                                        rtol=2e-3, atol=1e-8))
+                                        method=solver, max_dynamic=max_dyn))
         r = f(p, y0).check()
         return r, [float(v) for v in _metrics(mech_of, p, r)]
 
@@ -99,8 +108,8 @@ def test_gradients_match_finite_differences(problem):
     mech_of, p, y0 = problem
 
     def outputs(p, temperature):
-        r = evolve(mech_of(p), "crank_rod", y0, 4, period=PERIOD, extrapolation=2.0,
-                   cycle_rtol=1e-9, cycle_atol=1e-9, adjoint=diffrax.ForwardMode())
+        r = evolve(mech_of(p), "crank_rod", y0, 4, period=PERIOD, method=Constant(2.0),
+                   cycle=CycleSettings(1e-9, 1e-9, adjoint=diffrax.ForwardMode()))
         el = mech_of(p).element("crank_rod")
         return jnp.stack([smooth_max(r.depth, temperature) * 1e6,
                           worn_volume(r.depth, el.bushing_radius, el.law.depth) * 1e9])
@@ -128,9 +137,11 @@ def test_negative_wear_coefficient_rejected():
 def test_bad_evolution_options(problem):
     mech_of, p, y0 = problem
     with pytest.raises(InputError, match="extrapolation"):
-        evolve(mech_of(p), "crank_rod", y0, 4, period=PERIOD, extrapolation=0.5)
+        evolve(mech_of(p), "crank_rod", y0, 4, period=PERIOD, method=Constant(0.5))
     with pytest.raises(InputError, match="method"):
         evolve(mech_of(p), "crank_rod", y0, 4, period=PERIOD, method="bogus")
+    with pytest.raises(InputError, match="method"):
+        extrapolation_method("bogus")
     with pytest.raises(InputError, match="crank_rod|ClearanceJoint"):
         evolve(slider_crank()[0], "crank_rod", y0, 4, period=PERIOD)
 
@@ -164,8 +175,8 @@ def test_running_out_of_slots_is_an_error_not_a_short_answer(problem):
     """An adaptive run whose scan slots end before the requested cycles reports
     status 3 and raises, instead of returning the wear of fewer cycles."""
     mech_of, p, y0 = problem
-    res = evolve(mech_of(p), "crank_rod", y0, 6, period=PERIOD, method="adaptive",
-                 extrapolation=1.0, max_dynamic=2)
+    res = evolve(mech_of(p), "crank_rod", y0, 6, period=PERIOD,
+                 method=extrapolation_method("adaptive", extrapolation=1.0), max_dynamic=2)
     assert int(res.status) == 3 and float(res.cycles) < 6
     with pytest.raises(WearLimitError, match="slots"):
         res.check()
@@ -202,7 +213,8 @@ def _chunked(problem, cycles=6, a=2.0, chunk_slots=2, **kw):
 
     mech_of, p, y0 = problem
     return ChunkedEvolution(
-        lambda p: Evolver(mech_of(p), "crank_rod", cycles, period=PERIOD, extrapolation=a, **kw),
+        lambda p: Evolver(mech_of(p), "crank_rod", cycles, period=PERIOD, method=Constant(a),
+                          **kw),
         p, y0, chunk_slots)
 
 
@@ -266,21 +278,24 @@ def test_extrapolation_strategies_are_objects_and_names_map_onto_them(problem):
     mech_of, p, y0 = problem
     mech = mech_of(p)
 
-    def strategy(**kw):
-        return Evolver(mech, "crank_rod", 6, period=PERIOD, max_dynamic=4, **kw).strategy
+    def strategy(method, **kw):
+        solver = extrapolation_method(method, **kw)
+        return Evolver(mech, "crank_rod", 6, period=PERIOD, max_dynamic=4,
+                       method=solver).strategy
 
-    assert strategy(method="constant", extrapolation=2.0) == Constant(2.0)
-    assert strategy(method="adaptive", extrapolation=3.0,
+    assert strategy("constant", extrapolation=2.0) == Constant(2.0)
+    assert strategy("adaptive", extrapolation=3.0,
                     adaptive={"criterion": "pressure_jump"}) == \
         Adaptive(a0=3.0, criterion="pressure_jump")
-    assert strategy(method="error", rtol=1e-3, atol=1e-8) == \
+    assert strategy("error", rtol=1e-3, atol=1e-8) == \
         ErrorControlled(rtol=1e-3, atol=1e-8, dn0=1.0)
     # ceil(6 / 2.5) = 3 scan slots for constant A; max_dynamic for the others
     assert Evolver(mech, "crank_rod", 6, period=PERIOD, method=Constant(2.5)).n_slots == 3
     assert Evolver(mech, "crank_rod", 6, period=PERIOD, method=Adaptive(),
                    max_dynamic=4).n_slots == 4
     res = evolve(mech, "crank_rod", y0, 4, period=PERIOD, method=Constant(2.0))
-    ref = evolve(mech, "crank_rod", y0, 4, period=PERIOD, method="constant", extrapolation=2.0)
+    ref = evolve(mech, "crank_rod", y0, 4, period=PERIOD,
+                 method=extrapolation_method("constant", extrapolation=2.0))
     assert float(res.cycles) == 4.0 and int(res.dynamic_cycles) == 1 + 2
     np.testing.assert_array_equal(np.asarray(res.depth), np.asarray(ref.depth))
     with pytest.raises(InputError, match="A must be >= 1"):
@@ -288,4 +303,4 @@ def test_extrapolation_strategies_are_objects_and_names_map_onto_them(problem):
     with pytest.raises(InputError, match="criterion"):
         Adaptive(criterion="smoothness")
     with pytest.raises(InputError, match="extrapolation object"):
-        strategy(method="linear")
+        strategy("linear")

@@ -14,7 +14,8 @@ The names most users need, by task::
     contact     ClearanceJoint, with_clearance, contact_history, LankaraniNikravesh,
                 KelvinVoigt, ElasticFoundation, CoulombFriction, ArchardWear
     wear        evolve (method=Constant(A) | Adaptive() | ErrorControlled()),
-                cycles_to_limit, Dynamic, QuasiStatic, worn_volume
+                CycleSettings, worn_volume
+    models      Dynamic, QuasiStatic, FemRoute, cycles_to_limit
     design      TwoJointLife
     sweeps      sweep.sweep, sensitivity, finite_differences
     data        load_dataset, calibrate.calibrate
@@ -54,14 +55,13 @@ from .mechanism import (
     RevoluteJoint,
     TranslationalJoint,
 )
-from .quasistatic import QuasiStatic
+from .models import Dynamic, FemRoute, QuasiStatic, cycles_to_limit
 from .sweep.sensitivity import finite_differences, sensitivity
 from .wear import (
     Adaptive,
     Constant,
-    Dynamic,
+    CycleSettings,
     ErrorControlled,
-    cycles_to_limit,
     evolve,
     worn_volume,
 )
@@ -76,8 +76,8 @@ __all__ = [
     "Gravity", "LinearSpring", "simulate", "consistent_state", "ClearanceJoint",
     "with_clearance", "contact_history", "LankaraniNikravesh", "KelvinVoigt",
     "ElasticFoundation", "CoulombFriction", "ArchardWear", "evolve", "Constant",
-    "Adaptive", "ErrorControlled", "cycles_to_limit",
-    "Dynamic", "QuasiStatic", "worn_volume", "TwoJointLife", "sweep", "sensitivity",
+    "Adaptive", "ErrorControlled", "CycleSettings", "cycles_to_limit",
+    "Dynamic", "QuasiStatic", "FemRoute", "worn_volume", "TwoJointLife", "sweep", "sensitivity",
     "finite_differences", "load_dataset", "calibrate", "gradcheck", "GradCheck",
     "DiffwearError", "InputError", "SolverError",
 ]

@@ -1,10 +1,7 @@
 """Named choices of public options, in one module without heavy imports (the
 command line builds its parser from them before it imports JAX)."""
 
-from collections.abc import Iterable
 from pathlib import Path
-
-from .errors import InputError
 
 # How a wear evolution extrapolates over cycles (`diffwear.wear.evolve`, --method).
 WEAR_METHODS = ("constant", "adaptive", "error")
@@ -18,21 +15,6 @@ WEAR_MODELS = ("dynamic", "quasi-static")
 SWEEP_DEVICES = ("auto", "cpu", "gpu")
 # The dynamic cycles' integrator (--integrator; `diffwear.wear.cycle.CYCLE_INTEGRATORS`).
 WEAR_INTEGRATORS = ("tsit5", "rodas4")
-
-
-def check_wear_model(model: str, dynamic_only: Iterable[tuple[bool, str]] = ()) -> None:
-    """`InputError` for a wear model that does not exist, or for an option
-    given (``(given, "--option value")`` pairs) that only the dynamic model
-    takes: the quasi-static model has no extrapolation, no checkpoints and no
-    FEM pressure, it integrates the wear in the cycle count itself."""
-    if model not in WEAR_MODELS:
-        raise InputError(f"--model {model!r}; allowed: {', '.join(WEAR_MODELS)}")
-    if model == "quasi-static":
-        for given, option in dynamic_only:
-            if given:
-                raise InputError(f"{option} belongs to the dynamic model (--model dynamic); "
-                                 "the quasi-static model integrates the wear in the cycle "
-                                 "count itself (seconds, no checkpoints) with the EFM pressure")
 
 
 # Mechanism files shipped with the package, loadable by name (`diffwear run rig`).

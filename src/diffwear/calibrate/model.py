@@ -10,7 +10,7 @@ and periodic-linear in angle between grid nodes.
 * `RigHistory` (dynamic): a warm-up cycle (wear discarded, the pin's start-up
   transient), then ``dynamic_cycles`` dynamic cycles with a constant
   extrapolation factor A = cycles / dynamic_cycles (thesis Eq. 4-18), like
-  `wear.evolve` ("constant"), keeping the profiles after every dynamic cycle
+  `wear.evolve` with `Constant(A)`, keeping the profiles after every dynamic cycle
   (at N_j = j A) and each cycle's joint-force trace.  A must stay below
   ~1/lambda (lambda = k k_f s ~ 1e-3 per cycle on the rig, see `wear.life`):
   `MAX_EXTRAPOLATION` is enforced.

@@ -64,13 +64,20 @@ def _study(args: argparse.Namespace) -> int:
     _options_from_checkpoint(args)
     if args.cycles is not None:
         check_int_option("--cycles", args.cycles, 1, MAX_CYCLES)
-    for option in ("cycles", "method", "contact", "model", "integrator"):
-        value = getattr(args, option)
-        if value is None:
-            continue
-        if option not in accepted:
-            raise InputError(f"study {args.name!r} does not take --{option}")
-        kwargs[option] = value
+    chosen = {option: getattr(args, option) for option in ("method", "contact", "model",
+                                                            "integrator")
+              if getattr(args, option) is not None}
+    # --method, --contact, --model and --integrator choose a wear study's model
+    for option in ("cycles", *chosen):
+        if option not in accepted and (option == "cycles" or "model" not in accepted):
+            if getattr(args, option) is not None:
+                raise InputError(f"study {args.name!r} does not take --{option}")
+    if args.cycles is not None:
+        kwargs["cycles"] = args.cycles
+    if "model" in accepted:
+        cycles = accepted["cycles"].default if args.cycles is None else args.cycles
+        kwargs["model"] = study_model(STUDIES[args.name], cycles, chosen,
+                                      resume=args.resume is not None)
     if args.resume is not None:
         kwargs["resume"] = True
     if "progress" in accepted:
@@ -80,6 +87,31 @@ def _study(args: argparse.Namespace) -> int:
     log = _log(args)
     STUDIES[args.name].run(out, log=log, **kwargs)
     return 0
+
+
+def study_model(study, cycles, chosen: dict, *, resume: bool = False):
+    """The wear model of a wear study from ``--model``, ``--method``,
+    ``--contact`` and ``--integrator`` (the study's defaults where not given:
+    the dynamic model with the EFM pressure on the study's integrator; the
+    FEM route on Tsit5)."""
+    from ..wear.fem_route import default_model
+    from . import objects
+
+    model, method = chosen.get("model", "dynamic"), chosen.get("method", "constant")
+    contact = objects.check_contact(chosen.get("contact", "efm"))
+    objects.check_wear_model(model, ((method != "constant", f"--method {method}"),
+                                     (contact != "efm", f"--contact {contact}"),
+                                     ("integrator" in chosen,
+                                      f"--integrator {chosen.get('integrator')}"),
+                                     (resume, "--resume")))
+    integrator = chosen.get("integrator", study.INTEGRATOR if contact == "efm" else "tsit5")
+    fem = default_model(study.DESIGN) if contact == "fem" else None
+    if fem is not None and method != "constant":
+        raise InputError(f"--contact fem runs with --method constant only (constant A, as "
+                         f"the thesis's FEM route), got --method {method}")
+    return objects.wear_model(model, cycles=cycles, method=method,
+                              target_dynamic=study.TARGET_DYNAMIC, integrator=integrator,
+                              fem=fem)
 
 
 def _resume_folder(args: argparse.Namespace) -> None:
@@ -104,14 +136,14 @@ def _options_from_checkpoint(args: argparse.Namespace, origin: str = "") -> None
     record (an option given explicitly is kept: the study then checks it
     matches)."""
     from ..io import CHECKPOINT
-    from ..wear.evolution import load_checkpoint
+    from ..wear.chunked import load_checkpoint
 
     if args.resume is None:
         return
     path = Path(args.resume) / CHECKPOINT
     if not path.is_file():
         raise InputError(f"--resume {args.resume}: no {CHECKPOINT} there to resume from{origin}")
-    from ..studies._wear_common import META_DEFAULTS
+    from ..wear.chunked import META_DEFAULTS
 
     _, meta = load_checkpoint(path)
     # a key added later: what the checkpoints written without it meant

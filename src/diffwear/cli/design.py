@@ -26,10 +26,9 @@ from ..design.problems import START, solve_problems
 from ..design.two_joint import SWEEP_MODEL, TABLE_8_4, TABLE_8_5, TwoJointLife
 from ..errors import InputError
 from ..io import OutputDir
+from ..models import Dynamic, QuasiStatic
 from ..plots import design as plots_design
-from ..quasistatic import QuasiStatic
 from ..report import Block, Report, Table, render
-from ..wear import Dynamic
 
 NAME = "two-joint"
 DESCRIPTION = ("Ch. 8: bushing diameters and depths of two wearing joints for equal life "

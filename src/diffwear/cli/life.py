@@ -19,9 +19,8 @@ from ..design.optimise import jacobian, jacobian_method, life_of
 from ..design.two_joint import VARIABLES, TwoJointLife, check_design
 from ..errors import InputError
 from ..io import OutputDir
-from ..quasistatic import QuasiStatic
+from ..models import Dynamic, QuasiStatic
 from ..report import Block, Report, Table, render
-from ..wear import Dynamic
 
 NAME = "two-joint"
 MODELS = ("quasi-static", "dynamic")

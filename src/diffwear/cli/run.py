@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from .. import plots
-from ..choices import WEAR_METHODS, check_wear_model
+from ..choices import WEAR_METHODS
 from ..config import MechanismFile
 from ..errors import InputError, SolverError
 from ..io import OutputDir
@@ -47,7 +47,14 @@ from ..mechanism_file import (
 )
 from ..mechanism_file import wear as mechanism_wear
 from ..report import Block, Bullets, Figure, Report, Section, Table, render
+from ..wear.chunked import Checkpoints
 from ..wear.status import STATUS_CONTACT_LOSS, STATUS_OK, STATUS_PIERCED, STATUS_TEXT
+from . import objects
+
+# Dynamic cycles simulated by a file's dynamic wear run with constant
+# extrapolation (A = cycles / this), as the Ch. 7 rig study; the adaptive and
+# error-controlled methods get 4x as many scan slots.
+FILE_DYNAMIC_CYCLES = 50
 
 # per-joint numbers passed from a model's result into summary.json
 _REPORTED = ("contact_margin", "method", "dynamic_cycles", "wall_time_s", "compile_time_s",
@@ -365,11 +372,15 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
     if cycles is None and (resume or model != "quasi-static" or method != "constant"):
         raise InputError("--model, --method and --resume belong to a wear mfile: give "
                          "--cycles N")
+    wear_model = None
     if cycles is not None:
         check_wear_options(model, method, resume)
-        if model == "dynamic":
-            mechanism_wear.dynamic_wear_joint(mfile)
-        mechanism_wear.bushing_walls(mfile, mechanism_wear.wearing_joints(mfile), limit)
+        # a file's dynamic run: about `FILE_DYNAMIC_CYCLES` dynamic cycles
+        wear_model = objects.wear_model(model, cycles=cycles, method=method,
+                                        target_dynamic=FILE_DYNAMIC_CYCLES)
+        joints = mechanism_wear.wearing_joints(mfile)
+        mechanism_wear.check_joints(mfile, wear_model, joints)
+        mechanism_wear.bushing_walls(mfile, joints, limit)
         mechanism_wear.drive_period(mfile)
     y0 = initial_state(mfile)
     check_motion(mfile, y0)
@@ -381,12 +392,10 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
     wear = None
     if cycles is not None:
         log(f"[{mfile.file}] wear over {cycles:,.0f} cycles ({model} model) ...")
-        if model == "dynamic":
-            evolved = mechanism_wear.evolve_file_dynamic(
-                mfile, y0, cycles=cycles, method=method, limit=limit, out=out, resume=resume,
-                progress=progress)
-        else:
-            evolved = mechanism_wear.evolve_file(mfile, y0, cycles=cycles, limit=limit)
+        evolved = mechanism_wear.evolve_file(
+            mfile, y0, cycles=cycles, limit=limit,
+            model=None if model == "quasi-static" else wear_model,
+            checkpoints=Checkpoints(out, {}, resume=resume, progress=progress))
         wear = write_wear(mfile, out, evolved, cycles=cycles, limit=limit)
     summary = write(mfile, results, out, steps=int(traj.num_steps),
                     simulate_time=timed.compile_time_s + timed.run_time_s,
@@ -495,7 +504,7 @@ def check_wear_options(model: str, method: str, resume: bool) -> None:
     checkpoints: it integrates the wear in the cycle count, in seconds)."""
     if method not in WEAR_METHODS:
         raise InputError(f"--method {method!r}; allowed: {', '.join(WEAR_METHODS)}")
-    check_wear_model(model, ((method != "constant", f"--method {method}"),
+    objects.check_wear_model(model, ((method != "constant", f"--method {method}"),
                              (resume, "--resume")))
 
 

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..quasistatic import QuasiStatic
+from ..models import QuasiStatic
 from ..sweep.models import ClearanceForce, RigWear
 from .schema import (
     Context,

@@ -37,6 +37,7 @@ from .._checks import check_finite, concrete
 from ..contact import centred_state
 from ..dynamics import consistent_state
 from ..errors import InputError, SolverError
+from ..models import AbstractWearModel, QuasiStatic, cycles_to_limit
 from ..presets import (
     FRICTION_CH3,
     K_PTFE_MM3_PER_NM,
@@ -47,8 +48,7 @@ from ..presets import (
     slider_crank,
     with_wear_joint,
 )
-from ..quasistatic import QuasiStatic
-from ..wear import AbstractWearModel, LifeResult, cycles_to_limit
+from ..wear import LifeResult
 from ..wear.status import STATUS_TEXT
 
 JOINTS = ("crank_rod", "rod_slider")
@@ -145,10 +145,10 @@ class TwoJointLife(eqx.Module):
     def prepared(self) -> "TwoJointLife":
         """This model with the quasi-static joint loads computed once (they do
         not depend on the bushing design): cheaper evaluations and compiles."""
-        if not isinstance(self.wear_model, QuasiStatic) or self.wear_model.fixed_loads is not None:
+        if not self.wear_model.precomputes:
             return self
-        loads = _loads(self, jnp.asarray(0.5 * (LOWER + UPPER)))
-        return eqx.tree_at(lambda m: m.wear_model, self, self.wear_model.with_loads(loads))
+        model = _prepared(self, jnp.asarray(0.5 * (LOWER + UPPER)))
+        return eqx.tree_at(lambda m: m.wear_model, self, model)
 
     def evaluate(self, x: Float[Array, "4"], wear_scale=None) -> LifeResult:
         check_design(x)
@@ -187,11 +187,10 @@ class TwoJointLife(eqx.Module):
 
 
 @eqx.filter_jit
-def _loads(model: TwoJointLife, x):
+def _prepared(model: TwoJointLife, x):
     ideal, q_guess, mech = model.mechanism(x)
     y0 = centred_state(ideal, consistent_state(ideal, q_guess, check=False), mech)
-    assert isinstance(model.wear_model, QuasiStatic)  # loads are the quasi-static model's
-    return model.wear_model.loads(mech, JOINTS, y0, model.period)
+    return model.wear_model.prepared(mech, JOINTS, y0, model.period)
 
 
 @eqx.filter_jit

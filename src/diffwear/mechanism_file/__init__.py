@@ -22,9 +22,9 @@ from .motion import (
 )
 from .size import check_size
 from .transient import Settling, settled_part
-from .wear import evolve_file, evolve_file_dynamic
+from .wear import evolve_file
 
 __all__ = ["Results", "Settling", "Timed", "check_motion", "check_size", "check_step_budget",
-           "contact_warnings", "evolve_file", "evolve_file_dynamic",
+           "contact_warnings", "evolve_file",
            "first_driver", "force_signals", "initial_state", "integrate", "integrate_timed",
            "postprocess", "settled_part", "start_up_transient", "wear"]

@@ -27,10 +27,10 @@ from ..config import MechanismFile
 from ..contact.clearance_joint import ClearanceJoint
 from ..contact.mixed import MixedLubrication
 from ..errors import InputError
-from ..io import OutputDir
 from ..mechanism.constraints import Driver
-from ..quasistatic import QuasiStatic
+from ..models import AbstractWearModel, QuasiStatic, WearEvolution
 from ..wear import worn_volume
+from ..wear.chunked import Checkpoints
 from .motion import first_driver
 
 FILE_WEAR_SLOTS = 2000
@@ -96,20 +96,32 @@ def likely_causes(mfile: MechanismFile, name: str) -> list[str]:
 
 
 def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None = None,
-                model: QuasiStatic | None = None) -> dict:
+                model: AbstractWearModel | None = None,
+                checkpoints: Checkpoints | None = None) -> dict:
     """Per joint: depth profile [m], grid angles, peak-depth history, volume
-    [m^3], status, and (with ``limit`` [m]) the cycles to reach it."""
+    [m^3], status, and (with ``limit`` [m]) the cycles to reach it, on
+    ``model`` (default `QuasiStatic`; the dynamic model evolves one joint and
+    keeps ``checkpoints``, whose meta this adds the file's name and checksum
+    to: the checkpoint of another file, or an edited one, is not resumed)."""
     require_float64("wear of a mechanism file")
     # one mechanism, not a vmapped sweep: slots to spare for a groove whose
     # peak grows slower than the step rule expects (slots after the end cost
     # nothing; the four-bar example's joint needs ~12x the 40 steps to its wall)
     model = QuasiStatic(max_steps=FILE_WEAR_SLOTS) if model is None else model
     joints = wearing_joints(mfile)
+    check_joints(mfile, model, joints)
     period = drive_period(mfile)
     walls = bushing_walls(mfile, joints, limit)
     mech = mfile.mechanism
-    res = jax.jit(lambda y: model.evolve(mech, joints, y, period=period, cycles=cycles,
-                                         wall_thickness=walls))(y0)
+    if checkpoints is not None:
+        meta = {"mfile": f"run {Path(mfile.file).name}", **model.describe(cycles),
+                "limit_mm": None if limit is None else round(limit * 1e3, 12),
+                "file_crc32": f"{zlib.crc32(Path(mfile.file).read_bytes()):08x}",
+                "cycles": float(cycles),
+                "n_theta": int(mech.element(joints[0]).profile.n)}
+        checkpoints = checkpoints._replace(meta={**checkpoints.meta, **meta})
+    res, times = model.run(lambda _: mech, jnp.zeros(()), joints, y0, period=period,
+                           cycles=cycles, wall_thickness=walls, checkpoints=checkpoints)
     life = None
     if limit is not None:
         life = jax.jit(lambda y: model.life(mech, joints, y, period=period, limit=limit))(y0)
@@ -119,21 +131,44 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
         depth = np.asarray(res.depth[k])
         hist = res.history[k]
         valid = np.asarray(hist.valid)
-        status = int(res.joint_status[k])
         out[name] = {
             "theta": np.asarray(el.profile.theta), "depth": depth,
             "history_cycles": np.asarray(hist.cycles)[valid],
             "history_peak": np.asarray(hist.peak)[valid],
             "volume": float(worn_volume(depth, el.bushing_radius, el.law.depth)),
             "cycles": float(res.joint_cycles[k]), "wall": walls[k],
-            "status": status, "contact_margin": float(res.contact_margin[k]),
-            "contact_margin_worn": float(res.contact_margin_worn[k]),
+            "status": int(res.joint_status[k]),
             "cycles_to_limit": (float(life.cycles[k]) if life is not None else None),
-            "model": model.name,
+            "model": model.name, "wall_time_s": times.wall_time,
+            "compile_time_s": times.compile_time, **times.info,
+            **model_numbers(model, res, k, cycles),
         }
     for name, film in film_cycle(mfile, y0, {n: out[n]["depth"] for n in joints}).items():
         out[name]["film"] = film
     return out
+
+
+def model_numbers(model: AbstractWearModel, res: WearEvolution, k: int, cycles) -> dict:
+    """What a joint's summary says of the model beyond the wear: the contact
+    check where the model has one, the extrapolation and the dynamic cycles
+    where it simulates them."""
+    out = {}
+    margin = float(res.contact_margin[k])
+    if np.isfinite(margin):
+        out.update(contact_margin=margin,
+                   contact_margin_worn=float(res.contact_margin_worn[k]))
+    if res.detail is not None:
+        out.update(method=model.describe(cycles).get("method"),
+                   dynamic_cycles=int(res.detail.dynamic_cycles))
+    return out
+
+
+def check_joints(mfile: MechanismFile, model: AbstractWearModel, joints) -> None:
+    """`InputError` naming the file for wearing joints ``model`` does not evolve."""
+    try:
+        model.check_joints(mfile.mechanism, joints, what="file")
+    except InputError as err:
+        raise InputError(f"{mfile.file}: {err}") from None
 
 
 def lubricated_joints(mfile: MechanismFile, joints) -> tuple[str, ...]:
@@ -196,79 +231,3 @@ def film_cycle(mfile: MechanismFile, y0, depths: dict, model: QuasiStatic | None
             "onset_ratio": float(law.onset_ratio),
         }
     return out
-
-
-# Dynamic cycles simulated by a file's dynamic wear run with constant
-# extrapolation (A = cycles / this), as the Ch. 7 rig study; the adaptive and
-# error-controlled methods get 4x as many scan slots.
-DYNAMIC_CYCLES = 50
-
-
-def dynamic_wear_joint(mfile: MechanismFile) -> tuple[str, ...]:
-    """The one wearing joint the dynamic model evolves; `InputError` if the
-    file has more, or a lubricated one: a file's dynamic wear cycles run at
-    the wear routes' tolerance (1e-4 on Rodas4, 1e-6 on Tsit5, on the whole
-    state in SI units), coarser than an oil film of a micrometre, whose
-    forces then ring (the film needs ~1e-8 m: tests/test_lubricated_joint.py
-    runs it there, at ~10,000 steps a rig cycle); the quasi-static model
-    wears it."""
-    joints = wearing_joints(mfile)
-    oiled = lubricated_joints(mfile, joints)
-    if oiled:
-        raise InputError(f"{mfile.file}: clearance joint {oiled[0]!r} is lubricated: the "
-                         "dynamic wear model integrates a file's wear cycles at a tolerance "
-                         "coarser than its oil film (micrometres), where the film's forces are "
-                         "not resolved; allowed: --model quasi-static (the pin at the "
-                         "equilibrium of film and asperities)")
-    if len(joints) > 1:
-        raise InputError(f"{mfile.file}: the dynamic wear model evolves one clearance joint over "
-                         f"a fixed number of cycles; this file wears {len(joints)} "
-                         f"({', '.join(joints)}); allowed: --model quasi-static, or one joint "
-                         "with a wear law")
-    return joints
-
-
-def evolve_file_dynamic(mfile: MechanismFile, y0, *, cycles: float, method: str = "constant",
-                        limit: float | None = None, out: OutputDir | None = None,
-                        resume: bool = False, progress: bool = False) -> dict:
-    """`evolve_file` on the dynamic model (the reference: the mechanism with
-    its EFM clearance joint integrated over each simulated cycle, the wear
-    extrapolated over the cycles between by ``method``).  One wearing joint;
-    with ``out`` the run is checkpointed there after each tenth of it and
-    ``resume=True`` continues from that checkpoint."""
-    from ..studies._wear_common import default_constant_a, run_evolution
-    from ..wear.model import Dynamic
-
-    require_float64("wear of a mechanism file")
-    joints = dynamic_wear_joint(mfile)
-    (name,) = joints
-    period = drive_period(mfile)
-    walls = bushing_walls(mfile, joints, limit)
-    mech = mfile.mechanism
-    el = mech.element(name)
-    meta = {"mfile": f"run {Path(mfile.file).name}", "model": "dynamic",
-            "limit_mm": None if limit is None else round(limit * 1e3, 12),
-            # the checkpoint of another file (or an edited one) is not resumed
-            "file_crc32": f"{zlib.crc32(Path(mfile.file).read_bytes()):08x}"}
-    res, compile_time, wall_time, info = run_evolution(
-        lambda _: mech, jnp.zeros(()), y0, cycles, period, method=method,
-        extrapolation=default_constant_a(cycles, DYNAMIC_CYCLES),
-        max_dynamic=4 * DYNAMIC_CYCLES, wall=walls[0] if math.isfinite(walls[0]) else None,
-        n_theta=el.profile.n, out=out, meta=meta, resume=resume, progress=progress, joint=name)
-    life = None
-    if limit is not None:
-        life = jax.jit(lambda y: Dynamic().life(mech, joints, y, period=period, limit=limit))(y0)
-    h = {k: np.asarray(v) for k, v in res.history.items()}
-    valid = h["valid"].astype(bool)
-    depth = np.asarray(res.depth)
-    return {name: {
-        "theta": np.asarray(el.profile.theta), "depth": depth,
-        "history_cycles": np.concatenate([[0.0], h["cycles"][valid]]),
-        "history_peak": np.concatenate([[0.0], h["max_depth"][valid]]),
-        "volume": float(worn_volume(depth, el.bushing_radius, el.law.depth)),
-        "cycles": float(res.cycles), "wall": walls[0], "status": int(res.status),
-        "cycles_to_limit": (float(life.cycles[0]) if life is not None else None),
-        "model": Dynamic.name, "method": method,
-        "dynamic_cycles": int(res.dynamic_cycles),
-        "wall_time_s": wall_time, "compile_time_s": compile_time, **info,
-    }}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import NamedTuple
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -18,16 +19,29 @@ from .panels import closed, closed_profile, stop_words
 LOCUS_MARGIN = 0.08
 
 
-def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, clearance_mm,
-                 thesis, label="diffwear (EFM)", markers="simulated dynamic cycles",
-                 wall_mm: float | None = None, status: int = STATUS_OK) -> list[str]:
+class Lines(NamedTuple):
+    """What the wear figures draw beside the run: the ``clearance_mm`` circle,
+    the bushing ``wall_mm``, the run's ``label`` and what its history's
+    markers are (``markers``), and its wear ``status`` (`diffwear.wear.status`),
+    named in the titles when it stopped short."""
+
+    clearance_mm: float
+    wall_mm: float | None = None
+    label: str = "diffwear (EFM)"
+    markers: str = "simulated dynamic cycles"
+    status: int = STATUS_OK
+
+
+def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, thesis,
+                 lines: Lines) -> list[str]:
     """The wear profile, the wear against cycles and the contact (the pin's
     locus in the worn bushing, the joint force) of a wear study; ``history``:
     (cycles, max depth [mm], volume [mm^3]) at the steps; ``first``/``last``:
     the contact histories (`diffwear.contact.ContactHistory`) of the first
-    and last cycle over ``crank`` [rad]; ``wall_mm``: the bushing wall;
-    ``status``: the run's wear status (`diffwear.wear.status`), named in the
-    titles when it stopped short."""
+    and last cycle over ``crank`` [rad]; ``lines``: what is drawn beside
+    (`Lines`)."""
+    clearance_mm, wall_mm, label = lines.clearance_mm, lines.wall_mm, lines.label
+    markers, status = lines.markers, lines.status
     cycles, dmax, vol = (np.asarray(v, dtype=float) for v in history)
     reached = float(cycles[-1]) if len(cycles) else 0.0
     after = f"after {reached:,.0f} cycles" + (

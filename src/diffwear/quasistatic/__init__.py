@@ -1,6 +1,6 @@
 """The quasi-static joint model: the pin at the equilibrium of the EFM springs.
 
-`QuasiStatic` is the wear-model strategy (beside `diffwear.wear.Dynamic`);
+The wear model built on it is `diffwear.models.QuasiStatic`;
 `cycle_loads` the ideal mechanism's joint loads; `QuasiStaticJoint` one EFM
 joint's equilibrium, wear per cycle and its exact response to the profile;
 `LubricatedQuasiStaticJoint` the same for a lubricated joint (film plus
@@ -10,8 +10,7 @@ asperities).
 from .joint import Equilibrium, QuasiStaticJoint
 from .loads import CycleLoads, JointLoads, cycle_loads, ideal_parent
 from .lubricated import LubricatedEquilibrium, LubricatedQuasiStaticJoint
-from .model import QuasiStatic, QuasiStaticEvolution, joint_mass
 
 __all__ = ["Equilibrium", "QuasiStaticJoint", "LubricatedEquilibrium",
            "LubricatedQuasiStaticJoint", "CycleLoads", "JointLoads", "cycle_loads",
-           "ideal_parent", "QuasiStatic", "QuasiStaticEvolution", "joint_mass"]
+           "ideal_parent"]

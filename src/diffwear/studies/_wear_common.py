@@ -1,32 +1,42 @@
-"""Shared driver of the wear studies (``wear-5000``, ``rig-21400``)."""
+"""Shared driver of the wear studies (``wear-5000``, ``rig-21400``,
+``rig-lubricated``): a `WearStudy` run on any wear model, and its one writer.
+
+The run is the model's (`AbstractWearModel.run`: compiled once, timed, in
+chunks with checkpoints where the model keeps them); the outputs are the same
+for every model where they have a meaning: the profile, the history, the
+joint force and the pin's locus over the first and the last cycle
+(`AbstractWearModel.cycle_histories`), figures, summary and report.  What a
+result holds beyond the wear is reported where it has it: the simulated
+dynamic cycles and Archard's check (the dynamic models), the contact check
+(the quasi-static model).
+"""
 
 from __future__ import annotations
 
 import math
 import sys
-import time
+from typing import Any, Callable, NamedTuple
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import interrupt
-from ..choices import WEAR_CONTACTS as CONTACTS
-from ..choices import check_wear_model
-from ..contact import centred_state, contact_history
+from ..contact import MixedLubrication, centred_state
 from ..dynamics import consistent_state
-from ..errors import InputError
-from ..io import CHECKPOINT as OUT_CHECKPOINT
+from ..errors import SolverError
+from ..models import AbstractWearModel, Dynamic, WearEvolution
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..report import Block, Bullets, Report, Table
-from ..wear import wear_cycle, worn_mechanism, worn_volume
+from ..wear import Constant, CycleSettings, worn_volume
+from ..wear.chunked import Checkpoints, RunTimes
 from ..wear.cycle import cycle_integrator
-from ..wear.evolution import ChunkedEvolution, Evolver, load_checkpoint, save_checkpoint
-from ..wear.fem_route import FemEvolver, check_cycle_solver, default_model
+from ..wear.status import STATUS_OK, STATUS_TEXT
 from ._report import COMPARISON_WORDS, comparison_table, peak_line, write_report
 
 JOINT = "crank_rod"
-N_SAVE = 401
+# Free flight over more than this fraction of a simulated cycle (impacts)
+# warns: the wear of one cycle, extrapolated over A cycles, then rests on
+# impacts that change from cycle to cycle.
+CONTACT_LOSS_WARNING = 0.25
 
 
 def params_of(d: WearJointDesign):
@@ -52,100 +62,233 @@ def initial_state(mech0, q_guess, mech):
     return centred_state(mech0, consistent_state(mech0, q_guess), mech)
 
 
-CHECKPOINT = OUT_CHECKPOINT  # the name `io.OutputDir` knows
-# Free flight over more than this fraction of a simulated cycle (impacts)
-# warns: the wear of one cycle, extrapolated over A cycles, then rests on
-# impacts that change from cycle to cycle.
-CONTACT_LOSS_WARNING = 0.25
-CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
-# checkpoint keys added later, with the value that checkpoints written before meant
-META_DEFAULTS = {"contact": "efm", "integrator": "tsit5"}
+class WearStudy(NamedTuple):
+    """What a wear study is: its ``name``, the mechanism ``mech_of(p)`` with
+    its wear joint of ``design`` (``p``: its traced inputs, `params_of`), the
+    state ``y0`` and ``period`` [s] of a cycle, the ``thesis``'s values (for
+    ``thesis_cycles`` cycles), the report's ``description`` and what it adds
+    to the summary and the report."""
+
+    name: str
+    mech_of: Callable
+    p: Any
+    design: WearJointDesign
+    y0: Any
+    period: float
+    thesis: dict
+    description: str
+    thesis_cycles: int | None = None
+    extra_summary: dict = {}
+    extra_report: tuple = ()
 
 
-def run_evolution(mech_of_p, p, y0, cycles, period, *, method, extrapolation, max_dynamic,
-                  wall, n_theta, rtol=1e-2, atol=1e-6, out=None, meta=None, resume=False,
-                  progress=False, chunks=CHUNKS, fem=None, joint=JOINT, integrator="tsit5"):
-    """Compile (timed) and run (timed) the whole evolution of clearance joint
-    ``joint``.
+def run_wear_study(out, study: WearStudy, *, cycles, model: AbstractWearModel, log,
+                   resume: bool = False, progress: bool = False) -> dict:
+    """The wear of ``study`` over ``cycles`` on ``model``: the run (kept in
+    checkpoints in ``out`` where the model keeps them; ``resume`` continues),
+    every output, then a run that stopped early raises `SolverError` after
+    its results are written.  A model with a reference route (the FEM route:
+    the same dynamics with the EFM pressure) runs that first, and the report
+    compares both.  The thesis's values are compared only for the cycle
+    count they are for."""
+    if study.thesis_cycles is not None and study.thesis and int(cycles) != int(
+            study.thesis_cycles):
+        why = (f"the thesis's values are for {int(study.thesis_cycles):,} cycles and this "
+               f"run has {int(cycles):,}: not compared")
+        study = study._replace(thesis={}, extra_report=(*study.extra_report, Bullets([why])),
+                               extra_summary={**study.extra_summary,
+                                              "thesis_not_compared": why})
+    extra_summary, extra_report = dict(study.extra_summary), list(study.extra_report)
+    reference = model.reference()
+    if reference is not None:
+        log(f"[{study.name}] {reference.label} for the comparison ...")
+        ref, ref_times = _evolve(study, reference, cycles, None)
+    settings = model.describe(cycles)
+    log(f"[{study.name}] {cycles} cycles, " + ", ".join(f"{k} {v}" for k, v in settings.items())
+        + " ...")
+    meta = {"study": study.name, "cycles": float(cycles), **settings,
+            "n_theta": int(study.mech_of(study.p).element(JOINT).profile.n)}
+    res, times = _evolve(study, model, cycles, Checkpoints(out, meta, resume, progress))
+    extra_summary.update(times.info)
+    if reference is not None:
+        mine = route_numbers(res, study.design, times)
+        theirs = route_numbers(ref, study.design, ref_times)
+        ratio = times.wall_time / ref_times.wall_time
+        tag, ref_tag = settings["contact"], reference.describe(cycles)["contact"]
+        extra_summary.update({f"{tag}_route": {**model.route_summary(res), **mine},
+                              f"{ref_tag}_route": theirs,
+                              f"wall_time_ratio_{tag}_to_{ref_tag}": ratio})
+        extra_report += route_table(mine, theirs, ratio)
+    summary = write_outputs(out, study._replace(extra_summary=extra_summary,
+                                                extra_report=tuple(extra_report)),
+                            model=model, res=res, cycles=cycles, times=times, log=log)
+    status = int(res.status)
+    if status != STATUS_OK:
+        raise SolverError(f"{study.name}: {STATUS_TEXT.get(status, 'failed')} after "
+                          f"{summary['cycles']:.0f} cycles (max depth "
+                          f"{summary['max_wear_depth_mm']:.4f} mm; {model.name} model); "
+                          f"stopped, results so far written to {out.path}")
+    return summary
 
-    ``fem``: a `FemWearModel` for the FEM wear route (`wear.fem_route`), else
-    (None) the EFM route.  ``integrator``: the dynamic cycles' integrator by
-    name, at its tolerance (`wear.cycle.CYCLE_INTEGRATORS`).
 
-    Without ``out``: one jitted function.  With ``out`` (an `OutputDir`): in
-    ``chunks`` chunks of scan slots (`ChunkedEvolution`, same result), saving
-    ``out/checkpoint.npz`` (state, history so far, ``meta``) after each chunk;
-    ``resume=True`` continues from that checkpoint, which must carry the same
-    ``meta``.  ``progress``: a tqdm bar of real cycles done (with time left).
-    Returns (result, compile time, run time, info for the summary).
-    """
+def dynamic_model(cycles, target_dynamic: int, integrator: str) -> Dynamic:
+    """A study's dynamic model: constant A = ceil(cycles / ``target_dynamic``)
+    (about that many dynamic cycles) on the cycle integrator ``integrator``
+    (`wear.cycle.CYCLE_INTEGRATORS`, at its tolerance)."""
     solver, tol = cycle_integrator(integrator)
-    kw = dict(period=period, method=method, extrapolation=extrapolation,
-              max_dynamic=max_dynamic, wall_thickness=wall, rtol=rtol, atol=atol,
-              cycle_solver=solver, cycle_rtol=tol, cycle_atol=tol)
+    return Dynamic(extrapolation=Constant(max(1.0, float(math.ceil(cycles / target_dynamic)))),
+                   cycle=CycleSettings(rtol=tol, atol=tol, solver=solver),
+                   dynamic_cycles=int(target_dynamic))
 
-    def make(p):
-        if fem is None:
-            return Evolver(mech_of_p(p), joint, cycles, **kw)
-        return FemEvolver(mech_of_p(p), joint, cycles, fem=fem, **kw)
 
-    if out is None:
-        def fn(p, y0):  # as `evolve` / `evolve_fem`, for either route
-            ev = make(p)
-            state, hist = ev.run(ev.init(y0), ev.n_slots)
-            return ev.result(state, hist)
+def _evolve(study: WearStudy, model: AbstractWearModel, cycles, checkpoints):
+    return model.run(study.mech_of, study.p, (JOINT,), study.y0, period=study.period,
+                     cycles=cycles, wall_thickness=study.design.wall, checkpoints=checkpoints)
 
-        t0 = time.perf_counter()
-        compiled = jax.jit(fn).lower(p, y0).compile()
-        compile_time = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        res = jax.block_until_ready(compiled(p, y0))
-        return res, compile_time, time.perf_counter() - t0, {}
 
-    from tqdm.auto import tqdm
+def route_numbers(res: WearEvolution, design: WearJointDesign, times: RunTimes) -> dict:
+    """Max depth, volume, Archard volume (where the model sums the load),
+    times of one route's result."""
+    depth = res.depth[0]
+    out = {"max_wear_depth_mm": float(np.max(np.asarray(depth))) * 1e3,
+           "wear_volume_mm3": float(worn_volume(depth, design.bushing_radius,
+                                                design.depth)) * 1e9}
+    if res.detail is not None:  # simulated cycles: their normal load x sliding
+        out["archard_k_times_load_sliding_mm3"] = float(
+            design.k * res.detail.load_sliding) * 1e9
+    out.update(dynamic_cycles_simulated=simulated_cycles(res), status=int(res.status),
+               wall_time_s=times.wall_time, compile_time_s=times.compile_time)
+    return out
 
-    meta = {**(meta or {}), "cycles": float(cycles), "method": method,
-            "extrapolation": float(extrapolation), "n_theta": int(n_theta),
-            "contact": "efm" if fem is None else "fem", "integrator": integrator}
-    if fem is not None:
-        meta.update(fem_refresh_interval=float(fem.refresh_interval),
-                    fem_samples=fem.n_samples, fem_layers=fem.n_layers, fem_force=fem.force)
-    path = out.path / CHECKPOINT
-    start = None
-    if resume:
-        if not path.is_file():
-            raise InputError(f"--resume {out.path}: no {CHECKPOINT} there to resume from")
-        start, saved = load_checkpoint(path)
-        for key, value in meta.items():
-            if saved.get(key, META_DEFAULTS.get(key)) != value:
-                raise InputError(
-                    f"--resume {out.path}: the checkpoint belongs to a run with {key} = "
-                    f"{saved.get(key)!r}, this run has {key} = {value!r}; resume with the "
-                    "options of the interrupted run")
 
-    n_slots = make(p).n_slots
-    run = ChunkedEvolution(make, p, y0, max(1, math.ceil(n_slots / chunks)))
-    compile_time = run.compile()
-    done0 = 0.0 if start is None else float(start.state.n)
-    bar = tqdm(total=float(cycles), initial=done0, unit="cycle", disable=not progress,
-               desc=meta.get("study", "wear"), dynamic_ncols=True,
-               bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} cycles [{elapsed}<{remaining}]")
+def simulated_cycles(res: WearEvolution) -> int:
+    """Dynamic cycles the run simulated (0: none, the quasi-static model)."""
+    return 0 if res.detail is None else int(res.detail.dynamic_cycles)
 
-    def on_chunk(ck):
-        save_checkpoint(path, ck, meta)
-        bar.update(float(ck.state.n) - bar.n)
-        interrupt.check()  # a Ctrl-C lost inside a callback ends the run here
 
-    t0 = time.perf_counter()
-    try:
-        res = jax.block_until_ready(run.run(start=start, on_chunk=on_chunk))
-    finally:
-        bar.close()
-    if path.exists():
-        out.file(CHECKPOINT)  # listed in the summary; kept after the run
-    info = {"finished": True, "checkpoint": CHECKPOINT if path.exists() else None,
-            "resumed_from_cycles": done0 if start is not None else None}
-    return res, compile_time, time.perf_counter() - t0, info
+def route_table(mine: dict, reference: dict, ratio: float) -> list[Block]:
+    """Report blocks: the FEM route next to the EFM route (both run here)."""
+    return [
+        "FEM route next to the EFM route (both run here, same dynamics):",
+        Table(("route", "max depth [mm]", "volume [mm^3]", "k x sum(N ds) [mm^3]",
+               "run time [s]", "compile time [s]"),
+              [(tag, f"{d['max_wear_depth_mm']:.4f}", f"{d['wear_volume_mm3']:.2f}",
+                f"{d['archard_k_times_load_sliding_mm3']:.2f}", f"{d['wall_time_s']:.1f}",
+                f"{d['compile_time_s']:.1f}") for tag, d in (("FEM", mine), ("EFM", reference))]),
+        Bullets([f"run time FEM / EFM route: {ratio:.2f} (thesis: 11 h / 7 h = 1.6 on the "
+                 "rig, 162 / 92 min = 1.8 on wear-5000)"])]
+
+
+def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearEvolution,
+                  cycles, times: RunTimes, log) -> dict:
+    """Every output of a wear study's run into ``out``: the profile, the
+    history, the first and last cycles' joint force and pin locus (CSV),
+    figures, summary.json and report.md.  Returns the summary."""
+    from ..plots import wear as plots_wear
+
+    mech = study.mech_of(study.p)
+    design = study.design
+    el = mech.element(JOINT)
+    theta = np.asarray(el.profile.theta)
+    depth = np.asarray(res.depth[0])
+    hist = res.history[0]
+    valid = np.asarray(hist.valid).astype(bool)
+    steps_n = np.asarray(hist.cycles)[valid]
+    steps_depth = np.asarray(hist.depth)[valid]
+    volumes = np.asarray(worn_volume(steps_depth, el.bushing_radius, el.law.depth)) * 1e9
+    numbers = route_numbers(res, design, times)
+    first, last, crank = model.cycle_histories(mech, JOINT, study.y0, period=study.period,
+                                               evolution=res)
+    crank = np.asarray(crank)
+
+    out.csv("wear_profile.csv", {"theta_rad": theta, "depth_mm": depth * 1e3})
+    out.csv("wear_history.csv", {"cycles": steps_n,
+                                 "max_depth_mm": steps_depth.max(axis=1) * 1e3,
+                                 "volume_mm3": volumes, **_simulated_columns(res)})
+    for tag, h in (("first", first), ("last", last)):
+        f = np.asarray(h.force)
+        out.csv(f"joint_force_{tag}_cycle.csv", {
+            "crank_angle_rad": crank, "fx_N": f[:, 0], "fy_N": f[:, 1],
+            "force_N": np.hypot(f[:, 0], f[:, 1]), "normal_load_N": np.asarray(h.normal_load)})
+        off = np.asarray(h.offset)
+        out.csv(f"contact_locus_{tag}_cycle.csv", {
+            "crank_angle_rad": crank, "offset_x_mm": off[:, 0] * 1e3,
+            "offset_y_mm": off[:, 1] * 1e3, "contact_angle_rad": np.asarray(h.contact_angle),
+            "penetration_um": np.asarray(h.penetration) * 1e6})
+    status = int(res.status)
+    figs = plots_wear.wear_figures(out, name=study.name, theta=theta, depth_mm=depth * 1e3,
+                                   history=(steps_n[1:], steps_depth.max(axis=1)[1:] * 1e3,
+                                            volumes[1:]),
+                                   crank=crank, first=first, last=last, thesis=study.thesis,
+                                   lines=plots_wear.Lines(
+                                       clearance_mm=float(design.clearance) * 1e3,
+                                       wall_mm=float(design.wall) * 1e3, label=model.label,
+                                       markers=model.step_words, status=status))
+    settings = model.describe(cycles)
+    summary = {
+        "study": study.name, "cycles": float(res.cycles), "cycles_requested": float(cycles),
+        **{k: v for k, v in numbers.items() if k not in ("wall_time_s", "compile_time_s")},
+        "status_text": STATUS_TEXT.get(status, "failed"),
+        "wall_time_s": times.wall_time, "compile_time_s": times.compile_time,
+        "max_wear_angle_rad": float(theta[np.argmax(depth)]),
+        "worn_mass_g": numbers["wear_volume_mm3"] * 1e-9 * PTFE_DENSITY * 1e3,
+        **settings,
+        "mean_joint_force_first_cycle_N": float(np.mean(np.asarray(first.force_magnitude))),
+        "mean_normal_load_first_cycle_N": float(np.mean(np.asarray(first.normal_load))),
+        "n_theta": int(depth.size), "thesis": study.thesis, **study.extra_summary}
+    margins = (float(res.contact_margin[0]), float(res.contact_margin_worn[0]))
+    checked = bool(np.isfinite(margins[0]))
+    if checked:
+        summary.update(contact_margin=margins[0], contact_margin_worn=margins[1],
+                       wear_steps=int(valid.sum()) - 1)
+    warnings = []
+    if res.detail is not None:
+        warnings += contact_loss_warnings({"first": first, "last": last},
+                                          settings.get("extrapolation", 1.0))
+    if checked and margins[1] < 1.0:
+        warnings.append(f"at the final profile the load may not hold the pin on the wall "
+                        f"where it turns fastest (contact margin {margins[1]:.2f} < 1); "
+                        "check with the dynamic model (--model dynamic)")
+    if warnings:
+        summary["warnings"] = warnings
+    summary["files"] = sorted(set(out.files)) + ["report.md", "summary.json"]
+    report = Report(study.name, [
+        study.description,
+        *_model_words(res, el),
+        comparison_table(model.label, summary, study.thesis),
+        COMPARISON_WORDS,
+        Bullets([*_run_words(summary, res, times), peak_line(summary),
+                 *_contact_words(summary, res, checked)]),
+        *study.extra_report,
+        Bullets([f"warning: {w}" for w in warnings])])
+    write_report(out, report, figs, summary)
+    for w in warnings:
+        print(f"diffwear: warning: {study.name}: {w}", file=sys.stderr)
+    log(f"[{study.name}] {model.name}: max depth {summary['max_wear_depth_mm']:.4f} mm, "
+        f"volume {summary['wear_volume_mm3']:.2f} mm^3, "
+        f"{summary['dynamic_cycles_simulated']} dynamic cycles, {times.wall_time:.2f} s "
+        f"(+{times.compile_time:.1f} s compile)")
+    return summary
+
+
+def _simulated_columns(res: WearEvolution) -> dict:
+    """The history's extrapolation and dynamic cycles per step, where the
+    model simulates cycles (the first row: the warm-up)."""
+    if res.detail is None:
+        return {}
+    h = {k: np.asarray(v) for k, v in res.detail.history.items()}
+    valid = h["valid"].astype(bool)
+    return {"extrapolation": np.concatenate([[0.0], h["extrapolation"][valid]]),
+            "dynamic_cycles": np.concatenate([[1], h["dynamic_cycles"][valid]])}
+
+
+def _model_words(res: WearEvolution, el) -> list[str]:
+    if res.detail is not None:
+        return []
+    return ["Model: quasi-static joint (the pin at the equilibrium of "
+            + ("the oil film and the asperities (the EFM springs at the summit height)"
+               if isinstance(el.law, MixedLubrication) else "the EFM springs")
+            + " under the ideal mechanism's joint load; wear integrated in the cycle count)."]
 
 
 def _integrator_label(name: str) -> str:
@@ -154,248 +297,52 @@ def _integrator_label(name: str) -> str:
     return f"{type(solver).__name__}, rtol = atol = {tol:g}"
 
 
-def check_contact(contact) -> str:
-    if contact not in CONTACTS:
-        raise InputError(f"--contact must be one of {', '.join(CONTACTS)} (the pressure "
-                         f"model of the wear), got {contact!r}")
-    return contact
-
-
-def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, period, method,
-                   extrapolation, target_dynamic, n_theta, thesis: dict, description: str, log,
-                   resume=False, progress=False, extra_summary=None, extra_report=(),
-                   contact="efm", fem=None, model="dynamic", thesis_cycles=None,
-                   integrator=None, study_integrator="tsit5") -> dict:
-    """The body of a wear study: ``design``'s wear joint swapped into ``mech0``
-    (differentiable in k, clearance, depth, diameter), the evolution over
-    ``cycles`` (constant A = cycles / ``target_dynamic`` unless ``extrapolation``
-    is given; checkpointed into ``out``), all outputs, then `EvolutionResult.check`
-    (a run that stopped early raises after its results are written).
-
-    ``contact="fem"``: the wear pressure from the FE ring (`wear.fem_route`;
-    ``fem`` a `FemWearModel`, default `default_model(design)`); the EFM route is
-    run first (one jit, not checkpointed) so that the report compares both.
-    ``integrator``: the dynamic cycles' integrator ("tsit5" or "rodas4",
-    `wear.cycle.CYCLE_INTEGRATORS`); None: ``study_integrator``, the one the
-    study chose for its contact, on the EFM route, and tsit5 on the FEM route
-    (the only one it takes).  Given to the quasi-static model, an integrator is
-    an error: it has no dynamic cycles.
-
-    ``thesis_cycles``: the cycle count the ``thesis`` values are for; a run of
-    another length is not compared with them (report, plots and summary say
-    so instead)."""
-    check_contact(contact)
-    if thesis_cycles is not None and thesis and int(cycles) != int(thesis_cycles):
-        why = (f"the thesis's values are for {int(thesis_cycles):,} cycles and this run has "
-               f"{int(cycles):,}: not compared")
-        extra_report = [*extra_report, Bullets([why])]
-        extra_summary = {**(extra_summary or {}), "thesis_not_compared": why}
-        thesis = {}
-    check_wear_model(model, ((method != "constant", f"--method {method}"),
-                             (contact != "efm", f"--contact {contact}"),
-                             (integrator is not None, f"--integrator {integrator}"),
-                             (resume, "--resume")))
-    if integrator is None:
-        integrator = study_integrator if contact == "efm" else "tsit5"
-    solver, _ = cycle_integrator(integrator)  # a bad name fails before any work
-    if contact == "fem":
-        check_cycle_solver(solver)  # before the EFM comparison route runs
-    if model == "quasi-static":
-        from . import _quasi_static_study
-
-        mech = mech_builder(mech0, design, n_theta)(params_of(design))
-        return _quasi_static_study.run(
-            out, name=name, mech=mech, design=design, y0=y0, cycles=cycles, period=period,
-            thesis=thesis, description=description, log=log, extra_summary=extra_summary,
-            extra_report=extra_report)
-    if contact == "fem" and method != "constant":
-        raise InputError(f"--contact fem runs with --method constant only (constant A, as "
-                         f"the thesis's FEM route), got --method {method}")
-
-    mech_of_p = mech_builder(mech0, design, n_theta)
-    params = params_of(design)
-    a = extrapolation or default_constant_a(cycles, target_dynamic)
-    common_kw = dict(method=method, extrapolation=a, max_dynamic=4 * target_dynamic,
-                     wall=design.wall, n_theta=n_theta, integrator=integrator)
-    extra_summary, extra_report = dict(extra_summary or {}), list(extra_report)
-    label = "diffwear"
-    if contact == "fem":
-        fem = default_model(design) if fem is None else fem
-        log(f"[{name}] EFM route for the comparison: {cycles} cycles, A {a} ...")
-        efm, efm_ct, efm_wt, _ = run_evolution(mech_of_p, params, y0, cycles, period, **common_kw)
-        efm_summary = route_numbers(efm, design, efm_wt, efm_ct)
-        log(f"[{name}] EFM route: max depth {efm_summary['max_wear_depth_mm']:.4f} mm, volume "
-            f"{efm_summary['wear_volume_mm3']:.2f} mm^3, {efm_wt:.1f} s (+{efm_ct:.1f} s compile)")
-        label = "diffwear (FEM route)"
-        description = (description + f" Wear pressure: FEM route (thesis Ch. 5): the EFM "
-                       f"dynamics' joint force ({fem.force}) at {fem.n_samples + 1} times per "
-                       f"cycle on a plane-strain Q9 ring ({n_theta} x {fem.n_layers}, E "
-                       f"{float(fem.youngs_modulus) / 1e9:g} GPa, nu "
-                       f"{float(fem.poisson_ratio):g}, outer R "
-                       f"{float(fem.outer_radius) * 1e3:.3f} mm), compliance rebuilt every "
-                       f"{float(fem.refresh_interval):g} wear cycle(s).")
-    log(f"[{name}] {cycles} cycles, method {method}, A {a}, contact {contact} ...")
-    res, ct, wt, info = run_evolution(
-        mech_of_p, params, y0, cycles, period, **common_kw, out=out,
-        meta={"study": name}, resume=resume, progress=progress,
-        fem=fem if contact == "fem" else None)
-    extra_summary["contact"] = contact
-    extra_summary["integrator"] = integrator
-    if contact == "fem":
-        fallback = res.state.memory["fem_explicit"]
-        fem_summary = {"explicit_fallback_cycles": int(np.asarray(fallback)),
-                       **route_numbers(res, design, wt, ct)}
-        ratio = wt / efm_wt
-        extra_summary.update(
-            fem_route={**fem_summary, "refresh_interval": float(fem.refresh_interval),
-                       "samples_per_cycle": fem.n_samples + 1, "layers": fem.n_layers,
-                       "force": fem.force, "youngs_modulus_Pa": float(fem.youngs_modulus),
-                       "poisson_ratio": float(fem.poisson_ratio),
-                       "outer_radius_m": float(fem.outer_radius)},
-            efm_route=efm_summary, wall_time_ratio_fem_to_efm=ratio)
-        extra_report += route_table(fem_summary, efm_summary, ratio)
-    summary = write_outputs(
-        out, name=name, mech=mech_of_p(params), design=design, res=res, y0=y0, period=period,
-        cycles=cycles, compile_time=ct, wall_time=wt, thesis=thesis, method=method,
-        extrapolation=a, description=description, log=log,
-        extra_summary={**extra_summary, **info}, extra_report=extra_report, label=label)
-    res.check(name)
-    return summary
-
-
-def route_numbers(res, design: WearJointDesign, wall_time, compile_time) -> dict:
-    """Max depth, volume, Archard volume, times of one route's result."""
-    volume = float(worn_volume(res.depth, design.bushing_radius, design.depth)) * 1e9
-    return {"max_wear_depth_mm": float(np.max(np.asarray(res.depth))) * 1e3,
-            "wear_volume_mm3": volume,
-            "archard_k_times_load_sliding_mm3": float(design.k * res.load_sliding) * 1e9,
-            "dynamic_cycles_simulated": int(res.dynamic_cycles), "status": int(res.status),
-            "wall_time_s": wall_time, "compile_time_s": compile_time}
-
-
-def route_table(fem: dict, efm: dict, ratio: float) -> list[Block]:
-    """Report blocks: the FEM route next to the EFM route (both run here)."""
+def _run_words(s: dict, res: WearEvolution, times: RunTimes) -> list[str]:
+    if res.detail is None:
+        return [f"cycles: {s['cycles']:.0f} in {s['wear_steps']} steps of the wear ODE (the "
+                "profile's growth integrated over the cycle count by an adaptive solver); "
+                f"status: {s['status_text']}",
+                f"run time {times.wall_time:.2f} s (the compiled wear evolution), compile "
+                f"time {times.compile_time:.1f} s (compiling it)"]
     return [
-        "FEM route next to the EFM route (both run here, same dynamics):",
-        Table(("route", "max depth [mm]", "volume [mm^3]", "k x sum(N ds) [mm^3]",
-               "run time [s]", "compile time [s]"),
-              [(tag, f"{d['max_wear_depth_mm']:.4f}", f"{d['wear_volume_mm3']:.2f}",
-                f"{d['archard_k_times_load_sliding_mm3']:.2f}", f"{d['wall_time_s']:.1f}",
-                f"{d['compile_time_s']:.1f}") for tag, d in (("FEM", fem), ("EFM", efm))]),
-        Bullets([f"run time FEM / EFM route: {ratio:.2f} (thesis: 11 h / 7 h = 1.6 on the "
-                 "rig, 162 / 92 min = 1.8 on wear-5000)"])]
+        f"cycles: {s['cycles']:.0f}; dynamic cycles simulated: "
+        f"{s['dynamic_cycles_simulated']} (incl. 1 warm-up cycle whose wear is "
+        f"discarded); method {s['method']}, extrapolation A = {s['extrapolation']:g} (the "
+        "wear of one simulated cycle stands for A cycles; with --method adaptive or error, "
+        "the first A, which the method then changes)",
+        f"Archard check: k x sum(N ds) = {s['archard_k_times_load_sliding_mm3']:.3f} "
+        "mm^3 (the wear coefficient times the normal load integrated over the sliding "
+        "distance, summed over the cycles, each simulated one counted A times: Archard's "
+        "law for the whole volume, to compare with the wear volume above)",
+        f"mean |joint force| first cycle {s['mean_joint_force_first_cycle_N']:.1f} N "
+        "(the magnitude of the joint's contact force averaged over the first cycle after "
+        f"the warm-up), mean total normal load {s['mean_normal_load_first_cycle_N']:.1f}"
+        " N (the bushing's pressure integrated over the contact arc, averaged the same way: "
+        "above the joint force because the pressure spreads over an arc)",
+        f"run time {times.wall_time:.1f} s (the compiled wear evolution), compile time "
+        f"{times.compile_time:.1f} s (compiling it); dynamic cycles on "
+        f"{_integrator_label(s.get('integrator', 'tsit5'))}"]
 
 
-def write_outputs(out, *, name, mech, design: WearJointDesign, res, y0, period, cycles,
-                  compile_time, wall_time, thesis: dict, method: str, extrapolation,
-                  description: str, log, extra_summary=None, extra_report=(),
-                  label: str = "diffwear"):
-    from ..plots import wear as plots_wear
-
-    el = mech.element(JOINT)
-    n = el.profile.n
-    theta = np.asarray(el.profile.theta)
-    depth = np.asarray(res.depth)
-    numbers = route_numbers(res, design, wall_time, compile_time)
-
-    # first (after the warm-up) and last dynamic cycles, saved densely
-    cyc = jax.jit(lambda m, y, t: wear_cycle(m, JOINT, y, t, period, n_save=N_SAVE))
-    warm = cyc(mech, y0, 0.0)
-    first = cyc(mech, warm.y_end, period)
-    # the last cycle runs on the final profile after one settling cycle: the
-    # evolution's end state belongs to the profile before its last wear step,
-    # and on the deeper final profile the pin would first drop into the
-    # groove (an impact the gradually worn joint never sees)
-    mech_last = worn_mechanism(mech, JOINT, res.depth)
-    settle = cyc(mech_last, res.y, res.t)
-    last = cyc(mech_last, settle.y_end, res.t + period)
-    hist_first = contact_history(mech, JOINT, first.ys)
-    hist_last = contact_history(mech_last, JOINT, last.ys)
-    tt = np.asarray(first.ts) - float(first.ts[0])
-    crank = 2 * np.pi * tt / period
-
-    out.csv("wear_profile.csv", {"theta_rad": theta, "depth_mm": depth * 1e3})
-    h = {k: np.asarray(v) for k, v in res.history.items()}
-    valid = h["valid"].astype(bool)
-    out.csv("wear_history.csv", {
-        "cycles": np.concatenate([[0.0], h["cycles"][valid]]),
-        "max_depth_mm": np.concatenate([[0.0], h["max_depth"][valid] * 1e3]),
-        "volume_mm3": np.concatenate([[0.0], h["volume"][valid] * 1e9]),
-        "extrapolation": np.concatenate([[0.0], h["extrapolation"][valid]]),
-        "dynamic_cycles": np.concatenate([[h["dynamic_cycles"][0] * 0 + 1],
-                                          h["dynamic_cycles"][valid]]),
-    })
-    for tag, hist in (("first", hist_first), ("last", hist_last)):
-        f = np.asarray(hist.force)
-        out.csv(f"joint_force_{tag}_cycle.csv", {
-            "crank_angle_rad": crank, "fx_N": f[:, 0], "fy_N": f[:, 1],
-            "force_N": np.hypot(f[:, 0], f[:, 1]), "normal_load_N": np.asarray(hist.normal_load),
-        })
-        off = np.asarray(hist.offset)
-        out.csv(f"contact_locus_{tag}_cycle.csv", {
-            "crank_angle_rad": crank, "offset_x_mm": off[:, 0] * 1e3,
-            "offset_y_mm": off[:, 1] * 1e3, "contact_angle_rad": np.asarray(hist.contact_angle),
-            "penetration_um": np.asarray(hist.penetration) * 1e6,
-        })
-
-    figs = plots_wear.wear_figures(out, name=name, theta=theta, depth_mm=depth * 1e3,
-                                   history=(h["cycles"][valid], h["max_depth"][valid] * 1e3,
-                                            h["volume"][valid] * 1e9),
-                                   crank=crank, first=hist_first, last=hist_last,
-                                   clearance_mm=float(design.clearance) * 1e3, thesis=thesis,
-                                   wall_mm=float(design.wall) * 1e3, status=int(res.status))
-
-    summary = {
-        "study": name,
-        "cycles": float(res.cycles),
-        "cycles_requested": float(cycles),
-        **numbers,
-        "max_wear_angle_rad": float(theta[np.argmax(depth)]),
-        "worn_mass_g": numbers["wear_volume_mm3"] * 1e-9 * PTFE_DENSITY * 1e3,
-        "method": method,
-        "extrapolation": extrapolation,
-        "mean_joint_force_first_cycle_N": float(np.mean(np.asarray(hist_first.force_magnitude))),
-        "mean_normal_load_first_cycle_N": float(np.mean(np.asarray(hist_first.normal_load))),
-        "n_theta": n,
-        "thesis": thesis,
-        **(extra_summary or {}),
-    }
-    warnings = contact_loss_warnings({"first": hist_first, "last": hist_last}, extrapolation)
-    if warnings:
-        summary["warnings"] = warnings
-    summary["files"] = sorted(set(out.files)) + ["report.md", "summary.json"]
-    report = Report(name, [
-        description,
-        comparison_table(label, summary, thesis),
-        COMPARISON_WORDS,
-        Bullets([
-            f"cycles: {summary['cycles']:.0f}; dynamic cycles simulated: "
-            f"{summary['dynamic_cycles_simulated']} (incl. 1 warm-up cycle whose wear is "
-            f"discarded); method {method}, extrapolation A = {extrapolation} (the wear of one "
-            "simulated cycle stands for A cycles; with --method adaptive or error, the first "
-            "A, which the method then changes)",
-            f"Archard check: k x sum(N ds) = {summary['archard_k_times_load_sliding_mm3']:.3f} "
-            "mm^3 (the wear coefficient times the normal load integrated over the sliding "
-            "distance, summed over the cycles, each simulated one counted A times: Archard's "
-            "law for the whole volume, to compare with the wear volume above)",
-            peak_line(summary),
-            f"mean |joint force| first cycle {summary['mean_joint_force_first_cycle_N']:.1f} N "
-            "(the magnitude of the joint's contact force averaged over the first cycle after "
-            f"the warm-up), mean total normal load {summary['mean_normal_load_first_cycle_N']:.1f}"
-            " N (the bushing's pressure integrated over the contact arc, averaged the same way: "
-            "above the joint force because the pressure spreads over an arc)",
-            f"run time {wall_time:.1f} s (the compiled wear evolution), compile time "
-            f"{compile_time:.1f} s (compiling it); dynamic cycles on "
-            f"{_integrator_label(summary.get('integrator', 'tsit5'))}"]),
-        *extra_report,
-        Bullets([f"warning: {w}" for w in warnings])])
-    write_report(out, report, figs, summary)
-    for w in warnings:
-        print(f"diffwear: warning: {name}: {w}", file=sys.stderr)
-    log(f"[{name}] max depth {summary['max_wear_depth_mm']:.4f} mm, volume "
-        f"{summary['wear_volume_mm3']:.2f} mm^3, {summary['dynamic_cycles_simulated']} dynamic "
-        f"cycles, {wall_time:.1f} s (+{compile_time:.1f} s compile)")
-    return summary
+def _contact_words(s: dict, res: WearEvolution, checked: bool) -> list[str]:
+    if not checked:
+        return []
+    return [
+        f"contact margin: unworn {s['contact_margin']:.3g}, final profile "
+        f"{s['contact_margin_worn']:.3g}.  The smallest over the cycle of the joint load "
+        "divided by m c omega^2, the inward force the pin (effective mass m) needs to follow "
+        "the load around a wall of clearance c as the load turns at omega: above 1 the load "
+        "holds the pin on the wall, below 1 the pin may fly across the clearance and this "
+        "model does not hold; a huge value means the load's direction hardly turns",
+        f"mean |joint force| {s['mean_joint_force_first_cycle_N']:.1f} N (the magnitude of "
+        "the joint's load averaged over a cycle); mean total normal load (unworn) "
+        f"{s['mean_normal_load_first_cycle_N']:.1f} N (the bushing's pressure integrated "
+        "over the contact arc, averaged over a cycle: above the joint force because the "
+        "pressure spreads over an arc)",
+        "the first- and last-cycle joint force curves (joint_force_first/last_cycle.csv, "
+        "contact_locus_and_force.png) are the same: this model takes the joint load from "
+        "the ideal mechanism, which the wear does not change; the normal load and the "
+        "pin's locus do change with the worn profile"]
 
 
 def contact_loss_warnings(cycles: dict, extrapolation) -> list[str]:
@@ -411,7 +358,3 @@ def contact_loss_warnings(cycles: dict, extrapolation) -> list[str]:
                        f"{float(extrapolation):g} cycles rests on impacts that change from "
                        "cycle to cycle; check with --method error or a smaller A")
     return out
-
-
-def default_constant_a(cycles, target_dynamic):
-    return max(1.0, float(math.ceil(cycles / target_dynamic)))

@@ -13,6 +13,7 @@ import math
 import jax
 
 from ..io import OutputDir
+from ..models import AbstractWearModel
 from ..presets import (
     PTFE_DENSITY,
     RIG_CYCLES,
@@ -26,7 +27,7 @@ from ..presets import (
     with_wear_joint,
 )
 from ..report import Bullets
-from ..wear import evolve, worn_volume
+from ..wear import Constant, evolve, worn_volume
 from ..wear.cycle import clearance_element
 from . import _wear_common as common
 
@@ -34,6 +35,7 @@ NAME = "rig-21400"
 DESCRIPTION = "Ch. 7: experimental rig, EFM crank-rod bushing wear over 21,400 cycles"
 
 N_THETA = 180
+DESIGN = RIG_JOINT  # the wearing joint (Table 7-2)
 TARGET_DYNAMIC = 50
 PERIOD = 2 * math.pi / THESIS_CRANK_SPEED
 TARGET_VOLUME_MM3 = 106.7  # Table 7-4: FEM 106.71, EFM 106.68 mm^3
@@ -77,7 +79,7 @@ def calibrate_free_length(l0_guesses=(0.50, 0.56), *, cycles=RIG_CYCLES, dynamic
 
         m = eqx.tree_at(lambda m: m.forces[spring].free_length, mech, l0)
         r = evolve(m, common.JOINT, y0, cycles, period=PERIOD,
-                   extrapolation=float(cycles) / dynamic)
+                   method=Constant(float(cycles) / dynamic))
         return worn_volume(r.depth, m.forces[idx].bushing_radius, m.forces[idx].law.depth) * 1e9
 
     x0, x1 = l0_guesses
@@ -93,21 +95,29 @@ def calibrate_free_length(l0_guesses=(0.50, 0.56), *, cycles=RIG_CYCLES, dynamic
     return x1
 
 
-def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
-        extrapolation: float | None = None, free_length: float | None = None,
-        log=print, resume: bool = False, progress: bool = False,
-        contact: str = "efm", model: str = "dynamic", integrator: str | None = None) -> dict:
+def run(out: OutputDir, *, cycles: int = RIG_CYCLES, model: AbstractWearModel | None = None,
+        free_length: float | None = None, log=print, resume: bool = False,
+        progress: bool = False) -> dict:
+    """The study over ``cycles`` on ``model`` (default: the dynamic model on
+    `INTEGRATOR`, about `TARGET_DYNAMIC` dynamic cycles); ``free_length`` [m]:
+    the slider spring's (default the calibrated one)."""
+    model = (common.dynamic_model(cycles, TARGET_DYNAMIC, INTEGRATOR) if model is None
+             else model)
+    return common.run_wear_study(out, study(free_length, log), cycles=cycles, model=model,
+                                 log=log, resume=resume, progress=progress)
+
+
+def study(free_length: float | None = None, log=print) -> common.WearStudy:
+    """The rig with its slider spring of ``free_length`` [m] as a wear study."""
     l0 = RIG_SPRING_FREE_LENGTH if free_length is None else free_length
     mech0, _, y0 = _setup(TABLE_7_1, l0)
     log(f"[{NAME}] spring free length L0 {l0:.5f} m")
     x3 = float(y0[6])  # slider position at t = 0 [m]
     spring_mid = RIG_SPRING_STIFFNESS * (RIG_SPRING_ANCHOR_X - x3 - l0)
-    return common.run_wear_study(
-        out, name=NAME, mech0=mech0, design=RIG_JOINT, y0=y0, cycles=cycles, period=PERIOD,
-        method=method, extrapolation=extrapolation, target_dynamic=TARGET_DYNAMIC,
-        n_theta=N_THETA, thesis=THESIS, log=log, resume=resume, progress=progress,
-        contact=contact, model=model, integrator=integrator, study_integrator=INTEGRATOR,
-        thesis_cycles=RIG_CYCLES,
+    return common.WearStudy(
+        name=NAME, mech_of=common.mech_builder(mech0, RIG_JOINT, N_THETA),
+        p=common.params_of(RIG_JOINT), design=RIG_JOINT, y0=y0, period=PERIOD,
+        thesis=THESIS, thesis_cycles=RIG_CYCLES,
         description=(
             "Rig of thesis Ch. 7: Table 7-1 read as half-lengths (crank 38.1 mm, rod 101.6 mm "
             "COM distances), gravity -y in the plane, slider spring 525.4 N/m pulling the "
@@ -116,4 +126,4 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, method: str = "constant",
             "9.500 mm pin, wall 6.342 mm, depth 13.1 mm, mu 0.13, k 5.05e-4 mm^3/(N m), "
             f"30 rpm. Worn mass with PTFE density {PTFE_DENSITY / 1e3:g} g/cm^3."),
         extra_summary={"spring_free_length_m": l0, "spring_force_at_t0_N": spring_mid},
-        extra_report=[Bullets([f"spring force at t = 0 (crank angle 0): {spring_mid:.1f} N"])])
+        extra_report=(Bullets([f"spring force at t = 0 (crank angle 0): {spring_mid:.1f} N"]),))

@@ -20,10 +20,11 @@ import numpy as np
 from .. import plots
 from ..contact import MixedLubrication, ShortBearingFilm
 from ..io import OutputDir
+from ..models import QuasiStatic
 from ..presets import RIG_CYCLES, RIG_JOINT
-from ..quasistatic import QuasiStatic
 from ..report import Bullets
-from . import _quasi_static_study, rig_21400
+from . import _wear_common as common
+from . import rig_21400
 
 NAME = "rig-lubricated"
 DESCRIPTION = ("Ch. 7 rig with its crank-rod joint in oil (mixed lubrication): quasi-static "
@@ -42,17 +43,17 @@ DRY = {"max_wear_depth_mm": 0.4449, "wear_volume_mm3": 106.71}
 def lubricated(mech, viscosity=VISCOSITY, roughness=ROUGHNESS):
     """``mech`` with its crank-rod joint in oil of ``viscosity`` [Pa s] on
     surfaces of combined roughness ``roughness`` [m]."""
-    el = mech.element(_quasi_static_study.JOINT)
+    el = mech.element(common.JOINT)
     film = ShortBearingFilm(viscosity, el.law.depth, el.bushing_radius - el.pin_radius)
     law = MixedLubrication(film, el.law, roughness)
-    return eqx.tree_at(lambda m: m.element(_quasi_static_study.JOINT).law, mech, law)
+    return eqx.tree_at(lambda m: m.element(common.JOINT).law, mech, law)
 
 
 def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
     _, dry, y0 = rig_21400._setup()
     mech = lubricated(dry)
     model = QuasiStatic()
-    joint = _quasi_static_study.JOINT
+    joint = common.JOINT
 
     @jax.jit
     def film(y):
@@ -90,10 +91,15 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
         "([film.png](film.png), [film.csv](film.csv))",
         f"the dry rig (rig-21400, quasi-static): {DRY['max_wear_depth_mm']} mm, "
         f"{DRY['wear_volume_mm3']} mm^3 over the same cycles"])
-    return _quasi_static_study.run(
-        out, name=NAME, mech=mech, design=RIG_JOINT, y0=y0, cycles=cycles,
-        period=rig_21400.PERIOD, thesis={}, model=model, log=log,
+    study = common.WearStudy(
+        name=NAME, mech_of=_itself, p=mech, design=RIG_JOINT, y0=y0, period=rig_21400.PERIOD,
+        thesis={},
         description=("The Ch. 7 rig (rig-21400) with its crank-rod joint lubricated: film "
                      "(short-bearing Reynolds) and asperities share the load, only the "
                      "asperities wear the bushing."),
-        extra_summary={"lubricant": lube, "dry": DRY}, extra_report=[words])
+        extra_summary={"lubricant": lube, "dry": DRY}, extra_report=(words,))
+    return common.run_wear_study(out, study, cycles=cycles, model=model, log=log)
+
+
+def _itself(mech):
+    return mech

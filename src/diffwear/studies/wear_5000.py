@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 from ..io import OutputDir
+from ..models import AbstractWearModel
 from ..presets import (
     TABLE_2_1,
     THESIS_CRANK_SPEED,
@@ -25,6 +26,7 @@ NAME = "wear-5000"
 DESCRIPTION = "Ch. 5/6: Table 2-1 slider-crank, EFM crank-rod joint wear over 5,000 cycles"
 
 N_THETA = 180
+DESIGN = WEAR_5000  # the wearing joint (Tables 5-2, 5-3)
 TARGET_DYNAMIC = 50  # constant A = cycles / 50 (A = 100 for 5,000 cycles)
 # The dynamic cycles' integrator (`wear.cycle.CYCLE_INTEGRATORS`): Tsit5, the
 # reference.  Rodas4 halves the study's time here but moves its volume by
@@ -37,18 +39,25 @@ THESIS = {  # Table 6-4
 }
 
 
-def run(out: OutputDir, *, cycles: int = WEAR_5000_CYCLES, method: str = "constant",
-        extrapolation: float | None = None, log=print, resume: bool = False,
-        progress: bool = False, contact: str = "efm", model: str = "dynamic",
-        integrator: str | None = None) -> dict:
+def run(out: OutputDir, *, cycles: int = WEAR_5000_CYCLES,
+        model: AbstractWearModel | None = None, log=print, resume: bool = False,
+        progress: bool = False) -> dict:
+    """The study over ``cycles`` on ``model`` (default: the dynamic model on
+    `INTEGRATOR`, about `TARGET_DYNAMIC` dynamic cycles)."""
+    model = (common.dynamic_model(cycles, TARGET_DYNAMIC, INTEGRATOR) if model is None
+             else model)
+    return common.run_wear_study(out, study(), cycles=cycles, model=model, log=log,
+                                 resume=resume, progress=progress)
+
+
+def study() -> common.WearStudy:
+    """The Table 2-1 slider-crank's crank-rod joint as a wear study."""
     mech0, q_guess = slider_crank(TABLE_2_1)
     y0 = common.initial_state(mech0, q_guess, with_wear_joint(mech0, WEAR_5000, n_theta=N_THETA))
-    return common.run_wear_study(
-        out, name=NAME, mech0=mech0, design=WEAR_5000, y0=y0, cycles=cycles,
-        period=2 * math.pi / THESIS_CRANK_SPEED, method=method, extrapolation=extrapolation,
-        target_dynamic=TARGET_DYNAMIC, n_theta=N_THETA, thesis=THESIS, log=log, resume=resume,
-        progress=progress, contact=contact, model=model, integrator=integrator,
-        study_integrator=INTEGRATOR,
+    return common.WearStudy(
+        name=NAME, mech_of=common.mech_builder(mech0, WEAR_5000, N_THETA),
+        p=common.params_of(WEAR_5000), design=WEAR_5000, y0=y0,
+        period=2 * math.pi / THESIS_CRANK_SPEED, thesis=THESIS,
         thesis_cycles=WEAR_5000_CYCLES,
         description=(
             "Table 2-1 slider-crank (half-lengths 1 m / 1.75 m), gravity -y, crank-rod EFM "

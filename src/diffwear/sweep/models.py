@@ -17,8 +17,8 @@ import jax.numpy as jnp
 
 from ..contact import centred_state, contact_history
 from ..dynamics import consistent_state, simulate
-from ..errors import InputError
 from ..mechanism.geometry import safe_norm
+from ..models import AbstractWearModel, Dynamic
 from ..presets import (
     BUSHING_DEPTH_CH5,
     BUSHING_WALL_CH3,
@@ -36,16 +36,7 @@ from ..presets import (
     rig_slider_crank,
     with_wear_joint,
 )
-from ..quasistatic import QuasiStatic
-from ..wear import (
-    AbstractWearModel,
-    Dynamic,
-    evolve,
-    smooth_max,
-    wear_cycle,
-    worn_mechanism,
-    worn_volume,
-)
+from ..wear import Constant, CycleSettings, smooth_max, worn_volume
 from ..wear.cycle import CYCLE_ATOL, CYCLE_RTOL
 
 JOINT = "crank_rod"
@@ -53,7 +44,7 @@ JOINT = "crank_rod"
 
 class RigWear(eqx.Module):
     """Wear of the Ch. 7 rig's crank-rod PTFE bushing (`presets.rig_slider_crank`
-    + `with_wear_joint` + `evolve`, method "constant").
+    + `with_wear_joint` + `Dynamic().evolve` with `Constant(A)`).
 
     Parameters (SI): ``k`` wear coefficient [1/Pa], ``clearance`` [m], ``depth``
     bushing depth [m], ``diameter`` pin diameter [m], ``mu`` friction,
@@ -73,8 +64,9 @@ class RigWear(eqx.Module):
     evolution on the final profile (``force_samples`` equally spaced states);
     ``status`` (`EvolutionResult.status`: 0 ok, 1 worn through, 2 solver failure).
 
-    ``wear_model``: `Dynamic()` (default: the settings above) or `QuasiStatic(...)`
-    (`diffwear.quasistatic`: milliseconds per point, exact gradients; its
+    ``wear_model``: None (the dynamic model with the settings above) or any
+    wear model, e.g. `QuasiStatic(...)` (milliseconds per point, exact
+    gradients; its
     ``mean_joint_force_N`` is the ideal mechanism's, which wear does not change
     in that model, and ``status`` adds 4 = contact lost: the model does not
     hold there).
@@ -90,7 +82,7 @@ class RigWear(eqx.Module):
     cycle_rtol: float = eqx.field(static=True, default=CYCLE_RTOL)
     cycle_atol: float = eqx.field(static=True, default=CYCLE_ATOL)
     p: SliderCrankParameters = TABLE_7_1
-    wear_model: AbstractWearModel = Dynamic()
+    wear_model: AbstractWearModel | None = None
 
     param_names = ("k", "clearance", "depth", "diameter", "mu", "free_length")
 
@@ -110,6 +102,15 @@ class RigWear(eqx.Module):
         return WearJointDesign(params["k"], params["clearance"], params["depth"],
                                params["diameter"], self.wall, params["mu"], self.restitution)
 
+    def model(self) -> AbstractWearModel:
+        """The wear model: ``wear_model``, or the dynamic model with this
+        sweep's constant extrapolation A = cycles / dynamic_cycles and cycle
+        tolerances."""
+        if self.wear_model is not None:
+            return self.wear_model
+        return Dynamic(extrapolation=Constant(self.cycles / self.dynamic_cycles),
+                       cycle=CycleSettings(self.cycle_rtol, self.cycle_atol))
+
     def __call__(self, params: dict) -> dict:
         mech0, q_guess = rig_slider_crank(self.p, free_length=params["free_length"])
         design = self.design(params)
@@ -117,36 +118,16 @@ class RigWear(eqx.Module):
         # the ideal kinematics at t = 0 depend on no swept parameter
         y0 = centred_state(mech0, consistent_state(mech0, q_guess, check=False), mech)
         el = mech.element(JOINT)
-        if not isinstance(self.wear_model, Dynamic):
-            return self._quasi_static(mech, y0, design, el)
-        res = evolve(mech, JOINT, y0, self.cycles, period=self.period,
-                     extrapolation=self.cycles / self.dynamic_cycles, wall_thickness=design.wall,
-                     cycle_rtol=self.cycle_rtol, cycle_atol=self.cycle_atol)
-        worn = worn_mechanism(mech, JOINT, res.depth)
-        cyc = wear_cycle(worn, JOINT, res.y, res.t, self.period, n_save=self.force_samples,
-                         rtol=self.cycle_rtol, atol=self.cycle_atol)
-        assert cyc.ys is not None  # saved: n_save is given
-        force = contact_history(worn, JOINT, cyc.ys).force_magnitude
-        return {
-            "max_depth_mm": smooth_max(res.depth, self.temperature) * 1e3,
-            "volume_mm3": worn_volume(res.depth, el.bushing_radius, el.law.depth) * 1e9,
-            "mean_joint_force_N": jnp.mean(force[:-1]),  # one period: drop the repeated end
-            "status": res.status.astype(float),
-        }
-
-    def _quasi_static(self, mech, y0, design, el) -> dict:
-        model = self.wear_model
-        if not isinstance(model, QuasiStatic):
-            raise InputError(f"rig-wear: wear model {type(model).__name__}; allowed: Dynamic() "
-                             "or QuasiStatic()")
+        model = self.model()
         res = model.evolve(mech, (JOINT,), y0, period=self.period, cycles=self.cycles,
                            wall_thickness=design.wall)
-        loads = model.loads(mech, (JOINT,), y0, self.period).joints[0]
+        force = model.joint_force(mech, JOINT, y0, period=self.period, evolution=res,
+                                  samples=self.force_samples - 1)
         depth = res.depth[0]
         return {
             "max_depth_mm": smooth_max(depth, self.temperature) * 1e3,
             "volume_mm3": worn_volume(depth, el.bushing_radius, el.law.depth) * 1e9,
-            "mean_joint_force_N": jnp.mean(safe_norm(loads.force)),
+            "mean_joint_force_N": jnp.mean(force),
             "status": res.status.astype(float),
         }
 

@@ -2,6 +2,7 @@
 increments, evolution over many cycles, the wear models and the life."""
 
 from ..contact.archard import MM3_PER_NM, SLIP_RATE_WIDTH, ArchardWear
+from .chunked import Checkpoint, ChunkedEvolution, load_checkpoint, save_checkpoint
 from .cycle import (
     CycleResult,
     JointsCycleResult,
@@ -12,14 +13,10 @@ from .cycle import (
 from .dynamic_term import CycleSettings, DynamicWear
 from .engine import WearState
 from .evolution import (
-    Checkpoint,
-    ChunkedEvolution,
     EvolutionResult,
     Evolver,
     WearLimitError,
     evolve,
-    load_checkpoint,
-    save_checkpoint,
     smooth_max,
     worn_mechanism,
     worn_volume,
@@ -33,11 +30,6 @@ from .extrapolation import (
 from .life import (
     LifeResult,
 )
-from .model import (
-    AbstractWearModel,
-    Dynamic,
-    cycles_to_limit,
-)
 from .peak import (
     peak_depth,
 )
@@ -48,7 +40,7 @@ from .status import (
 __all__ = [
     "MM3_PER_NM", "SLIP_RATE_WIDTH", "ArchardWear",
     "CycleResult", "wear_cycle", "reset_wear", "JointsCycleResult", "wear_cycle_joints",
-    "LifeResult", "cycles_to_limit", "AbstractWearModel", "Dynamic", "peak_depth",
+    "LifeResult", "peak_depth",
     "STATUS_TEXT",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "AbstractExtrapolation", "Constant", "Adaptive", "ErrorControlled",

@@ -54,6 +54,14 @@ def cycle_integrator(name: str) -> tuple[diffrax.AbstractSolver, float]:
     return cls(), tol
 
 
+def integrator_name(solver: diffrax.AbstractSolver | None) -> str:
+    """The `CYCLE_INTEGRATORS` name of a cycle integrator (None: Tsit5, the
+    default); its class name when it is none of them."""
+    kind = diffrax.Tsit5 if solver is None else type(solver)
+    return next((name for name, (cls, _) in CYCLE_INTEGRATORS.items() if cls is kind),
+                kind.__name__)
+
+
 class CycleResult(eqx.Module):
     """End state, wear-depth increment [m] on the grid, load x sliding increment
     [N m], integrator statistics, and (if requested) the saved trajectory."""

@@ -9,9 +9,7 @@ cycle count, integrated by an embedded Heun-Euler pair with step-size control.
 
 Each solver owns its step and the memory it keeps in the engine's state
 (`init`); the engine owns the shared bookkeeping (the scan, the status, the
-cut at the wall, the history).  The names ``"constant"``, ``"adaptive"`` and
-``"error"`` (the command line's ``--method``) map onto them through
-`extrapolation_method`.  Settings are static: a new value recompiles.
+cut at the wall, the history).  Settings are static: a new value recompiles.
 """
 
 from __future__ import annotations
@@ -23,7 +21,6 @@ import equinox as eqx
 import jax.numpy as jnp
 from jax import lax
 
-from ..choices import WEAR_METHODS
 from ..errors import InputError
 from .engine import AbstractWearSolver, CycleWear, Proposal, Stop, WearState
 
@@ -49,6 +46,11 @@ class AbstractExtrapolation(AbstractWearSolver):
     def init(self, term, state: WearState, stop: Stop) -> WearState:
         return state
 
+    def first_step(self, cycles) -> float:
+        """The first extrapolation (real cycles per simulated one) of a run of
+        ``cycles`` (a Python number)."""
+        raise NotImplementedError
+
 
 class Constant(AbstractExtrapolation):
     """Every simulated cycle stands for ``a`` real cycles (Eq. 4-19); the last
@@ -61,6 +63,9 @@ class Constant(AbstractExtrapolation):
     def __check_init__(self):
         if not (float(self.a) >= 1.0 and math.isfinite(float(self.a))):
             raise InputError(f"extrapolation factor A must be >= 1, got {self.a}")
+
+    def first_step(self, cycles) -> float:
+        return float(self.a)
 
     def slots(self, stop: Stop, max_slots) -> int:
         cycles = stop.cycles
@@ -108,6 +113,11 @@ class Adaptive(AbstractExtrapolation):
             raise InputError(f"adaptive criterion must be 'increment_change' or "
                              f"'pressure_jump', got {self.criterion!r}")
 
+    def first_step(self, cycles) -> float:
+        if self.a0 in (None, 1.0):
+            return max(round(self.a0_fraction * float(cycles)), 1.0)
+        return float(self.a0)
+
     def init(self, term, state: WearState, stop: Stop) -> WearState:
         end = jnp.asarray(stop.end, dtype=float)
         a0 = (jnp.maximum(jnp.round(self.a0_fraction * end), 1.0)
@@ -150,6 +160,11 @@ class ErrorControlled(AbstractExtrapolation):
     dn0: float | None = eqx.field(default=None, static=True)
     name: ClassVar[str] = "error"
 
+    def first_step(self, cycles) -> float:
+        if self.dn0 in (None, 1.0):
+            return max(0.01 * float(cycles), 1.0)
+        return float(self.dn0)
+
     def init(self, term, state: WearState, stop: Stop) -> WearState:
         end = jnp.asarray(stop.end, dtype=float)
         dn0 = (jnp.maximum(0.01 * end, 1.0) if self.dn0 in (None, 1.0)
@@ -186,31 +201,4 @@ class ErrorControlled(AbstractExtrapolation):
             solver=dict(dn=dn * factor, have_k1=~accept, k1=k1, ls1=ls1))
 
 
-def extrapolation_method(method, *, extrapolation=1.0, rtol=1e-2, atol=1e-7,
-                         adaptive: dict | None = None) -> AbstractExtrapolation:
-    """A strategy object as given, or one built from its name (``"constant"``
-    with A = ``extrapolation``; ``"adaptive"`` with A_0 = ``extrapolation``
-    and the ``adaptive`` settings; ``"error"`` with ``rtol``/``atol`` [m] and
-    the first step ``extrapolation``)."""
-    if isinstance(method, AbstractExtrapolation):
-        return method
-    if method not in WEAR_METHODS:
-        raise InputError(f"method must be one of {', '.join(map(repr, WEAR_METHODS))} "
-                         f"or an extrapolation object, got {method!r}")
-    ex = None if extrapolation is None else float(extrapolation)
-    if method == "constant":
-        return Constant(1.0 if ex is None else ex)
-    if method == "adaptive":
-        opts = dict(adaptive or {})
-        # A_0 comes from ``extrapolation``, not from the settings
-        unknown = sorted(set(opts) - set(Adaptive.__dataclass_fields__) - {"name", "a0"})
-        if unknown:
-            raise InputError(f"adaptive settings {unknown}; allowed: a0_fraction, "
-                             "inc_fraction, dec_fraction, criterion, change_fraction, "
-                             "p_crit_fraction")
-        return Adaptive(a0=ex, **opts)
-    return ErrorControlled(rtol=float(rtol), atol=float(atol), dn0=ex)
-
-
-__all__ = ["AbstractExtrapolation", "Adaptive", "Constant", "ErrorControlled",
-           "extrapolation_method"]
+__all__ = ["AbstractExtrapolation", "Adaptive", "Constant", "ErrorControlled"]

@@ -367,17 +367,18 @@ class FemWear(DynamicWear):
 
 
 class FemEvolver(Evolver):
-    """`Evolver` (method "constant") whose wear term is the FE ring's
+    """`Evolver` (`Constant(A)` only) whose wear term is the FE ring's
     (`FemWear`)."""
 
     def __init__(self, mech: Mechanism, joint: str, cycles, *, fem: FemWearModel,
-                 method: str | AbstractExtrapolation = "constant", **kw):
-        if not isinstance(method, Constant) and method != "constant":
-            raise InputError(f"the FEM wear route supports method 'constant' only (constant "
-                             f"A, as the thesis's FEM runs), got {method!r}")
+                 method: AbstractExtrapolation = Constant(), **kw):
+        if not isinstance(method, Constant):
+            raise InputError(f"the FEM wear route extrapolates with Constant(A) only (as the "
+                             f"thesis's FEM runs), got {method!r}")
         if not isinstance(fem, FemWearModel):
             raise InputError(f"fem must be a FemWearModel, got {type(fem).__name__}")
-        check_cycle_solver(kw.get("cycle_solver"))
+        cycle = kw.get("cycle")
+        check_cycle_solver(None if cycle is None else cycle.solver)
         _, el = clearance_element(mech, joint)
         rb, b = concrete(el.bushing_radius), concrete(fem.outer_radius)
         if rb is not None and b is not None and not b > rb:
@@ -393,11 +394,11 @@ class FemEvolver(Evolver):
 
 def evolve_fem(mech: Mechanism, joint: str, y0, cycles, *, period, fem: FemWearModel,
                extrapolation=1.0, **kw) -> EvolutionResult:
-    """`evolve` (method "constant") with the FE wear pressure; ``kw`` as `evolve`
-    (wall_thickness, warmup_cycles, cycle tolerances, ...)."""
+    """`evolve` with constant A = ``extrapolation`` and the FE wear pressure;
+    ``kw`` as `evolve` (wall_thickness, warmup_cycles, cycle, ...)."""
     require_float64("evolve_fem")
-    ev = FemEvolver(mech, joint, cycles, fem=fem, period=period, extrapolation=extrapolation,
-                    **kw)
+    ev = FemEvolver(mech, joint, cycles, fem=fem, period=period,
+                    method=Constant(float(extrapolation)), **kw)
     state, hist = ev.run(ev.init(y0), ev.n_slots)
     return ev.result(state, hist)
 

@@ -23,8 +23,8 @@ sinks in at a constant rate).  They differ in how dN is chosen:
 * `DepthGain` (the dynamic model's life): the dN at which the deepest node of
   the fastest-wearing joint gains exactly limit / steps under the explicit
   step, min over nodes (limit / steps - (h_k - max h)) / w_k; the response A
-  comes from the same cycle (`scheme="implicit"`) or is left out
-  (``"euler"``).  The crossing is interpolated linearly in the maximum depth.
+  comes from the same cycle (``implicit=True``) or is left out
+  (``implicit=False``).  The crossing is interpolated linearly in the maximum depth.
 * `CycleGrid` (the calibration's histories): steps between given cycle
   counts, each from the rate at its start modulated over the step.
 """

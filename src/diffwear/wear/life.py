@@ -24,9 +24,9 @@ life); the others carry on.
 
 The profile update: explicit or linearly implicit
 -------------------------------------------------
-Explicit Euler (``scheme="euler"``) is unstable for dN beyond about
+Explicit Euler (``implicit=False``) is unstable for dN beyond about
 1 / lambda, lambda = k k_f s_contact (~1e-3 per cycle on the Ch. 8 mechanism):
-a worn node loses pressure at that rate.  ``scheme="implicit"`` (default)
+a worn node loses pressure at that rate.  ``implicit=True`` (default)
 solves (I + dN A) dh_step = dN f(h) with `wear_operator` A, the
 cycle-integrated response of the wear increment to the profile (a
 W-method: first order for any A, stable when A holds the stiff part).  The
@@ -103,12 +103,10 @@ from jaxtyping import Array, Float
 
 from ..errors import InputError
 from ..mechanism import Mechanism
-from .cycle import CYCLE_ATOL, CYCLE_RTOL
 from .dynamic_term import CycleSettings, DynamicWear
 from .engine import Stop, initial_state, integrate
 from .implicit import DepthGain
 
-SCHEMES = ("implicit", "euler")
 
 class LifeResult(eqx.Module):
     """Per-joint cycles to the limit and the evolution that found them.
@@ -149,46 +147,39 @@ def dynamic_cycles_to_limit(
     period,
     limit,
     steps: int = 10,
-    scheme: str = "implicit",
+    implicit: bool = True,
     operator_samples: int = 181,
     operator_width=1e-6,
     slots: int | None = None,
     warmup_cycles: int = 1,
-    cycle_rtol: float = CYCLE_RTOL,
-    cycle_atol: float = CYCLE_ATOL,
-    adjoint=None,
-    max_steps: int = 200_000,
-    cycle_solver=None,
+    cycle: CycleSettings = CycleSettings(),
 ) -> LifeResult:
     """Cycles until the maximum bushing wear depth of each of ``joints`` reaches
     ``limit`` [m] (see the module notes for the stepping and the derivative).
 
     ``steps``: slots the fastest-wearing joint takes to reach the limit (the
-    accuracy knob; the error falls as 1 / steps).  ``scheme``: "implicit" or
-    "euler" (module notes); ``operator_samples`` states per cycle and
+    accuracy knob; the error falls as 1 / steps).  ``implicit``: the linearly
+    implicit profile update, else explicit Euler (module notes);
+    ``operator_samples`` states per cycle and
     ``operator_width`` [m] contact band of `wear_operator`.  ``slots``: scan
     slots (default 3 x steps + 4: the implicit gain per slot is below
     limit / steps, and the slowest joint carries on once the fastest is done).
     ``warmup_cycles`` dynamic cycles run first with their wear
-    discarded (the pin's start-up transient).  ``cycle_solver``: the dynamic
-    cycles' integrator (default Tsit5; `diffwear.wear.cycle.CYCLE_INTEGRATORS`).
+    discarded (the pin's start-up transient).  ``cycle``: how each dynamic
+    cycle is integrated (`CycleSettings`).
     Pure and jit-able; a solver failure or a joint that never reaches the
     limit is reported in ``status``.
     """
     joints = tuple(joints)
     if not joints:
         raise InputError("cycles_to_limit needs at least one wearing joint")
-    if scheme not in SCHEMES:
-        raise InputError(f"scheme must be one of {SCHEMES}, got {scheme!r}")
-    solver = DepthGain(int(steps), implicit=scheme == "implicit")
+    solver = DepthGain(int(steps), implicit=bool(implicit))
     stop = Stop(limit=jnp.asarray(limit, dtype=float))
     n_slots = solver.slots(stop, slots)
     if n_slots < 1:
         raise InputError(f"slots must be >= 1, got {slots}")
-    settings = CycleSettings(cycle_rtol, cycle_atol, cycle_solver, adjoint, max_steps)
-    implicit = scheme == "implicit"
     # the state a slot starts from carries no derivative (module notes)
-    term = DynamicWear(mech, joints, jnp.asarray(period, dtype=float), settings,
+    term = DynamicWear(mech, joints, jnp.asarray(period, dtype=float), cycle,
                        saves=operator_samples if implicit else None, response=implicit,
                        operator_width=operator_width, fresh_state=True)
     memory, ok = term.warm_up(y0, warmup_cycles)

@@ -32,39 +32,15 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .._checks import require_float64
+from ..contact import ContactHistory
 from ..mechanism import GROUND, Mechanism
+from ..mechanism.geometry import safe_angle, safe_norm
+from ..quasistatic.loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
+from ..quasistatic.lubricated import joint_model
 from ..wear.life import LifeResult
-from ..wear.model import AbstractWearModel
-from ..wear.profile_ode import ProfileHistory, ProfileSolution, integrate_profile
+from ..wear.profile_ode import ProfileSolution, integrate_profile
 from ..wear.status import STATUS_CONTACT_LOSS, STATUS_INCOMPLETE, STATUS_OK, STATUS_SOLVER
-from .loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
-from .lubricated import joint_model
-
-
-class QuasiStaticEvolution(eqx.Module):
-    """Wear of each joint after ``cycles`` real cycles (quasi-static model).
-
-    depth: final wear profiles [m], one per joint (tuple)
-    cycles: real cycles reached: the requested count, or fewer when a joint
-        wore through its wall (or its model failed) first
-    joint_cycles: per joint, the cycles its profile represents (a joint
-        stopped at its wall holds the cycles at which it reached it)
-    status: `diffwear.wear.status` code (worst over the joints)
-    joint_status: per joint
-    contact_margin: per joint, the smallest `QuasiStaticJoint.contact_margin`
-        over the cycle of the unworn joint (< 1: status contact loss)
-    contact_margin_worn: the same at the final profile (< 1: a warning)
-    history: one `ProfileHistory` per joint (the integrator's steps)
-    """
-
-    depth: tuple
-    cycles: Float[Array, ""]
-    joint_cycles: Float[Array, " J"]
-    status: Array
-    joint_status: Array
-    contact_margin: Float[Array, " J"]
-    contact_margin_worn: Float[Array, " J"]
-    history: tuple
+from ._base import AbstractWearModel, WearEvolution
 
 
 def joint_mass(mech: Mechanism, joint) -> Float[Array, ""]:
@@ -102,6 +78,8 @@ class QuasiStatic(AbstractWearModel):
 
     name: ClassVar[str] = "quasi-static"
     exact_gradients: ClassVar[bool] = True
+    label: ClassVar[str] = "diffwear (quasi-static)"
+    step_words: ClassVar[str] = "wear ODE steps"
     samples: int = eqx.field(static=True, default=180)
     steps: int = eqx.field(static=True, default=40)
     warmup_cycles: int = eqx.field(static=True, default=0)
@@ -109,6 +87,21 @@ class QuasiStatic(AbstractWearModel):
     contact_mass: Float[Array, ""] | None = None
     fixed_loads: CycleLoads | None = None
     max_steps: int | None = eqx.field(static=True, default=None)
+
+    def describe(self, cycles) -> dict:
+        return {"model": self.name, "load_samples_per_cycle": self.samples}
+
+    @property
+    def precomputes(self) -> bool:  # type: ignore[override]
+        """The joint loads are computed once unless they are given."""
+        return self.fixed_loads is None
+
+    def prepared(self, mech: Mechanism, joints, y0, period) -> "QuasiStatic":
+        """This model with the joint loads of ``mech`` computed once
+        (`with_loads`), unless they are given already."""
+        if self.fixed_loads is not None:
+            return self
+        return self.with_loads(self.loads(mech, joints, y0, period))
 
     def with_loads(self, loads: CycleLoads) -> "QuasiStatic":
         """This model with the joint loads given (`loads`): for studies whose
@@ -207,8 +200,35 @@ class QuasiStatic(AbstractWearModel):
                           depth=tuple(s.depth for s in sols), status=status,
                           dynamic_cycles=jnp.zeros((), int), history=history)
 
+    def joint_force(self, mech, joint, y0, *, period, evolution: WearEvolution,
+                    samples: int = 180):
+        """The ideal mechanism's joint load over the cycle (`samples` of this
+        model's): wear does not change it in this model."""
+        return safe_norm(self.loads(mech, (joint,), y0, period).joints[0].force)
+
+    def contact_history(self, mech, joint: str, y0, period, depth) -> ContactHistory:
+        """``joint`` over one cycle at wear ``depth``: the loads of the ideal
+        mechanism, the pin at equilibrium."""
+        loads = self.loads(mech, (joint,), y0, period).joints[0]
+        model = self.joints(mech, (joint,))[0]
+        eq = model.equilibrium(depth, loads)
+        gap = eq.offset @ model.directions.T - (model.clearance + depth)
+        angle = jnp.mod(safe_angle(eq.offset), 2 * jnp.pi)
+        return ContactHistory(force=loads.force, normal_load=eq.normal_load, offset=eq.offset,
+                              penetration=gap.max(axis=1), contact_angle=angle,
+                              pressure=eq.pressure)
+
+    def cycle_histories(self, mech, joint, y0, *, period, evolution: WearEvolution) -> tuple:
+        """The unworn and the final profile's equilibria over the cycle (the
+        same joint load: wear does not change it in this model)."""
+        history = eqx.filter_jit(self.contact_history)
+        depth = evolution.depth[0]
+        crank = 2 * jnp.pi * jnp.arange(self.samples) / self.samples
+        return (history(mech, joint, y0, period, jnp.zeros_like(depth)),
+                history(mech, joint, y0, period, depth), crank)
+
     def evolve(self, mech, joints, y0, *, period, cycles,
-               wall_thickness=None) -> QuasiStaticEvolution:
+               wall_thickness=None) -> WearEvolution:
         """Wear of ``joints`` after ``cycles`` real cycles from unworn bushings;
         ``wall_thickness`` [m] (one for all, or one per joint): stop a joint
         whose peak depth reaches it."""
@@ -216,7 +236,7 @@ class QuasiStatic(AbstractWearModel):
         joint_status, status = self._status(per_joint, ok)
         sols = [s for s, _ in per_joint]
         joint_cycles = jnp.stack([s.cycles for s in sols])
-        return QuasiStaticEvolution(
+        return WearEvolution(
             depth=tuple(s.depth for s in sols), cycles=jnp.min(joint_cycles),
             joint_cycles=joint_cycles, status=status, joint_status=joint_status,
             contact_margin=jnp.stack([m[0] for _, m in per_joint]),
@@ -224,4 +244,4 @@ class QuasiStatic(AbstractWearModel):
             history=tuple(s.history for s in sols))
 
 
-__all__ = ["QuasiStatic", "QuasiStaticEvolution", "ProfileHistory", "joint_mass"]
+__all__ = ["QuasiStatic", "joint_mass"]

@@ -1,0 +1,25 @@
+"""Wear models: how the wear of one crank cycle is computed, as strategy
+objects that every consumer of wear takes (as diffrax takes a solver).
+
+* `Dynamic`: the reference.  The mechanism with its clearance joints is
+  integrated over each simulated cycle (Baumgarte DAE with the stiff EFM
+  contact); the pin may impact and leave the wall.
+* `QuasiStatic`: the pin at the equilibrium of the EFM springs (or the oil
+  film and asperities) under the loads of the ideal mechanism; smooth, exact
+  gradients, milliseconds per cycle; valid while the contact is kept (it
+  checks).
+* `FemRoute`: the dynamic model with the wear pressure of a finite-element
+  bushing ring (thesis Ch. 5).
+
+Each computes lives (`cycles_to_limit`), evolutions over a number of cycles
+and the joint force at the end, on the wear engine (`diffwear.wear.engine`).
+"""
+
+from ._base import AbstractWearModel, WearEvolution
+from .dynamic import Dynamic
+from .fem import FemRoute
+from .life import cycles_to_limit
+from .quasi_static import QuasiStatic, joint_mass
+
+__all__ = ["AbstractWearModel", "WearEvolution", "Dynamic", "QuasiStatic", "FemRoute",
+           "cycles_to_limit", "joint_mass"]

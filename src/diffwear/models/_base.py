@@ -1,0 +1,132 @@
+"""What every wear model provides: `AbstractWearModel` and its evolution result."""
+
+from __future__ import annotations
+
+import abc
+from typing import Any, Callable, ClassVar
+
+import equinox as eqx
+from jaxtyping import Array, Float
+
+from ..errors import InputError
+from ..mechanism import Mechanism
+from ..wear.chunked import Checkpoints, RunTimes, timed
+
+
+class WearEvolution(eqx.Module):
+    """Wear of each joint after ``cycles`` real cycles.
+
+    depth: final wear profiles [m], one per joint (tuple)
+    cycles: real cycles reached: the requested count, or fewer when a joint
+        wore through its wall (or its model failed) first
+    joint_cycles: per joint, the cycles its profile represents
+    status: `diffwear.wear.status` code (worst over the joints)
+    joint_status: per joint
+    contact_margin, contact_margin_worn: per joint, the quasi-static model's
+        contact check on the unworn and the final profile (NaN where the
+        model needs none)
+    history: per joint a `diffwear.wear.profile_ode.ProfileHistory` (index 0
+        the start)
+    detail: the model's own result (the dynamic model's `EvolutionResult`:
+        end state, load x sliding, dynamic cycles), or None
+    """
+
+    depth: tuple
+    cycles: Float[Array, ""]
+    joint_cycles: Float[Array, " J"]
+    status: Array
+    joint_status: Array
+    contact_margin: Float[Array, " J"]
+    contact_margin_worn: Float[Array, " J"]
+    history: tuple
+    detail: Any = None
+
+
+class AbstractWearModel(eqx.Module):
+    """How the wear of one crank cycle is computed, and with it the wear of
+    many: every consumer of wear (lives, evolutions, the wear studies, the
+    bushing design, the sweeps) takes a model object, as diffrax takes a
+    solver.
+
+    ``exact_gradients``: the pointwise derivative of its results is the slope
+    users want (the quasi-static model), else callers should difference (the
+    dynamic model).  ``precomputes``: `prepared` has something to compute that
+    does not depend on the bushing design (the quasi-static model's joint
+    loads).
+    """
+
+    name: eqx.AbstractClassVar[str]
+    exact_gradients: eqx.AbstractClassVar[bool]
+    precomputes: ClassVar[bool] = False
+    # how its results are labelled, and what its history's steps are
+    label: ClassVar[str] = "diffwear"
+    step_words: ClassVar[str] = "steps"
+
+    @abc.abstractmethod
+    def life(self, mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,
+             period, limit):
+        """Cycles until the peak wear depth of each joint reaches ``limit`` [m]:
+        a `diffwear.wear.LifeResult`."""
+
+    @abc.abstractmethod
+    def evolve(self, mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,
+               period, cycles, wall_thickness=None) -> WearEvolution:
+        """Wear of ``joints`` after ``cycles`` real cycles from unworn bushings;
+        ``wall_thickness`` [m] (one for all, or one per joint): stop a joint
+        whose peak depth reaches it."""
+
+    @abc.abstractmethod
+    def joint_force(self, mech: Mechanism, joint: str, y0: Float[Array, " s"], *, period,
+                    evolution: WearEvolution, samples: int = 180) -> Float[Array, " T"]:
+        """|joint force| [N] of ``joint`` over one cycle at the end of
+        ``evolution``, equally spaced over the period (``samples`` of them
+        where the model samples the cycle anew)."""
+
+    @abc.abstractmethod
+    def cycle_histories(self, mech: Mechanism, joint: str, y0, *, period,
+                        evolution: WearEvolution) -> tuple:
+        """``joint`` over its first cycle (unworn) and its last (at the end of
+        ``evolution``): (first, last `diffwear.contact.ContactHistory`, the
+        crank angle [rad] of their samples from the cycle's start)."""
+
+    def check_joints(self, mech: Mechanism, joints: tuple[str, ...],
+                     what: str = "mechanism") -> None:
+        """`InputError` for wearing joints this model does not evolve (none
+        here); ``what`` names the mechanism's source in the message."""
+
+    def describe(self, cycles) -> dict:
+        """The settings of an evolution over ``cycles`` that a summary reports
+        and a checkpoint records (a checkpoint resumes only a run with the
+        same)."""
+        return {"model": self.name}
+
+    def reference(self) -> "AbstractWearModel | None":
+        """The model a run of this one is compared with (the FEM route: the same
+        dynamics with the EFM pressure), or None."""
+        return None
+
+    def route_summary(self, evolution: WearEvolution) -> dict:
+        """What a comparison of routes reports of this one beyond the wear."""
+        return {}
+
+    def run(self, mech_of: Callable, p, joints: tuple[str, ...], y0, *, period, cycles,
+            wall_thickness=None, checkpoints: Checkpoints | None = None
+            ) -> tuple[WearEvolution, RunTimes]:
+        """`evolve` of the mechanism ``mech_of(p)`` compiled once and run, both
+        timed.  ``checkpoints``: the output folder and settings of a run kept
+        in checkpoints; this model runs whole (a resume is an `InputError`)."""
+        if checkpoints is not None and checkpoints.resume:
+            raise InputError(f"--resume: the {self.name} model runs whole, without "
+                             "checkpoints (seconds); run it again instead")
+
+        def evolution(p, y0):
+            return self.evolve(mech_of(p), joints, y0, period=period, cycles=cycles,
+                               wall_thickness=wall_thickness)
+
+        return timed(evolution, p, y0)
+
+    def prepared(self, mech: Mechanism, joints: tuple[str, ...], y0, period
+                 ) -> "AbstractWearModel":
+        """This model with what does not depend on the bushing design computed
+        once for ``mech`` (nothing here)."""
+        return self

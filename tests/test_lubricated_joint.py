@@ -315,7 +315,7 @@ def test_oil_film_damps_the_dry_joints_impacts_at_speed():
     p = SliderCrankParameters(l1=0.05, m1=0.30, inertia1=1e-4, l2=0.12, m2=0.21,
                               inertia2=2.5e-4, m3=0.14, omega=5000 * 2 * math.pi / 60)
     mech, y0 = clearance_slider_crank("efm", clearance=0.5e-3, p=p, pin_radius=0.01,
-                                      depth=0.04, bushing_material=STEEL, n_theta=90)
+                                      depth=0.04, materials=(STEEL, STEEL), n_theta=90)
     el = mech.element("crank_rod")
     c = float(el.bushing_radius - el.pin_radius)
     period = 2 * math.pi / p.omega

@@ -128,14 +128,15 @@ def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *,
                            p: SliderCrankParameters = TABLE_2_1,
                            friction=FRICTION_CH3, restitution=RESTITUTION_CH3,
                            pin_radius=PIN_RADIUS_CH3, depth=BUSHING_DEPTH_CH5,
-                           wall=BUSHING_WALL_CH3, pin_material=None, bushing_material=None,
-                           wear=None, n_theta: int = 180, check: bool = True):
+                           wall=BUSHING_WALL_CH3, materials=None, wear=None,
+                           n_theta: int = 180, check: bool = True):
     """Table 2-1 slider-crank with the crank-rod joint as a clearance joint
     (pin on the crank, bushing in the rod: thesis Ch. 3), Table 3-2/3-3 data.
 
     ``law``: "ln" (Lankarani-Nikravesh, Hertz stiffness from the radius
     difference), "kv" (Kelvin-Voigt with the LN secant stiffness at 1 kN) or
-    "efm" (elastic foundation, PTFE wall ``wall``, depth ``depth``).
+    "efm" (elastic foundation, PTFE wall ``wall``, depth ``depth``);
+    ``materials``: (pin, bushing) `Material`s, default (steel, PTFE).
     Returns (mechanism, y0): y0 is the ideal mechanism's consistent state at
     t = 0 with the pin centred in the bushing (the thesis's start-up).
     """
@@ -152,8 +153,7 @@ def clearance_slider_crank(law: str = "ln", clearance=0.5e-3, *,
     from .dynamics import consistent_state
     from .errors import InputError
 
-    pin_material = STEEL if pin_material is None else pin_material
-    bushing_material = PTFE if bushing_material is None else bushing_material
+    pin_material, bushing_material = (STEEL, PTFE) if materials is None else materials
     pin_radius = jnp.asarray(pin_radius, dtype=float)
     bore = pin_radius + jnp.asarray(clearance, dtype=float)
     contact: AbstractContactLaw

@@ -26,7 +26,7 @@ def cycles_to_limit(mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, "
     """
     require_float64("cycles_to_limit")
     model = Dynamic() if model is None else model
-    if not isinstance(model, AbstractWearModel):
+    if not callable(getattr(model, "life", None)):
         raise InputError(f"cycles_to_limit: model must be a wear model (Dynamic(), "
                          f"QuasiStatic()), got {model!r}")
     res = model.life(mech, tuple(joints), y0, period=period, limit=limit)

@@ -48,47 +48,14 @@ give the slot's end), so the result is piecewise smooth with kinks only there
 and where the fastest joint changes.  ``max`` over the profile grid is the
 exact maximum (a subgradient at ties; no smoothing bias).
 
-The derivative: what is measured (Ch. 8 model, box centre, steps = 3)
---------------------------------------------------------------------
+The derivative
+--------------
 The mechanism state a slot starts from is passed on without its derivative
 (`lax.stop_gradient`): the cycle's wear depends on the design through the
-cycle itself, not through the inherited pin state, whose tangent grows from
-cycle to cycle.  Forward-mode autodiff (`jax.jacfwd`, diffrax `ForwardMode`)
-then behaves as follows against central differences of the same model:
-
-* Cycle tolerance decides most of it.  At the default rtol = atol = 1e-6 the
-  tangents reach 1e9 by the third slot (measured with A frozen) and 1e20-1e44
-  at the end, and central differences themselves are not converged
-  (dcyc1/dh1 = 2.4e6, 2.2e6, 1.0e7 cycles/m at relative steps 1e-2, 1e-3,
-  1e-4): the integrator's error
-  (step rejections changing with the design) is part of the derivative.  At
-  rtol = atol = 1e-8 (2.5x the run time) the slot tangents stay finite.
-* While the wear is shallow it is right: limit 0.2 mm, rtol 1e-8, the whole
-  Jacobian within 0.12 % of the largest entry of each row (1e-2 relative
-  central differences; `tests/test_life.py` checks 2 %).
-* At the 2 mm limit it is close for the joint that reaches the limit first
-  (cyc1 row within 1-4 % at rtol 1e-8) and wrong for the other (cyc2 row off
-  by a factor ~30: dcyc2/dd2 = 2.7e8 vs -2e4 cycles/m).  The cyc2 row is
-  set by the slots run after joint 1 is held at its end-of-life profile (a
-  groove over 2 mm deep): there a single cycle's wear is rough in the design
-  (central differences of one cycle's max increment change sign between
-  relative steps 1e-2, 1e-3 and 1e-4 even at rtol 1e-8), already visible at
-  a 1.7 mm groove (one cycle's jvp 8x below central differences).  The
-  pointwise derivative of that cycle is not the slope of the life; no guard
-  in this module changes that (it is in the dynamics of a deeply worn joint).
-  Even the cyc1 row is right only by luck of rounding: writing the profile
-  update as h + 1.0 (h_new - h) (a 1e-16 change) moved slot 3's cycle count
-  by 2e-6 relative and jacfwd's dcyc1/dh1 by 9 % (2.61e6 -> 2.84e6
-  cycles/m; 4 % -> 15 % of the row), while central differences at relative
-  steps 1e-2, 3e-3, 1e-3 stayed within 2.51-2.56e6.  Holding a finished
-  joint at its crossing profile (max depth = limit) instead of the slot's
-  end sent the cyc2 tangents to ~5e9 (differences: ~9e6).  Both measured and
-  not kept.
-* Treating `wear_operator` A as a preconditioner (`lax.stop_gradient` on A)
-  does not help and is wrong at coarse steps: with few slots the W-method's
-  result depends on A at first order (1 % error instead of 0.02 % in the
-  shallow case; cyc1 row 6 % instead of 1 % at 2 mm), so A is differentiated.
-
+cycle itself, not through the inherited pin state.  Forward-mode derivatives
+of a shallow life at a tight cycle tolerance (1e-8) agree with central
+differences (`tests/test_life.py`); at the Ch. 8 limit of 2 mm they do not
+(design note "The dynamic life's derivative" gives the measurements).
 Callers that need a Jacobian of the Ch. 8 life therefore use central
 differences (`diffwear.design.finite_difference_jacobian`, 1e-3 relative: it
 averages over the roughness).

@@ -133,7 +133,7 @@ def finite_difference_jacobian(model, rel_step: float = FD_REL_STEP, on_jacobian
 
     Why not automatic differentiation: the life model's forward-mode
     derivative matches central differences only where the wear stays shallow
-    (`diffwear.wear.life`, "The derivative": at cycle_rtol 1e-8 the whole
+    (design note "The dynamic life's derivative": at cycle_rtol 1e-8 the whole
     Jacobian within 0.12 % for a 0.2 mm limit, but the second joint's row
     ~30x off at the 2 mm limit, where the joint held at its end-of-life
     groove makes one cycle's wear rough in the design).  Central differences

@@ -200,9 +200,10 @@ class RigHistory(eqx.Module):
         # (few parameters, many residuals)
         settings = CycleSettings(self.cycle_rtol, self.cycle_atol,
                                  adjoint=diffrax.ForwardMode())
+        grow = 1.0 + effects["creep"]
         term = _RigDynamicWear(mech, (JOINT,), jnp.asarray(self.period), settings,
-                               saves=self.force_samples, effects=effects,
-                               grow=1.0 + effects["creep"], total_cycles=self.cycles)
+                               saves=self.force_samples, effects=effects, grow=grow,
+                               total_cycles=self.cycles)
         memory, ok = term.warm_up(y0, 1)
         stop = Stop(cycles=self.cycles)
         solver = Constant(self.extrapolation)
@@ -222,7 +223,7 @@ class RigHistory(eqx.Module):
         wear = jnp.concatenate([zeros[None], hs])
         return History(
             cycles=a * jnp.arange(self.dynamic_cycles + 1, dtype=float),
-            wear=wear, creep=(term.grow - 1.0) * wear,
+            wear=wear, creep=(grow - 1.0) * wear,
             force=forces, force_cycles=a * jnp.arange(self.dynamic_cycles, dtype=float),
             force_angle=angle, theta=el.profile.theta,
             bushing_radius=el.bushing_radius, bushing_depth=el.law.depth,
@@ -245,14 +246,17 @@ class _RigDynamicWear(DynamicWear):
         return dict(memory, force=jnp.zeros(self.saves)), ok
 
     def cycle(self, h, memory) -> CycleWear:
+        assert self.grow is not None
         profile = (self.grow * h[0],)
         r, after, worn = self.run(profile, memory, self.saves)
+        assert r.ys is not None  # saved: ``saves`` states
         force = contact_history(worn, JOINT, r.ys).force_magnitude
         return CycleWear(rate=tuple(r.depth_increment), ok=r.ok, memory=dict(after, force=force),
                          load_sliding=jnp.stack(r.load_sliding))
 
     def modulate(self, cw: CycleWear, h, n, dn) -> CycleWear:
-        el = clearance_element(self.mech, JOINT)[1]
+        assert self.effects is not None
+        el = self.mech.element(JOINT)
         volume = worn_volume(h[0], el.bushing_radius, el.law.depth)
         g = rate_factor(self.effects, h[0], volume, n, dn, el.profile.theta, self.total_cycles)
         return CycleWear(rate=(g * cw.rate[0],), ok=cw.ok, memory=cw.memory,

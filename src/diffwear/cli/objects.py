@@ -86,11 +86,12 @@ def wear_model(model: str, *, cycles, method: str = "constant", target_dynamic: 
     if model == "quasi-static":
         return QuasiStatic()
     a = extrapolation or default_constant_a(cycles, target_dynamic)
-    options = dict(extrapolation=extrapolation_method(method, extrapolation=a, atol=1e-6),
-                   cycle=cycle_settings(integrator), dynamic_cycles=int(target_dynamic))
+    solver = extrapolation_method(method, extrapolation=a, atol=1e-6)
+    cycle = cycle_settings(integrator)
     if fem is not None:
-        return FemRoute(fem=fem, **options)
-    return Dynamic(**options)
+        return FemRoute(fem=fem, extrapolation=solver, cycle=cycle,
+                        dynamic_cycles=int(target_dynamic))
+    return Dynamic(extrapolation=solver, cycle=cycle, dynamic_cycles=int(target_dynamic))
 
 
 __all__ = ["extrapolation_method", "check_wear_model", "check_contact", "cycle_settings",

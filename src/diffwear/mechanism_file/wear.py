@@ -152,7 +152,7 @@ def model_numbers(model: AbstractWearModel, res: WearEvolution, k: int, cycles) 
     """What a joint's summary says of the model beyond the wear: the contact
     check where the model has one, the extrapolation and the dynamic cycles
     where it simulates them."""
-    out = {}
+    out: dict = {}
     margin = float(res.contact_margin[k])
     if np.isfinite(margin):
         out.update(contact_margin=margin,

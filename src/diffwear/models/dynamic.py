@@ -159,6 +159,7 @@ class Dynamic(AbstractWearModel):
         worn = worn_mechanism(mech, joint, res.depth)
         cyc = wear_cycle(worn, joint, res.y, res.t, period, n_save=samples + 1,
                          **self.cycle.options())
+        assert cyc.ys is not None  # saved: n_save is given
         return contact_history(worn, joint, cyc.ys).force_magnitude[:-1]
 
 

@@ -76,7 +76,7 @@ class _Folder:
 def _wear_study_figures(run: str, folder: Path, clearance_mm: float) -> None:
     """The wear study's own figures (`diffwear.plots.wear.wear_figures`) from
     its stored curves: profile, history, first/last cycle's locus and force."""
-    from diffwear.plots.wear import wear_figures
+    from diffwear.plots.wear import Lines, wear_figures
 
     s = _summary(run)
     profile = read_csv(STUDIES / run / "wear_profile.csv")
@@ -96,8 +96,8 @@ def _wear_study_figures(run: str, folder: Path, clearance_mm: float) -> None:
                  depth_mm=profile["depth_mm"],
                  history=(history["cycles"][later], history["max_depth_mm"][later],
                           history["volume_mm3"][later]),
-                 crank=crank, first=first, last=last, clearance_mm=clearance_mm,
-                 thesis=s["thesis"])
+                 crank=crank, first=first, last=last, thesis=s["thesis"],
+                 lines=Lines(clearance_mm=clearance_mm))
 
 
 _WEAR_STUDY_PNGS: dict[str, dict[str, bytes]] = {}  # run -> its figures, drawn once

@@ -3,8 +3,12 @@ command line builds its parser from them before it imports JAX)."""
 
 from pathlib import Path
 
-# How a wear evolution extrapolates over cycles (`diffwear.wear.evolve`, --method).
-WEAR_METHODS = ("constant", "adaptive", "error")
+# How a wear evolution extrapolates over cycles (--method): the option's name of
+# each extrapolation solver of `diffwear.wear.extrapolation`, by its class
+# (the name a summary and a checkpoint record).
+METHOD_OF_SOLVER = {"Constant": "constant", "Adaptive": "adaptive",
+                    "ErrorControlled": "error"}
+WEAR_METHODS = tuple(METHOD_OF_SOLVER.values())
 # The pressure model of the wear (--contact); the dynamics always use the EFM.
 WEAR_CONTACTS = ("efm", "fem")
 # The wear model (--model): the dynamic reference or the quasi-static joint.

@@ -21,6 +21,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jax import lax
 
+from ..choices import METHOD_OF_SOLVER
 from ..errors import InputError
 from .engine import AbstractWearSolver, CycleWear, Proposal, Stop, WearState
 
@@ -58,7 +59,7 @@ class Constant(AbstractExtrapolation):
     Python number)."""
 
     a: float = eqx.field(default=1.0, static=True)
-    name: ClassVar[str] = "constant"
+    name: ClassVar[str] = METHOD_OF_SOLVER["Constant"]
 
     def __check_init__(self):
         if not (float(self.a) >= 1.0 and math.isfinite(float(self.a))):
@@ -106,7 +107,7 @@ class Adaptive(AbstractExtrapolation):
     criterion: str = eqx.field(default="increment_change", static=True)
     change_fraction: float = eqx.field(default=0.10, static=True)
     p_crit_fraction: float = eqx.field(default=0.25, static=True)
-    name: ClassVar[str] = "adaptive"
+    name: ClassVar[str] = METHOD_OF_SOLVER["Adaptive"]
 
     def __check_init__(self):
         if self.criterion not in ADAPTIVE_CRITERIA:
@@ -158,7 +159,7 @@ class ErrorControlled(AbstractExtrapolation):
     rtol: float = eqx.field(default=1e-2, static=True)
     atol: float = eqx.field(default=1e-7, static=True)
     dn0: float | None = eqx.field(default=None, static=True)
-    name: ClassVar[str] = "error"
+    name: ClassVar[str] = METHOD_OF_SOLVER["ErrorControlled"]
 
     def first_step(self, cycles) -> float:
         if self.dn0 in (None, 1.0):

@@ -281,8 +281,8 @@ def peaks(h: tuple, peak: Callable) -> Float[Array, " J"]:
 # ----------------------------------------------------------------- the driver
 class Integration(NamedTuple):
     """The end of an integration: its final `WearState` and per-slot history
-    (``cycles``, ``max_depth`` per joint, ``valid`` and the solver's
-    entries)."""
+    (``cycles``, ``max_depth`` per joint, ``step`` dN, ``valid``,
+    ``evaluations``; ``depth`` and ``memory`` where kept)."""
 
     state: WearState
     history: dict

@@ -3,7 +3,7 @@
 Every wear result of the package (an evolution over N cycles, a life to a
 depth limit, a calibration's forward history) is one call of `integrate`:
 
-    integrate(term, solver, h0, stop=..., slots=...)
+    integrate(term, solver, initial_state(h0, memory), stop=..., slots=...)
 
 in the shape of diffrax's ``diffeqsolve(terms, solver, ...)``:
 
@@ -11,11 +11,14 @@ in the shape of diffrax's ``diffeqsolve(terms, solver, ...)``:
   cycle at a profile, w(h) (thesis Eq. 4-18 with A = 1), its response
   A = -dw/dh where the solver needs it, and what the next cycle starts from
   (the mechanism state of a dynamic cycle, the warm start of an equilibrium).
-  The wear models supply it (`diffwear.wear.dynamic`, `diffwear.quasistatic`).
+  The wear models supply it (`diffwear.wear.dynamic_term.DynamicWear`, the
+  FEM route's `FemWear`, the quasi-static joint through
+  `diffwear.wear.profile_ode`).
 * the **solver** (`AbstractWearSolver`) advances the profile by one step:
   explicit extrapolation (`Constant`, `Adaptive`: thesis Eqs. 4-19, 4-20), an
   error-controlled pair (`ErrorControlled`), or the linearly implicit Euler
-  step (`LinearlyImplicitEuler`, `DepthGain`) with its step-size rule.
+  step with its step-size rule (`LinearlyImplicitEuler`, `DepthGain`,
+  `CycleGrid`: `diffwear.wear.implicit`).
 * the **stop** (`Stop`) says where the integration ends: a cycle count, a
   depth limit (the life: the crossing is interpolated within its step), a
   wall (a step through it is cut back to it).

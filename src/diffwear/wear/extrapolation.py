@@ -23,13 +23,9 @@ from jax import lax
 
 from ..choices import METHOD_OF_SOLVER
 from ..errors import InputError
-from .engine import AbstractWearSolver, CycleWear, Proposal, Stop, WearState
+from .engine import AbstractWearSolver, Proposal, Stop, WearState
 
 ADAPTIVE_CRITERIA = ("increment_change", "pressure_jump")
-
-
-def _advance(term, s: WearState, cw: CycleWear, dn):
-    return term.advance(s.h, cw, dn)
 
 
 class AbstractExtrapolation(AbstractWearSolver):
@@ -77,7 +73,7 @@ class Constant(AbstractExtrapolation):
     def step(self, term, state: WearState, stop: Stop) -> Proposal:
         a_i = jnp.minimum(float(self.a), jnp.asarray(stop.end, dtype=float) - state.n)
         cw = term.modulate(term.cycle(state.h, state.memory), state.h, state.n, a_i)
-        h, ls, memory, ok = _advance(term, state, cw, a_i)
+        h, ls, memory, ok = term.advance(state.h, cw, a_i)
         return Proposal(h=h, dn=a_i, ok=ok, memory=memory, load_sliding=ls, evaluations=1,
                         solver={})
 
@@ -144,7 +140,7 @@ class Adaptive(AbstractExtrapolation):
             change = jnp.max(jnp.abs(dh - c["dh_prev"]))
             smooth = change < self.change_fraction * jnp.max(jnp.abs(dh))
         a_next = jnp.where(smooth, c["a"] + a_inc, jnp.maximum(c["a"] - a_dec, 1.0))
-        h, ls, memory, ok = _advance(term, state, cw, a_i)
+        h, ls, memory, ok = term.advance(state.h, cw, a_i)
         return Proposal(h=h, dn=a_i, ok=ok, memory=memory, load_sliding=ls, evaluations=1,
                         solver=dict(a=a_next, dh_prev=dh))
 

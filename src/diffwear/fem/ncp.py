@@ -54,6 +54,15 @@ def fischer_burmeister(a, b):
     return a + b - jnp.where(zero, 0.0, r)
 
 
+def fischer_burmeister_partials(a, b):
+    """(d phi / da, d phi / db) of `fischer_burmeister`: 1 - a / r and 1 - b / r
+    (r = sqrt(a^2 + b^2)), (1, 1) at a = b = 0, as its autodiff gives."""
+    r2 = a * a + b * b
+    zero = r2 == 0.0
+    r = jnp.sqrt(jnp.where(zero, 1.0, r2))
+    return jnp.where(zero, 1.0, 1.0 - a / r), jnp.where(zero, 1.0, 1.0 - b / r)
+
+
 class NewtonInfo(eqx.Module):
     """How the solve ended: ``converged`` (max |Phi| <= tol), the final max |Phi|
     and the number of Newton steps."""
@@ -64,7 +73,10 @@ class NewtonInfo(eqx.Module):
     tol: float = eqx.field(static=True)
 
 
-def _newton(residual: Callable, z0, args, tol: float, max_steps: int):
+def _newton(residual: Callable, z0, args, tol: float, max_steps: int,
+            jacobian: Callable | None = None):
+    jacobian = _jacobian_of(residual) if jacobian is None else jacobian
+
     def merit(z):
         r = residual(z, args)
         return 0.5 * jnp.sum(r * r), r
@@ -75,7 +87,7 @@ def _newton(residual: Callable, z0, args, tol: float, max_steps: int):
 
     def body(state):
         z, psi, r, k = state
-        jac = jax.jacfwd(lambda y: residual(y, args))(z)
+        jac = jacobian(z, args)
         d = jnp.linalg.solve(jac, -r)
         grad = jac.T @ r
         ok = jnp.all(jnp.isfinite(d)) & (grad @ d < -1e-12 * jnp.sum(d * d))
@@ -103,15 +115,27 @@ def _newton(residual: Callable, z0, args, tol: float, max_steps: int):
     return z, NewtonInfo(converged=res <= tol, residual=res, steps=k, tol=tol)
 
 
+def _jacobian_of(residual: Callable) -> Callable:
+    """(z, args) -> d residual / dz by forward-mode autodiff."""
+    return lambda z, args: jax.jacfwd(lambda y: residual(y, args))(z)
+
+
 def solve(residual: Callable, z0: Float[Array, " m"], args, *, tol: float = 1e-12,
-          max_steps: int = 100) -> tuple[Float[Array, " m"], NewtonInfo]:
+          max_steps: int = 100, jacobian: Callable | None = None
+          ) -> tuple[Float[Array, " m"], NewtonInfo]:
     """z with residual(z, args) = 0 (max norm <= tol), differentiable in ``args``
     (a pytree of arrays) by the implicit function theorem; see the module docstring.
 
+    ``jacobian(z, args)``: d residual / dz in closed form (its generalized
+    derivative where the residual is not differentiable); default forward-mode
+    autodiff of ``residual``, one tangent per unknown.  A ``z0`` that already
+    meets ``tol`` takes no Newton step (a warm start at a known solution).
+
     Never raises: check ``info.converged`` (`diffwear.fem.contact` does, and
     raises `SolverError` outside ``jit``)."""
+    jacobian = _jacobian_of(residual) if jacobian is None else jacobian
     args_c = jax.lax.stop_gradient(args)
-    z, info = _newton(residual, jax.lax.stop_gradient(z0), args_c, tol, max_steps)
+    z, info = _newton(residual, jax.lax.stop_gradient(z0), args_c, tol, max_steps, jacobian)
     z = jax.lax.stop_gradient(z)
-    jac = jax.lax.stop_gradient(jax.jacfwd(lambda y: residual(y, args_c))(z))
+    jac = jax.lax.stop_gradient(jacobian(z, args_c))
     return z - jnp.linalg.solve(jac, residual(z, args)), info

@@ -22,7 +22,7 @@ from ..report import Block, Bullets, Report, Table
 from ..wear import wear_cycle, worn_mechanism, worn_volume
 from ..wear.cycle import cycle_integrator
 from ..wear.evolution import ChunkedEvolution, Evolver, load_checkpoint, save_checkpoint
-from ..wear.fem_route import FemEvolver, check_cycle_solver, default_model
+from ..wear.fem_route import FemEvolver, default_model
 from ._report import COMPARISON_WORDS, comparison_table, peak_line, write_report
 
 JOINT = "crank_rod"
@@ -176,9 +176,8 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
     ``fem`` a `FemWearModel`, default `default_model(design)`); the EFM route is
     run first (one jit, not checkpointed) so that the report compares both.
     ``integrator``: the dynamic cycles' integrator ("tsit5" or "rodas4",
-    `wear.cycle.CYCLE_INTEGRATORS`); None: ``study_integrator``, the one the
-    study chose for its contact, on the EFM route, and tsit5 on the FEM route
-    (the only one it takes).  Given to the quasi-static model, an integrator is
+    `wear.cycle.CYCLE_INTEGRATORS`) of both routes; None: ``study_integrator``,
+    the one the study chose.  Given to the quasi-static model, an integrator is
     an error: it has no dynamic cycles.
 
     ``thesis_cycles``: the cycle count the ``thesis`` values are for; a run of
@@ -196,10 +195,8 @@ def run_wear_study(out, *, name, mech0, design: WearJointDesign, y0, cycles, per
                              (integrator is not None, f"--integrator {integrator}"),
                              (resume, "--resume")))
     if integrator is None:
-        integrator = study_integrator if contact == "efm" else "tsit5"
-    solver, _ = cycle_integrator(integrator)  # a bad name fails before any work
-    if contact == "fem":
-        check_cycle_solver(solver)  # before the EFM comparison route runs
+        integrator = study_integrator
+    cycle_integrator(integrator)  # a bad name fails before any work
     if model == "quasi-static":
         from . import _quasi_static_study
 

@@ -4,7 +4,8 @@ FEM route (Ch. 5).
 The dynamics still run with the elastic-foundation (EFM) clearance joint: it
 supplies the joint force and the pin's relative rotation.  The wear pressure
 is not the EFM's: for each dynamic cycle the joint force at ``n_samples + 1``
-equally spaced times is applied to the rigid pin in the plane-strain bushing
+equally spaced times (each the end of an integrator step: the cycle steps
+onto them, see "Integrator") is applied to the rigid pin in the plane-strain bushing
 ring (`diffwear.fem.RingContact`, given-force, frictionless contact), and the
 depth increment on the profile grid theta_k is
 
@@ -53,19 +54,44 @@ The FEM route therefore takes the linearly implicit (Rosenbrock-Euler) step
     (I - A J) Delta h = A dh(h),     J = d(dh)/dh at h,
 
 with J from the contact's implicit derivative (forward mode through the FE
-solves, ``jacobian_samples`` of the cycle's samples, compliance held), which
-damps every mode instead of amplifying it and equals A dh where the wear is
-uniform; Delta h is floored at 0 (material is only removed).
+solves, by default at every sample: the derivative of the increment's own
+quadrature; ``jacobian_samples`` a subset; compliance held), which damps every
+mode instead of amplifying it and equals A dh where the wear is uniform;
+Delta h is floored at 0 (material is only removed).  J holds the contact set
+of the step's start: a node that leaves or enters contact during a step is
+not anticipated, and the worn profile keeps a node-to-node roughness of about
+one wear step's depth (rig: ~0.01 mm rms in second differences), so that its
+maximum depth scatters by ~2 % between runs that differ at round-off (the
+profile smoothed over 5 nodes and the volume by < 1 %: measured in the docs).
+
+Integrator.  The cycle steps exactly onto the sample times (`wear_cycle`'s
+``step_to_saves``), so the samples are step ends, never the integrator's
+interpolant.  On Tsit5 (steps of ~0.6 ms on the rig) the interpolant would
+do; on Rodas4 (L-stable, ~10 ms steps at rtol 1e-4) it misses the stiff
+contact between steps (rig cycle: sampled joint force up to 13 % of its peak
+off, against 1.1 % at step ends) and the Rosenbrock dense output is dropped
+(`sampling_solver`).  Stepping onto 65 samples costs Rodas4 ~510 steps a rig
+cycle instead of ~210.
+
+FE solves.  The samples are solved in order, each from the previous sample's
+solution (~3 semismooth Newton steps instead of ~13), on the half ring around
+the joint force first (`contact_window`; accepted only if it solves the
+whole ring's problem), with the Newton Jacobian in closed form
+(`diffwear.fem.contact`); J's samples start from their solutions (no
+Newton step).  Rig cycle, measured: the 65 solves 25-40 ms (was 340-460 ms),
+J from all 65 samples ~55 ms.
 
 Geometry refresh.  The condensed compliance C of the worn ring is rebuilt from
 the current profile every ``refresh_interval`` = M wear cycles (mesh and
-condensation, ~0.1 s at 180 x 4); in between, wear enters only through the
+condensation, ~55 ms at 180 x 4); in between, wear enters only through the
 initial gap (boundary radius a + h) with the last C kept.  M = 1 rebuilds every
 cycle.  The FE grid is the profile grid (same n_theta nodes, theta_j =
 2 pi j / n): no interpolation.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import equinox as eqx
 import jax
@@ -75,6 +101,7 @@ from jax import lax
 from jaxtyping import Array, Float
 
 from .._checks import check_int_option, check_positive, check_range, concrete, require_float64
+from ..dynamics.projection import replace_inner
 from ..dynamics.rosenbrock import AbstractRosenbrock
 from ..errors import InputError
 from ..fem import RingContact, ring_mesh
@@ -107,10 +134,13 @@ ACCEPT_RESIDUAL = 1e-9
 DEFAULT_SAMPLES = 64
 DEFAULT_LAYERS = 4
 DEFAULT_REFRESH = 1
-# Samples of the cycle (of the n_samples + 1) that form J of the implicit step:
-# J only has to carry the stiffness of the contact region (it is not the
-# increment), 8 intervals over the cycle: rig contact moves by < 20 deg.
-DEFAULT_JACOBIAN_SAMPLES = 8
+# Samples of the cycle that form J of the implicit step: None, all of them (J is
+# then the derivative of the increment's own quadrature).  Measured over
+# rig-21400 on Rodas4, six runs each from starts 1e-12 m apart (the route's
+# node-scale roughness makes single runs scatter): J from every 8th sample
+# gave a max depth of 0.474 +- 0.020 mm (range 0.457-0.515), J from all
+# 0.466 +- 0.010 mm; the docs' FEM page gives the table.
+DEFAULT_JACOBIAN_SAMPLES = None
 
 
 class FemWearModel(eqx.Module):
@@ -121,7 +151,9 @@ class FemWearModel(eqx.Module):
     cycles between rebuilds of the condensed compliance (integer >= 1; an array,
     so that one compiled evolution serves every M); n_samples: quadrature
     intervals per dynamic cycle (FE solves: n_samples + 1); n_layers: Q9 element
-    layers through the wall; force: "resultant" or "normal" (module docstring).
+    layers through the wall; force: "resultant" or "normal" (module docstring);
+    jacobian_samples: intervals of the samples that form the implicit step's J
+    (None: all n_samples).
     """
 
     youngs_modulus: Float[Array, ""]
@@ -136,7 +168,7 @@ class FemWearModel(eqx.Module):
     def __init__(self, youngs_modulus, poisson_ratio, outer_radius, *,
                  refresh_interval=DEFAULT_REFRESH, n_samples: int = DEFAULT_SAMPLES,
                  n_layers: int = DEFAULT_LAYERS, force: str = "resultant",
-                 jacobian_samples: int = DEFAULT_JACOBIAN_SAMPLES):
+                 jacobian_samples: int | None = DEFAULT_JACOBIAN_SAMPLES):
         check_positive("FEM route: Young's modulus E [Pa]", youngs_modulus)
         check_range("FEM route: Poisson ratio nu", poisson_ratio, -1.0, 0.5,
                     low_open=True, high_open=True)
@@ -149,13 +181,15 @@ class FemWearModel(eqx.Module):
         for name, v, low in (("n_samples (quadrature intervals per cycle)", n_samples, 2),
                              ("n_layers (element layers through the wall)", n_layers, 1),
                              ("jacobian_samples (intervals of the implicit step's J)",
-                              jacobian_samples, 1)):
+                              n_samples if jacobian_samples is None else jacobian_samples, 1)):
             check_int_option(f"FEM route: {name}", v, low)
         if force not in FORCE_MODES:
             raise InputError(f"FEM route: force must be one of {FORCE_MODES}, got {force!r}")
         f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731
         self.youngs_modulus, self.poisson_ratio = f(youngs_modulus), f(poisson_ratio)
         self.outer_radius, self.refresh_interval = f(outer_radius), f(refresh_interval)
+        if jacobian_samples is None:
+            jacobian_samples = n_samples
         if jacobian_samples > n_samples:
             raise InputError(f"FEM route: jacobian_samples ({jacobian_samples}) must not exceed "
                              f"n_samples ({n_samples})")
@@ -217,13 +251,16 @@ def ring_contact(compliance, tributary, bushing_radius, pin_radius, depth, lengt
 
 class FemIncrement(eqx.Module):
     """One cycle's FE wear: depth increment [m], k-free load x sliding [N m],
-    pressures at the samples [Pa], whether every FE solve converged."""
+    pressures [Pa] and FE total normal loads [N] at the samples (zero where
+    unloaded), whether every FE solve converged, the pin offsets [m] at the
+    samples (where unloaded: the last loaded sample's)."""
 
     depth_increment: Float[Array, " n"]
     load_sliding: Float[Array, ""]
     pressure: Float[Array, "T n"]
     normal_load: Float[Array, " T"]
     ok: Array
+    offset: Float[Array, "T 2"] | None = None
 
 
 def trapezoid_weights(ts: Float[Array, " T"]) -> Float[Array, " T"]:
@@ -232,35 +269,88 @@ def trapezoid_weights(ts: Float[Array, " T"]) -> Float[Array, " T"]:
     return 0.5 * (jnp.concatenate([dt, jnp.zeros(1)]) + jnp.concatenate([jnp.zeros(1), dt]))
 
 
-def fem_increment(contact: RingContact, samples: JointSamples, ts, k) -> FemIncrement:
+def contact_window(n: int) -> int:
+    """Nodes of the FE solves' first try (`RingContact.solve_force`'s ``window``):
+    the half ring centred on the joint force, where a pin pressed along F
+    touches (the rig's contact: 30-37 of 180 nodes unworn, 15-20 worn); checked
+    on the whole ring, else solved there."""
+    return n // 2
+
+
+def fem_increment(contact: RingContact, samples: JointSamples, ts, k,
+                  starts: tuple | None = None) -> FemIncrement:
     """dh_k = k sum_i w_i p_k(t_i) s_i and sum_i w_i N_i s_i (s = R_b |omega|, N
-    the FE total normal load L sum_j f_j) for the loads ``samples`` at ``ts``."""
+    the FE total normal load L sum_j f_j) for the loads ``samples`` at ``ts``.
+
+    The samples are solved in order, each from the last loaded one's solution
+    (consecutive loads differ little: ~3 Newton steps instead of ~13 from the
+    pin touching the wall along F); ``starts``: (pin offsets [m], pressures
+    [Pa]) of a solution at these loads (`FemIncrement.offset`, ``.pressure``),
+    each sample's start instead (no Newton step where they solve it)."""
     f = samples.force
+    n = contact.theta.shape[0]
     mag = safe_norm(f)
     loaded = mag > MIN_JOINT_FORCE
     f_safe = jnp.where(loaded[:, None], f, jnp.array([1.0, 0.0]))  # any valid load; result dropped
+    window = contact_window(n)
 
-    def solve(x):
-        s = contact.solve_force(x, tol=TOL)  # under tracing: no concrete checks, no raise
+    def solve(x, guess):
+        """(nodal forces, residual, offset) of sample load ``x`` from ``guess``."""
+        s = contact.solve_force(x, tol=TOL, guess=guess, window=window)  # traced: no raise
 
         def retry(_):
             # Semismooth Newton from the default start (pin touching the least worn
             # point along F) can stall on a deep pocket (seen once on the rig at
             # M = 5: 100 steps, residual 1e-4); start at the worn wall along F.
-            return contact.solve_force(x, tol=TOL, offset_guess=contact.wall_offset(x))
+            return out(contact.solve_force(x, tol=TOL, offset_guess=contact.wall_offset(x)))
 
-        s = lax.cond(s.info.residual <= ACCEPT_RESIDUAL, lambda _: s, retry, None)
-        return (s.pressure, contact.length * jnp.sum(s.nodal_force),
-                s.info.residual <= ACCEPT_RESIDUAL)
+        return lax.cond(s.info.residual <= ACCEPT_RESIDUAL, lambda _: out(s), retry, None)
 
-    p, load, conv = lax.map(solve, f_safe)
+    def out(s):  # only what the increment reads (the rest of a solution is never formed)
+        return s.nodal_force, s.info.residual, s.offset
+
+    def unloaded(guess):
+        return jnp.zeros(n), jnp.zeros(()), guess[0]
+
+    if starts is None:
+        def step(prev, xs):
+            x, on = xs
+
+            def go(prev):
+                r = solve(x, prev)
+                return (r[2], r[0]), r
+
+            return lax.cond(on, go, lambda prev: (prev, unloaded(prev)), prev)
+
+        # the first sample starts as `solve_force` does: touching the wall along F
+        first = f_safe[0] / safe_norm(f_safe[0]) * (jnp.min(contact.boundary_radius)
+                                                    - contact.pin_radius)
+        _, (nodal, res, offset) = lax.scan(step, (first, jnp.zeros(n)), (f_safe, loaded))
+    else:
+        e_start, p_start = jax.lax.stop_gradient(starts)
+
+        def one(xs):
+            x, on, e0, f0 = xs
+            return lax.cond(on, lambda g: solve(x, g), unloaded, (e0, f0))
+
+        nodal, res, offset = lax.map(
+            one, (f_safe, loaded, e_start, p_start * jax.lax.stop_gradient(contact.tributary)))
+    p = nodal / contact.tributary
+    load = contact.length * jnp.sum(nodal, axis=1)
+    conv = res <= ACCEPT_RESIDUAL
     p = jnp.where(loaded[:, None], p, 0.0)
     load = jnp.where(loaded, load, 0.0)
     w = trapezoid_weights(ts) * samples.sliding_rate
     dh = jnp.asarray(k, dtype=float) * (w @ p)
     ok = jnp.all(conv | ~loaded) & jnp.all(jnp.isfinite(dh))
     return FemIncrement(depth_increment=dh, load_sliding=w @ load, pressure=p,
-                        normal_load=load, ok=ok)
+                        normal_load=load, ok=ok, offset=offset)
+
+
+def jacobian_sample_indices(n_t: int, jacobian_samples: int) -> np.ndarray:
+    """The samples (of ``n_t``) that form the implicit step's J: ``jacobian_samples``
+    intervals, evenly spread (all of them when it is ``n_t - 1``)."""
+    return np.unique(np.round(np.linspace(0, n_t - 1, jacobian_samples + 1)).astype(int))
 
 
 def implicit_step(contact: RingContact, samples: JointSamples, ts, inc: FemIncrement, k, a,
@@ -271,16 +361,18 @@ def implicit_step(contact: RingContact, samples: JointSamples, ts, inc: FemIncre
     compliance held; floored at 0.  The load x sliding is linearised the same
     way, a (ls + (d ls / d depth) . Delta h), so that k x it stays the step's
     volume (the Archard bookkeeping of an implicit step: the loads at the end of
-    the step).  See the module docstring."""
-    n_t = ts.shape[0]
-    idx = np.unique(np.round(np.linspace(0, n_t - 1, jacobian_samples + 1)).astype(int))
+    the step).  Each sample's derivative starts from its solution in ``inc``
+    (no Newton step: the implicit-function step alone).  See the module
+    docstring."""
+    idx = jacobian_sample_indices(ts.shape[0], jacobian_samples)
     sub = jax.tree.map(lambda x: x[idx], samples)
+    starts = (inc.offset[idx], inc.pressure[idx])
     frozen = jax.lax.stop_gradient(contact)
 
     def dh(extra_depth):  # at the current profile plus ``extra_depth``
         ct = eqx.tree_at(lambda c: c.boundary_radius, frozen,
                          frozen.boundary_radius + extra_depth)
-        r = fem_increment(ct, sub, ts[idx], k)
+        r = fem_increment(ct, sub, ts[idx], k, starts=starts)
         return r.depth_increment, r.load_sliding
 
     n = inc.depth_increment.shape[0]
@@ -296,18 +388,17 @@ def implicit_step(contact: RingContact, samples: JointSamples, ts, inc: FemIncre
             jnp.where(good, ls, a * inc.load_sliding), ~good)
 
 
-def check_cycle_solver(solver) -> None:
-    """`InputError` for a cycle integrator the FEM route cannot sample: it reads
-    the joint force at fixed times of each cycle, which fall between the long
-    steps of a linearly implicit solver, where the interpolated state's force
-    is off (a rig cycle on Rodas4 at rtol 1e-4: up to 8.6 % of the peak force,
-    against 0.12 % on Tsit5 at 1e-6; over rig-21400, max depth +2.5 %)."""
-    if isinstance(solver, AbstractRosenbrock):
-        raise InputError(f"the FEM wear route runs its dynamic cycles on Tsit5 only "
-                         f"(--integrator tsit5), got {type(solver).__name__}: it reads the "
-                         f"joint force at fixed times of each cycle, which fall between a "
-                         f"linearly implicit solver's long steps, where the interpolated "
-                         f"force is off")
+def sampling_solver(solver):
+    """The cycle integrator ``solver`` as the FEM route runs it: the cycle steps
+    onto the sample times (`wear_cycle`'s ``step_to_saves``), so the samples
+    are ends of steps and a Rosenbrock solver's dense output (one more
+    evaluation of the right-hand side per step) is never read: dropped."""
+    def configure(s):
+        if isinstance(s, AbstractRosenbrock) and s.dense_output:
+            return dataclasses.replace(s, dense_output=False)
+        return s
+
+    return None if solver is None else replace_inner(solver, configure)
 
 
 class FemEvolver(Evolver):
@@ -323,8 +414,8 @@ class FemEvolver(Evolver):
                              f"A, as the thesis's FEM runs), got {method!r}")
         if not isinstance(fem, FemWearModel):
             raise InputError(f"fem must be a FemWearModel, got {type(fem).__name__}")
-        check_cycle_solver(kw.get("cycle_solver"))
         super().__init__(mech, joint, cycles, method=method, **kw)
+        self.cycle_kw = {**self.cycle_kw, "solver": sampling_solver(self.cycle_kw["solver"])}
         _, el = clearance_element(mech, joint)
         rb, b = concrete(el.bushing_radius), concrete(fem.outer_radius)
         if rb is not None and b is not None and not b > rb:
@@ -345,7 +436,7 @@ class FemEvolver(Evolver):
         age = jnp.where(stale, 0.0, c.memory["fem_age"]) + 1.0
         mech = _with_profile(self.mech, self.index, self.c_base + c.h)
         r = wear_cycle(mech, self.joint, c.y, c.t, self.period,
-                       n_save=fem.n_samples + 1, **self.cycle_kw)
+                       n_save=fem.n_samples + 1, step_to_saves=True, **self.cycle_kw)
         assert r.ys is not None  # saved: n_save is given
         samples = joint_samples(mech, self.joint, r.ys, fem.force)
         contact = ring_contact(cmat, self.w0, el.bushing_radius, el.pin_radius, c.h,
@@ -394,5 +485,6 @@ def default_model(design, *, refresh_interval=DEFAULT_REFRESH, n_samples=DEFAULT
 
 
 __all__ = ["FORCE_MODES", "MIN_JOINT_FORCE", "FemWearModel", "JointSamples", "joint_samples",
-           "FemIncrement", "fem_increment", "FemEvolver", "evolve_fem", "default_model",
-           "ring_compliance", "ring_contact", "unworn_tributary", "trapezoid_weights"]
+           "FemIncrement", "fem_increment", "implicit_step", "FemEvolver", "evolve_fem",
+           "default_model", "ring_compliance", "ring_contact", "unworn_tributary",
+           "trapezoid_weights", "sampling_solver", "contact_window"]

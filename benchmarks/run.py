@@ -206,14 +206,23 @@ def rig_cycle_integrators(repeats: int) -> dict:
 
 
 def rig_21400_fem_route(repeats: int) -> dict:
-    """``rig-21400`` by the FEM wear route (README "FEM wear route": FE ring
-    contact for the wear pressure, 65 samples per cycle, compliance rebuilt every
-    wear cycle) next to the EFM route, each compiled once and run once (a run is
-    30-90 s); ``ratio_fem_to_efm`` is the route's cost measure (target < 5;
-    thesis 11 h / 7 h = 1.6)."""
+    """``rig-21400`` by the FEM wear route (docs "FEM contact and the FEM wear
+    route": FE ring contact for the wear pressure, 65 samples per cycle,
+    compliance rebuilt every wear cycle) next to the EFM route, both as the
+    study runs them by default: their cycles on the study's integrator
+    (`rig_21400.INTEGRATOR`, Rodas4 at rtol 1e-4; the FEM route's cycles step
+    onto its samples).  Each compiled once and run once; ``ratio_fem_to_efm``
+    is the route's cost measure (target <= 5; thesis 11 h / 7 h = 1.6)."""
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
-    from diffwear.studies.rig_21400 import N_THETA, PERIOD, RIG_JOINT, TARGET_DYNAMIC, _setup
+    from diffwear.studies.rig_21400 import (
+        INTEGRATOR,
+        N_THETA,
+        PERIOD,
+        RIG_JOINT,
+        TARGET_DYNAMIC,
+        _setup,
+    )
     from diffwear.wear.fem_route import default_model
 
     mech0, _, y0 = _setup()
@@ -221,9 +230,9 @@ def rig_21400_fem_route(repeats: int) -> dict:
     mech_of_p = common.mech_builder(mech0, RIG_JOINT, N_THETA)
 
     kw = dict(method="constant", extrapolation=a, max_dynamic=4 * TARGET_DYNAMIC,
-              wall=RIG_JOINT.wall, n_theta=N_THETA)
+              wall=RIG_JOINT.wall, n_theta=N_THETA, integrator=INTEGRATOR)
     p = common.params_of(RIG_JOINT)
-    out = {}
+    out = {"integrator": INTEGRATOR}
     for tag, fem in (("efm", None), ("fem", default_model(RIG_JOINT))):
         res, ct, wt, _ = common.run_evolution(mech_of_p, p, y0, RIG_CYCLES, PERIOD, fem=fem, **kw)
         res.check(f"benchmark rig-21400 {tag} route")

@@ -11,6 +11,7 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
+import equinox as eqx  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
@@ -281,7 +282,8 @@ def test_window_and_warm_start_solve_the_same_contact(thin_cycle):
     solution as a cold whole-ring solve, sample by sample (pressures within
     1e-9 of the peak); a window too small for the contact falls back to the
     whole ring and still finds it; a start at the solution takes no Newton
-    step; the closed-form Newton Jacobian equals forward-mode autodiff."""
+    step; the closed-form Newton Jacobian and depth derivative (the implicit
+    step's J) equal forward-mode autodiff."""
     from diffwear.fem import contact as fc
 
     mech, r = thin_cycle
@@ -310,6 +312,20 @@ def test_window_and_warm_start_solve_the_same_contact(thin_cycle):
     again = solve(contact, f0, (full.offset, full.nodal_force), N // 2)
     assert int(again.info.steps) == 0
     assert float(jnp.max(jnp.abs(again.pressure - full.pressure))) < 1e-12 * scale
+
+    # the closed-form depth derivative of the implicit step's J against forward
+    # mode through the solve (its implicit-function step), on the window's nodes
+    nodes = contact.window_nodes(f0, N // 2)
+    closed = contact.force_depth_derivative(f0, full.offset, full.nodal_force, nodes)
+
+    def nodal(extra):
+        worn = eqx.tree_at(lambda c: c.boundary_radius, contact,
+                           contact.boundary_radius.at[nodes].add(extra))
+        return worn.solve_force(f0, guess=(full.offset, full.nodal_force)).nodal_force[nodes]
+
+    auto = jax.jit(jax.jacfwd(nodal))(jnp.zeros(N // 2))
+    assert float(jnp.max(jnp.abs(closed - auto))) < 1e-9 * float(jnp.max(jnp.abs(auto)))
+    assert float(jnp.max(jnp.abs(auto))) > 0
 
     n = N
     l_g, f_s = (float(x) for x in contact._scales(1e-4))

@@ -56,7 +56,6 @@ def stored_profile(n: int) -> np.ndarray:
 
 
 def profile_cycle(mech, depth) -> dict:
-    from diffwear.dynamics import Rodas4
     from diffwear.presets import RIG_JOINT
     from diffwear.studies._wear_common import JOINT
     from diffwear.studies.rig_21400 import PERIOD, _setup

@@ -252,16 +252,41 @@ class RingContact(eqx.Module):
                            boundary_radius=self.boundary_radius[nodes], theta=self.theta[nodes],
                            pin_radius=self.pin_radius, length=self.length)
 
-    def _solve_force(self, force, tol, offset_guess=None, guess=None, window=None):
+    def _force_scales(self, force):
+        """(gap scale l [m], force scale [N/m], |F| [N]) of the given-force
+        residual: constants of its units (the solution does not depend on them)."""
         mag = jnp.sqrt(jnp.sum(force * force))
-        unit = force / mag
-        n = self.theta.shape[0]
         gap0 = jnp.max(self.boundary_radius) - self.pin_radius
         # Scale: the clearance plus the wall's deflection under F spread on ~n/4 nodes.
-        ell = gap0 + (mag / self.length * jnp.mean(jnp.diag(self.compliance)) * 4.0 / n)
-        # constants of the residual's units (the solution does not depend on them)
-        l_g, f_s = jax.lax.stop_gradient(self._scales(ell))
-        scales = (l_g, f_s, jax.lax.stop_gradient(mag))
+        ell = gap0 + (mag / self.length * jnp.mean(jnp.diag(self.compliance)) * 4.0
+                      / self.theta.shape[0])
+        return jax.lax.stop_gradient((*self._scales(ell), mag))
+
+    def force_depth_derivative(self, force, offset, nodal_force, nodes) -> Float[Array, "m m"]:
+        """D[i, j] = d f(nodes_i) / d r_b(nodes_j) [N/m per m]: how the nodal
+        forces of the given-force solution (``offset`` e [m], ``nodal_force``
+        f [N/m], for ``force``) change with the surface radius (a + depth) of
+        the nodes ``nodes``, load and compliance held, by the implicit function
+        theorem: the derivative of `solve_force`'s result, in closed form.
+        Exact where every loaded node is among ``nodes`` (the others open:
+        f = 0, g > 0); one LU of size m + 2."""
+        l_g, f_s, mag = self._force_scales(force)
+        sub = self.restricted(nodes)
+        args = (sub, force, (l_g, f_s, mag))
+        x = nodal_force[nodes] / f_s
+        z = jnp.concatenate([x, offset / l_g])
+        jac = _force_jacobian(z, args)
+        g = (sub.initial_gap(offset) + sub.compliance @ nodal_force[nodes]) / l_g
+        _, db = ncp.fischer_burmeister_partials(x, g)
+        m = nodes.shape[0]
+        # d Phi / d r_b: the complementarity rows through g / l_g (d g_j / d r_b,j = 1)
+        rhs = jnp.concatenate([jnp.diag(db / l_g), jnp.zeros((2, m))], axis=0)
+        return -f_s * jnp.linalg.solve(jac, rhs)[:m]
+
+    def _solve_force(self, force, tol, offset_guess=None, guess=None, window=None):
+        n = self.theta.shape[0]
+        l_g, f_s, mag = scales = self._force_scales(force)
+        unit = force / mag
         if guess is not None:
             e0, x0 = guess[0], guess[1] / f_s
         else:  # pin touching the nearest wall point along F (or the guess), nothing loaded

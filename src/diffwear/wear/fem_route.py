@@ -85,7 +85,7 @@ Geometry refresh.  The condensed compliance C of the worn ring is rebuilt from
 the current profile every ``refresh_interval`` = M wear cycles (mesh and
 condensation, ~55 ms at 180 x 4); in between, wear enters only through the
 initial gap (boundary radius a + h) with the last C kept.  M = 1 rebuilds every
-cycle.  The FE grid is the profile grid (same n_theta nodes, theta_j =
+cycle; the default, 2, every second.  The FE grid is the profile grid (same n_theta nodes, theta_j =
 2 pi j / n): no interpolation.
 """
 
@@ -106,7 +106,7 @@ from ..dynamics.rosenbrock import AbstractRosenbrock
 from ..errors import InputError
 from ..fem import RingContact, ring_mesh
 from ..fem.condense import inner_compliance, tributary_lengths
-from ..fem.contact import TOL
+from ..fem.contact import CONTACT_FRACTION, TOL
 from ..mechanism import Mechanism
 from ..mechanism.geometry import grid_angles, safe_norm
 from .cycle import CycleResult, clearance_element, wear_cycle, wear_parts
@@ -130,10 +130,15 @@ ACCEPT_RESIDUAL = 1e-9
 
 # Defaults, chosen by convergence checks on the rig (docs, "FEM contact and the FEM route"):
 # n_samples: the rig's cycle increment changes by < 1e-3 (max) from 64 to 256
-# samples; n_r: 4 Q9 layers through the wall (peak pressure within 1e-3 of 8).
+# samples (32: its volume over rig-21400 -0.6 %, eight runs each); n_r: 4 Q9
+# layers through the wall (peak pressure within 1e-3 of 8); refresh_interval:
+# the compliance rebuilt every 2nd wear cycle, ~1/5 of the route's time at
+# every cycle on Rodas4, with rig-21400's depth and volume unchanged within
+# the route's run-to-run scatter (eight runs each at M = 1, 2, 3: means within
+# 0.3 % (max depth), 0.6 % (5-node smoothed max), 0.2 % (volume)).
 DEFAULT_SAMPLES = 64
 DEFAULT_LAYERS = 4
-DEFAULT_REFRESH = 1
+DEFAULT_REFRESH = 2
 # Samples of the cycle that form J of the implicit step: None, all of them (J is
 # then the derivative of the increment's own quadrature).  Measured over
 # rig-21400 on Rodas4, six runs each from starts 1e-12 m apart (the route's
@@ -353,30 +358,59 @@ def jacobian_sample_indices(n_t: int, jacobian_samples: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, n_t - 1, jacobian_samples + 1)).astype(int))
 
 
+def depth_jacobian(contact: RingContact, samples: JointSamples, ts, inc: FemIncrement, k,
+                   jacobian_samples: int) -> tuple[Float[Array, "n n"], Float[Array, " n"]]:
+    """(J, d ls / d depth): the derivatives of the increment ``inc`` (its depth
+    increment and k-free load x sliding) w.r.t. the depth, compliance and
+    loads held, from ``jacobian_samples`` + 1 of the samples (trapezoid over
+    the cycle; all of them: the increment's own quadrature).  Each sample's
+    nodal forces are differentiated at its solution in ``inc`` by the implicit
+    function theorem (`RingContact.force_depth_derivative`), on the nodes of
+    its first-try window (`contact_window`) where all its loaded nodes lie
+    there, else on the whole ring."""
+    n = inc.depth_increment.shape[0]
+    idx = jacobian_sample_indices(ts.shape[0], jacobian_samples)
+    force = samples.force[idx]
+    loaded = safe_norm(force) > MIN_JOINT_FORCE
+    force = jnp.where(loaded[:, None], force, jnp.array([1.0, 0.0]))
+    weights = trapezoid_weights(ts[idx]) * samples.sliding_rate[idx]
+    window = contact_window(n)
+    frozen = jax.lax.stop_gradient(contact)
+    trib = frozen.tributary
+    offsets, nodal = jax.lax.stop_gradient((inc.offset[idx], inc.pressure[idx] * trib))
+
+    def one(acc, xs):
+        x, on, weight, e, f = xs
+
+        def add(nodes, acc):
+            jac, d_ls = acc
+            d = frozen.force_depth_derivative(x, e, f, nodes)  # (m, m)
+            return (jac.at[nodes[:, None], nodes[None, :]].add(weight * d / trib[nodes, None]),
+                    d_ls.at[nodes].add(weight * frozen.length * jnp.sum(d, axis=0)))
+
+        nodes = frozen.window_nodes(x, window)
+        # no load outside the window (a node below CONTACT_FRACTION of the peak is open)
+        inside = jnp.max(jnp.abs(f.at[nodes].set(0.0))) <= CONTACT_FRACTION * jnp.max(f)
+        acc = lax.cond(on & inside, lambda acc: add(nodes, acc), lambda acc: acc, acc)
+        acc = lax.cond(on & ~inside, lambda acc: add(jnp.arange(n), acc), lambda acc: acc, acc)
+        return acc, None
+
+    (jac, d_ls), _ = lax.scan(one, (jnp.zeros((n, n)), jnp.zeros(n)),
+                              (force, loaded, weights, offsets, nodal))
+    return jnp.asarray(k, dtype=float) * jac, d_ls
+
+
 def implicit_step(contact: RingContact, samples: JointSamples, ts, inc: FemIncrement, k, a,
                   jacobian_samples: int) -> tuple[Float[Array, " n"], Float[Array, ""], Array]:
     """(Delta h, load x sliding of the step, explicit fallback used): Delta h solves
     (I - a J) Delta h = a dh (dh = ``inc.depth_increment``), J = d(dh)/d(depth)
-    from ``jacobian_samples`` + 1 of the samples (trapezoid over the cycle),
-    compliance held; floored at 0.  The load x sliding is linearised the same
-    way, a (ls + (d ls / d depth) . Delta h), so that k x it stays the step's
+    from ``jacobian_samples`` + 1 of the samples (`depth_jacobian`), compliance
+    held; floored at 0.  The load x sliding is linearised the same way,
+    a (ls + (d ls / d depth) . Delta h), so that k x it stays the step's
     volume (the Archard bookkeeping of an implicit step: the loads at the end of
-    the step).  Each sample's derivative starts from its solution in ``inc``
-    (no Newton step: the implicit-function step alone).  See the module
-    docstring."""
-    idx = jacobian_sample_indices(ts.shape[0], jacobian_samples)
-    sub = jax.tree.map(lambda x: x[idx], samples)
-    starts = (inc.offset[idx], inc.pressure[idx])
-    frozen = jax.lax.stop_gradient(contact)
-
-    def dh(extra_depth):  # at the current profile plus ``extra_depth``
-        ct = eqx.tree_at(lambda c: c.boundary_radius, frozen,
-                         frozen.boundary_radius + extra_depth)
-        r = fem_increment(ct, sub, ts[idx], k, starts=starts)
-        return r.depth_increment, r.load_sliding
-
+    the step).  See the module docstring."""
     n = inc.depth_increment.shape[0]
-    jac, d_ls = jax.jacfwd(dh)(jnp.zeros(n))
+    jac, d_ls = depth_jacobian(contact, samples, ts, inc, k, jacobian_samples)
     step = jnp.linalg.solve(jnp.eye(n) - a * jac, a * inc.depth_increment)
     step = jnp.maximum(step, 0.0)
     ls = a * (inc.load_sliding + d_ls @ step)
@@ -485,6 +519,7 @@ def default_model(design, *, refresh_interval=DEFAULT_REFRESH, n_samples=DEFAULT
 
 
 __all__ = ["FORCE_MODES", "MIN_JOINT_FORCE", "FemWearModel", "JointSamples", "joint_samples",
-           "FemIncrement", "fem_increment", "implicit_step", "FemEvolver", "evolve_fem",
+           "FemIncrement", "fem_increment", "depth_jacobian", "implicit_step", "FemEvolver",
+           "evolve_fem",
            "default_model", "ring_compliance", "ring_contact", "unworn_tributary",
            "trapezoid_weights", "sampling_solver", "contact_window"]

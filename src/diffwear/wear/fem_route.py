@@ -140,11 +140,13 @@ DEFAULT_SAMPLES = 64
 DEFAULT_LAYERS = 4
 DEFAULT_REFRESH = 2
 # Samples of the cycle that form J of the implicit step: None, all of them (J is
-# then the derivative of the increment's own quadrature).  Measured over
-# rig-21400 on Rodas4, six runs each from starts 1e-12 m apart (the route's
-# node-scale roughness makes single runs scatter): J from every 8th sample
-# gave a max depth of 0.474 +- 0.020 mm (range 0.457-0.515), J from all
-# 0.466 +- 0.010 mm; the docs' FEM page gives the table.
+# then the derivative of the increment's own quadrature, whichever integrator
+# runs the cycles).  Measured over rig-21400 on Rodas4 from starts 1e-12 m
+# apart (the route's node-scale roughness makes single runs scatter; the docs'
+# FEM page, benchmarks/records/fem_route_scatter.json): J from every 8th
+# sample gives the same means within the scatter and costs ~12 % less, but
+# one of its 14 runs ended in a 0.05 mm zigzag (max depth 0.515 mm, M = 1);
+# in over 80 runs with J from every sample none exceeded 0.494 mm.
 DEFAULT_JACOBIAN_SAMPLES = None
 
 

@@ -14,8 +14,8 @@ the second difference) and the run time; then mean and standard deviation.
 
 Settings (`--settings`, comma-separated): ``rodas4`` and ``tsit5`` (the
 route's defaults on each integrator at its `CYCLE_INTEGRATORS` tolerance),
-``rodas4-j8`` (J from every 8th sample), ``rodas4-m1`` (compliance rebuilt
-every cycle).
+``rodas4-j8`` (J from every 8th sample), ``rodas4-m1`` and ``rodas4-m2``
+(compliance rebuilt every cycle, every second).
 
     python benchmarks/experiments/fem_route_scatter.py [--runs 8] [--json out.json]
 """
@@ -42,6 +42,7 @@ SETTINGS = {  # name -> (integrator, FemWearModel options)
     "tsit5": ("tsit5", {}),
     "rodas4-j8": ("rodas4", {"jacobian_samples": 8}),
     "rodas4-m1": ("rodas4", {"refresh_interval": 1}),
+    "rodas4-m2": ("rodas4", {"refresh_interval": 2}),
 }
 PERTURBATION = 1e-12  # m of the crank centre's x per run index
 

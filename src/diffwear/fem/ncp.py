@@ -21,18 +21,21 @@ phi is not differentiable at a = b = 0; `fischer_burmeister` guards the sqrt
 with the "double where" and returns the generalized derivative (1, 1) there.
 
 Differentiation.  The loop runs on stop-gradient inputs; the solution z* is
-then passed through one Newton step that is differentiable in the parameters:
+returned with the derivative of one Newton step in the parameters,
 
     z = z* - J(z*)^-1 Phi(z*, theta),    J held constant,
 
-which leaves the value unchanged (Phi(z*) ~ 0) and gives exactly the implicit-
-function-theorem derivative dz/dtheta = -J^-1 dPhi/dtheta in forward and
-reverse mode.  It is valid where the solution is strictly complementary (no
-node with a = b = 0), i.e. away from the instant a node enters contact.
+as a custom JVP (the step itself is not taken: its value differs from z* by
+the tolerance, and a solve that is not differentiated skips its LU), which is
+exactly the implicit-function-theorem derivative dz/dtheta = -J^-1
+dPhi/dtheta in forward and reverse mode.  It is valid where the solution is
+strictly complementary (no node with a = b = 0), i.e. away from the instant a
+node enters contact.
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Callable
 
 import equinox as eqx
@@ -136,6 +139,22 @@ def solve(residual: Callable, z0: Float[Array, " m"], args, *, tol: float = 1e-1
     jacobian = _jacobian_of(residual) if jacobian is None else jacobian
     args_c = jax.lax.stop_gradient(args)
     z, info = _newton(residual, jax.lax.stop_gradient(z0), args_c, tol, max_steps, jacobian)
-    z = jax.lax.stop_gradient(z)
-    jac = jax.lax.stop_gradient(jacobian(z, args_c))
-    return z - jnp.linalg.solve(jac, residual(z, args)), info
+    return _at_solution(residual, jacobian, jax.lax.stop_gradient(z), args), info
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1))
+def _at_solution(residual, jacobian, z, args):
+    """The solution ``z`` of residual(z, args) = 0, with the implicit-function
+    derivative dz = -J^-1 (d residual / d args) d args (J = ``jacobian`` at z,
+    held): the derivative of one Newton step at z (module docstring), whose
+    value is not computed (it differs from z by the solve's tolerance)."""
+    del residual, jacobian, args
+    return z
+
+
+@_at_solution.defjvp
+def _at_solution_jvp(residual, jacobian, primals, tangents):
+    z, args = primals
+    _, d_args = tangents
+    _, d_res = jax.jvp(lambda a: residual(z, a), (args,), (d_args,))
+    return z, -jnp.linalg.solve(jax.lax.stop_gradient(jacobian(z, args)), d_res)

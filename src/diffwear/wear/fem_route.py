@@ -85,7 +85,7 @@ Geometry refresh.  The condensed compliance C of the worn ring is rebuilt from
 the current profile every ``refresh_interval`` = M wear cycles (mesh and
 condensation, ~55 ms at 180 x 4); in between, wear enters only through the
 initial gap (boundary radius a + h) with the last C kept.  M = 1 rebuilds every
-cycle; the default, 2, every second.  The FE grid is the profile grid (same n_theta nodes, theta_j =
+cycle; the default, 3, every third.  The FE grid is the profile grid (same n_theta nodes, theta_j =
 2 pi j / n): no interpolation.
 """
 
@@ -132,13 +132,15 @@ ACCEPT_RESIDUAL = 1e-9
 # n_samples: the rig's cycle increment changes by < 1e-3 (max) from 64 to 256
 # samples (32: its volume over rig-21400 -0.6 %, eight runs each); n_r: 4 Q9
 # layers through the wall (peak pressure within 1e-3 of 8); refresh_interval:
-# the compliance rebuilt every 2nd wear cycle, ~1/5 of the route's time at
-# every cycle on Rodas4, with rig-21400's depth and volume unchanged within
-# the route's run-to-run scatter (eight runs each at M = 1, 2, 3: means within
-# 0.3 % (max depth), 0.6 % (5-node smoothed max), 0.2 % (volume)).
+# the compliance rebuilt every 3rd wear cycle (rebuilt at every cycle it took
+# ~1/4 of the route's time on Rodas4), with rig-21400's depth and volume
+# unchanged within the route's run-to-run scatter: eight runs each at M = 1,
+# 2, 3, means within 0.3 % (max depth), 0.7 % (5-node smoothed max), 0.2 %
+# (volume), the standard error of each mean ~0.7 %, 0.4 %, 0.1 %
+# (benchmarks/records/fem_route_scatter.json).
 DEFAULT_SAMPLES = 64
 DEFAULT_LAYERS = 4
-DEFAULT_REFRESH = 2
+DEFAULT_REFRESH = 3
 # Samples of the cycle that form J of the implicit step: None, all of them (J is
 # then the derivative of the increment's own quadrature, whichever integrator
 # runs the cycles).  Measured over rig-21400 on Rodas4 from starts 1e-12 m

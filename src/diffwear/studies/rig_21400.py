@@ -47,7 +47,7 @@ TARGET_VOLUME_MM3 = 106.7  # Table 7-4: FEM 106.71, EFM 106.68 mm^3
 # the explicit reference.  The FEM route (`--contact fem`) too runs on Rodas4,
 # its cycles stepping onto the FE samples (`wear.fem_route`): the means of
 # max depth, smoothed max depth and volume over eight runs from starts 1e-12 m
-# apart within 0.3 % of Tsit5's (benchmarks/records/fem_route_scatter.json),
+# apart within 0.5 % of Tsit5's (benchmarks/records/fem_route_scatter.json),
 # at ~2/5 of its time.
 INTEGRATOR = "rodas4"
 

@@ -130,13 +130,13 @@ ACCEPT_RESIDUAL = 1e-9
 
 # Defaults, chosen by convergence checks on the rig (docs, "FEM contact and the FEM route"):
 # n_samples: the rig's cycle increment changes by < 1e-3 (max) from 64 to 256
-# samples (32: its volume over rig-21400 -0.6 %, eight runs each); n_r: 4 Q9
+# samples (32: its volume over rig-21400 -0.6 %, eight runs each at M = 1); n_r: 4 Q9
 # layers through the wall (peak pressure within 1e-3 of 8); refresh_interval:
 # the compliance rebuilt every 3rd wear cycle (rebuilt at every cycle it took
 # ~1/4 of the route's time on Rodas4), with rig-21400's depth and volume
 # unchanged within the route's run-to-run scatter: eight runs each at M = 1,
-# 2, 3, means within 0.3 % (max depth), 0.7 % (5-node smoothed max), 0.2 %
-# (volume), the standard error of each mean ~0.7 %, 0.4 %, 0.1 %
+# 2, 3, means within 0.9 % (max depth; each mean's standard error ~0.8 %),
+# 0.4 % (5-node smoothed max), 0.1 % (volume)
 # (benchmarks/records/fem_route_scatter.json).
 DEFAULT_SAMPLES = 64
 DEFAULT_LAYERS = 4
@@ -146,9 +146,10 @@ DEFAULT_REFRESH = 3
 # runs the cycles).  Measured over rig-21400 on Rodas4 from starts 1e-12 m
 # apart (the route's node-scale roughness makes single runs scatter; the docs'
 # FEM page, benchmarks/records/fem_route_scatter.json): J from every 8th
-# sample gives the same means within the scatter and costs ~12 % less, but
-# one of its 14 runs ended in a 0.05 mm zigzag (max depth 0.515 mm, M = 1);
-# in over 80 runs with J from every sample none exceeded 0.494 mm.
+# sample costs ~1/9 less but leaves the profile rougher (rms second
+# difference 0.016 vs 0.013 mm, max depth +1.2 % on the mean, eight runs
+# each), and one of its 22 runs ended in a 0.05 mm zigzag (max depth
+# 0.515 mm); in over 80 runs with J from every sample none exceeded 0.494 mm.
 DEFAULT_JACOBIAN_SAMPLES = None
 
 

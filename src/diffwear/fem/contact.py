@@ -195,7 +195,7 @@ class RingContact(eqx.Module):
         return self._solution(e, x * f_s, info)
 
     def solve_force(self, force, *, tol: float = TOL, offset_guess=None, guess=None,
-                    window: int | None = None) -> ContactSolution:
+                    window: int | None = None, polish: bool = True) -> ContactSolution:
         """Contact for a prescribed force F [N] of the pin on the ring (F != 0):
         unknowns f and e, with L sum_j f_j u_j = F.  ``offset_guess`` [m]: the
         Newton start for e (default: the pin touching the nearest wall point
@@ -212,7 +212,8 @@ class RingContact(eqx.Module):
         ``tol``), for a Newton system of window + 2 instead of n + 2 unknowns
         where the contact arc is known to be short (a pin pressed along F
         touches within +-90 deg of F: ``window = n // 2`` serves any such
-        contact)."""
+        contact).  ``polish``: as `ncp.solve` (False: the solution as the
+        Newton loop leaves it, within ``tol``, one LU less)."""
         force = jnp.asarray(force, dtype=float)
         _check_vector("joint force F [N]", force)
         fv = concrete(force)
@@ -235,7 +236,8 @@ class RingContact(eqx.Module):
                 raise InputError(f"ring contact: guess nodal forces need shape ({n},), got "
                                  f"{f_g.shape}")
             guess = (e_g, f_g)
-        return self._checked(_solve_force(self, force, tol, offset_guess, guess, window))
+        return self._checked(_solve_force(self, force, tol, offset_guess, guess, window,
+                                          polish))
 
     def window_nodes(self, force, size: int):
         """Indices of the ``size`` nodes centred on the node nearest F's direction."""
@@ -283,7 +285,8 @@ class RingContact(eqx.Module):
         rhs = jnp.concatenate([jnp.diag(db / l_g), jnp.zeros((2, m))], axis=0)
         return -f_s * jnp.linalg.solve(jac, rhs)[:m]
 
-    def _solve_force(self, force, tol, offset_guess=None, guess=None, window=None):
+    def _solve_force(self, force, tol, offset_guess=None, guess=None, window=None,
+                     polish=True):
         n = self.theta.shape[0]
         l_g, f_s, mag = scales = self._force_scales(force)
         unit = force / mag
@@ -297,7 +300,8 @@ class RingContact(eqx.Module):
         args = (self, force, scales)
 
         def whole(z_start, steps_before=0):
-            z, info = ncp.solve(_force_residual, z_start, args, tol=tol, jacobian=_force_jacobian)
+            z, info = ncp.solve(_force_residual, z_start, args, tol=tol, jacobian=_force_jacobian,
+                                polish=polish)
             return z, eqx.tree_at(lambda i: i.steps, info, info.steps + steps_before)
 
         if window is None:
@@ -307,7 +311,7 @@ class RingContact(eqx.Module):
             zw, info_w = ncp.solve(_force_residual,
                                    jnp.concatenate([z0[:n][nodes], z0[n:]]),
                                    (self.restricted(nodes), force, scales), tol=tol,
-                                   jacobian=_force_jacobian)
+                                   jacobian=_force_jacobian, polish=polish)
             z_in = jnp.concatenate([jnp.zeros(n).at[nodes].set(zw[:window]), zw[window:]])
             # the whole ring's residual there: the window's rows, and the open nodes
             # outside it (f = 0: phi = 0 where g >= 0, 2 g / l_g where g < 0)

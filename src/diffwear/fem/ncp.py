@@ -21,14 +21,15 @@ phi is not differentiable at a = b = 0; `fischer_burmeister` guards the sqrt
 with the "double where" and returns the generalized derivative (1, 1) there.
 
 Differentiation.  The loop runs on stop-gradient inputs; the solution z* is
-returned with the derivative of one Newton step in the parameters,
+then passed through one Newton step that is differentiable in the parameters:
 
     z = z* - J(z*)^-1 Phi(z*, theta),    J held constant,
 
-as a custom JVP (the step itself is not taken: its value differs from z* by
-the tolerance, and a solve that is not differentiated skips its LU), which is
+which leaves the value unchanged to the tolerance (Phi(z*) ~ 0) and gives
 exactly the implicit-function-theorem derivative dz/dtheta = -J^-1
-dPhi/dtheta in forward and reverse mode.  It is valid where the solution is
+dPhi/dtheta in forward and reverse mode.  With ``polish=False`` the step's
+derivative is given as a custom JVP and the step itself is not taken (a
+solve that is not differentiated skips its LU).  It is valid where the solution is
 strictly complementary (no node with a = b = 0), i.e. away from the instant a
 node enters contact.
 """
@@ -124,7 +125,7 @@ def _jacobian_of(residual: Callable) -> Callable:
 
 
 def solve(residual: Callable, z0: Float[Array, " m"], args, *, tol: float = 1e-12,
-          max_steps: int = 100, jacobian: Callable | None = None
+          max_steps: int = 100, jacobian: Callable | None = None, polish: bool = True
           ) -> tuple[Float[Array, " m"], NewtonInfo]:
     """z with residual(z, args) = 0 (max norm <= tol), differentiable in ``args``
     (a pytree of arrays) by the implicit function theorem; see the module docstring.
@@ -133,13 +134,21 @@ def solve(residual: Callable, z0: Float[Array, " m"], args, *, tol: float = 1e-1
     derivative where the residual is not differentiable); default forward-mode
     autodiff of ``residual``, one tangent per unknown.  A ``z0`` that already
     meets ``tol`` takes no Newton step (a warm start at a known solution).
+    ``polish``: return z one Newton step past the loop's (the step whose
+    derivative is the implicit one; one more LU); False: z as the loop left
+    it (within ``tol``), with the same derivative, for many solves whose
+    values need nothing finer (the FEM wear route's samples).
 
     Never raises: check ``info.converged`` (`diffwear.fem.contact` does, and
     raises `SolverError` outside ``jit``)."""
     jacobian = _jacobian_of(residual) if jacobian is None else jacobian
     args_c = jax.lax.stop_gradient(args)
     z, info = _newton(residual, jax.lax.stop_gradient(z0), args_c, tol, max_steps, jacobian)
-    return _at_solution(residual, jacobian, jax.lax.stop_gradient(z), args), info
+    z = jax.lax.stop_gradient(z)
+    if not polish:
+        return _at_solution(residual, jacobian, z, args), info
+    jac = jax.lax.stop_gradient(jacobian(z, args_c))
+    return z - jnp.linalg.solve(jac, residual(z, args)), info
 
 
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1))

@@ -306,7 +306,8 @@ def fem_increment(contact: RingContact, samples: JointSamples, ts, k,
 
     def solve(x, guess):
         """(nodal forces, residual, offset) of sample load ``x`` from ``guess``."""
-        s = contact.solve_force(x, tol=TOL, guess=guess, window=window)  # traced: no raise
+        # traced: no raise; unpolished: the loop's solution (within TOL) and its derivative
+        s = contact.solve_force(x, tol=TOL, guess=guess, window=window, polish=False)
 
         def retry(_):
             # Semismooth Newton from the default start (pin touching the least worn

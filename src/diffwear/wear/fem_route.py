@@ -53,9 +53,10 @@ The FEM route therefore takes the linearly implicit (Rosenbrock-Euler) step
 
     (I - A J) Delta h = A dh(h),     J = d(dh)/dh at h,
 
-with J from the contact's implicit derivative (forward mode through the FE
-solves, by default at every sample: the derivative of the increment's own
-quadrature; ``jacobian_samples`` a subset; compliance held), which damps every
+with J from the contact's implicit derivative (in closed form at each
+sample's solution, by default at every sample: the derivative of the
+increment's own quadrature; ``jacobian_samples`` a subset; compliance held,
+`depth_jacobian`), which damps every
 mode instead of amplifying it and equals A dh where the wear is uniform;
 Delta h is floored at 0 (material is only removed).  J holds the contact set
 of the step's start: a node that leaves or enters contact during a step is
@@ -76,17 +77,18 @@ cycle instead of ~210.
 FE solves.  The samples are solved in order, each from the previous sample's
 solution (~3 semismooth Newton steps instead of ~13), on the half ring around
 the joint force first (`contact_window`; accepted only if it solves the
-whole ring's problem), with the Newton Jacobian in closed form
-(`diffwear.fem.contact`); J's samples start from their solutions (no
-Newton step).  Rig cycle, measured: the 65 solves 25-40 ms (was 340-460 ms),
-J from all 65 samples ~55 ms.
+whole ring's problem), with the Newton Jacobian in closed form and without
+the final polishing step (`diffwear.fem.contact`); J's derivative of each
+sample is one LU at its solution.  Rig cycle, measured
+(benchmarks/experiments/fem_route_cycle_profile.py): the 65 solves ~18 ms
+(before: 340-460 ms), J from all 65 samples ~17 ms (from 9 before: 61 ms).
 
 Geometry refresh.  The condensed compliance C of the worn ring is rebuilt from
 the current profile every ``refresh_interval`` = M wear cycles (mesh and
 condensation, ~55 ms at 180 x 4); in between, wear enters only through the
 initial gap (boundary radius a + h) with the last C kept.  M = 1 rebuilds every
-cycle; the default, 3, every third.  The FE grid is the profile grid (same n_theta nodes, theta_j =
-2 pi j / n): no interpolation.
+cycle; the default, 3, every third.  The FE grid is the profile grid (same
+n_theta nodes, theta_j = 2 pi j / n): no interpolation.
 """
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ from diffwear.presets import clearance_slider_crank
 from diffwear.quasistatic import JointLoads, QuasiStaticJoint
 from diffwear.quasistatic.joint import pin_offset
 from diffwear.studies import rig_21400
-from diffwear.wear import ArchardWear, peak_depth, worn_volume
+from diffwear.wear import ArchardWear, arc_peak_depth, peak_depth, worn_volume
 from diffwear.wear.profile_ode import integrate_profile
 from diffwear.wear.status import STATUS_CONTACT_LOSS, STATUS_OK, STATUS_PIERCED
 
@@ -105,6 +105,26 @@ def test_peak_depth_of_a_smooth_bump_between_nodes():
         # within 1e-3 of the true peak (the grid maximum misses it by up to 1.4 %)
         np.testing.assert_allclose(p, 1e-3, rtol=1e-3)
     assert float(peak_depth(jnp.full(n, 2e-4))) == pytest.approx(2e-4, rel=1e-14)
+
+
+def test_arc_peak_depth_is_the_dirichlet_mean_of_a_cosine_groove():
+    """The +-4 deg mean of h = h0 (1 + cos(theta - phi)) on 180 nodes (2 nodes
+    each side) peaks at the node nearest phi; on a node its value is the
+    Dirichlet kernel h0 (1 + sin(5 d / 2) / (5 sin(d / 2))), d = 2 deg.  A
+    node-to-node zigzag of +-e on the groove averages to within e / 5 of the
+    smooth groove's value; a constant profile and a zero half-width give the
+    grid maximum."""
+    n, h0 = 180, 2e-4
+    d = 2 * math.pi / n
+    theta = d * np.arange(n)
+    h = h0 * (1.0 + np.cos(theta - 37 * d))
+    want = h0 * (1.0 + math.sin(2.5 * d) / (5.0 * math.sin(0.5 * d)))
+    assert float(arc_peak_depth(jnp.asarray(h))) == pytest.approx(want, rel=1e-13)
+    zigzag = h + 1e-5 * (-1.0) ** np.arange(n)
+    assert float(np.max(zigzag)) - want > 0.9e-5  # the grid maximum carries it whole
+    assert abs(float(arc_peak_depth(jnp.asarray(zigzag))) - want) <= 1e-5 / 5 + 1e-18
+    assert float(arc_peak_depth(jnp.full(n, h0))) == pytest.approx(h0, rel=1e-14)
+    assert float(arc_peak_depth(jnp.asarray(zigzag), half_width=0.0)) == float(np.max(zigzag))
 
 
 def test_peak_depth_derivative_is_continuous_as_the_peak_crosses_a_node():

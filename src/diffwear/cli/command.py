@@ -92,8 +92,7 @@ def _study(args: argparse.Namespace) -> int:
 def study_model(study, cycles, chosen: dict, *, resume: bool = False):
     """The wear model of a wear study from ``--model``, ``--method``,
     ``--contact`` and ``--integrator`` (the study's defaults where not given:
-    the dynamic model with the EFM pressure on the study's integrator; the
-    FEM route on Tsit5)."""
+    the dynamic model with the EFM pressure on the study's integrator)."""
     from ..wear.fem_route import default_model
     from . import objects
 
@@ -104,7 +103,7 @@ def study_model(study, cycles, chosen: dict, *, resume: bool = False):
                                      ("integrator" in chosen,
                                       f"--integrator {chosen.get('integrator')}"),
                                      (resume, "--resume")))
-    integrator = chosen.get("integrator", study.INTEGRATOR if contact == "efm" else "tsit5")
+    integrator = chosen.get("integrator", study.INTEGRATOR)
     fem = default_model(study.DESIGN) if contact == "fem" else None
     if fem is not None and method != "constant":
         raise InputError(f"--contact fem runs with --method constant only (constant A, as "
@@ -371,10 +370,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cycles", type=int, default=None,
                    help="number of real crank cycles (wear studies)")
     p.add_argument("--integrator", choices=WEAR_INTEGRATORS,
-                   help="integrator of the dynamic cycles (wear studies): tsit5 (explicit, "
-                        "rtol 1e-6; the default of wear-5000 and the only one of --contact "
-                        "fem) or rodas4 (linearly implicit, L-stable, rtol 1e-4; the default "
-                        "of rig-21400: several times faster "
+                   help="integrator of the dynamic cycles (wear studies; both routes): tsit5 "
+                        "(explicit, rtol 1e-6; the default of wear-5000) or rodas4 (linearly "
+                        "implicit, L-stable, rtol 1e-4; the default of rig-21400: several "
+                        "times faster "
                         "where the pin stays pressed into the bushing, as on the rig; slower "
                         "than tsit5 at equal accuracy where it flies and impacts; wear within "
                         "4e-3 of tsit5 on the thesis studies)")

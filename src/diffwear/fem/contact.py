@@ -194,13 +194,26 @@ class RingContact(eqx.Module):
         x, info = ncp.solve(residual, jnp.zeros_like(self.theta), (self, e), tol=tol)
         return self._solution(e, x * f_s, info)
 
-    def solve_force(self, force, *, tol: float = TOL, offset_guess=None) -> ContactSolution:
+    def solve_force(self, force, *, tol: float = TOL, offset_guess=None, guess=None,
+                    window: int | None = None, polish: bool = True) -> ContactSolution:
         """Contact for a prescribed force F [N] of the pin on the ring (F != 0):
         unknowns f and e, with L sum_j f_j u_j = F.  ``offset_guess`` [m]: the
         Newton start for e (default: the pin touching the nearest wall point
         along F); in a deeply worn ring the nearest wall point can lie far from
         the solution (the pin sits in the pocket), and a start there (e.g. the
-        previous solution of a sequence of solves) saves many damped steps."""
+        previous solution of a sequence of solves) saves many damped steps.
+        ``guess``: a whole start, (offset e [m], nodal forces f [N/m]), e.g. the
+        solution for a nearby force (it replaces ``offset_guess``).
+
+        ``window``: solve first on the ``window`` nodes centred on F's direction
+        (the others held at f = 0), then accept that solution only if it solves
+        the whole ring's problem to ``tol`` (every node outside open, g >= 0),
+        else solve the whole ring from it.  The same solution either way (to
+        ``tol``), for a Newton system of window + 2 instead of n + 2 unknowns
+        where the contact arc is known to be short (a pin pressed along F
+        touches within +-90 deg of F: ``window = n // 2`` serves any such
+        contact).  ``polish``: as `ncp.solve` (False: the solution as the
+        Newton loop leaves it, within ``tol``, one LU less)."""
         force = jnp.asarray(force, dtype=float)
         _check_vector("joint force F [N]", force)
         fv = concrete(force)
@@ -210,34 +223,145 @@ class RingContact(eqx.Module):
         if offset_guess is not None:
             offset_guess = jnp.asarray(offset_guess, dtype=float)
             _check_vector("offset guess e [m]", offset_guess)
-        return self._checked(_solve_force(self, force, tol, offset_guess))
+        n = self.theta.shape[0]
+        if window is not None and not (isinstance(window, int) and 1 <= window):
+            raise InputError(f"ring contact: window must be a positive number of nodes, "
+                             f"got {window!r}")
+        if window is not None and window >= n:
+            window = None
+        if guess is not None:
+            e_g, f_g = (jnp.asarray(v, dtype=float) for v in guess)
+            _check_vector("guess offset e [m]", e_g)
+            if f_g.shape != (n,):
+                raise InputError(f"ring contact: guess nodal forces need shape ({n},), got "
+                                 f"{f_g.shape}")
+            guess = (e_g, f_g)
+        return self._checked(_solve_force(self, force, tol, offset_guess, guess, window,
+                                          polish))
 
-    def _solve_force(self, force, tol, offset_guess=None):
+    def window_nodes(self, force, size: int):
+        """Indices of the ``size`` nodes centred on the node nearest F's direction."""
+        n = self.theta.shape[0]
+        ang = jnp.mod(jnp.arctan2(force[1], force[0]), 2 * jnp.pi) * n / (2 * jnp.pi)
+        j = jnp.round(ang).astype(int)
+        return (j - size // 2 + jnp.arange(size)) % n
+
+    def restricted(self, nodes) -> "RingContact":
+        """The contact on the inner-surface nodes ``nodes`` only (the others
+        unloaded): compliance, tributary lengths, surface and angles taken there."""
+        return RingContact(compliance=self.compliance[nodes[:, None], nodes[None, :]],
+                           tributary=self.tributary[nodes],
+                           boundary_radius=self.boundary_radius[nodes], theta=self.theta[nodes],
+                           pin_radius=self.pin_radius, length=self.length)
+
+    def _force_scales(self, force):
+        """(gap scale l [m], force scale [N/m], |F| [N]) of the given-force
+        residual: constants of its units (the solution does not depend on them)."""
         mag = jnp.sqrt(jnp.sum(force * force))
-        unit = force / mag
         gap0 = jnp.max(self.boundary_radius) - self.pin_radius
         # Scale: the clearance plus the wall's deflection under F spread on ~n/4 nodes.
         ell = gap0 + (mag / self.length * jnp.mean(jnp.diag(self.compliance)) * 4.0
                       / self.theta.shape[0])
-        ell = jax.lax.stop_gradient(ell)
-        l_g, f_s = self._scales(ell)
-        u = self.directions
+        return jax.lax.stop_gradient((*self._scales(ell), mag))
+
+    def force_depth_derivative(self, force, offset, nodal_force, nodes) -> Float[Array, "m m"]:
+        """D[i, j] = d f(nodes_i) / d r_b(nodes_j) [N/m per m]: how the nodal
+        forces of the given-force solution (``offset`` e [m], ``nodal_force``
+        f [N/m], for ``force``) change with the surface radius (a + depth) of
+        the nodes ``nodes``, load and compliance held, by the implicit function
+        theorem: the derivative of `solve_force`'s result, in closed form.
+        Exact where every loaded node is among ``nodes`` (the others open:
+        f = 0, g > 0); one LU of size m + 2."""
+        l_g, f_s, mag = self._force_scales(force)
+        sub = self.restricted(nodes)
+        args = (sub, force, (l_g, f_s, mag))
+        x = nodal_force[nodes] / f_s
+        z = jnp.concatenate([x, offset / l_g])
+        jac = _force_jacobian(z, args)
+        g = (sub.initial_gap(offset) + sub.compliance @ nodal_force[nodes]) / l_g
+        _, db = ncp.fischer_burmeister_partials(x, g)
+        m = nodes.shape[0]
+        # d Phi / d r_b: the complementarity rows through g / l_g (d g_j / d r_b,j = 1)
+        rhs = jnp.concatenate([jnp.diag(db / l_g), jnp.zeros((2, m))], axis=0)
+        return -f_s * jnp.linalg.solve(jac, rhs)[:m]
+
+    def _solve_force(self, force, tol, offset_guess=None, guess=None, window=None,
+                     polish=True):
         n = self.theta.shape[0]
+        l_g, f_s, mag = scales = self._force_scales(force)
+        unit = force / mag
+        if guess is not None:
+            e0, x0 = guess[0], guess[1] / f_s
+        else:  # pin touching the nearest wall point along F (or the guess), nothing loaded
+            e0 = unit * (jnp.min(self.boundary_radius) - self.pin_radius) \
+                if offset_guess is None else offset_guess
+            x0 = jnp.zeros(n)
+        z0 = jax.lax.stop_gradient(jnp.concatenate([x0, e0 / l_g]))
+        args = (self, force, scales)
 
-        def residual(z, args):
-            prob, f_target = args
-            x, e = z[:n], z[n:] * l_g
-            f = x * f_s
-            g = prob.initial_gap(e) + prob.compliance @ f
-            eq = (prob.length * (f @ u) - f_target) / jax.lax.stop_gradient(mag)
-            return jnp.concatenate([ncp.fischer_burmeister(x, g / l_g), eq])
+        def whole(z_start, steps_before=0):
+            z, info = ncp.solve(_force_residual, z_start, args, tol=tol, jacobian=_force_jacobian,
+                                polish=polish)
+            return z, eqx.tree_at(lambda i: i.steps, info, info.steps + steps_before)
 
-        # start: pin touching the nearest wall point along F (or the guess), nothing loaded
-        e0 = unit * (jnp.min(self.boundary_radius) - self.pin_radius) if offset_guess is None \
-            else offset_guess
-        z0 = jnp.concatenate([jnp.zeros(n), e0 / l_g])
-        z, info = ncp.solve(residual, jax.lax.stop_gradient(z0), (self, force), tol=tol)
+        if window is None:
+            z, info = whole(z0)
+        else:
+            nodes = self.window_nodes(jax.lax.stop_gradient(force), window)
+            zw, info_w = ncp.solve(_force_residual,
+                                   jnp.concatenate([z0[:n][nodes], z0[n:]]),
+                                   (self.restricted(nodes), force, scales), tol=tol,
+                                   jacobian=_force_jacobian, polish=polish)
+            z_in = jnp.concatenate([jnp.zeros(n).at[nodes].set(zw[:window]), zw[window:]])
+            # the whole ring's residual there: the window's rows, and the open nodes
+            # outside it (f = 0: phi = 0 where g >= 0, 2 g / l_g where g < 0)
+            res = jnp.max(jnp.abs(_force_residual(jax.lax.stop_gradient(z_in),
+                                                  jax.lax.stop_gradient(args))))
+            inside = res <= tol
+            info_in = ncp.NewtonInfo(converged=inside, residual=res, steps=info_w.steps,
+                                     tol=tol)
+            z, info = jax.lax.cond(
+                inside, lambda: (z_in, info_in),
+                lambda: whole(jax.lax.stop_gradient(z_in), info_w.steps))
         return self._solution(z[n:] * l_g, z[:n] * f_s, info)
+
+
+def _force_residual(z, args):
+    """Phi of the given-force problem: unknowns z = (f / f_s, e / l_g); rows the
+    Fischer-Burmeister complementarity of (f, g) per node, then the two force
+    equations L sum_j f_j u_j = F (relative to |F|)."""
+    prob, force, (l_g, f_s, mag) = args
+    n = prob.theta.shape[0]
+    x, e = z[:n], z[n:] * l_g
+    f = x * f_s
+    g = prob.initial_gap(e) + prob.compliance @ f
+    eq = (prob.length * (f @ prob.directions) - force) / mag
+    return jnp.concatenate([ncp.fischer_burmeister(x, g / l_g), eq])
+
+
+def _force_jacobian(z, args):
+    """d Phi / dz of `_force_residual` in closed form (its forward-mode Jacobian,
+    one tangent per unknown, cost n products with C; this costs one scaling of C):
+
+        [[diag(a) + diag(b) C f_s / l_g,   diag(b) dg0/de],
+         [L f_s u^T / |F|,                 0            ]]
+
+    with (a, b) the Fischer-Burmeister partials and dg0_j/de = -u_j +
+    (e x u_j) / sqrt(R^2 - (e x u_j)^2) d(e x u_j)/de (the exact ray gap)."""
+    prob, _, (l_g, f_s, mag) = args
+    n = prob.theta.shape[0]
+    x, e = z[:n], z[n:] * l_g
+    u = prob.directions
+    g = (prob.initial_gap(e) + prob.compliance @ (x * f_s)) / l_g
+    da, db = ncp.fischer_burmeister_partials(x, g)
+    across = u[:, 0] * e[1] - u[:, 1] * e[0]
+    root = jnp.sqrt(prob.pin_radius**2 - across**2)
+    d_across = jnp.stack([-u[:, 1], u[:, 0]], axis=-1)
+    dg0 = -u + (across / root)[:, None] * d_across
+    top = jnp.concatenate([jnp.diag(da) + db[:, None] * prob.compliance * (f_s / l_g),
+                           db[:, None] * dg0], axis=1)
+    bottom = jnp.concatenate([(prob.length * f_s / mag) * u.T, jnp.zeros((2, 2))], axis=1)
+    return jnp.concatenate([top, bottom], axis=0)
 
 
 @eqx.filter_jit

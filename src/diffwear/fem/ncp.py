@@ -25,14 +25,18 @@ then passed through one Newton step that is differentiable in the parameters:
 
     z = z* - J(z*)^-1 Phi(z*, theta),    J held constant,
 
-which leaves the value unchanged (Phi(z*) ~ 0) and gives exactly the implicit-
-function-theorem derivative dz/dtheta = -J^-1 dPhi/dtheta in forward and
-reverse mode.  It is valid where the solution is strictly complementary (no
-node with a = b = 0), i.e. away from the instant a node enters contact.
+which leaves the value unchanged to the tolerance (Phi(z*) ~ 0) and gives
+exactly the implicit-function-theorem derivative dz/dtheta = -J^-1
+dPhi/dtheta in forward and reverse mode.  With ``polish=False`` the step's
+derivative is given as a custom JVP and the step itself is not taken (a
+solve that is not differentiated skips its LU).  It is valid where the solution is
+strictly complementary (no node with a = b = 0), i.e. away from the instant a
+node enters contact.
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Callable
 
 import equinox as eqx
@@ -54,6 +58,15 @@ def fischer_burmeister(a, b):
     return a + b - jnp.where(zero, 0.0, r)
 
 
+def fischer_burmeister_partials(a, b):
+    """(d phi / da, d phi / db) of `fischer_burmeister`: 1 - a / r and 1 - b / r
+    (r = sqrt(a^2 + b^2)), (1, 1) at a = b = 0, as its autodiff gives."""
+    r2 = a * a + b * b
+    zero = r2 == 0.0
+    r = jnp.sqrt(jnp.where(zero, 1.0, r2))
+    return jnp.where(zero, 1.0, 1.0 - a / r), jnp.where(zero, 1.0, 1.0 - b / r)
+
+
 class NewtonInfo(eqx.Module):
     """How the solve ended: ``converged`` (max |Phi| <= tol), the final max |Phi|
     and the number of Newton steps."""
@@ -64,7 +77,10 @@ class NewtonInfo(eqx.Module):
     tol: float = eqx.field(static=True)
 
 
-def _newton(residual: Callable, z0, args, tol: float, max_steps: int):
+def _newton(residual: Callable, z0, args, tol: float, max_steps: int,
+            jacobian: Callable | None = None):
+    jacobian = _jacobian_of(residual) if jacobian is None else jacobian
+
     def merit(z):
         r = residual(z, args)
         return 0.5 * jnp.sum(r * r), r
@@ -75,7 +91,7 @@ def _newton(residual: Callable, z0, args, tol: float, max_steps: int):
 
     def body(state):
         z, psi, r, k = state
-        jac = jax.jacfwd(lambda y: residual(y, args))(z)
+        jac = jacobian(z, args)
         d = jnp.linalg.solve(jac, -r)
         grad = jac.T @ r
         ok = jnp.all(jnp.isfinite(d)) & (grad @ d < -1e-12 * jnp.sum(d * d))
@@ -103,15 +119,51 @@ def _newton(residual: Callable, z0, args, tol: float, max_steps: int):
     return z, NewtonInfo(converged=res <= tol, residual=res, steps=k, tol=tol)
 
 
+def _jacobian_of(residual: Callable) -> Callable:
+    """(z, args) -> d residual / dz by forward-mode autodiff."""
+    return lambda z, args: jax.jacfwd(lambda y: residual(y, args))(z)
+
+
 def solve(residual: Callable, z0: Float[Array, " m"], args, *, tol: float = 1e-12,
-          max_steps: int = 100) -> tuple[Float[Array, " m"], NewtonInfo]:
+          max_steps: int = 100, jacobian: Callable | None = None, polish: bool = True
+          ) -> tuple[Float[Array, " m"], NewtonInfo]:
     """z with residual(z, args) = 0 (max norm <= tol), differentiable in ``args``
     (a pytree of arrays) by the implicit function theorem; see the module docstring.
 
+    ``jacobian(z, args)``: d residual / dz in closed form (its generalized
+    derivative where the residual is not differentiable); default forward-mode
+    autodiff of ``residual``, one tangent per unknown.  A ``z0`` that already
+    meets ``tol`` takes no Newton step (a warm start at a known solution).
+    ``polish``: return z one Newton step past the loop's (the step whose
+    derivative is the implicit one; one more LU); False: z as the loop left
+    it (within ``tol``), with the same derivative, for many solves whose
+    values need nothing finer (the FEM wear route's samples).
+
     Never raises: check ``info.converged`` (`diffwear.fem.contact` does, and
     raises `SolverError` outside ``jit``)."""
+    jacobian = _jacobian_of(residual) if jacobian is None else jacobian
     args_c = jax.lax.stop_gradient(args)
-    z, info = _newton(residual, jax.lax.stop_gradient(z0), args_c, tol, max_steps)
+    z, info = _newton(residual, jax.lax.stop_gradient(z0), args_c, tol, max_steps, jacobian)
     z = jax.lax.stop_gradient(z)
-    jac = jax.lax.stop_gradient(jax.jacfwd(lambda y: residual(y, args_c))(z))
+    if not polish:
+        return _at_solution(residual, jacobian, z, args), info
+    jac = jax.lax.stop_gradient(jacobian(z, args_c))
     return z - jnp.linalg.solve(jac, residual(z, args)), info
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1))
+def _at_solution(residual, jacobian, z, args):
+    """The solution ``z`` of residual(z, args) = 0, with the implicit-function
+    derivative dz = -J^-1 (d residual / d args) d args (J = ``jacobian`` at z,
+    held): the derivative of one Newton step at z (module docstring), whose
+    value is not computed (it differs from z by the solve's tolerance)."""
+    del residual, jacobian, args
+    return z
+
+
+@_at_solution.defjvp
+def _at_solution_jvp(residual, jacobian, primals, tangents):
+    z, args = primals
+    _, d_args = tangents
+    _, d_res = jax.jvp(lambda a: residual(z, a), (args,), (d_args,))
+    return z, -jnp.linalg.solve(jax.lax.stop_gradient(jacobian(z, args)), d_res)

@@ -8,7 +8,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import InputError
-from ..wear.fem_route import FemEvolver, FemWearModel, check_cycle_solver
+from ..wear.fem_route import FemEvolver, FemWearModel
 from .dynamic import Dynamic
 
 
@@ -27,7 +27,6 @@ class FemRoute(Dynamic):
     def __check_init__(self):
         if not isinstance(self.fem, FemWearModel):
             raise InputError(f"FemRoute: fem must be a FemWearModel, got {self.fem!r}")
-        check_cycle_solver(self.cycle.solver)
 
     def evolver(self, mech, joint: str, cycles, *, period, wall_thickness=None) -> FemEvolver:
         assert self.fem is not None

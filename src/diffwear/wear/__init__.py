@@ -31,6 +31,7 @@ from .life import (
     LifeResult,
 )
 from .peak import (
+    arc_peak_depth,
     peak_depth,
 )
 from .status import (
@@ -40,7 +41,7 @@ from .status import (
 __all__ = [
     "MM3_PER_NM", "SLIP_RATE_WIDTH", "ArchardWear",
     "CycleResult", "wear_cycle", "reset_wear", "JointsCycleResult", "wear_cycle_joints",
-    "LifeResult", "peak_depth",
+    "LifeResult", "peak_depth", "arc_peak_depth",
     "STATUS_TEXT",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "AbstractExtrapolation", "Constant", "Adaptive", "ErrorControlled",

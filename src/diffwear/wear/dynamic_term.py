@@ -120,14 +120,15 @@ class DynamicWear(AbstractWearTerm):
     def worn(self, h) -> Mechanism:
         return with_profiles(self.mech, self.joints, h)
 
-    def run(self, h, memory, saves: int | None):
+    def run(self, h, memory, saves: int | None, step_to_saves: bool = False):
         """One dynamic cycle at profiles ``h`` from ``memory`` (``saves``
-        states saved): (`JointsCycleResult`, the memory after it, the worn
-        mechanism)."""
+        states saved; ``step_to_saves``: as `wear_cycle`, the saved states
+        are ends of steps): (`JointsCycleResult`, the memory after it, the
+        worn mechanism)."""
         y = lax.stop_gradient(memory["y"]) if self.fresh_state else memory["y"]
         worn = self.worn(h)
         r = wear_cycle_joints(worn, self.joints, y, memory["t"], self.period, n_save=saves,
-                              **self.settings.options())
+                              step_to_saves=step_to_saves, **self.settings.options())
         return r, dict(memory, y=r.y_end, t=memory["t"] + self.period), worn
 
     def cycle(self, h, memory) -> CycleWear:

@@ -4,7 +4,8 @@ FEM route (Ch. 5).
 The dynamics still run with the elastic-foundation (EFM) clearance joint: it
 supplies the joint force and the pin's relative rotation.  The wear pressure
 is not the EFM's: for each dynamic cycle the joint force at ``n_samples + 1``
-equally spaced times is applied to the rigid pin in the plane-strain bushing
+equally spaced times (each the end of an integrator step: the cycle steps
+onto them, see "Integrator") is applied to the rigid pin in the plane-strain bushing
 ring (`diffwear.fem.RingContact`, given-force, frictionless contact), and the
 depth increment on the profile grid theta_k is
 
@@ -52,20 +53,47 @@ The FEM route therefore takes the linearly implicit (Rosenbrock-Euler) step
 
     (I - A J) Delta h = A dh(h),     J = d(dh)/dh at h,
 
-with J from the contact's implicit derivative (forward mode through the FE
-solves, ``jacobian_samples`` of the cycle's samples, compliance held), which
-damps every mode instead of amplifying it and equals A dh where the wear is
-uniform; Delta h is floored at 0 (material is only removed).
+with J from the contact's implicit derivative (in closed form at each
+sample's solution, by default at every sample: the derivative of the
+increment's own quadrature; ``jacobian_samples`` a subset; compliance held,
+`depth_jacobian`), which damps every
+mode instead of amplifying it and equals A dh where the wear is uniform;
+Delta h is floored at 0 (material is only removed).  J holds the contact set
+of the step's start: a node that leaves or enters contact during a step is
+not anticipated, and the worn profile keeps a node-to-node roughness of about
+one wear step's depth (rig: ~0.01 mm rms in second differences), so that its
+maximum depth scatters by ~2 % between runs that differ at round-off (the
+profile smoothed over 5 nodes and the volume by < 1 %: measured in the docs).
+
+Integrator.  The cycle steps exactly onto the sample times (`wear_cycle`'s
+``step_to_saves``), so the samples are step ends, never the integrator's
+interpolant.  On Tsit5 (steps of ~0.6 ms on the rig) the interpolant would
+do; on Rodas4 (L-stable, ~10 ms steps at rtol 1e-4) it misses the stiff
+contact between steps (rig cycle: sampled joint force up to 13 % of its peak
+off, against 1.1 % at step ends) and the Rosenbrock dense output is dropped
+(`sampling_solver`).  Stepping onto 65 samples costs Rodas4 ~510 steps a rig
+cycle instead of ~210.
+
+FE solves.  The samples are solved in order, each from the previous sample's
+solution (~3 semismooth Newton steps instead of ~13), on the half ring around
+the joint force first (`contact_window`; accepted only if it solves the
+whole ring's problem), with the Newton Jacobian in closed form and without
+the final polishing step (`diffwear.fem.contact`); J's derivative of each
+sample is one LU at its solution.  Rig cycle, measured
+(benchmarks/experiments/fem_route_cycle_profile.py): the 65 solves ~18 ms
+(before: 340-460 ms), J from all 65 samples ~17 ms (from 9 before: 61 ms).
 
 Geometry refresh.  The condensed compliance C of the worn ring is rebuilt from
 the current profile every ``refresh_interval`` = M wear cycles (mesh and
-condensation, ~0.1 s at 180 x 4); in between, wear enters only through the
+condensation, ~55 ms at 180 x 4); in between, wear enters only through the
 initial gap (boundary radius a + h) with the last C kept.  M = 1 rebuilds every
-cycle.  The FE grid is the profile grid (same n_theta nodes, theta_j =
-2 pi j / n): no interpolation.
+cycle; the default, 3, every third.  The FE grid is the profile grid (same
+n_theta nodes, theta_j = 2 pi j / n): no interpolation.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import equinox as eqx
 import jax
@@ -75,11 +103,12 @@ from jax import lax
 from jaxtyping import Array, Float
 
 from .._checks import check_int_option, check_positive, check_range, concrete, require_float64
+from ..dynamics.projection import replace_inner
 from ..dynamics.rosenbrock import AbstractRosenbrock
 from ..errors import InputError
 from ..fem import RingContact, ring_mesh
 from ..fem.condense import inner_compliance, tributary_lengths
-from ..fem.contact import TOL
+from ..fem.contact import CONTACT_FRACTION, TOL
 from ..mechanism import Mechanism
 from ..mechanism.geometry import grid_angles, safe_norm
 from .cycle import clearance_element, wear_parts
@@ -105,14 +134,27 @@ ACCEPT_RESIDUAL = 1e-9
 
 # Defaults, chosen by convergence checks on the rig (docs, "FEM contact and the FEM route"):
 # n_samples: the rig's cycle increment changes by < 1e-3 (max) from 64 to 256
-# samples; n_r: 4 Q9 layers through the wall (peak pressure within 1e-3 of 8).
+# samples (32: its volume over rig-21400 -0.6 %, eight runs each at M = 1); n_r: 4 Q9
+# layers through the wall (peak pressure within 1e-3 of 8); refresh_interval:
+# the compliance rebuilt every 3rd wear cycle (rebuilt at every cycle it took
+# ~1/4 of the route's time on Rodas4), with rig-21400's depth and volume
+# unchanged within the route's run-to-run scatter: eight runs each at M = 1,
+# 2, 3, means within 0.9 % (max depth; each mean's standard error ~0.8 %),
+# 0.4 % (5-node smoothed max), 0.1 % (volume)
+# (benchmarks/records/fem_route_scatter.json).
 DEFAULT_SAMPLES = 64
 DEFAULT_LAYERS = 4
-DEFAULT_REFRESH = 1
-# Samples of the cycle (of the n_samples + 1) that form J of the implicit step:
-# J only has to carry the stiffness of the contact region (it is not the
-# increment), 8 intervals over the cycle: rig contact moves by < 20 deg.
-DEFAULT_JACOBIAN_SAMPLES = 8
+DEFAULT_REFRESH = 3
+# Samples of the cycle that form J of the implicit step: None, all of them (J is
+# then the derivative of the increment's own quadrature, whichever integrator
+# runs the cycles).  Measured over rig-21400 on Rodas4 from starts 1e-12 m
+# apart (the route's node-scale roughness makes single runs scatter; the docs'
+# FEM page, benchmarks/records/fem_route_scatter.json): J from every 8th
+# sample costs ~1/9 less but leaves the profile rougher (rms second
+# difference 0.016 vs 0.013 mm, max depth +1.2 % on the mean, eight runs
+# each), and one of its 22 runs ended in a 0.05 mm zigzag (max depth
+# 0.515 mm); in over 80 runs with J from every sample none exceeded 0.494 mm.
+DEFAULT_JACOBIAN_SAMPLES = None
 
 
 class FemWearModel(eqx.Module):
@@ -123,7 +165,9 @@ class FemWearModel(eqx.Module):
     cycles between rebuilds of the condensed compliance (integer >= 1; an array,
     so that one compiled evolution serves every M); n_samples: quadrature
     intervals per dynamic cycle (FE solves: n_samples + 1); n_layers: Q9 element
-    layers through the wall; force: "resultant" or "normal" (module docstring).
+    layers through the wall; force: "resultant" or "normal" (module docstring);
+    jacobian_samples: intervals of the samples that form the implicit step's J
+    (None: all n_samples).
     """
 
     youngs_modulus: Float[Array, ""]
@@ -138,7 +182,7 @@ class FemWearModel(eqx.Module):
     def __init__(self, youngs_modulus, poisson_ratio, outer_radius, *,
                  refresh_interval=DEFAULT_REFRESH, n_samples: int = DEFAULT_SAMPLES,
                  n_layers: int = DEFAULT_LAYERS, force: str = "resultant",
-                 jacobian_samples: int = DEFAULT_JACOBIAN_SAMPLES):
+                 jacobian_samples: int | None = DEFAULT_JACOBIAN_SAMPLES):
         check_positive("FEM route: Young's modulus E [Pa]", youngs_modulus)
         check_range("FEM route: Poisson ratio nu", poisson_ratio, -1.0, 0.5,
                     low_open=True, high_open=True)
@@ -151,13 +195,15 @@ class FemWearModel(eqx.Module):
         for name, v, low in (("n_samples (quadrature intervals per cycle)", n_samples, 2),
                              ("n_layers (element layers through the wall)", n_layers, 1),
                              ("jacobian_samples (intervals of the implicit step's J)",
-                              jacobian_samples, 1)):
+                              n_samples if jacobian_samples is None else jacobian_samples, 1)):
             check_int_option(f"FEM route: {name}", v, low)
         if force not in FORCE_MODES:
             raise InputError(f"FEM route: force must be one of {FORCE_MODES}, got {force!r}")
         f = lambda v: jnp.asarray(v, dtype=float)  # noqa: E731
         self.youngs_modulus, self.poisson_ratio = f(youngs_modulus), f(poisson_ratio)
         self.outer_radius, self.refresh_interval = f(outer_radius), f(refresh_interval)
+        if jacobian_samples is None:
+            jacobian_samples = n_samples
         if jacobian_samples > n_samples:
             raise InputError(f"FEM route: jacobian_samples ({jacobian_samples}) must not exceed "
                              f"n_samples ({n_samples})")
@@ -219,13 +265,16 @@ def ring_contact(compliance, tributary, bushing_radius, pin_radius, depth, lengt
 
 class FemIncrement(eqx.Module):
     """One cycle's FE wear: depth increment [m], k-free load x sliding [N m],
-    pressures at the samples [Pa], whether every FE solve converged."""
+    pressures [Pa] and FE total normal loads [N] at the samples (zero where
+    unloaded), whether every FE solve converged, the pin offsets [m] at the
+    samples (where unloaded: the last loaded sample's)."""
 
     depth_increment: Float[Array, " n"]
     load_sliding: Float[Array, ""]
     pressure: Float[Array, "T n"]
     normal_load: Float[Array, " T"]
     ok: Array
+    offset: Float[Array, "T 2"] | None = None
 
 
 def trapezoid_weights(ts: Float[Array, " T"]) -> Float[Array, " T"]:
@@ -234,59 +283,145 @@ def trapezoid_weights(ts: Float[Array, " T"]) -> Float[Array, " T"]:
     return 0.5 * (jnp.concatenate([dt, jnp.zeros(1)]) + jnp.concatenate([jnp.zeros(1), dt]))
 
 
-def fem_increment(contact: RingContact, samples: JointSamples, ts, k) -> FemIncrement:
+def contact_window(n: int) -> int:
+    """Nodes of the FE solves' first try (`RingContact.solve_force`'s ``window``):
+    the half ring centred on the joint force, where a pin pressed along F
+    touches (the rig's contact: 30-37 of 180 nodes unworn, 15-20 worn); checked
+    on the whole ring, else solved there."""
+    return n // 2
+
+
+def fem_increment(contact: RingContact, samples: JointSamples, ts, k,
+                  starts: tuple | None = None) -> FemIncrement:
     """dh_k = k sum_i w_i p_k(t_i) s_i and sum_i w_i N_i s_i (s = R_b |omega|, N
-    the FE total normal load L sum_j f_j) for the loads ``samples`` at ``ts``."""
+    the FE total normal load L sum_j f_j) for the loads ``samples`` at ``ts``.
+
+    The samples are solved in order, each from the last loaded one's solution
+    (consecutive loads differ little: ~3 Newton steps instead of ~13 from the
+    pin touching the wall along F); ``starts``: (pin offsets [m], pressures
+    [Pa]) of a solution at these loads (`FemIncrement.offset`, ``.pressure``),
+    each sample's start instead (no Newton step where they solve it)."""
     f = samples.force
+    n = contact.theta.shape[0]
     mag = safe_norm(f)
     loaded = mag > MIN_JOINT_FORCE
     f_safe = jnp.where(loaded[:, None], f, jnp.array([1.0, 0.0]))  # any valid load; result dropped
+    window = contact_window(n)
 
-    def solve(x):
-        s = contact.solve_force(x, tol=TOL)  # under tracing: no concrete checks, no raise
+    def solve(x, guess):
+        """(nodal forces, residual, offset) of sample load ``x`` from ``guess``."""
+        # traced: no raise; unpolished: the loop's solution (within TOL) and its derivative
+        s = contact.solve_force(x, tol=TOL, guess=guess, window=window, polish=False)
 
         def retry(_):
             # Semismooth Newton from the default start (pin touching the least worn
             # point along F) can stall on a deep pocket (seen once on the rig at
             # M = 5: 100 steps, residual 1e-4); start at the worn wall along F.
-            return contact.solve_force(x, tol=TOL, offset_guess=contact.wall_offset(x))
+            return out(contact.solve_force(x, tol=TOL, offset_guess=contact.wall_offset(x)))
 
-        s = lax.cond(s.info.residual <= ACCEPT_RESIDUAL, lambda _: s, retry, None)
-        return (s.pressure, contact.length * jnp.sum(s.nodal_force),
-                s.info.residual <= ACCEPT_RESIDUAL)
+        return lax.cond(s.info.residual <= ACCEPT_RESIDUAL, lambda _: out(s), retry, None)
 
-    p, load, conv = lax.map(solve, f_safe)
+    def out(s):  # only what the increment reads (the rest of a solution is never formed)
+        return s.nodal_force, s.info.residual, s.offset
+
+    def unloaded(guess):
+        return jnp.zeros(n), jnp.zeros(()), guess[0]
+
+    if starts is None:
+        def step(prev, xs):
+            x, on = xs
+
+            def go(prev):
+                r = solve(x, prev)
+                return (r[2], r[0]), r
+
+            return lax.cond(on, go, lambda prev: (prev, unloaded(prev)), prev)
+
+        # the first sample starts as `solve_force` does: touching the wall along F
+        first = f_safe[0] / safe_norm(f_safe[0]) * (jnp.min(contact.boundary_radius)
+                                                    - contact.pin_radius)
+        _, (nodal, res, offset) = lax.scan(step, (first, jnp.zeros(n)), (f_safe, loaded))
+    else:
+        e_start, p_start = jax.lax.stop_gradient(starts)
+
+        def one(xs):
+            x, on, e0, f0 = xs
+            return lax.cond(on, lambda g: solve(x, g), unloaded, (e0, f0))
+
+        nodal, res, offset = lax.map(
+            one, (f_safe, loaded, e_start, p_start * jax.lax.stop_gradient(contact.tributary)))
+    p = nodal / contact.tributary
+    load = contact.length * jnp.sum(nodal, axis=1)
+    conv = res <= ACCEPT_RESIDUAL
     p = jnp.where(loaded[:, None], p, 0.0)
     load = jnp.where(loaded, load, 0.0)
     w = trapezoid_weights(ts) * samples.sliding_rate
     dh = jnp.asarray(k, dtype=float) * (w @ p)
     ok = jnp.all(conv | ~loaded) & jnp.all(jnp.isfinite(dh))
     return FemIncrement(depth_increment=dh, load_sliding=w @ load, pressure=p,
-                        normal_load=load, ok=ok)
+                        normal_load=load, ok=ok, offset=offset)
+
+
+def jacobian_sample_indices(n_t: int, jacobian_samples: int) -> np.ndarray:
+    """The samples (of ``n_t``) that form the implicit step's J: ``jacobian_samples``
+    intervals, evenly spread (all of them when it is ``n_t - 1``)."""
+    return np.unique(np.round(np.linspace(0, n_t - 1, jacobian_samples + 1)).astype(int))
+
+
+def depth_jacobian(contact: RingContact, samples: JointSamples, ts, inc: FemIncrement, k,
+                   jacobian_samples: int) -> tuple[Float[Array, "n n"], Float[Array, " n"]]:
+    """(J, d ls / d depth): the derivatives of the increment ``inc`` (its depth
+    increment and k-free load x sliding) w.r.t. the depth, compliance and
+    loads held, from ``jacobian_samples`` + 1 of the samples (trapezoid over
+    the cycle; all of them: the increment's own quadrature).  Each sample's
+    nodal forces are differentiated at its solution in ``inc`` by the implicit
+    function theorem (`RingContact.force_depth_derivative`), on the nodes of
+    its first-try window (`contact_window`) where all its loaded nodes lie
+    there, else on the whole ring."""
+    n = inc.depth_increment.shape[0]
+    idx = jacobian_sample_indices(ts.shape[0], jacobian_samples)
+    force = samples.force[idx]
+    loaded = safe_norm(force) > MIN_JOINT_FORCE
+    force = jnp.where(loaded[:, None], force, jnp.array([1.0, 0.0]))
+    weights = trapezoid_weights(ts[idx]) * samples.sliding_rate[idx]
+    window = contact_window(n)
+    frozen = jax.lax.stop_gradient(contact)
+    trib = frozen.tributary
+    assert inc.offset is not None  # `fem_increment` returns the samples' offsets
+    offsets, nodal = jax.lax.stop_gradient((inc.offset[idx], inc.pressure[idx] * trib))
+
+    def one(acc, xs):
+        x, on, weight, e, f = xs
+
+        def add(nodes, acc):
+            jac, d_ls = acc
+            d = frozen.force_depth_derivative(x, e, f, nodes)  # (m, m)
+            return (jac.at[nodes[:, None], nodes[None, :]].add(weight * d / trib[nodes, None]),
+                    d_ls.at[nodes].add(weight * frozen.length * jnp.sum(d, axis=0)))
+
+        nodes = frozen.window_nodes(x, window)
+        # no load outside the window (a node below CONTACT_FRACTION of the peak is open)
+        inside = jnp.max(jnp.abs(f.at[nodes].set(0.0))) <= CONTACT_FRACTION * jnp.max(f)
+        acc = lax.cond(on & inside, lambda acc: add(nodes, acc), lambda acc: acc, acc)
+        acc = lax.cond(on & ~inside, lambda acc: add(jnp.arange(n), acc), lambda acc: acc, acc)
+        return acc, None
+
+    (jac, d_ls), _ = lax.scan(one, (jnp.zeros((n, n)), jnp.zeros(n)),
+                              (force, loaded, weights, offsets, nodal))
+    return jnp.asarray(k, dtype=float) * jac, d_ls
 
 
 def implicit_step(contact: RingContact, samples: JointSamples, ts, inc: FemIncrement, k, a,
                   jacobian_samples: int) -> tuple[Float[Array, " n"], Float[Array, ""], Array]:
     """(Delta h, load x sliding of the step, explicit fallback used): Delta h solves
     (I - a J) Delta h = a dh (dh = ``inc.depth_increment``), J = d(dh)/d(depth)
-    from ``jacobian_samples`` + 1 of the samples (trapezoid over the cycle),
-    compliance held; floored at 0.  The load x sliding is linearised the same
-    way, a (ls + (d ls / d depth) . Delta h), so that k x it stays the step's
+    from ``jacobian_samples`` + 1 of the samples (`depth_jacobian`), compliance
+    held; floored at 0.  The load x sliding is linearised the same way,
+    a (ls + (d ls / d depth) . Delta h), so that k x it stays the step's
     volume (the Archard bookkeeping of an implicit step: the loads at the end of
     the step).  See the module docstring."""
-    n_t = ts.shape[0]
-    idx = np.unique(np.round(np.linspace(0, n_t - 1, jacobian_samples + 1)).astype(int))
-    sub = jax.tree.map(lambda x: x[idx], samples)
-    frozen = jax.lax.stop_gradient(contact)
-
-    def dh(extra_depth):  # at the current profile plus ``extra_depth``
-        ct = eqx.tree_at(lambda c: c.boundary_radius, frozen,
-                         frozen.boundary_radius + extra_depth)
-        r = fem_increment(ct, sub, ts[idx], k)
-        return r.depth_increment, r.load_sliding
-
     n = inc.depth_increment.shape[0]
-    jac, d_ls = jax.jacfwd(dh)(jnp.zeros(n))
+    jac, d_ls = depth_jacobian(contact, samples, ts, inc, k, jacobian_samples)
     step = jnp.linalg.solve(jnp.eye(n) - a * jac, a * inc.depth_increment)
     step = jnp.maximum(step, 0.0)
     ls = a * (inc.load_sliding + d_ls @ step)
@@ -298,18 +433,17 @@ def implicit_step(contact: RingContact, samples: JointSamples, ts, inc: FemIncre
             jnp.where(good, ls, a * inc.load_sliding), ~good)
 
 
-def check_cycle_solver(solver) -> None:
-    """`InputError` for a cycle integrator the FEM route cannot sample: it reads
-    the joint force at fixed times of each cycle, which fall between the long
-    steps of a linearly implicit solver, where the interpolated state's force
-    is off (a rig cycle on Rodas4 at rtol 1e-4: up to 8.6 % of the peak force,
-    against 0.12 % on Tsit5 at 1e-6; over rig-21400, max depth +2.5 %)."""
-    if isinstance(solver, AbstractRosenbrock):
-        raise InputError(f"the FEM wear route runs its dynamic cycles on Tsit5 only "
-                         f"(--integrator tsit5), got {type(solver).__name__}: it reads the "
-                         f"joint force at fixed times of each cycle, which fall between a "
-                         f"linearly implicit solver's long steps, where the interpolated "
-                         f"force is off")
+def sampling_solver(solver):
+    """The cycle integrator ``solver`` as the FEM route runs it: the cycle steps
+    onto the sample times (`wear_cycle`'s ``step_to_saves``), so the samples
+    are ends of steps and a Rosenbrock solver's dense output (one more
+    evaluation of the right-hand side per step) is never read: dropped."""
+    def configure(s):
+        if isinstance(s, AbstractRosenbrock) and s.dense_output:
+            return dataclasses.replace(s, dense_output=False)
+        return s
+
+    return None if solver is None else replace_inner(solver, configure)
 
 
 class FemWear(DynamicWear):
@@ -344,7 +478,7 @@ class FemWear(DynamicWear):
         stale = memory["fem_age"] >= fem.refresh_interval
         cmat = lax.cond(stale, self.compliance, lambda h: memory["fem_C"], depth)
         age = jnp.where(stale, 0.0, memory["fem_age"]) + 1.0
-        r, after, worn = self.run(h, memory, fem.n_samples + 1)
+        r, after, worn = self.run(h, memory, fem.n_samples + 1, step_to_saves=True)
         assert r.ys is not None and r.ts is not None  # saved: n_save is given
         samples = joint_samples(worn, self.joints[0], r.ys, fem.force)
         contact = ring_contact(cmat, self.tributary, el.bushing_radius, el.pin_radius, depth,
@@ -377,8 +511,6 @@ class FemEvolver(Evolver):
                              f"thesis's FEM runs), got {method!r}")
         if not isinstance(fem, FemWearModel):
             raise InputError(f"fem must be a FemWearModel, got {type(fem).__name__}")
-        cycle = kw.get("cycle")
-        check_cycle_solver(None if cycle is None else cycle.solver)
         _, el = clearance_element(mech, joint)
         rb, b = concrete(el.bushing_radius), concrete(fem.outer_radius)
         if rb is not None and b is not None and not b > rb:
@@ -389,6 +521,7 @@ class FemEvolver(Evolver):
         super().__init__(mech, joint, cycles, method=method, **kw)
 
     def make_term(self, mech, joint, period, settings) -> FemWear:
+        settings = dataclasses.replace(settings, solver=sampling_solver(settings.solver))
         return FemWear(mech, (joint,), period, settings, fem=self.fem, tributary=self.tributary)
 
 
@@ -417,5 +550,6 @@ def default_model(design, *, refresh_interval=DEFAULT_REFRESH, n_samples=DEFAULT
 
 
 __all__ = ["FORCE_MODES", "MIN_JOINT_FORCE", "FemWearModel", "JointSamples", "joint_samples",
-           "FemIncrement", "fem_increment", "FemEvolver", "FemWear", "evolve_fem", "default_model",
-           "ring_compliance", "ring_contact", "unworn_tributary", "trapezoid_weights"]
+           "FemIncrement", "fem_increment", "depth_jacobian", "implicit_step", "FemEvolver",
+           "FemWear", "evolve_fem", "default_model", "ring_compliance", "ring_contact",
+           "unworn_tributary", "trapezoid_weights", "sampling_solver", "contact_window"]

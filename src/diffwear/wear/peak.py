@@ -1,4 +1,5 @@
-"""The maximum of a wear-depth profile, as a smooth function of its grid values.
+"""The maximum of a wear-depth profile, as a smooth function of its grid values
+(`peak_depth`), and without the grid's node-scale roughness (`arc_peak_depth`).
 
 ``jnp.max`` over the grid is the maximum of the grid values: when the deepest
 node changes (the groove's peak moves between two nodes) its derivative jumps,
@@ -14,6 +15,8 @@ maximum by O(dtheta^2) of the curvature.
 """
 
 from __future__ import annotations
+
+import math
 
 import jax.numpy as jnp
 from jax import lax
@@ -69,3 +72,24 @@ def peak_depth(h: Float[Array, " n"]) -> Float[Array, ""]:
     x = lax.fori_loop(0, _NEWTON_ITERATIONS, newton, x0)
     value, _, _ = _hermite(h, x)
     return jnp.maximum(value, mid)
+
+
+# Half-width of the arc over which `arc_peak_depth` averages: 4 deg, two nodes
+# each side on the studies' 180-node grid.  The FEM route's worn profile keeps
+# a node-to-node roughness of about one wear step (`wear.fem_route`), so its
+# grid maximum moves by ~2 % between runs that differ at round-off; averaged
+# over +-2 nodes it moves by ~0.4 % (eight rig-21400 runs each,
+# benchmarks/records/fem_route_scatter.json).
+ARC_HALF_WIDTH = math.radians(4.0)
+
+
+def arc_peak_depth(h: Float[Array, " n"], half_width=ARC_HALF_WIDTH) -> Float[Array, ""]:
+    """Largest mean of the periodic profile ``h`` over an arc of +- ``half_width``
+    [rad] (rounded to whole grid spacings, at least 0): the peak of the groove
+    without the grid's node-scale roughness.  Equals ``max(h)`` for a constant
+    profile and, at ``half_width`` below half a spacing, for any."""
+    n = h.shape[-1]
+    half = max(int(round(half_width * n / (2.0 * math.pi))), 0)
+    k = 2 * half + 1
+    window = sum(jnp.roll(h, s, axis=-1) for s in range(-half, half + 1))
+    return jnp.max(window / k, axis=-1)

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import inspect
 import os
 import shutil
 import subprocess
@@ -134,7 +135,13 @@ def run(name: str, folder: Path) -> Path:
                         "--out", str(out), "--quiet"], check=True,
                        env={**os.environ, "PYTHONPATH": str(ROOT / "src")})
         return out
-    STUDIES[study].run(OutputDir(out), log=lambda *a: None, **options)
+    kwargs = {}
+    if options:  # the study's model from the command line's options (`diffwear study`)
+        from diffwear.cli.command import study_model
+
+        cycles = inspect.signature(STUDIES[study].run).parameters["cycles"].default
+        kwargs["model"] = study_model(STUDIES[study], cycles, options)
+    STUDIES[study].run(OutputDir(out), log=lambda *a: None, **kwargs)
     return out
 
 

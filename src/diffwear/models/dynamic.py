@@ -86,8 +86,7 @@ class Dynamic(AbstractWearModel):
         if wall_thickness is not None:
             wall = jnp.reshape(jnp.asarray(wall_thickness, dtype=float), (-1,))[0]
         ev = self.evolver(mech, joints[0], cycles, period=period, wall_thickness=wall)
-        state, hist = ev.run(ev.init(y0), ev.n_slots)
-        return as_evolution(ev.result(state, hist))
+        return as_evolution(ev.solve(y0))
 
     def run(self, mech_of, p, joints, y0, *, period, cycles, wall_thickness=None,
             checkpoints: Checkpoints | None = None) -> tuple[WearEvolution, RunTimes]:

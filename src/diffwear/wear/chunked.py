@@ -189,8 +189,7 @@ def run_evolution(make: Callable, p, y0, checkpoints: Checkpoints | None = None,
     if checkpoints is None:
         def whole(p, y0):
             ev = make(p)
-            state, hist = ev.run(ev.init(y0), ev.n_slots)
-            return ev.result(state, hist)
+            return ev.solve(y0)
 
         return timed(whole, p, y0)
 

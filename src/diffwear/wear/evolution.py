@@ -141,9 +141,7 @@ def evolve(
     require_float64("evolve")
     ev = Evolver(mech, joint, cycles, period=period, method=method, max_dynamic=max_dynamic,
                  wall_thickness=wall_thickness, warmup_cycles=warmup_cycles, cycle=cycle)
-    state = ev.init(y0) if start is None else start
-    state, hist = ev.run(state, ev.n_slots if slots is None else int(slots))
-    return ev.result(state, hist)
+    return ev.solve(y0, start, slots)
 
 
 class Evolver:
@@ -197,6 +195,15 @@ class Evolver:
     def idle_record(self, state: WearState) -> dict:
         """The history entry of a slot after the end (what `run` records there)."""
         return self._history(self.engine.idle_record(state))
+
+    def solve(self, y0, start: WearState | None = None, slots: int | None = None
+              ) -> EvolutionResult:
+        """The evolution from ``y0`` (its warm-up, then every slot) in one call;
+        from the engine state ``start`` instead (``y0`` ignored), ``slots``
+        of them (default: all)."""
+        state = self.init(y0) if start is None else start
+        state, hist = self.run(state, self.n_slots if slots is None else int(slots))
+        return self.result(state, hist)
 
     def result(self, final: WearState, hist: dict) -> EvolutionResult:
         done = self.engine.finish(final)

@@ -476,7 +476,9 @@ class FemWear(DynamicWear):
         assert fem is not None and self.tributary is not None
         (depth,) = h
         stale = memory["fem_age"] >= fem.refresh_interval
-        cmat = lax.cond(stale, self.compliance, lambda h: memory["fem_C"], depth)
+        # a lambda, not the bound method: lax.cond hashes its branches, and a
+        # Module with concrete array leaves is not hashable
+        cmat = lax.cond(stale, lambda h: self.compliance(h), lambda h: memory["fem_C"], depth)
         age = jnp.where(stale, 0.0, memory["fem_age"]) + 1.0
         r, after, worn = self.run(h, memory, fem.n_samples + 1, step_to_saves=True)
         assert r.ys is not None and r.ts is not None  # saved: n_save is given
@@ -532,8 +534,7 @@ def evolve_fem(mech: Mechanism, joint: str, y0, cycles, *, period, fem: FemWearM
     require_float64("evolve_fem")
     ev = FemEvolver(mech, joint, cycles, fem=fem, period=period,
                     method=Constant(float(extrapolation)), **kw)
-    state, hist = ev.run(ev.init(y0), ev.n_slots)
-    return ev.result(state, hist)
+    return ev.solve(y0)
 
 
 def default_model(design, *, refresh_interval=DEFAULT_REFRESH, n_samples=DEFAULT_SAMPLES,

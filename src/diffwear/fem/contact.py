@@ -23,12 +23,7 @@ Pressure.  Reported at the nodes as p_j = f_j / w_j [Pa], w_j the tributary
 length of node j (`condense.tributary_lengths`): exact for a uniform pressure;
 for a varying one it is the nodal value of the lumped (row-sum) load.
 
-Timing (development machine, 2 shared CPU cores, OPENBLAS_NUM_THREADS=1,
-jit-compiled, after the first call; a = 10 mm, b = 15 mm, PTFE-like
-E = 0.5 GPa, clearance 20 um, L = 10 mm, F = 2 kN): at n_theta = 96, n_r = 4
-one given-force solve takes 1.4 ms (12 Newton steps), one given-offset solve
-0.9 ms (6 steps); building the problem (`RingContact.build`: mesh and
-condensation) 30 ms.
+The cost of the solves and of building the problem is on the docs' FEM page.
 """
 
 from __future__ import annotations

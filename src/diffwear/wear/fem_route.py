@@ -48,7 +48,7 @@ pressure per unit depth of the mode).  The EFM's springs have one K = E_W / L
 elastic ring is stiffer for short modes, K ~ E* pi / lambda for a wavelength
 lambda below the wall thickness (E* = E / (1 - nu^2)): ~20 x the EFM's at
 lambda = 2 node spacings, so the explicit step turns the worn pocket into a
-node-to-node zigzag (measured on the rig: 0.530 mm peak, neighbours 0.45 mm).
+node-to-node zigzag (docs, "FEM contact and the FEM wear route").
 The FEM route therefore takes the linearly implicit (Rosenbrock-Euler) step
 
     (I - A J) Delta h = A dh(h),     J = d(dh)/dh at h,
@@ -61,31 +61,27 @@ mode instead of amplifying it and equals A dh where the wear is uniform;
 Delta h is floored at 0 (material is only removed).  J holds the contact set
 of the step's start: a node that leaves or enters contact during a step is
 not anticipated, and the worn profile keeps a node-to-node roughness of about
-one wear step's depth (rig: ~0.01 mm rms in second differences), so that its
-maximum depth scatters by ~2 % between runs that differ at round-off (the
-profile smoothed over 5 nodes and the volume by < 1 %: measured in the docs).
+one wear step's depth, so that its maximum depth scatters between runs that
+differ at round-off; `diffwear.wear.arc_peak_depth` and the volume scatter
+less (the docs' FEM page gives the figures).
 
 Integrator.  The cycle steps exactly onto the sample times (`wear_cycle`'s
 ``step_to_saves``), so the samples are step ends, never the integrator's
-interpolant.  On Tsit5 (steps of ~0.6 ms on the rig) the interpolant would
-do; on Rodas4 (L-stable, ~10 ms steps at rtol 1e-4) it misses the stiff
-contact between steps (rig cycle: sampled joint force up to 13 % of its peak
-off, against 1.1 % at step ends) and the Rosenbrock dense output is dropped
-(`sampling_solver`).  Stepping onto 65 samples costs Rodas4 ~510 steps a rig
-cycle instead of ~210.
+interpolant: between the long steps of a linearly implicit solver (Rodas4)
+an interpolant misses the stiff contact.  The Rosenbrock dense output is then
+never read and is dropped (`sampling_solver`).
 
 FE solves.  The samples are solved in order, each from the previous sample's
 solution (~3 semismooth Newton steps instead of ~13), on the half ring around
 the joint force first (`contact_window`; accepted only if it solves the
 whole ring's problem), with the Newton Jacobian in closed form and without
 the final polishing step (`diffwear.fem.contact`); J's derivative of each
-sample is one LU at its solution.  Rig cycle, measured
-(benchmarks/experiments/fem_route_cycle_profile.py): the 65 solves ~18 ms
-(before: 340-460 ms), J from all 65 samples ~17 ms (from 9 before: 61 ms).
+sample is one LU at its solution (the cost of each part of a cycle:
+benchmarks/experiments/fem_route_cycle_profile.py).
 
 Geometry refresh.  The condensed compliance C of the worn ring is rebuilt from
 the current profile every ``refresh_interval`` = M wear cycles (mesh and
-condensation, ~55 ms at 180 x 4); in between, wear enters only through the
+condensation); in between, wear enters only through the
 initial gap (boundary radius a + h) with the last C kept.  M = 1 rebuilds every
 cycle; the default, 3, every third.  The FE grid is the profile grid (same
 n_theta nodes, theta_j = 2 pi j / n): no interpolation.
@@ -132,28 +128,16 @@ MIN_JOINT_FORCE = 1e-6  # N
 # gap error of 1e-13 m and a force error of 1e-9 of the load: nothing for wear.
 ACCEPT_RESIDUAL = 1e-9
 
-# Defaults, chosen by convergence checks on the rig (docs, "FEM contact and the FEM route"):
-# n_samples: the rig's cycle increment changes by < 1e-3 (max) from 64 to 256
-# samples (32: its volume over rig-21400 -0.6 %, eight runs each at M = 1); n_r: 4 Q9
-# layers through the wall (peak pressure within 1e-3 of 8); refresh_interval:
-# the compliance rebuilt every 3rd wear cycle (rebuilt at every cycle it took
-# ~1/4 of the route's time on Rodas4), with rig-21400's depth and volume
-# unchanged within the route's run-to-run scatter: eight runs each at M = 1,
-# 2, 3, means within 0.9 % (max depth; each mean's standard error ~0.8 %),
-# 0.4 % (5-node smoothed max), 0.1 % (volume)
-# (benchmarks/records/fem_route_scatter.json).
+# Defaults, chosen by convergence checks on the rig (docs, "FEM contact and the
+# FEM wear route"; benchmarks/records/fem_route_scatter.json): n_samples, the
+# cycle increment within 1e-3 of 256 samples; n_layers, the peak pressure
+# within 1e-3 of 8 Q9 layers; refresh_interval, the compliance rebuilt every
+# 3rd wear cycle, rig-21400's means over eight runs at M = 1, 2, 3 within their
+# scatter; jacobian_samples (None: all), J as the derivative of the increment's
+# own quadrature (from every 8th sample the profile is rougher).
 DEFAULT_SAMPLES = 64
 DEFAULT_LAYERS = 4
 DEFAULT_REFRESH = 3
-# Samples of the cycle that form J of the implicit step: None, all of them (J is
-# then the derivative of the increment's own quadrature, whichever integrator
-# runs the cycles).  Measured over rig-21400 on Rodas4 from starts 1e-12 m
-# apart (the route's node-scale roughness makes single runs scatter; the docs'
-# FEM page, benchmarks/records/fem_route_scatter.json): J from every 8th
-# sample costs ~1/9 less but leaves the profile rougher (rms second
-# difference 0.016 vs 0.013 mm, max depth +1.2 % on the mean, eight runs
-# each), and one of its 22 runs ended in a 0.05 mm zigzag (max depth
-# 0.515 mm); in over 80 runs with J from every sample none exceeded 0.494 mm.
 DEFAULT_JACOBIAN_SAMPLES = None
 
 

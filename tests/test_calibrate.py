@@ -674,3 +674,29 @@ def test_discrepancy_columns_are_exact_against_central_differences(small_dataset
         assert np.linalg.norm(fd) > 0, i
         err = np.linalg.norm(jac[:, i] - fd) / np.linalg.norm(fd)
         assert err < 1e-5, (i, err)
+
+
+def test_the_forward_model_is_a_class_chosen_at_the_command_line():
+    """`--model` names map to the forward model classes in `cli` only; each
+    builds itself for a campaign (the dynamic one with the fewest dynamic
+    cycles of A <= 250: 21,400 cycles -> 86) and says whether a fit on it is
+    checked on the dynamic model (the quasi-static rig history: yes; the
+    dynamic one and a mechanism file's history: no)."""
+    from diffwear.calibrate.mechanism_file import QuasiStaticFileHistory
+    from diffwear.calibrate.quasi_static import QuasiStaticRigHistory
+    from diffwear.cli.objects import calibration_model
+    from diffwear.errors import InputError
+
+    assert calibration_model("dynamic") is RigHistory
+    assert calibration_model("quasi-static") is QuasiStaticRigHistory
+    assert ModelSettings().model is QuasiStaticRigHistory
+    dynamic = ModelSettings(model=RigHistory).build(21400)
+    assert isinstance(dynamic, RigHistory) and dynamic.dynamic_cycles == 86
+    qs = ModelSettings(steps=20).build(21400, (3000.0, 21400.0, 3000.0))
+    assert isinstance(qs, QuasiStaticRigHistory) and qs.checkpoints == (3000.0, 21400.0)
+    assert QuasiStaticRigHistory.checked_on_dynamic
+    assert not RigHistory.checked_on_dynamic and not QuasiStaticFileHistory.checked_on_dynamic
+    with pytest.raises(InputError, match="calibration model 'dynamic'"):
+        ModelSettings(model="dynamic")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="--model 'fem'; allowed: quasi-static, dynamic"):
+        calibration_model("fem")

@@ -40,15 +40,16 @@ jax.config.update("jax_enable_x64", True)
 from diffwear.calibrate.discrepancy import SIZES  # noqa: E402
 from diffwear.calibrate.effects import EffectValues  # noqa: E402
 from diffwear.calibrate.fit import ModelSettings  # noqa: E402
-from diffwear.calibrate.model import rig_defaults  # noqa: E402
+from diffwear.calibrate.model import RigHistory, rig_defaults  # noqa: E402
+from diffwear.calibrate.quasi_static import QuasiStaticRigHistory  # noqa: E402
 from diffwear.calibrate.synthetic import CAMPAIGN_21400, Plan, synthesize  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 _D = rig_defaults()
 TRUTH = {"k": 1.2 * _D["k"], "free_length": _D["free_length"] + 0.010}
-SHORT = ModelSettings(model="dynamic", dynamic_cycles=80)
-LONG = ModelSettings(model="dynamic", dynamic_cycles=214)
-QUASI_STATIC = ModelSettings(model="quasi-static")
+SHORT = ModelSettings(model=RigHistory, dynamic_cycles=80)
+LONG = ModelSettings(model=RigHistory, dynamic_cycles=214)
+QUASI_STATIC = ModelSettings(model=QuasiStaticRigHistory)
 
 
 def lobed_k(lobes: int, peak_deg: float, amplitude: float = 0.6) -> EffectValues:

@@ -13,6 +13,8 @@ WEAR_METHODS = tuple(METHOD_OF_SOLVER.values())
 WEAR_CONTACTS = ("efm", "fem")
 # The wear model (--model): the dynamic reference or the quasi-static joint.
 WEAR_MODELS = ("dynamic", "quasi-static")
+# The forward model a calibration fits (`diffwear calibrate --model`).
+CALIBRATION_MODELS = ("quasi-static", "dynamic")
 # Where `diffwear sweep` runs its points (--device): auto picks the GPU when
 # JAX has one; on a CPU the points run one after another (over a process per
 # core when that pays), on a GPU vmapped in chunks (`diffwear.sweep.execution`).

@@ -40,7 +40,7 @@ from ..errors import InputError, SolverError
 from . import discrepancy as disc
 from .dataset import Dataset
 from .effects import EFFECTS, NAMES, SHAPED, EffectValues, log_shape
-from .model import BASE_NAMES, MAX_EXTRAPOLATION, Observation, RigHistory, rig_defaults
+from .model import BASE_NAMES, Observation, RigHistory, rig_defaults
 from .quasi_static import DEFAULT_STEPS, QuasiStaticRigHistory
 
 DEFAULT_LOG_SCALE = 0.1  # tau of a fitted parameter without a stated std
@@ -48,19 +48,23 @@ DEFAULT_LOG_SCALE = 0.1  # tau of a fitted parameter without a stated std
 # 1e4 either way for a decade prior): beyond, an effect has no shape left to
 # give (a film formed at once is a change of k)
 SHAPE_PRIOR_SIGMAS = 4.0
-MODELS = ("quasi-static", "dynamic")
 # Cycle counts at which the model's worn volume is reported beside the
 # residuals (`Problem.probe_cycles`): fractions of the campaign, geometric
 # from 1/50 (where a run-in shows) to the end
 PROBE_FRACTIONS = tuple(float(f) for f in np.geomspace(0.02, 1.0, 12))
 
 
+# The forward models a calibration fits, as classes (`ModelSettings.model`).
+ForwardModel = type[QuasiStaticRigHistory] | type[RigHistory]
+
+
 @dataclass(frozen=True)
 class ModelSettings:
-    """Which forward model, and its resolution (`quasi_static.QuasiStaticRigHistory`,
-    `model.RigHistory`)."""
+    """Which forward model, the class `quasi_static.QuasiStaticRigHistory` or
+    `model.RigHistory` (each builds itself for a campaign: ``for_campaign``),
+    and its resolution."""
 
-    model: str = "quasi-static"
+    model: ForwardModel = QuasiStaticRigHistory
     dynamic_cycles: int | None = None   # default: the fewest with A <= MAX_EXTRAPOLATION
     n_theta: int = 90
     force_samples: int = 91
@@ -68,20 +72,14 @@ class ModelSettings:
     steps: int = DEFAULT_STEPS
 
     def __post_init__(self):
-        if self.model not in MODELS:
-            raise InputError(f"calibration model {self.model!r}: allowed {', '.join(MODELS)}")
+        if not callable(getattr(self.model, "for_campaign", None)):
+            raise InputError(f"calibration model {self.model!r}: allowed QuasiStaticRigHistory, "
+                             "RigHistory")
 
     def build(self, cycles: float, checkpoints=()):
-        if self.model == "dynamic":
-            d = self.dynamic_cycles or max(1, math.ceil(cycles / MAX_EXTRAPOLATION))
-            return RigHistory(cycles=float(cycles), dynamic_cycles=d, n_theta=self.n_theta,
-                              force_samples=self.force_samples, cycle_rtol=self.cycle_rtol,
-                              cycle_atol=self.cycle_rtol)
-        return QuasiStaticRigHistory(cycles=float(cycles),
-                                     checkpoints=tuple(sorted({float(c) for c in checkpoints})),
-                                     steps=self.steps, n_theta=self.n_theta)
+        return self.model.for_campaign(cycles, checkpoints, self)
 
-    def with_model(self, model: str) -> "ModelSettings":
+    def with_model(self, model: ForwardModel) -> "ModelSettings":
         return dataclasses.replace(self, model=model)
 
 
@@ -129,7 +127,7 @@ class Problem:
     def _from_mechanism_file(cls, data: Dataset, settings: ModelSettings):
         from .mechanism_file import file_model
 
-        if settings.model != "quasi-static":
+        if not settings.model.calibrates_files:
             raise InputError(f"{data.path}: a mechanism-file dataset is calibrated on the "
                              "quasi-static model; allowed: --model quasi-static")
         names = tuple(data.parameters)

@@ -699,7 +699,7 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     wall = problem.base0.get("wall")
     check_depths(data, None if wall is None else float(wall))
     fitter = Fitter(problem)
-    check = check and problem.model.name != "dynamic" and data.mechanism is None
+    check = check and problem.model.checked_on_dynamic
     # the dynamic model, compiled and evaluated beside the fits (`reference`)
     dynamic = DynamicCheck(data, settings) if check else None
     try:

@@ -27,6 +27,7 @@ import math
 import re
 import tomllib
 from pathlib import Path
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -211,6 +212,9 @@ class QuasiStaticFileHistory(QuasiStaticRigHistory):
     parameters: FileParameterMap | None = None
     joint_name: str = eqx.field(static=True, default="")
     file_period: float = eqx.field(static=True, default=1.0)
+
+    # the dynamic check is the rig's dynamic model: not a user's mechanism
+    checked_on_dynamic: ClassVar[bool] = False
 
     @property
     def period(self) -> float:

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import diffrax
 import equinox as eqx
@@ -162,7 +163,22 @@ class RigHistory(eqx.Module):
     penetration_width: float | None = eqx.field(static=True, default=PENETRATION_WIDTH)
     p: SliderCrankParameters = TABLE_7_1
 
-    name = "dynamic"
+    name: ClassVar[str] = "dynamic"
+    # a fit on this model is the reference: nothing to check it against
+    checked_on_dynamic: ClassVar[bool] = False
+    # a user's mechanism file is calibrated on the quasi-static model only
+    calibrates_files: ClassVar[bool] = False
+
+    @classmethod
+    def for_campaign(cls, cycles: float, checkpoints, settings) -> "RigHistory":
+        """The model of a campaign of ``cycles`` at the resolution of
+        ``settings`` (`fit.ModelSettings`): ``settings.dynamic_cycles`` dynamic
+        cycles, default the fewest with A <= `MAX_EXTRAPOLATION`."""
+        del checkpoints  # the dynamic history reports every dynamic cycle
+        d = settings.dynamic_cycles or max(1, math.ceil(cycles / MAX_EXTRAPOLATION))
+        return cls(cycles=float(cycles), dynamic_cycles=d, n_theta=settings.n_theta,
+                   force_samples=settings.force_samples, cycle_rtol=settings.cycle_rtol,
+                   cycle_atol=settings.cycle_rtol)
 
     def __check_init__(self):
         check_campaign_cycles(self.cycles)

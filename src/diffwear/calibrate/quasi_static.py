@@ -25,6 +25,7 @@ equilibrium) is one compiled program.
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -80,7 +81,18 @@ class QuasiStaticRigHistory(eqx.Module):
     penetration_width: float | None = eqx.field(static=True, default=PENETRATION_WIDTH)
     p: SliderCrankParameters = TABLE_7_1
 
-    name = "quasi-static"
+    name: ClassVar[str] = "quasi-static"
+    # a fit on this model is checked on the dynamic one (`calibrate.reference`)
+    checked_on_dynamic: ClassVar[bool] = True
+    calibrates_files: ClassVar[bool] = True
+
+    @classmethod
+    def for_campaign(cls, cycles: float, checkpoints, settings) -> "QuasiStaticRigHistory":
+        """The model of a campaign of ``cycles`` whose measurements are at
+        ``checkpoints`` (cycle counts on its grid), at the resolution of
+        ``settings`` (`fit.ModelSettings`)."""
+        return cls(cycles=float(cycles), checkpoints=tuple(sorted({float(c) for c in checkpoints})),
+                   steps=settings.steps, n_theta=settings.n_theta)
 
     def __check_init__(self):
         check_campaign_cycles(self.cycles)

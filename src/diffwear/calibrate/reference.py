@@ -43,8 +43,9 @@ def _build(data: Dataset, settings):
     import jax.numpy as jnp
 
     from .fit import Problem
+    from .model import RigHistory
 
-    reference = settings.with_model("dynamic").build(data.max_cycles)
+    reference = settings.with_model(RigHistory).build(data.max_cycles)
     problem = Problem.from_dataset(data, settings).with_model(reference)
     x = jax.ShapeDtypeStruct((problem.n_base,), jnp.float64)
     effects = jax.tree.map(lambda a: jax.ShapeDtypeStruct(a.shape, a.dtype),

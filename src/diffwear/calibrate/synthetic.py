@@ -24,7 +24,7 @@ from ..presets import PTFE_DENSITY
 from .dataset import Dataset, Parameter, Series, write_dataset
 from .effects import EffectValues
 from .fit import ModelSettings
-from .model import Observation, rig_defaults
+from .model import Observation, RigHistory, rig_defaults
 
 # the parameters a dataset states even at the thesis rig's values
 LEGACY_STATED = ("k", "clearance", "depth", "diameter", "mu", "free_length")
@@ -63,7 +63,7 @@ CAMPAIGN_21400 = Plan(
 
 
 def synthesize(folder, *, name: str, effects: EffectValues | None = None, seed: int = 0,
-               plan: Plan = Plan(), settings: ModelSettings = ModelSettings(model="dynamic"),
+               plan: Plan = Plan(), settings: ModelSettings = ModelSettings(model=RigHistory),
                truth: dict | None = None, distort=None, description: str = "",
                stated: dict | None = None, overwrite: bool = False) -> Dataset:
     """Write a synthetic dataset to ``folder`` (see module notes).  ``effects``:

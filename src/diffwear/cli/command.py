@@ -18,6 +18,7 @@ from pathlib import Path
 
 from .._checks import check_int_option
 from ..choices import (
+    CALIBRATION_MODELS,
     SWEEP_DEVICES,
     WEAR_CONTACTS,
     WEAR_INTEGRATORS,
@@ -295,6 +296,7 @@ def _calibrate(args: argparse.Namespace) -> int:
     from ..calibrate.fit import ModelSettings
     from ..calibrate.identify import discrepancy_variables, require_fit_points
     from ..io import OutputDir
+    from . import objects
     from .calibrate import run
 
     data = load_dataset(args.data)  # every input check happens before --out is touched
@@ -304,12 +306,12 @@ def _calibrate(args: argparse.Namespace) -> int:
     if args.dynamic_cycles is not None:
         check_int_option("--dynamic-cycles", args.dynamic_cycles, 1, 2000)
     check_int_option("--n-theta", args.n_theta, 12, 720)
-    settings = ModelSettings(model=args.model, dynamic_cycles=args.dynamic_cycles,
-                             n_theta=args.n_theta)
+    settings = ModelSettings(model=objects.calibration_model(args.model),
+                             dynamic_cycles=args.dynamic_cycles, n_theta=args.n_theta)
     # the models' own limits (the dynamic check's too), before --out is touched
     settings.build(data.max_cycles)
-    if args.model != "dynamic" and not args.no_dynamic_check:
-        settings.with_model("dynamic").build(data.max_cycles)
+    if settings.model.checked_on_dynamic and not args.no_dynamic_check:
+        settings.with_model(objects.calibration_model("dynamic")).build(data.max_cycles)
     out = OutputDir(args.out, overwrite=args.overwrite)
     log = _log(args)
     run(data, out, settings=settings, top=args.top, check=not args.no_dynamic_check,
@@ -499,7 +501,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="variables a learned discrepancy of k is searched over when the "
                         "library leaves the residual unexplained: comma-separated from angle, "
                         "pressure, sliding_speed, cycles, depth; 'all' (default) or 'none'")
-    p.add_argument("--model", choices=("quasi-static", "dynamic"), default="quasi-static",
+    p.add_argument("--model", choices=CALIBRATION_MODELS, default="quasi-static",
                    help="the forward model fitted (default quasi-static; dynamic: the "
                         "reference, minutes per fit step on a long campaign)")
     p.add_argument("--dynamic-cycles", type=int, default=None,

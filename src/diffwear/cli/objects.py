@@ -6,13 +6,17 @@ fem``, ``--integrator rodas4``) becomes a model or a solver.  The names are
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-from ..choices import WEAR_CONTACTS, WEAR_METHODS, WEAR_MODELS
+from ..choices import CALIBRATION_MODELS, WEAR_CONTACTS, WEAR_METHODS, WEAR_MODELS
 from ..errors import InputError
 from ..models import AbstractWearModel, Dynamic, FemRoute, QuasiStatic
 from ..wear import CycleSettings
 from ..wear.cycle import cycle_integrator
 from ..wear.extrapolation import AbstractExtrapolation, Adaptive, Constant, ErrorControlled
+
+if TYPE_CHECKING:
+    from ..calibrate.fit import ForwardModel
 
 
 def extrapolation_method(method, *, extrapolation=1.0, rtol=1e-2, atol=1e-7,
@@ -54,6 +58,20 @@ def check_wear_model(model: str, dynamic_only=()) -> None:
                 raise InputError(f"{option} belongs to the dynamic model (--model dynamic); "
                                  "the quasi-static model integrates the wear in the cycle "
                                  "count itself (seconds, no checkpoints) with the EFM pressure")
+
+
+def calibration_model(model: str) -> "ForwardModel":
+    """The forward model class a calibration fits, by its ``--model`` name
+    (`CALIBRATION_MODELS`): the quasi-static or the dynamic rig history."""
+    from ..calibrate.model import RigHistory
+    from ..calibrate.quasi_static import QuasiStaticRigHistory
+
+    classes: dict[str, ForwardModel] = {QuasiStaticRigHistory.name: QuasiStaticRigHistory,
+                                        RigHistory.name: RigHistory}
+    assert set(classes) == set(CALIBRATION_MODELS)
+    if model not in classes:
+        raise InputError(f"--model {model!r}; allowed: {', '.join(CALIBRATION_MODELS)}")
+    return classes[model]
 
 
 def check_contact(contact: str) -> str:

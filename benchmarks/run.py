@@ -1049,6 +1049,35 @@ def rig_21400_quasi_static(repeats: int) -> dict:
             "status": int(res.status), "pair": "rig-21400 (constant A)", "goal_s": 0.5}
 
 
+def rig_lubricated_quasi_static(repeats: int) -> dict:
+    """The ``rig-lubricated`` study's wear run: the Ch. 7 rig with its
+    crank-rod joint in oil (`MixedLubrication`: short-bearing film and
+    asperities) over 21,400 cycles on the quasi-static model, beside the dry
+    rig's in the same run (``ratio_lubricated_to_dry``: what the film's
+    equilibrium costs), each compiled once."""
+    import jax
+
+    from diffwear.models import QuasiStatic
+    from diffwear.presets import RIG_CYCLES
+    from diffwear.studies.rig_21400 import PERIOD, RIG_JOINT, _setup
+    from diffwear.studies.rig_lubricated import lubricated
+
+    _, dry, y0 = _setup()
+    model = QuasiStatic()
+    out: dict = {}
+    for tag, mech in (("dry", dry), ("lubricated", lubricated(dry))):
+        fn = jax.jit(lambda m: model.evolve(m, ("crank_rod",), y0, period=PERIOD,
+                                            cycles=float(RIG_CYCLES),
+                                            wall_thickness=RIG_JOINT.wall))
+        res, m = time_jitted(fn, (mech,), repeats)
+        out.update({f"{tag}_compile_s": m["compile_s"], f"{tag}_run_s": m["run_s"],
+                    f"{tag}_max_wear_depth_mm": float(res.depth[0].max()) * 1e3,
+                    f"{tag}_status": int(res.status)})
+    return {"compile_s": out["lubricated_compile_s"], "run_s": out["lubricated_run_s"],
+            "ratio_lubricated_to_dry": out["lubricated_run_s"] / out["dry_run_s"], **out,
+            "repeats": repeats}
+
+
 def quasi_static_life_gradient(repeats: int) -> dict:
     """Ch. 8 lives (cyc1, cyc2) at the Table 8-4 design on the quasi-static
     model (`TwoJointLife().prepared()`, defaults) and their exact Jacobian
@@ -1294,6 +1323,7 @@ CASES: dict[str, Callable[[int], dict]] = {
     "rig cycle profile": rig_profile,
     "ch8-optimisation": ch8_optimisation,
     "rig-21400 quasi-static": rig_21400_quasi_static,
+    "rig-lubricated quasi-static (beside the dry rig)": rig_lubricated_quasi_static,
     "quasi-static life gradient (4 parameters)": quasi_static_life_gradient,
     "quasi-static life sweep, 1000 designs": quasi_static_life_sweep,
     "CPU sweep, quasi-static rig, 64 points (batched, looped, pooled, default vs loop)":
@@ -1369,6 +1399,7 @@ COLUMNS = (  # metric key, header, format
     ("ratio_gradient_to_forward", "gradient / forward", "{:.1f}"),
     ("speedup_per_cycle", "peer / diffwear per cycle", "{:.1f}"),
     ("ratio_fem_to_efm", "FEM / EFM route", "{:.2f}"),
+    ("ratio_lubricated_to_dry", "lubricated / dry", "{:.2f}"),
     ("note", "note", "{}"),
 )
 

@@ -29,13 +29,9 @@ triangular solve, so the cost is ~n_r (3 n_theta)^3 / 3 + ... instead of
 (2 (2 n_r + 1) n_theta)^3 / 3 for the dense factorisation: ~50x less work
 at n_r = 4, growing as n_r^2.
 
-Timing (development machine: 2 shared CPU cores, float64, jit-compiled, after
-the first call, OPENBLAS_NUM_THREADS=1): `inner_compliance` at n_theta = 96,
-n_r = 4 (1728 dofs) 20-40 ms; at n_theta = 192, n_r = 8 (6528 dofs) 0.3 s
-(both before the centre nodes were eliminated first; at n_theta = 180,
-n_r = 4, the FEM wear route's ring, 125 ms before, 45-60 ms after).
-With OpenBLAS free to start a thread per core on a loaded machine the
-Cholesky factorisations ran up to 100x slower (0.9 s and 3.1 s).
+Its cost (the FEM wear route's 180 x 4 ring: tens of milliseconds) is on the
+docs' FEM page.  With OpenBLAS free to start a thread per core on a loaded
+machine the Cholesky factorisations ran up to 100x slower.
 """
 
 from __future__ import annotations

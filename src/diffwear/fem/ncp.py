@@ -77,10 +77,7 @@ class NewtonInfo(eqx.Module):
     tol: float = eqx.field(static=True)
 
 
-def _newton(residual: Callable, z0, args, tol: float, max_steps: int,
-            jacobian: Callable | None = None):
-    jacobian = _jacobian_of(residual) if jacobian is None else jacobian
-
+def _newton(residual: Callable, z0, args, tol: float, max_steps: int, jacobian: Callable):
     def merit(z):
         r = residual(z, args)
         return 0.5 * jnp.sum(r * r), r

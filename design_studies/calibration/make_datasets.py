@@ -76,6 +76,41 @@ def lobed_bore(theta, cycles, amplitude=6e-6, angle=0.5):
     return amplitude * (1.0 + np.cos(3.0 * (theta - angle)))
 
 
+def coating(thickness: float, inside: float, width: float = 15e-6):
+    """Outside the library and the discrepancy's bases: a bore coated with a
+    layer ``thickness`` [m] thick whose wear coefficient is ``inside`` times
+    the bulk's; once the local depth passes it the rate steps to the bulk's
+    over ``width`` (a smoothed step in the depth of each node)."""
+    import jax.numpy as jnp
+
+    def factor(theta, depth, cycles):
+        through = 0.5 * (1.0 + jnp.tanh((depth - thickness) / width))
+        return inside + (1.0 - inside) * through
+
+    return EffectValues.zero().with_outside(factor)
+
+
+def humidity(amplitude: float, period: float, phase: float = 0.0,
+             base: EffectValues | None = None):
+    """Outside the library: a wear coefficient that follows the laboratory's
+    humidity over the test, k (1 + a sin(2 pi N / period + phase)): up, down
+    and up again over the 21,400 cycles (polymer wear is humidity-sensitive:
+    e.g. PTFE's rate rises several-fold in humid air, Lancaster 1971)."""
+    import jax.numpy as jnp
+
+    def factor(theta, depth, cycles):
+        return 1.0 + amplitude * jnp.sin(2.0 * jnp.pi * cycles / period + phase) + 0.0 * depth
+
+    return (base or EffectValues.zero()).with_outside(factor)
+
+
+def run_in_beside_lobes() -> EffectValues:
+    """A run-in (x2 at the start over 4,000 cycles) beside a three-lobed k."""
+    lobes = lobed_k(3, 23.0)
+    return EffectValues.of(run_in=1.0, run_in_cycles=4000.0).with_discrepancy(
+        "angle", lobes.discrepancy[:SIZES["angle"]])
+
+
 # name -> (effects, plan, settings, truth, distortion, seed, description)
 # pressure_exponent was 0.5 at first: identified but its held-out error before
 # the effect was only 1.87 sigma; at 1.0 (wear ~ p^2, within the exponents
@@ -134,6 +169,20 @@ DATASETS = {
     # before the first inspection: these inspections cannot show it
     "campaign_unseen_run_in": (EffectValues.of(run_in=0.5, run_in_cycles=30.0), CAMPAIGN_21400,
                                LONG, TRUTH, None, 31, "21,400-cycle rig campaign P (synthetic)"),
+    # outside the library and the discrepancy's bases: a hard coating 0.25 mm
+    # thick wearing at a third of the bulk's rate, worn through in the test
+    "campaign_coating_worn_through": (coating(0.25e-3, 1.0 / 3.0), CAMPAIGN_21400, LONG, TRUTH,
+                                      None, 32, "21,400-cycle rig campaign Q (synthetic)"),
+    # a low-wear skin 0.1 mm thick (half the bulk's rate): a library effect
+    # (debris raising the rate with the worn volume) fits the fit window
+    "campaign_low_wear_skin": (coating(0.1e-3, 0.5, 10e-6), CAMPAIGN_21400, LONG, TRUTH, None,
+                               33, "21,400-cycle rig campaign R (synthetic)"),
+    # a wear coefficient that swings with the laboratory's humidity
+    "campaign_humidity_k": (humidity(0.4, 14000.0), CAMPAIGN_21400, LONG, TRUTH, None, 34,
+                            "21,400-cycle rig campaign S (synthetic)"),
+    # a run-in beside a three-lobed k: both must be named
+    "campaign_run_in_and_lobes": (run_in_beside_lobes(), CAMPAIGN_21400, LONG, TRUTH, None, 35,
+                                  "21,400-cycle rig campaign T (synthetic)"),
 }
 
 # What the calibration must answer on each campaign whose answer is not the
@@ -147,6 +196,11 @@ EXPECT = {
     "campaign_two_lobe_k": {"effects": (), "discrepancy": ("angle", 2, (40.0, 220.0))},
     "campaign_three_lobe_k": {"effects": (), "discrepancy": ("angle", 3, (23.0, 143.0, 263.0))},
     "campaign_unseen_run_in": {"effects": ()},
+    "campaign_coating_worn_through": {"effects": (), "discrepancy": ("depth",)},
+    "campaign_low_wear_skin": {"effects": (), "discrepancy": ("depth",)},
+    "campaign_humidity_k": {"effects": (), "discrepancy": ("cycles",)},
+    "campaign_run_in_and_lobes": {"effects": ("run_in",),
+                                  "discrepancy": ("angle", 3, (23.0, 143.0, 263.0))},
 }
 
 

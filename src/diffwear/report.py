@@ -101,3 +101,28 @@ def render(report: Report) -> str:
 
 
 __all__ = ["Block", "Bullets", "Figure", "Report", "Section", "Table", "markdown", "render"]
+
+
+def significant(value: float, digits: int = 4) -> str:
+    """``value`` to ``digits`` significant digits, in plain notation between
+    1e-3 and 1e5 and scientific outside ("0.8647", "6.074e-04", "n/a")."""
+    if value is None or not isinstance(value, (int, float)) or value != value:
+        return "n/a"
+    if value == 0 or not abs(value) < float("inf"):
+        return f"{value:g}"
+    if 1e-3 <= abs(value) < 1e5:
+        return f"{value:.{digits}g}"
+    return f"{value:.{digits - 1}e}"
+
+
+def plus_minus(value: float, std: float) -> str:
+    """``value +- std`` with the uncertainty to two significant digits and the
+    value to the same decimal place ("6.074e-04 +- 1.4e-06", "0.55 +- 0.12")."""
+    if std is None or not std > 0 or std != std or value != value:
+        return f"{significant(value)} +- {significant(std, 2)}"
+    if value == 0:
+        return f"0 +- {significant(std, 2)}"
+    from math import floor, log10
+
+    digits = max(2, min(10, floor(log10(abs(value))) - floor(log10(std)) + 2))
+    return f"{significant(value, digits)} +- {significant(std, 2)}"

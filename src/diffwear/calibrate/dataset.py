@@ -84,6 +84,7 @@ class Parameter:
     std: float | None = None  # 1-sigma prior width, SI
     fit: bool = False
     suspect: bool = True
+    unit: str | None = None   # the unit the dataset wrote it in (reports use it)
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,6 +147,17 @@ class Dataset:
     def max_cycles(self) -> float:
         """The largest cycle count of any measurement."""
         return max(float(np.max(s.cycle_counts)) for s in self.series)
+
+    @property
+    def fit_cycles(self) -> float:
+        """The end of the fit window: the largest cycle count of a fitted (not
+        held-out) wear measurement (profile, volume or depth); `max_cycles`
+        when no wear measurement is fitted.  Everything the calibration
+        chooses is computed on [0, fit_cycles], so that deleting the held-out
+        measurements leaves it unchanged."""
+        counts = [float(np.max(np.broadcast_to(s.cycle_counts, s.holdout.shape)[~s.holdout]))
+                  for s in self.series if s.kind != "force" and not s.holdout.all()]
+        return max(counts) if counts else self.max_cycles
 
     @property
     def fit_names(self) -> tuple[str, ...]:
@@ -463,7 +475,10 @@ def _parameters(ctx: Context, raw, mechanism=None) -> dict[str, Parameter]:
         if v["fit"] and v["value"] is None and mechanism is None:
             raise ctx.error(f"{path}.value", "missing: a fitted parameter needs its starting "
                             "value", f"{name} = {{ value = ..., std = ..., fit = true }}")
-        out[name] = Parameter(name, v["value"], v["std"], v["fit"], v["suspect"])
+        written = entry.get("value", entry.get("std"))
+        out[name] = Parameter(name, v["value"], v["std"], v["fit"], v["suspect"],
+                              units.unit_of(written, dimension)
+                              if isinstance(written, str) and dimension else None)
     if not any(p.fit for p in out.values()):
         given = ", ".join(out) or "(none)"
         rule = PARAMETER_RULE if mechanism is None else "numbers of the mechanism file by path"

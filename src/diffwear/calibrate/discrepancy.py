@@ -14,7 +14,8 @@ variable           basis phi_j(x) (delta = sum c_j phi_j)              prior std
 ``angle``          cos(m theta), sin(m theta), m = 1..4 (bushing angle)  1 / m
 ``pressure``       xi, xi^2, xi^3; xi = tanh(ln(p / 1 MPa) / ln 10)     1 / j
 ``sliding_speed``  xi, xi^2, xi^3; xi = tanh(ln(v / 30 mm/s) / ln 10)   1 / j
-``cycles``         Legendre P_1..P_3 of 2 N / N_end - 1                 1 / j
+``cycles``         Legendre P_1..P_3 of 2 N / N_end - 1 (N_end: the     1 / j
+                   end of the fit window; held beyond it)
 ``depth``          xi, xi^2, xi^3; xi = tanh(h / 0.3 mm)               1 / j
 =================  ==================================================  ==========
 
@@ -54,6 +55,9 @@ V_REF = 0.03  # m/s
 # that range on the steep part of tanh.
 H_REF = 3.0e-4  # m
 FLOOR = 0.02    # smallest factor 1 + delta (a rate cut 50-fold at most)
+WORDS = {"angle": "the bushing angle", "pressure": "the contact pressure",
+         "sliding_speed": "the sliding speed", "cycles": "the cycle count",
+         "depth": "the wear depth"}
 UNITS = {"angle": "deg", "pressure": "MPa", "sliding_speed": "mm/s", "cycles": "cycles",
          "depth": "mm"}
 
@@ -84,7 +88,9 @@ def basis(variable: str, x, total_cycles: float = 1.0):
         xi = jnp.where(positive, jnp.tanh(jnp.log(safe / ref) / math.log(10.0)), -1.0)
         return _powers(xi)
     if variable == "cycles":
-        xi = 2.0 * x / total_cycles - 1.0
+        # beyond the fit window the data say nothing of the trend: delta
+        # holds its value at the window's end (no polynomial extrapolation)
+        xi = jnp.clip(2.0 * x / total_cycles - 1.0, -1.0, 1.0)
         return jnp.stack([xi, 0.5 * (3 * xi ** 2 - 1), 0.5 * (5 * xi ** 3 - 3 * xi)], axis=-1)
     if variable == "depth":
         return _powers(jnp.tanh(x / H_REF))

@@ -46,6 +46,7 @@ over a step (it changes over hundreds of cycles; a step is tens).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import equinox as eqx
@@ -146,12 +147,18 @@ class EffectValues(eqx.Module):
     strength: Float[Array, " E"]
     log_shape: Float[Array, " E"]
     discrepancy: Float[Array, " D"]
+    # A rate factor from outside the library and the discrepancy's bases,
+    # (theta, depth, cycles) -> factor per node: what a synthetic campaign's
+    # truth may hold that no candidate can give exactly (None: none; the
+    # calibration never sets it)
+    outside: Callable | None = eqx.field(static=True, default=None)
 
-    def __init__(self, strength, log_shape, discrepancy=None):
+    def __init__(self, strength, log_shape, discrepancy=None, outside=None):
         self.strength = jnp.asarray(strength, dtype=float)
         self.log_shape = jnp.asarray(log_shape, dtype=float)
         self.discrepancy = (jnp.zeros(_discrepancy.SIZE) if discrepancy is None
                             else jnp.asarray(discrepancy, dtype=float))
+        self.outside = outside
 
     @classmethod
     def zero(cls) -> "EffectValues":
@@ -161,7 +168,12 @@ class EffectValues(eqx.Module):
         """These values with ``variable``'s discrepancy coefficients set."""
         d = self.discrepancy.at[_discrepancy.SLICES[variable]].set(
             jnp.asarray(coefficients, dtype=float))
-        return EffectValues(self.strength, self.log_shape, d)
+        return EffectValues(self.strength, self.log_shape, d, self.outside)
+
+    def with_outside(self, factor: Callable) -> "EffectValues":
+        """These values with the outside rate ``factor`` (theta, depth, cycles)
+        -> multiplier (a synthetic truth)."""
+        return EffectValues(self.strength, self.log_shape, self.discrepancy, factor)
 
     @classmethod
     def of(cls, **strengths) -> "EffectValues":
@@ -253,6 +265,9 @@ def rate_factor(effects: EffectValues, depth, volume, n_start, span, theta=None,
         return g
     d = effects.discrepancy
     middle = n_start + 0.5 * span
-    return (g * _discrepancy.factor(d, "angle", theta)
-            * _discrepancy.factor(d, "cycles", middle, total_cycles)
-            * _discrepancy.factor(d, "depth", depth))
+    g = (g * _discrepancy.factor(d, "angle", theta)
+         * _discrepancy.factor(d, "cycles", middle, total_cycles)
+         * _discrepancy.factor(d, "depth", depth))
+    if effects.outside is not None:
+        g = g * effects.outside(theta, depth, middle)
+    return g

@@ -76,8 +76,8 @@ class ModelSettings:
             raise InputError(f"calibration model {self.model!r}: allowed QuasiStaticRigHistory, "
                              "RigHistory")
 
-    def build(self, cycles: float, checkpoints=()):
-        return self.model.for_campaign(cycles, checkpoints, self)
+    def build(self, cycles: float, checkpoints=(), window: float | None = None):
+        return self.model.for_campaign(cycles, checkpoints, self, window)
 
     def with_model(self, model: ForwardModel) -> "ModelSettings":
         return dataclasses.replace(self, model=model)
@@ -113,6 +113,12 @@ class Problem:
     # worn volume (mass basis) reported at these cycle counts beside the
     # residuals (`outputs`): every inspection and `PROBE_FRACTIONS` of the run
     probe_cycles: tuple = ()
+    cycles_of_point: np.ndarray | None = None   # the cycle count of each point
+    kinds: tuple = ()                           # each series' kind
+
+    @property
+    def kind_of_point(self) -> np.ndarray:
+        return np.asarray(self.kinds, dtype=object)[self.series_of_point]
 
     @classmethod
     def from_dataset(cls, data: Dataset, settings: ModelSettings = ModelSettings()):
@@ -120,7 +126,7 @@ class Problem:
             return cls._from_mechanism_file(data, settings)
         if data.preset != "rig":
             raise InputError(f"{data.path}: preset {data.preset!r}: only 'rig' is modelled")
-        model = settings.build(data.max_cycles, _checkpoints(data))
+        model = settings.build(data.max_cycles, _checkpoints(data), data.fit_cycles)
         return cls._assemble(data, model, rig_defaults(), BASE_NAMES)
 
     @classmethod
@@ -133,13 +139,14 @@ class Problem:
         names = tuple(data.parameters)
         assert data.mechanism is not None  # this route is taken for a mechanism file only
         model = file_model(data.mechanism, names, data.joint, cycles=float(data.max_cycles),
+                           window=float(data.fit_cycles),
                            checkpoints=tuple(sorted(set(_checkpoints(data)))),
                            steps=settings.steps)
         return cls._assemble(data, model, dict(model.file_parameters.value0), names)
 
     @classmethod
     def _assemble(cls, data: Dataset, model, defaults: dict, names: tuple):
-        obs, ys, sig, hold, which = [], [], [], [], []
+        obs, ys, sig, hold, which, counts = [], [], [], [], [], []
         for k, s in enumerate(data.series):
             obs.append(Observation(s.kind, np.asarray(s.x), cycles=float(s.cycles or 0.0),
                                    basis=s.basis or "mass"))
@@ -147,6 +154,7 @@ class Problem:
             sig.append(np.full(s.y.shape, s.sigma))
             hold.append(s.holdout)
             which.append(np.full(s.y.shape, k))
+            counts.append(np.broadcast_to(np.asarray(s.cycle_counts, float), s.y.shape))
         base0 = dict(defaults)
         tau = []
         for name, p in data.parameters.items():
@@ -157,13 +165,14 @@ class Problem:
             tau.append(abs(p.std / base0[name]) if p.std else DEFAULT_LOG_SCALE)
         suspects = tuple(n for n in names if n not in data.fit_names
                          and (n not in data.parameters or data.parameters[n].suspect))
-        end = float(data.max_cycles)
-        probes = tuple(sorted({*(float(c) for c in _checkpoints(data)),
+        end = float(data.fit_cycles)   # the fit window: nothing chosen looks beyond it
+        probes = tuple(sorted({*(float(c) for c in _checkpoints(data) if c <= end),
                                *(f * end for f in PROBE_FRACTIONS)}))
         return cls(model, tuple(obs), np.concatenate(ys), np.concatenate(sig),
                    np.concatenate(hold), np.concatenate(which), tuple(data.fit_names),
                    {k: jnp.asarray(v, dtype=float) for k, v in base0.items()},
-                   np.asarray(tau, dtype=float), suspects, names, probes)
+                   np.asarray(tau, dtype=float), suspects, names, probes,
+                   np.concatenate(counts), tuple(s.kind for s in data.series))
 
     def with_model(self, model) -> "Problem":
         return dataclasses.replace(self, model=model)
@@ -171,6 +180,16 @@ class Problem:
     @property
     def n_base(self) -> int:
         return len(self.fit_names)
+
+    @property
+    def wear_coefficient_index(self) -> int | None:
+        """Position of the fitted wear coefficient among the fitted unknowns (the
+        rig's ``k``, a mechanism file's ``...wear.coefficient``), None when the
+        dataset does not fit it."""
+        for i, name in enumerate(self.fit_names):
+            if name == "k" or name.endswith("wear.coefficient"):
+                return i
+        return None
 
     def base(self, x, log_multipliers=None) -> dict:
         """Rig parameters at fitted unknowns ``x``; ``log_multipliers``: ln of a
@@ -348,7 +367,10 @@ class Fitter:
                             out_axes=((None, None), (1, 1)))(tangents)
 
         self._columns = jax.jit(columns)
+        self._outputs = jax.jit(outputs)
+        self._raw_outputs = outputs
         self.evaluations = 0
+        self.k_index = problem.wear_coefficient_index
         # fits kept by the caller, by (effects, discrepancy): a model reached
         # on two selection paths is fitted once
         self.fits: dict = {}
@@ -361,6 +383,52 @@ class Fitter:
             if part is not None:
                 v[sl] = part
         return v
+
+    def residuals(self, v) -> np.ndarray:
+        """The residuals of every point at the packed point ``v`` (no derivative)."""
+        self.evaluations += 1
+        return np.asarray(self._outputs(jnp.asarray(v))[0])
+
+    def log_posterior(self, fit: "FitResult"):
+        """z -> log p(z | data) up to a constant, a JAX function of ``fit``'s
+        unknowns (`posterior` module notes; -inf outside the layout's bounds),
+        whose gradient -J^T r comes from the same forward-mode program as the
+        fit's Jacobian (one pass of its unknowns' tangents), not reverse mode."""
+        lay: Layout = fit.notes["layout"]
+        rows = jnp.asarray(np.asarray(fit.notes["rows"], bool))
+        tangents = jnp.asarray(lay.tangents)
+        prior = jnp.asarray(lay.prior_index)
+        lower, upper = jnp.asarray(lay.lower), jnp.asarray(lay.upper)
+        outputs = self._raw_outputs
+
+        def residual_and_jacobian(z):
+            v = tangents.T @ z
+            (r, _), (jac, _) = jax.vmap(lambda t: jax.jvp(outputs, (v,), (t,)),
+                                        out_axes=((None, None), (1, 1)))(tangents)
+            return jnp.where(rows, r, 0.0), jnp.where(rows[:, None], jac, 0.0)
+
+        @jax.custom_vjp
+        def log_p(z):
+            r, _ = residual_and_jacobian(z)
+            return _value(z, r)
+
+        def _value(z, r):
+            inside = jnp.all((z >= lower) & (z <= upper)) & jnp.all(jnp.isfinite(r))
+            safe = jnp.where(jnp.isfinite(r), r, 0.0)
+            value = -0.5 * (safe @ safe + z[prior] @ z[prior])
+            return jnp.where(inside, value, -jnp.inf)
+
+        def forward(z):
+            r, jac = residual_and_jacobian(z)
+            safe = jnp.where(jnp.isfinite(r), r, 0.0)
+            grad = -(jac.T @ safe) - jnp.zeros_like(z).at[prior].set(z[prior])
+            return _value(z, r), jnp.where(jnp.all(jnp.isfinite(grad)), grad, 0.0)
+
+        def backward(grad, g):
+            return (g * grad,)
+
+        log_p.defvjp(forward, backward)
+        return log_p
 
     def linearise(self, v, tangents) -> Linearisation:
         """The model and its derivatives along any number of tangent rows, in
@@ -494,22 +562,24 @@ class Fitter:
         return Layout.of(self, tuple(effects), discrepancy)
 
     def fit(self, effect: str | tuple | None = None, x0=None, s0=0.0, log_shape0=0.0, *,
-            discrepancy: str | None = None, start: "FitResult | None" = None) -> FitResult:
+            discrepancy: str | None = None, start: "FitResult | None" = None,
+            rows: np.ndarray | None = None) -> FitResult:
         """Fit the base parameters with ``effect`` (a name, a tuple of names or
         None) and the learned discrepancy over ``discrepancy`` (a variable of
-        `discrepancy.VARIABLES`, or None).  Starting point: ``x0`` (fitted
-        unknowns), ``s0`` / ``log_shape0`` (a number for a single effect, a
-        dict by name for several), or ``start``, an earlier fit whose numbers
-        are reused where it shares the effects."""
+        `discrepancy.VARIABLES`, or None).  Starting point: ``x0`` (the model's
+        fitted unknowns), ``s0`` / ``log_shape0`` (a number for a single effect,
+        a dict by name for several), or ``start``, an earlier fit whose numbers
+        are reused where it shares the effects.  ``rows``: the points fitted
+        (default: every point not held out); the others are predicted."""
         p = self.problem
         effects = () if effect is None else (effect,) if isinstance(effect, str) else tuple(effect)
         lay = self.layout(effects, discrepancy)
         z0 = lay.start(x0, s0, log_shape0, start)
         what = "base model" + "".join(f" + {e}" for e in effects) \
             + (f" + discrepancy in {discrepancy}" if discrepancy else "")
-        fit_rows = ~p.holdout
+        fit_rows = ~p.holdout if rows is None else np.asarray(rows, bool)
 
-        def rows(r_all, z):
+        def objective_rows(r_all, z):
             return np.concatenate([r_all[fit_rows], lay.prior_rows(z)])
 
         def evaluate(z):
@@ -519,7 +589,7 @@ class Fitter:
         t0 = time.perf_counter()
         z0 = np.clip(z0, lay.lower, lay.upper)
         z, steps, jz, r = self._levenberg_marquardt(
-            z0, evaluate, rows, np.ones(lay.size, bool), what, (lay.lower, lay.upper))
+            z0, evaluate, objective_rows, np.ones(lay.size, bool), what, (lay.lower, lay.upper))
         wall = time.perf_counter() - t0
         if not np.all(np.isfinite(r)):  # a held-out point the model could not reach
             raise SolverError(f"calibration of the {what}: the model failed at the solution "
@@ -527,7 +597,26 @@ class Fitter:
         # Gauss-Newton covariance of z from the last Jacobian (fit and prior rows)
         cov = np.linalg.pinv(jz.T @ jz)
         return lay.result(z, cov, jz[:int(fit_rows.sum())], r, steps, wall,
-                          float(np.sum(lay.prior_rows(z) ** 2)))
+                          float(np.sum(lay.prior_rows(z) ** 2)), fit_rows)
+
+
+def identified_k(jac, k: int, d: slice) -> np.ndarray:
+    """How the wear coefficient is identified beside a learned discrepancy.
+
+    Over the worn arc the discrepancy's Fourier terms (or its trends in
+    depth, cycles, ...) are not orthogonal to a constant, so a constant part
+    of delta and k trade against each other: k alone is not identified.  The
+    identified wear coefficient k_id is k with delta's component along k's
+    direction taken out, x_id = x_k - a.z_d, where a_j = -<J_k, J_j> / <J_k,
+    J_k> over the fit points (``jac``: their Jacobian by the unknowns, k at
+    column ``k``, the discrepancy's at ``d``): in the coordinates (x_id, z_d)
+    every discrepancy direction J_j + a_j J_k is orthogonal to k's, so k_id
+    keeps the uncertainty k has without the discrepancy, and delta is
+    reported relative to it, k (1 + delta) = k_id (1 + delta) exp(tau a.z_d).
+    Returns a."""
+    jk = jac[:, k]
+    norm = float(jk @ jk)
+    return -(jk @ jac[:, d]) / norm if norm > 0 else np.zeros(d.stop - d.start)
 
 
 @dataclass
@@ -594,6 +683,31 @@ class Layout:
     def prior_rows(self, z) -> np.ndarray:
         return z[self.prior_index]
 
+    def natural(self, z) -> dict:
+        """{name: values} of the numbers at unknowns ``z`` (S, size) in SI: the
+        fitted rig parameters (the identified wear coefficient), each effect's
+        strength (``<effect>``) and shape (``<shape name>``), the discrepancy's
+        coefficients (``delta_<variable>_<j>``)."""
+        z = np.atleast_2d(z)
+        p = self.fitter.problem
+        nb = self.n_base
+        out = {}
+        for i, name in enumerate(p.fit_names):
+            out[name] = float(p.base0[name]) * np.exp(p.tau[i] * z[:, i])
+        for i, e in enumerate(self.effects):
+            out[e] = z[:, nb + i] * SCALES[NAMES.index(e)]
+        o = nb + len(self.effects)
+        for i, e in enumerate(self.shaped):
+            shape = EFFECTS[NAMES.index(e)].shape
+            assert shape is not None  # a shaped effect
+            out[shape.name] = shape.default * np.exp(z[:, o + i] * shape.log_std)
+        o += len(self.shaped)
+        if self.discrepancy:
+            scale = disc.prior_std(self.discrepancy)
+            for j in range(scale.size):
+                out[f"delta_{self.discrepancy}_{j + 1}"] = z[:, o + j] * scale[j]
+        return out
+
     def start(self, x0, s0, log_shape0, start: FitResult | None) -> np.ndarray:
         nb = self.n_base
         z = np.zeros(self.size)
@@ -623,10 +737,9 @@ class Layout:
             z[o + i] = float(g) / LOG_STD[k]
         return z
 
-    def result(self, z, cov, jac_fit, r, steps, wall, prior_chi2) -> FitResult:
+    def result(self, z, cov, jac_fit, r, steps, wall, prior_chi2, fit_rows) -> FitResult:
         p = self.fitter.problem
         nb = self.n_base
-        fit_rows = ~p.holdout
         std_z = np.sqrt(np.clip(np.diag(cov), 0.0, None))
         x = z[:nb]
         base = p.base(jnp.asarray(x))
@@ -648,23 +761,43 @@ class Layout:
                             float(default * math.exp(ln + half)))
         o += len(self.shaped)
         coef = cov_d = None
+        b = None
         if self.discrepancy:
             scale = disc.prior_std(self.discrepancy)
             coef = z[o:] * scale
             cov_d = cov[o:, o:] * np.outer(scale, scale)
+            ki = self.fitter.k_index
+            if ki is not None:
+                # the wear coefficient identified beside the discrepancy
+                # (`identified_k`): its value and 1-sigma replace the model's
+                k = ki
+                a = identified_k(jac_fit, k, slice(o, self.size))
+                e = np.zeros(self.size)
+                e[k], e[o:] = 1.0, -a
+                x_id = x[k] - a @ z[o:]
+                b = p.tau[k] * a / scale               # ln(k_model / k_id) per coefficient
+                name = p.fit_names[k]
+                params[name] = float(p.base0[name] * math.exp(p.tau[k] * x_id))
+                params_std[name] = float(params[name] * p.tau[k]
+                                         * math.sqrt(max(float(e @ cov @ e), 0.0)))
         first = self.effects[0] if self.effects else None
+        v = self.pack(z)
+        held = ~fit_rows
         return FitResult(
             effect=" + ".join(self.effects) if self.effects else None,
             params=params, params_std=params_std,
             strength=strengths.get(first, 0.0) if first else 0.0,
             strength_std=strengths_std.get(first, 0.0) if first else 0.0,
             chi2_fit=float(np.sum(r[fit_rows] ** 2)), n_fit=int(fit_rows.sum()),
-            chi2_holdout=float(np.sum(r[p.holdout] ** 2)), n_holdout=int(p.holdout.sum()),
+            chi2_holdout=float(np.sum(r[held] ** 2)), n_holdout=int(held.sum()),
             residual=r, prediction=r * p.sigma + p.y, iterations=steps, wall_time_s=wall,
             shape=shapes.get(first) if first else None,
             shape_interval=intervals.get(first) if first else None,
-            notes={"x": x.tolist(), "z": z, "cov": cov, "jacobian": jac_fit,
-                   "v": self.pack(z), "layout": self},
+            # "x": the model's fitted unknowns (``params`` hold the identified k
+            # beside a discrepancy: `identified_k`)
+            notes={"x": v[:nb].tolist(), "z": z, "cov": cov, "jacobian": jac_fit,
+                   "v": v, "layout": self, "rows": fit_rows,
+                   "log_k_per_coefficient": b},
             effects=self.effects, strengths=strengths, strengths_std=strengths_std,
             shapes=shapes, shape_intervals=intervals, discrepancy=self.discrepancy,
             discrepancy_coefficients=coef, discrepancy_cov=cov_d, prior_chi2=prior_chi2)

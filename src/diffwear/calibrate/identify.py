@@ -46,8 +46,11 @@ from .dataset import Dataset
 from .discrepancy import VARIABLES
 from .effects import EFFECTS, NAMES, log_shape
 from .fit import SCALES, FitResult, Fitter, ModelSettings, Problem
-from .parameters import RIG_PARAMETERS
+from .forecast import Forecast, Outlook, forecast
+from .parameters import RIG_PARAMETERS, plausible_range
 from .plausibility import check_depths, unit_slips
+from .posterior import Posterior
+from .posterior import posterior as posterior_of
 from .reference import DynamicCheck
 from .scores import (
     SHAPE_GRID,
@@ -63,16 +66,30 @@ from .selection import (
     STRENGTH_SIGMAS,
     Assessment,
     assess,
+    assess_discrepancy,
     criterion,
     determined_numbers,
-    separating_measurement,
 )
+from .validation import PredictiveCheck, forward_check
 
 GOF_SIGMAS = 4.0       # chi2 above dof + 4 sqrt(2 dof): residual not noise
+SELECTION_RULE = (
+    "chosen on the fit points alone: the library's effects and the learned discrepancies "
+    "compete in one forward selection (each adopted on its chi-square drop at p = 0.001 and "
+    "ranked by BIC, chi2 + prior + ln n per determined number); a model counts as an "
+    "explanation only if, refitted on the points before the fit window's last inspection, "
+    "it predicts that inspection; the held-out points are read once, after the choice")
 # An effect is refitted only if the fit points leave degrees of freedom after
 # it: with none, any candidate fits exactly and nothing can be told apart.
 MIN_DOF_FOR_EFFECT = 2
-MAX_EFFECTS = 3        # effects adopted at most (forward-selection stages)
+MAX_EFFECTS = 3        # members adopted at most: effects and a discrepancy
+# Beside other members, an effect is refitted only when its score test (the
+# chi-square drop of one Gauss-Newton step) exceeds this: p = 0.16, where an
+# adoption needs a drop of 10.83 (p = 0.001)
+LATER_SCORE = 2.0
+# Occam's window keeps the models within this many determined numbers of the
+# simplest (a discrepancy's effective number of coefficients is not whole)
+OCCAM_TOLERANCE = 0.5
 # Forward-selection paths: one from each of the best few qualifying single
 # effects (a greedy path from the single best can be trapped by an effect
 # that mimics a pair of others), each explaining at least PATH_SHARE of the
@@ -97,6 +114,20 @@ class Suspect:
     value0: float
     score: Score
     refit: FitResult | None = None
+
+    @property
+    def plausible(self) -> bool:
+        """Whether the refitted (or first-step) value lies in the parameter's
+        plausible range (`parameters.plausible_range`)."""
+        bounds = plausible_range(self.name)
+        return bounds is None or bounds[0] <= self.factor <= bounds[1]
+
+    def implausible(self) -> str:
+        lo, hi = plausible_range(self.name) or (0.0, math.inf)
+        return (f"the data ask for {self.name} = {self.value0 * self.factor:.3g} SI "
+                f"({self.factor:.3g}x the stated {self.value0:.4g}), outside its plausible "
+                f"range ({lo:.3g}x to {hi:.3g}x): not a finding; the residual stands for a "
+                "model error of another kind")
 
     @property
     def factor(self) -> float:
@@ -132,12 +163,16 @@ class Suspect:
 
 def _suspect(s: Suspect) -> dict:
     out = {"name": s.name, "score": s.score.statistic, "p_value": s.score.p_value,
-           "value": s.value0, "factor": s.factor}
+           "value": s.value0, "factor": s.factor,
+           "plausible_range": plausible_range(s.name)}
     if s.refit is not None:
         gof = _gof(s.refit)
         out.update(refit_value=s.refit.params[s.name], refit_std=s.refit.params_std[s.name],
                    refit_chi2_fit=s.refit.chi2_fit, refit_heldout_rmse=s.refit.rmse_holdout,
-                   explains=gof["consistent_with_noise"], sentence=s.sentence())
+                   explains=gof["consistent_with_noise"] and s.plausible,
+                   sentence=s.sentence())
+        if not s.plausible:
+            out["implausible"] = s.implausible()
     return out
 
 
@@ -204,11 +239,12 @@ class Stage:
 
 @dataclass
 class Selection:
-    model: FitResult                   # the chosen model (base + the adopted effects)
-    adopted: list                      # Assessment of each adopted effect, in the joint fit
+    model: FitResult                   # the chosen model (base + the adopted members)
+    adopted: list                      # Assessment of each adopted member, in the joint fit
     stages: list
     ambiguous: tuple | None = None     # (Path, Path)
     separation: dict | None = None
+    paths: list = field(default_factory=list)   # every path's end, best criterion first
 
 
 def _starts(score: Score, effect: str):
@@ -228,10 +264,14 @@ def _starts(score: Score, effect: str):
 
 
 def refit(fitter: Fitter, current: FitResult, effect: str, score: Score, log):
-    """``current`` + ``effect`` from the starts of `_starts`, in turn until a
-    fit ends no worse than ``current`` (a start far down a non-linear
-    direction can end in a poorer minimum); (the best fit, None) or (None,
-    the reasons every start failed)."""
+    """``current`` + ``effect`` (a library effect from the starts of
+    `_starts`, in turn until a fit ends no worse than ``current``: a start far
+    down a non-linear direction can end in a poorer minimum; or a learned
+    discrepancy, `learned.candidate`); (the best fit, None) or (None, the
+    reasons every start failed)."""
+    variable = learned.variable_of(effect)
+    if variable is not None:
+        return _refit_discrepancy(fitter, current, variable, log)
     key = (frozenset((*current.effects, effect)), current.discrepancy)
     cache = fitter.fits
     if key in cache:  # the same model reached on another path
@@ -243,9 +283,8 @@ def refit(fitter: Fitter, current: FitResult, effect: str, score: Score, log):
         shapes = {e: log_shape(e, v) for e, v in current.shapes.items()}
         shapes[effect] = g0
         try:
-            f = fitter.fit((*current.effects, effect), x0=current.notes["x"],
-                           s0=strengths, log_shape0=shapes,
-                           discrepancy=current.discrepancy)
+            f = fitter.fit((*current.effects, effect), s0=strengths, log_shape0=shapes,
+                           discrepancy=current.discrepancy, start=current)
         except SolverError as err:
             errors.append(str(err))
             continue
@@ -255,6 +294,7 @@ def refit(fitter: Fitter, current: FitResult, effect: str, score: Score, log):
             break
     if best is not None:
         best.notes.update(starts=tried, refit_s=time.perf_counter() - t0)
+        _note_edf(best)
         cache[key] = best
         return best, None
     reason = "; ".join(dict.fromkeys(errors))
@@ -262,27 +302,68 @@ def refit(fitter: Fitter, current: FitResult, effect: str, score: Score, log):
     return None, reason
 
 
+def _note_edf(fit: FitResult) -> None:
+    if fit.discrepancy is not None and "discrepancy_edf" not in fit.notes:
+        fit.notes["discrepancy_edf"] = learned.effective_coefficients(fit)
+
+
+def _fit_cached(fitter: Fitter, effects: tuple, discrepancy: str | None, start: FitResult):
+    """The model of ``effects`` and ``discrepancy`` (fitted once, from ``start``)."""
+    key = (frozenset(effects), discrepancy)
+    if key not in fitter.fits:
+        f = fitter.fit(effects, start=start, discrepancy=discrepancy)
+        _note_edf(f)
+        fitter.fits[key] = f
+    return fitter.fits[key]
+
+
+def _refit_discrepancy(fitter: Fitter, current: FitResult, variable: str, log):
+    t0 = time.perf_counter()
+    try:
+        f = _fit_cached(fitter, current.effects, variable, current)
+    except SolverError as err:
+        log(f"refit + {learned.label(learned.candidate(variable))} failed: {err}")
+        return None, str(err)
+    f.notes.setdefault("refit_s", time.perf_counter() - t0)
+    return f, None
+
+
+def _members(model: FitResult) -> tuple:
+    """The candidates a model holds: its effects and its discrepancy."""
+    return (*model.effects,
+            *((learned.candidate(model.discrepancy),) if model.discrepancy else ()))
+
+
+def _without(model: FitResult, member: str) -> tuple:
+    """(effects, discrepancy) of ``model`` less ``member``."""
+    if learned.variable_of(member) is not None:
+        return model.effects, None
+    return tuple(x for x in model.effects if x != member), model.discrepancy
+
+
+def _judge(fitter, member: str, model: FitResult, without: FitResult, inspections):
+    if learned.variable_of(member) is not None:
+        return assess_discrepancy(member, model, without)
+    return assess(fitter, member, model, without, inspections)
+
+
 def _judge_members(fitter, model: FitResult, inspections, log, always: bool = False):
-    """Each effect of ``model`` judged in the joint fit against the model
-    without it (its discrepancy kept); returns (assessments, the weakest
-    that fails or None).  A single effect is judged only when ``always``."""
+    """Each member of ``model`` (effect or discrepancy) judged in the joint fit
+    against the model without it; returns (assessments, the weakest that
+    fails or None).  A single member is judged only when ``always``."""
     out: dict = {}
     weakest = None
-    if len(model.effects) == 1 and not always:
+    members = _members(model)
+    if len(members) == 1 and not always:
         return out, None
-    for e in model.effects:
-        rest = tuple(x for x in model.effects if x != e)
-        key = (frozenset(rest), model.discrepancy)
-        cache = fitter.fits
-        without = cache.get(key)
-        if without is None:
-            try:
-                without = cache[key] = fitter.fit(rest, start=model,
-                                                  discrepancy=model.discrepancy)
-            except SolverError as err:
-                log(f"refit without {e} failed: {err}")
-                continue
-        a = assess(fitter, e, model, without, inspections)
+    for e in members:
+        effects, variable = _without(model, e)
+        try:
+            without = _fit_cached(fitter, effects, variable, model)
+        except SolverError as err:
+            log(f"refit without {learned.label(e)} failed: {err}")
+            continue
+        a = _judge(fitter, e, model, without, inspections)
         out[e] = a
         # the weakest failing member: the one whose removal leaves the best model
         if not a.qualifies and (weakest is None
@@ -292,41 +373,73 @@ def _judge_members(fitter, model: FitResult, inspections, log, always: bool = Fa
 
 
 def prune(fitter: Fitter, model: FitResult, inspections, log, always: bool = False):
-    """Drop the effects of ``model`` that no longer qualify beside the others
-    (and its discrepancy), weakest first; (model, {effect: Assessment}, dropped)."""
+    """Drop the members of ``model`` (effects, discrepancy) that no longer
+    qualify beside the others, weakest first; (model, {member: Assessment},
+    dropped)."""
     judged, weakest = _judge_members(fitter, model, inspections, log, always)
     dropped = []
     while weakest is not None:
         e, model = weakest
         dropped.append(e)
         judged.pop(e, None)
-        log(f"dropped: {e} (no longer qualifies beside the rest of the model)")
+        log(f"dropped: {learned.label(e)} (no longer qualifies beside the rest of the model)")
         judged, weakest = _judge_members(fitter, model, inspections, log, always)
     return model, judged, dropped
 
 
 def _stage(fitter: Fitter, current: FitResult, kinds, inspections, log,
-           exclude=()) -> Stage:
-    """Score every effect not in ``current`` (nor ``exclude``) and refit each
-    with a positive score on top of it (the scores kept in ``current``'s notes:
-    a path grown again reaches the same fits)."""
-    key = ("scores", tuple(sorted(exclude)))
+           exclude=(), variables=()) -> Stage:
+    """Score every candidate not in ``current`` (nor ``exclude``): the library's
+    effects and, when ``current`` has none, the discrepancy over each of
+    ``variables``; refit each effect with a positive score and each
+    discrepancy whose score passes `learned.SCREEN_P` on top of it (the
+    scores kept in ``current``'s notes: a path grown again reaches the same
+    fits)."""
+    key = ("scores", tuple(sorted(exclude)), tuple(variables))
     if key not in current.notes:
-        current.notes[key] = score_tests(fitter, current, kinds, exclude)
+        current.notes[key] = (score_tests(fitter, current, kinds, exclude)
+                              + _discrepancy_scores(fitter, current, variables, exclude))
     scores = current.notes[key]
-    log(("scores" if not current.effects else f"scores beside {' + '.join(current.effects)}")
-        + ": " + ", ".join(f"{s.effect} {s.statistic:.3g}" for s in scores))
+    log(("scores" if not _members(current) else
+         f"scores beside {' + '.join(learned.label(m) for m in _members(current))}")
+        + ": " + ", ".join(f"{learned.label(s.effect)} {s.statistic:.3g}" for s in scores))
     stage = Stage(scores, {}, {})
-    todo = [s for s in scores if s.statistic > 0.0]
+    # at the first stage every effect with a positive score is refitted (a
+    # strong non-linear effect can score low at zero strength); beside
+    # others, one whose score could not grow into an adoption is not
+    floor = 0.0 if not _members(current) else LATER_SCORE
+    todo = [s for s in scores if s.statistic > floor and (
+        learned.variable_of(s.effect) is None or s.p_value < learned.SCREEN_P)]
     done = [(s, refit(fitter, current, s.effect, s, log)) for s in todo]
     for s, (f, failure) in done:
         if f is None:
             stage.failed[s.effect] = failure
             continue
-        a = assess(fitter, s.effect, f, current, inspections)
+        a = _judge(fitter, s.effect, f, current, inspections)
         stage.assessed[s.effect] = a
-        log(f"refit + {s.effect}: {_words(a)}")
+        log(f"refit + {learned.label(s.effect)}: {_words(a)}")
     return stage
+
+
+def _discrepancy_scores(fitter: Fitter, current: FitResult, variables, exclude) -> list:
+    """Score tests (`learned.score`) of the discrepancy over each variable,
+    when ``current`` has none; as `Score` (statistic, p-value corrected for
+    the number of variables)."""
+    todo = [v for v in variables if learned.candidate(v) not in exclude]
+    if current.discrepancy is not None or not todo:
+        return []
+    rows = ~fitter.problem.holdout
+    if current.effects or current.discrepancy is not None:
+        jb, v = current.notes["jacobian"], current.notes["v"]
+    else:
+        jb = fitter.parameter_jacobian(np.asarray(current.notes["x"]), names=())[0][rows]
+        v = current.notes.get("v", fitter._pack(np.asarray(current.notes["x"])))
+    out = []
+    for variable in todo:
+        t = learned.score(fitter, current, variable, jb, v)
+        out.append(Score(learned.candidate(variable), t["statistic"], 0.0,
+                         min(1.0, len(todo) * t["p_value"]), by_kind={"dof": t["dof"]}))
+    return sorted(out, key=lambda s: -s.statistic)
 
 
 @dataclass
@@ -337,6 +450,7 @@ class Path:
     model: FitResult
     adopted: dict
     stages: list
+    check: "PredictiveCheck | None" = None   # its prediction of the last fit inspection
 
     @property
     def criterion(self) -> float:
@@ -348,7 +462,7 @@ class Path:
 
     @property
     def name(self) -> str:
-        return " + ".join(self.model.effects) or "none"
+        return " + ".join(learned.label(m) for m in _members(self.model)) or "none"
 
 
 def _improving(stage: Stage, current: FitResult) -> list:
@@ -360,20 +474,21 @@ def _improving(stage: Stage, current: FitResult) -> list:
 
 
 def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
-          reference=None, foresee=None) -> Path:
-    """Greedy forward selection from the one-effect model ``first``: the best
-    qualifying addition by the criterion at each stage, then the effects
-    already in the model re-judged beside it; an effect dropped is not
-    offered again on this path.  ``reference(fit) -> chi2`` (the dynamic
-    model's fit-point chi-square, evaluated, not refitted): an addition must
-    lower it too, else it stands for the fitted model's own error.
-    ``foresee(fit)``: told the fits that check would evaluate (unchecked)."""
+          reference=None, foresee=None, variables=()) -> Path:
+    """Greedy forward selection from the one-candidate model ``first``: the
+    best qualifying addition (effect or discrepancy over one of
+    ``variables``) by the criterion at each stage, then the members already
+    in the model re-judged beside it; a member dropped is not offered again
+    on this path.  ``reference(fit) -> chi2`` (the dynamic model's fit-point
+    chi-square, evaluated, not refitted): an addition must lower it too,
+    else it stands for the fitted model's own error.  ``foresee(fit)``: told
+    the fits that check would evaluate (unchecked)."""
     current = first.fit
     adopted = {first.effect: first}
     stages: list = []
     excluded: set = set()
-    while len(current.effects) < MAX_EFFECTS:
-        stage = _stage(fitter, current, kinds, inspections, log, tuple(excluded))
+    while len(_members(current)) < MAX_EFFECTS:
+        stage = _stage(fitter, current, kinds, inspections, log, tuple(excluded), variables)
         stages.append(stage)
         ranked = _improving(stage, current)
         if ranked and foresee is not None:
@@ -383,14 +498,15 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
             before = reference(current)
             for a in ranked:
                 after = reference(a.fit)
+                beside = " + ".join(learned.label(m) for m in _members(current))
                 if not after < before:
                     a.qualifies = False
                     a.reasons.append(f"the dynamic model's chi2 rises ({before:.1f} -> "
                                      f"{after:.1f}): the fitted model's own error")
-                    log(f"+ {a.effect} beside {' + '.join(current.effects)}: the dynamic "
+                    log(f"+ {learned.label(a.effect)} beside {beside}: the dynamic "
                         f"model's chi2 rises {before:.1f} -> {after:.1f}; not adopted")
                 else:
-                    log(f"+ {a.effect} beside {' + '.join(current.effects)}: the dynamic "
+                    log(f"+ {learned.label(a.effect)} beside {beside}: the dynamic "
                         f"model's chi2 falls {before:.1f} -> {after:.1f}")
                     break
             ranked = [a for a in ranked if a.qualifies]
@@ -398,7 +514,8 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
             break
         best = ranked[0]
         stage.added = best.effect
-        log(f"adopted beside {' + '.join(current.effects)}: {best.effect}")
+        log(f"adopted beside {' + '.join(learned.label(m) for m in _members(current))}: "
+            f"{learned.label(best.effect)}")
         current, judged, stage.dropped = prune(fitter, best.fit, inspections, log)
         adopted[best.effect] = best
         for e in stage.dropped:
@@ -407,7 +524,7 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
         adopted.update(judged)
         if best.effect in stage.dropped:
             break
-    return Path(current, {e: adopted[e] for e in current.effects if e in adopted}, stages)
+    return Path(current, {e: adopted[e] for e in _members(current) if e in adopted}, stages)
 
 
 @dataclass
@@ -418,19 +535,26 @@ class _Grown:
 
 
 def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
-           reference=None) -> Selection:
+           reference=None, variables=()) -> Selection:
     """Forward selection along `PATHS` paths (module notes): each starts from
-    one of the best qualifying single effects and grows greedily; the paths'
-    final models are compared by the criterion, within Occam's window."""
-    stage1 = _stage(fitter, base, kinds, inspections, log)
+    one of the best qualifying single candidates (and one from the best
+    qualifying discrepancy) and grows greedily; the paths' final models are
+    checked on the last fit inspection (`validation`), and those that predict
+    it are compared by the criterion, within Occam's window."""
+    stage1 = _stage(fitter, base, kinds, inspections, log, (), variables)
     ranked = _improving(stage1, base)
     if not ranked:
         return Selection(base, [], [stage1])
-    # a path starts from a single effect that explains most of what the best
-    # one explains (a far poorer start cannot be rescued by one more effect)
+    # a path starts from a single candidate that explains most of what the
+    # best one explains (a far poorer start cannot be rescued by one more),
+    # and one from the best discrepancy: a library effect that fits the fit
+    # points as well may not predict, and only the check below can tell
     gain = criterion(base) - ranked[0].criterion
     starts = [a for a in ranked[:PATHS]
               if a.criterion - ranked[0].criterion <= (1.0 - PATH_SHARE) * gain]
+    learned_first = [a for a in ranked if learned.variable_of(a.effect) is not None]
+    if learned_first and learned_first[0] not in starts:
+        starts.append(learned_first[0])
     # Each path grown first without the dynamic model's check (one dynamic
     # evaluation costs as much as several refits; those a check would need
     # are queued to run beside the fits); then the best path not yet checked
@@ -447,7 +571,8 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
             log(line)
 
         grown.append(_Grown(_grow(fitter, a, kinds, inspections, first_pass,
-                                  foresee=foresee), seen, reference is None))
+                                  foresee=foresee, variables=variables),
+                            seen, reference is None))
     while True:
         unchecked = [g for g in grown if not g.checked]
         checked = [g.path.criterion for g in grown if g.checked]
@@ -457,47 +582,61 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
         g = min(unchecked, key=lambda g: g.path.criterion)
         log(f"path {g.path.name}: checked on the dynamic model")
         g.path = _grow(fitter, starts[grown.index(g)], kinds, inspections,
-                       lambda line, seen=g.seen: None if line in seen else log(line), reference)
+                       lambda line, seen=g.seen: None if line in seen else log(line), reference,
+                       variables=variables)
         g.checked = True
     paths: dict[tuple, Path] = {}
     trailing = []
     for g in grown:
         if g.checked:
-            paths.setdefault(tuple(sorted(g.path.model.effects)), g.path)
+            paths.setdefault(tuple(sorted(_members(g.path.model))), g.path)
         else:
             trailing.append(g.path)
             log(f"path {g.path.name}: not checked on the dynamic model (criterion "
                 f"{g.path.criterion:.1f}, {AMBIGUITY:g} or more above the best checked path)")
     order = sorted(paths.values(), key=lambda p: p.criterion)
-    window = [p for p in order if p.criterion - order[0].criterion < AMBIGUITY]
+    # a model is an explanation only when it also predicts the last fit
+    # inspection from the earlier ones (`validation`)
+    for p in order:
+        p.check = forward_check(fitter, p.model, data)
+        if p.check is not None:
+            log(f"path {p.name}: {p.check.sentence()}")
+    predicting = [p for p in order if p.check is None or p.check.predicts]
+    if predicting and predicting[0] is not order[0]:
+        log(f"{order[0].name} fits best but does not predict the last fit inspection; "
+            f"{predicting[0].name} does")
+    pool = predicting or order
+    window = [p for p in pool if p.criterion - pool[0].criterion < AMBIGUITY]
     simplest = min(p.numbers for p in window)
-    window = [p for p in window if p.numbers == simplest]  # Occam's window
+    window = [p for p in window if p.numbers <= simplest + OCCAM_TOLERANCE]  # Occam's window
     best = window[0]
-    stage1.added = best.model.effects[0] if best.model.effects else None
+    stage1.added = _members(best.model)[0] if _members(best.model) else None
     stages = [stage1, *best.stages]
     if len(window) > 1:
         other = window[1]
-        sep = separating_measurement(fitter, best.model, other.model, data)
         log(f"{best.name} or {other.name}: these data cannot tell them apart (criteria "
-            f"{best.criterion:.1f} and {other.criterion:.1f}); {sep['sentence']}")
+            f"{best.criterion:.1f} and {other.criterion:.1f})")
         stage1.ambiguous = (best, other)
-        return Selection(base, [], stages, (best, other), sep)
+        return Selection(base, [], stages, (best, other), None, order)
     others = sorted((p for p in (*order, *trailing) if p is not best), key=lambda p: p.criterion)
     log(f"selected: {best.name} (criterion {best.criterion:.1f}; other paths: "
         + (", ".join(f"{p.name} {p.criterion:.1f}" for p in others) or "none") + ")")
-    return Selection(best.model, list(best.adopted.values()), stages)
+    return Selection(best.model, list(best.adopted.values()), stages, None, None, order)
 
 
 def _words(a: Assessment) -> str:
     f = a.fit
+    verdict = (" (qualifies)" if a.qualifies else f" ({'; '.join(a.reasons)})") \
+        + f" [{f.notes.get('starts', 1)} start(s), {f.iterations} steps, " \
+          f"{f.notes.get('refit_s', f.wall_time_s):.1f} s]"
+    if a.edf is not None:
+        return (f"chi2 {f.chi2_fit:.1f}, {a.edf:.2g} effective coefficients, chi2 drop "
+                f"{a.likelihood_ratio:.1f}" + verdict)
     shape = "" if f.shapes.get(a.effect) is None else f", shape {f.shapes[a.effect]:.3g}" + (
         "" if a.shape_determined else " (not determined)")
     form = f"; {a.form.sentence(a.effect)}" if a.form is not None else ""
     return (f"strength {f.strengths[a.effect]:.4g} +- {f.strengths_std[a.effect]:.2g}{shape}, "
-            f"chi2 {f.chi2_fit:.1f}, held-out RMSE {f.rmse_holdout:.3g} sigma{form}"
-            + (" (qualifies)" if a.qualifies else f" ({'; '.join(a.reasons)})")
-            + f" [{f.notes.get('starts', 1)} start(s), {f.iterations} steps, "
-              f"{f.notes.get('refit_s', f.wall_time_s):.1f} s]")
+            f"chi2 {f.chi2_fit:.1f}{form}" + verdict)
 
 
 @dataclass
@@ -517,11 +656,16 @@ class Calibration:
     check: dict | None = None   # the chosen model's fit on the reference (dynamic) model
     notes: dict = field(default_factory=dict)
     selection: Selection | None = None
-    discrepancy: learned.Search | None = None
+    discrepancy: Assessment | None = None   # the adopted discrepancy
     limits: dict = field(default_factory=dict)
     final: FitResult | None = None   # the adopted effects (+ the named discrepancy)
     adopted: list = field(default_factory=list)   # Assessment of each named effect
     partial: list = field(default_factory=list)   # adopted, but leaving the residual
+    prediction: PredictiveCheck | None = None     # the final model's forward check
+    without_discrepancy: FitResult | None = None  # the final model less its discrepancy
+    posterior: Posterior | None = None
+    coverage: dict = field(default_factory=dict)  # share of points inside the 90 % band
+    forecast: Forecast | None = None
 
     def summary(self) -> dict:
         final = self.final or self.chosen
@@ -571,12 +715,33 @@ class Calibration:
             "goodness_of_fit": self.gof,
             "suspects": [_suspect(s) for s in self.suspects],
             "suspect": (self.suspects[0].sentence()
-                        if self.suspects and self.suspects[0].refit is not None else None),
+                        if self.suspects and self.suspects[0].refit is not None
+                        and self.suspects[0].plausible else None),
             "model_check": self.check,
             "model_settings": {"description": m.describe(), "n_theta": m.n_theta},
+            "selection": {
+                "rule": SELECTION_RULE,
+                "prediction_check": None if self.prediction is None
+                else self.prediction.entry(),
+                "paths": [{"name": p.name, "criterion": p.criterion,
+                           "prediction_check": None if p.check is None else p.check.entry()}
+                          for p in (sel.paths if sel else [])]},
+            "posterior": None if self.posterior is None else self.posterior.entry(),
+            "heldout_coverage": self.coverage.get("heldout"),
+            "fit_coverage": self.coverage.get("fit"),
+            "life": None if self.forecast is None else {
+                "limit_mm": self.forecast.limit * 1e3, **self.forecast.life,
+                "depth_at_horizon": self.forecast.depth,
+                "horizon_cycles": self.forecast.horizon},
+            "next_measurement": None if self.forecast is None
+            else self.forecast.next_measurement,
             "wall_time_s": self.wall_time_s,
         }
         return out
+
+    def summary_discrepancy(self) -> dict:
+        """The discrepancy as `summary.json` lists it (`_discrepancy`)."""
+        return _discrepancy(self) or {}
 
 
 def _stage_summary(st: Stage) -> dict:
@@ -590,26 +755,46 @@ def _stage_summary(st: Stage) -> dict:
 
 
 def _discrepancy(c: Calibration) -> dict | None:
+    """The discrepancy in `summary.json`: the adopted one described, with k
+    with and without it; else the variables tried and why none qualified."""
+    sel = c.selection
+    stage1 = sel.stages[0] if sel is not None and sel.stages else None
+    tried = {}
+    for s in (stage1.scores if stage1 else []):
+        v = learned.variable_of(s.effect)
+        if v is None:
+            continue
+        assert stage1 is not None  # the scores are the first stage's
+        a = stage1.assessed.get(s.effect)
+        tried[v] = {"score": s.statistic, "p_value": s.p_value,
+                    **({} if a is None else {"chi2_fit": a.fit.chi2_fit, "criterion": a.criterion,
+                                             "qualifies": a.qualifies, "reasons": a.reasons,
+                                             "effective_coefficients": a.edf})}
+        if s.effect in stage1.failed:
+            tried[v]["failed"] = stage1.failed[s.effect]
     d = c.discrepancy
     if d is None:
-        return None
-    trials = {t.variable: ({"failed": t.failure} if t.fit is None else
-                           {"heldout_rmse": t.fit.rmse_holdout, "chi2_fit": t.fit.chi2_fit,
-                            "criterion": t.criterion, "cuts_heldout_error": t.cuts})
-              for t in d.trials}
-    before = d.reference.rmse_holdout
-    if d.chosen is None:
-        tried = [t.variable for t in d.trials]
-        return {"variable": None, "heldout_rmse_before": before, "heldout_rmse_after": before,
-                "tried": trials, "skipped": d.skipped,
-                "shape": "unexplained; no discrepancy in " + _or_list(tried)
-                         + " cuts the held-out error"}
-    f = d.chosen.model
-    out = learned.describe(d.chosen.variable, f.discrepancy_coefficients, f.discrepancy_cov,
-                           c.dataset)
-    out.update(heldout_rmse_before=before, heldout_rmse_after=f.rmse_holdout,
-               effective_coefficients=f.notes.get("discrepancy_edf"), tried=trials,
-               skipped=d.skipped)
+        if not tried:
+            return None
+        return {"variable": None, "tried": tried,
+                "shape": "no discrepancy in " + _or_list(list(tried)) + " qualifies beside "
+                         "the library's effects on the fit data"}
+    f = c.final or d.fit
+    lay = f.notes["layout"]
+    variable = f.discrepancy
+    assert variable is not None  # an adopted discrepancy is in the final model
+    b = f.notes.get("log_k_per_coefficient")
+    out = learned.describe(variable, f.discrepancy_coefficients, f.discrepancy_cov,
+                           c.dataset, b)
+    out.update(effective_coefficients=f.notes.get("discrepancy_edf"), tried=tried,
+               likelihood_ratio=d.likelihood_ratio,
+               log_k_per_coefficient=None if b is None else np.asarray(b).tolist())
+    w = c.without_discrepancy
+    k = c.problem.fit_names[lay.fitter.k_index] if lay.fitter.k_index is not None else None
+    if k is not None:
+        out["k_with"] = {"value": f.params[k], "std": f.params_std[k]}
+        if w is not None:
+            out["k_without"] = {"value": w.params[k], "std": w.params_std[k]}
     return out
 
 
@@ -683,12 +868,13 @@ def discrepancy_variables(data: Dataset, spec: str) -> tuple:
 
 def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
               top: int = DEFAULT_TOP, check: bool = True, discrepancy=VARIABLES,
-              log=print) -> Calibration:
+              outlook: Outlook | None = Outlook(), log=print) -> Calibration:
     """The whole loop on one dataset (module notes).  ``check``: evaluate the
     chosen fit on the dynamic model too (when the fit ran on another);
-    ``discrepancy``: the variables a learned discrepancy is searched over
-    (empty: none).  ``top`` is kept for compatibility: every candidate is
-    refitted."""
+    ``discrepancy``: the candidate variables of a learned discrepancy
+    (empty: none); ``outlook``: the posterior, the life and the next
+    measurement (None: none).  ``top`` is kept for compatibility: every
+    candidate is refitted."""
     del top
     t0 = time.perf_counter()
     discrepancy = tuple(discrepancy)
@@ -698,6 +884,8 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     require_fit_points(data, problem.n_base)
     wall = problem.base0.get("wall")
     check_depths(data, None if wall is None else float(wall))
+    if outlook is not None:
+        outlook.resolved(data, problem)  # bad limits and horizons refused before the work
     fitter = Fitter(problem)
     check = check and problem.model.checked_on_dynamic
     # the dynamic model, compiled and evaluated beside the fits (`reference`)
@@ -707,24 +895,59 @@ def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
     finally:
         if dynamic is not None:
             dynamic.close()
+    if outlook is not None and result.base.dof > 0:
+        _look_ahead(result, fitter, outlook, log)
     result.wall_time_s = time.perf_counter() - t0
     return result
 
 
+def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None:
+    """The chosen model's posterior, its predictive bands' coverage of the
+    held-out points, the life with its band and the next measurement."""
+    final = c.final or c.base
+    t0 = time.perf_counter()
+    exact = getattr(fitter.problem.model, "name", "") == "quasi-static"
+    c.posterior = posterior_of(fitter, final, outlook.method if exact else "linear")
+    p = c.problem
+    c.coverage = {"fit": c.posterior.coverage(p.sigma, p.y, ~p.holdout),
+                  "heldout": c.posterior.coverage(p.sigma, p.y, p.holdout)}
+    d = c.posterior.diagnostics
+    log(f"posterior ({c.posterior.method}): " + (
+        f"Pareto k {d['pareto_k']:.2f}, ESS {d['ess']:.0f}" if "pareto_k" in d else
+        f"max R-hat {d.get('max_r_hat', math.nan):.3f}, min ESS {d.get('min_ess', math.nan):.0f}")
+        + f" ({time.perf_counter() - t0:.0f} s)")
+    limit, horizon = outlook.resolved(c.dataset, p)
+    if limit is None:
+        return
+    sel = c.selection
+    alternatives = None
+    if sel is not None and sel.ambiguous is not None:
+        alternatives = (sel.ambiguous[0].model, sel.ambiguous[1].model)
+    t0 = time.perf_counter()
+    c.forecast = forecast(fitter, c.posterior, c.dataset, limit, horizon, alternatives)
+    life = c.forecast.life
+    log(f"life to {limit * 1e3:g} mm: {life['median']:,.0f} cycles (90 %: {life['q05']:,.0f}"
+        f"-{life['q95']:,.0f}); next measurement: "
+        f"{(c.forecast.next_measurement or {}).get('sentence', 'none')} "
+        f"({time.perf_counter() - t0:.0f} s)")
+
+
 def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
           dynamic: DynamicCheck | None, log) -> Calibration:
-    """`calibrate`'s steps 1-6 (module notes)."""
-    kinds = np.array([data.series[k].kind for k in problem.series_of_point])
+    """`calibrate`'s steps (module notes)."""
+    kinds = problem.kind_of_point
     inspections = _inspections(data, problem)
     log(f"{problem.model.describe()}; fitting {', '.join(problem.fit_names)}")
     base = fitter.fit(None)
-    log(f"base fit: chi2 {base.chi2_fit:.1f} on {base.n_fit} points, held-out RMSE "
-        f"{base.rmse_holdout:.3g} sigma ({base.iterations} steps, {base.wall_time_s:.1f} s)")
+    log(f"base fit: chi2 {base.chi2_fit:.1f} on {base.n_fit} points ({base.iterations} steps, "
+        f"{base.wall_time_s:.1f} s)")
     stated_k = problem.base0.get("k")
     slips = unit_slips(data, problem, base, None if stated_k is None else float(stated_k))
     for w in slips:
         log(f"warning: {w['message']}")
+    variables = tuple(v for v in discrepancy if learned.unsupported(data, v) is None)
     too_few = base.n_fit - problem.n_base - 2 < MIN_DOF_FOR_EFFECT
+    fitter.fits[(frozenset(), None)] = base
     if too_few:
         log(f"{base.n_fit} fit points for {problem.n_base} parameters: too few to fit an effect "
             "as well; candidates are scored, not refitted")
@@ -732,67 +955,48 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
         scores = score_tests(fitter, base, kinds)
     else:
         sel = select(fitter, base, kinds, inspections, data, log,
-                     None if dynamic is None else _DynamicChi2(problem, dynamic))
+                     None if dynamic is None else _DynamicChi2(problem, dynamic), variables)
         scores = sel.stages[0].scores
     first = sel.stages[0] if sel.stages else None
     refits = {e: a.fit for e, a in first.assessed.items()} if first else {}
     qualifying = [e for e, a in first.assessed.items() if a.qualifies] if first else []
     failed = dict(first.failed) if first else {}
     chosen = sel.model
-    gof = _gof(chosen)
-    unexplained = not gof["consistent_with_noise"]
-    if sel.ambiguous is not None:  # either alternative stands for the model's fit
-        unexplained = not _gof(sel.ambiguous[0].model)["consistent_with_noise"]
-    log(f"selected: {', '.join(chosen.effects) or 'no effect'}"
+    final = chosen
+    if sel.ambiguous is not None and not _members(chosen):
+        final = sel.ambiguous[0].model  # either alternative stands for the fitted model
+    gof = _gof(final)
+    path = next((p for p in sel.paths if p.model is final), None)
+    prediction = path.check if path is not None else (
+        forward_check(fitter, final) if _members(final) else None)
+    explained = gof["consistent_with_noise"] and (prediction is None or prediction.predicts)
+    unexplained = not explained
+    log(f"selected: {' + '.join(learned.label(m) for m in _members(chosen)) or 'no effect'}"
         + (" (the residual stays unexplained)" if unexplained else ""))
     suspects = []
-    suspect_explains = False
-    if (not chosen.effects or unexplained) and sel.ambiguous is None and problem.suspects \
+    if (not _members(chosen) or unexplained) and sel.ambiguous is None and problem.suspects \
             and not too_few:
-        ranked = score_suspects(fitter, base, kinds)
-        suspects = [Suspect(s.effect, float(problem.base0[s.effect]), s) for s in ranked]
-        # named only when something is left to explain, at p = 0.001 over all suspects
-        critical = chi2_isf(0.001 / len(ranked))
-        if unexplained and ranked and ranked[0].statistic > critical:
-            lead = suspects[0]
-            try:
-                lead.refit = fitter.fit_suspect(lead.name, np.asarray(base.notes["x"]),
-                                                lead.score.first_step)
-                suspect_explains = _gof(lead.refit)["consistent_with_noise"]
-            except SolverError as err:  # a suspect that cannot be fitted is still named
-                log(f"refit with {lead.name} free failed: {err}")
-            log(f"suspect: {lead.sentence()}")
-    search = None
-    if unexplained and not suspect_explains and discrepancy and not too_few:
-        # against the base model: effects adopted while the residual stays
-        # unexplained may stand in for what the library lacks
-        search = learned.search(fitter, base, data, discrepancy, log)
-        if search.chosen is not None:
-            log(f"discrepancy named: {search.chosen.variable}")
-        else:
-            log("no discrepancy cuts the held-out error")
-    final, adopted = chosen, list(sel.adopted)
-    if sel.ambiguous is not None and not chosen.effects:
-        final = sel.ambiguous[0].model  # either alternative stands for the fitted model
-    if search is not None and search.chosen is not None:
-        # the library's effects must still qualify beside the learned discrepancy
-        final, judged, dropped = prune(fitter, search.chosen.model, inspections, log,
-                                       always=True)
-        search.chosen.fit = final
-        adopted = [judged[e] for e in final.effects if e in judged]
-    explained = _gof(final)["consistent_with_noise"]
-    partial = [] if explained else adopted
-    adopted = adopted if explained else []
-    if sel.ambiguous is not None and not adopted:
+        suspects = _suspects(fitter, base, kinds, unexplained, log)
+    members = list(sel.adopted)
+    found = [a for a in members if learned.variable_of(a.effect) is None]
+    learned_one = next((a for a in members if learned.variable_of(a.effect) is not None), None)
+    without = None
+    if learned_one is not None and final.discrepancy is not None:
+        without = _fit_cached(fitter, final.effects, None, final)
+        log(f"{learned.label(learned_one.effect)} adopted")
+    partial = [] if explained else found
+    found = found if explained else []
+    if sel.ambiguous is not None and not found:
         identified = "ambiguous"
     else:
-        identified = adopted[0].effect if adopted else "none"
+        identified = found[0].effect if found else "none"
     limits = detection_limits(score_tests(fitter, final, kinds)) if not too_few else {}
     result = Calibration(data, problem, base, scores, refits, qualifying, chosen, identified,
                          unexplained, gof, 0.0, suspects,
                          notes={"failed_refits": failed, "unit_warnings": slips},
-                         selection=sel, discrepancy=search, limits=limits, final=final,
-                         adopted=adopted, partial=partial)
+                         selection=sel, discrepancy=learned_one, limits=limits, final=final,
+                         adopted=found, partial=partial, prediction=prediction,
+                         without_discrepancy=without)
     if dynamic is not None:
         result.check = model_check(problem, final, dynamic)
         c = result.check
@@ -802,3 +1006,22 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
             log("warning: the fit does not carry over to the dynamic model; the quasi-static "
                 "model's own error may have chosen the effects (refit with --model dynamic)")
     return result
+
+
+def _suspects(fitter: Fitter, base: FitResult, kinds, unexplained: bool, log) -> list:
+    """Every suspect scored at the base fit; the best refitted and named when
+    something is left to explain and its score passes p = 0.001 over all
+    suspects (module notes)."""
+    problem = fitter.problem
+    ranked = score_suspects(fitter, base, kinds)
+    suspects = [Suspect(s.effect, float(problem.base0[s.effect]), s) for s in ranked]
+    critical = chi2_isf(0.001 / len(ranked))
+    if unexplained and ranked and ranked[0].statistic > critical:
+        lead = suspects[0]
+        try:
+            lead.refit = fitter.fit_suspect(lead.name, np.asarray(base.notes["x"]),
+                                            lead.score.first_step)
+        except SolverError as err:  # a suspect that cannot be fitted is still named
+            log(f"refit with {lead.name} free failed: {err}")
+        log(f"suspect: {lead.sentence()}" if lead.plausible else lead.implausible())
+    return suspects

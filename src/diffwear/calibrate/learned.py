@@ -1,33 +1,51 @@
-"""Learn the discrepancy the library lacks, then name it by its shape.
+"""The learned discrepancy as a candidate cause, and its shape in words.
 
-When the chosen model still leaves a residual above the noise, the fit is
-repeated with the learned discrepancy k (1 + delta(x)) (`discrepancy`) over
-each candidate variable x in turn, the model's effects refitted with it.  A
-variable *cuts the held-out error* when its held-out chi-square falls by
-more than `LR_CRITICAL` [1] and its held-out RMSE by at least `HELDOUT_CUT`
-(with held-out data), and the penalised criterion
-(`selection.criterion`, the discrepancy counted by its effective number of
-coefficients) falls too; among those, the lowest criterion names the
-variable.  Its delta is then described in words (`describe`): lobes and peak
-angles for the bushing angle, the trend and its range for the others.
+The wear coefficient's multiplicative discrepancy k (1 + delta(x))
+(`discrepancy`) over a variable x is offered to the forward selection of
+`identify` beside the library's effects, on the same footing: it is scored
+at the model so far (a score test of its coefficients together, chi-square
+with as many degrees of freedom as the data determine), refitted when the
+score asks for it, and adopted by the same rule on the fit data alone (its
+chi-square drop beyond the p = 0.001 critical value for its effective
+number of coefficients, `effective_coefficients`, and the penalised
+criterion).  An adopted discrepancy is described in words (`describe`):
+lobes and peak angles for the bushing angle, the trend and its range for
+the others.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import jax.numpy as jnp
 import numpy as np
 
-from ..errors import InputError, SolverError
+from ..errors import InputError
+from . import chi2
 from . import discrepancy as disc
 from .fit import FitResult, Fitter
-from .selection import LR_CRITICAL, criterion
 
-# A discrepancy names the missing variable only when it cuts the held-out
-# RMSE by at least this share (a few per cent is a flexible fit, not a cause)
-HELDOUT_CUT = 0.25
+# A discrepancy is refitted when its score test passes this p-value (a
+# cheap screen: its refit costs several of an effect's)
+SCREEN_P = 0.01
+# The prefix of a discrepancy's name among the candidates
+PREFIX = "discrepancy:"
+
+
+def candidate(variable: str) -> str:
+    """The candidate name of the discrepancy over ``variable``."""
+    return PREFIX + variable
+
+
+def variable_of(name: str) -> str | None:
+    """The discrepancy variable of candidate ``name`` (None: a library effect)."""
+    return name[len(PREFIX):] if name.startswith(PREFIX) else None
+
+
+def label(name: str) -> str:
+    """A candidate in words: "run_in", "discrepancy in the bushing angle"."""
+    v = variable_of(name)
+    return name if v is None else f"discrepancy in {disc.WORDS[v]}"
 
 
 def unsupported(data, variable: str) -> str | None:
@@ -59,72 +77,54 @@ def effective_coefficients(fit: FitResult) -> float:
     return float(np.sum(lam / (1.0 + np.clip(lam, 0.0, None))))
 
 
-@dataclass
-class Trial:
-    variable: str
-    fit: FitResult | None
-    criterion: float = math.inf
-    cuts: bool = False
-    failure: str | None = None
-
-    @property
-    def model(self) -> FitResult:
-        """The fit (a trial that cuts the error always has one)."""
-        assert self.fit is not None, f"discrepancy in {self.variable}: {self.failure}"
-        return self.fit
-
-
-@dataclass
-class Search:
-    """The discrepancy search at ``reference`` (the chosen model)."""
-
-    reference: FitResult
-    trials: list = field(default_factory=list)
-    chosen: Trial | None = None
-    skipped: dict = field(default_factory=dict)   # variable -> why the data cannot show it
-
-
-def search(fitter: Fitter, reference: FitResult, data, variables, log=print) -> Search:
-    """Fit the discrepancy over each of ``variables`` (module notes)."""
-    out = Search(reference)
-    base_crit = criterion(reference)
-    for v in variables:
-        why = unsupported(data, v)
-        if why is not None:
-            out.skipped[v] = why
-            continue
-        try:
-            f = fitter.fit(reference.effects, start=reference, discrepancy=v)
-        except SolverError as err:
-            out.trials.append(Trial(v, None, failure=str(err)))
-            log(f"discrepancy in {v}: {err}")
-            continue
-        f.notes["discrepancy_edf"] = effective_coefficients(f)
-        crit = criterion(f)
-        held = (reference.n_holdout == 0
-                or (reference.chi2_holdout - f.chi2_holdout > LR_CRITICAL[1]
-                    and f.rmse_holdout <= (1.0 - HELDOUT_CUT) * reference.rmse_holdout))
-        cuts = held and crit < base_crit - LR_CRITICAL[1]
-        out.trials.append(Trial(v, f, crit, cuts))
-        log(f"discrepancy in {v}: chi2 {f.chi2_fit:.1f}, held-out RMSE "
-            f"{f.rmse_holdout:.3g} sigma, {f.notes['discrepancy_edf']:.2g} effective "
-            f"coefficients{' (cuts the error)' if cuts else ''}")
-    cutting = [t for t in out.trials if t.cuts]
-    out.chosen = min(cutting, key=lambda t: t.criterion, default=None)
-    return out
+def score(fitter: Fitter, fit: FitResult, variable: str, jb: np.ndarray, v) -> dict:
+    """Score test of the discrepancy over ``variable`` at ``fit`` (every
+    coefficient at zero): S = g^T I^+ g, g = J_d^T r, I the efficient
+    information of the coefficients against the fitted columns ``jb``
+    (fit rows), chi-square with rank(I) degrees of freedom under "no
+    discrepancy"."""
+    rows = fit.notes.get("rows", ~fitter.problem.holdout)
+    lay = fitter.layout(fit.effects, variable)
+    nd = disc.SIZES[variable]
+    jd = fitter.linearise(v, lay.tangents[-nd:]).jac[rows]
+    r = fit.residual[rows]
+    g = jd.T @ r
+    cross = jb.T @ jd
+    info = jd.T @ jd - (cross.T @ np.linalg.lstsq(jb.T @ jb, cross, rcond=None)[0]
+                        if jb.size else 0.0)
+    lam, vec = np.linalg.eigh(0.5 * (info + info.T))
+    # a direction the fitted columns nearly span carries no information of its
+    # own (its g is round-off): counted out at 1e-6 of the columns' own scale
+    scale = float(np.max(np.linalg.eigvalsh(jd.T @ jd)))
+    keep = lam > 1e-6 * max(scale, 1e-300)
+    if not keep.any():
+        return {"statistic": 0.0, "dof": 0, "p_value": 1.0}
+    proj = vec[:, keep].T @ g
+    stat = float(np.sum(proj ** 2 / lam[keep]))
+    dof = int(keep.sum())
+    return {"statistic": stat, "dof": dof, "p_value": chi2.sf(stat, dof)}
 
 
-def curve(variable: str, coefficients, cov, span: tuple):
-    """(x in report units, delta, 1-sigma band) over ``span`` (SI)."""
+def curve(variable: str, coefficients, cov, span: tuple, total_cycles: float | None = None,
+          log_k_per_coefficient=None):
+    """(x in report units, delta, 1-sigma band) over ``span`` (SI), delta
+    relative to the identified k: (1 + phi c) exp(b.c) - 1, b the move of ln k
+    per coefficient (`fit.identified_k`; None: none); the band by
+    the delta method.  ``total_cycles``: the cycle-count basis's time scale
+    (default the span's end)."""
     lo, hi = span
     if variable in ("pressure", "sliding_speed"):
         x = np.geomspace(lo, hi, 200)
     else:
         x = np.linspace(lo, hi, 361 if variable == "angle" else 200)
-    total = hi if variable == "cycles" else 1.0
+    total = (hi if total_cycles is None else total_cycles) if variable == "cycles" else 1.0
     phi = np.asarray(disc.basis(variable, jnp.asarray(x), total))
-    d = phi @ np.asarray(coefficients)
-    band = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", phi, cov, phi), 0.0, None))
+    c = np.asarray(coefficients, dtype=float)
+    b = np.zeros(c.size) if log_k_per_coefficient is None else np.asarray(log_k_per_coefficient)
+    shift = math.exp(float(b @ c))
+    d = (1.0 + phi @ c) * shift - 1.0
+    grad = shift * (phi + np.outer(1.0 + phi @ c, b))
+    band = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", grad, cov, grad), 0.0, None))
     scale = {"angle": 180.0 / math.pi, "pressure": 1e-6, "sliding_speed": 1e3,
              "cycles": 1.0, "depth": 1e3}[variable]
     return x * scale, d, band
@@ -180,20 +180,21 @@ def _extrema(d):
     return np.flatnonzero(up) + 1, np.flatnonzero(down) + 1
 
 
-def _angle_shape(c, data) -> dict:
+def _angle_shape(c, data, b) -> dict:
     """Lobes and peak angles of an angle discrepancy, read where the data see
     it: over the worn arc (`worn_arc`) the spacing of delta's extrema gives
     the period (adjacent extrema of opposite kind are half a period apart);
     the highest peak inside the arc, repeated at that period, gives the
-    peaks round the bushing."""
+    peaks round the bushing.  ``b``: the move of ln k per coefficient."""
     lo, hi = worn_arc(data) or (0.0, 360.0)
     if hi < lo:
         hi += 360.0
     x = np.linspace(lo, hi, max(int(4 * (hi - lo)), 16))
-    d = np.asarray(disc.basis("angle", jnp.asarray(np.radians(x)))) @ c
+    d = (1.0 + np.asarray(disc.basis("angle", jnp.asarray(np.radians(x)))) @ c) \
+        * math.exp(float(b @ c)) - 1.0
     maxima, minima = _extrema(d)
     extrema = sorted([(x[i], 1) for i in maxima] + [(x[i], -1) for i in minima])
-    gaps = [b[0] - a[0] for a, b in zip(extrema, extrema[1:]) if a[1] != b[1]]
+    gaps = [q[0] - p[0] for p, q in zip(extrema, extrema[1:]) if p[1] != q[1]]
     if gaps:
         lobes = max(1, int(round(360.0 / (2.0 * float(np.median(gaps))))))
     else:  # no turn inside the arc: the largest harmonic
@@ -211,30 +212,58 @@ def _angle_shape(c, data) -> dict:
                      f"+-{100 * a:.0f} % (read over {where})"}
 
 
-def describe(variable: str, coefficients, cov, data) -> dict:
-    """The discrepancy's shape in words and numbers."""
+# A turn of delta is named when it moves delta by this share of its range
+TURN_SHARE = 0.15
+
+
+def _turns(d) -> list[int]:
+    """Indices of delta's ends and of its turns that move it by `TURN_SHARE`
+    of its range (smaller wiggles merged)."""
+    span_ = float(np.max(d) - np.min(d))
+    keep = [0]
+    direction = 0
+    for i in range(1, len(d)):
+        step = d[i] - d[keep[-1]]
+        if direction == 0:
+            if abs(step) > TURN_SHARE * span_:
+                direction = 1 if step > 0 else -1
+                keep.append(i)
+        elif step * direction > 0:
+            keep[-1] = i          # still rising (falling): the turn moves on
+        elif abs(step) > TURN_SHARE * span_:
+            direction = -direction
+            keep.append(i)
+    if keep[-1] != len(d) - 1:
+        keep.append(len(d) - 1)
+    return keep
+
+
+def describe(variable: str, coefficients, cov, data, log_k_per_coefficient=None) -> dict:
+    """The discrepancy's shape in words and numbers, relative to the
+    identified k (``log_k_per_coefficient``: `curve`), over the range the
+    data cover."""
     c = np.asarray(coefficients)
-    x, d, band = curve(variable, c, cov, span(variable, data))
-    unit = disc.UNITS[variable]
+    b = np.zeros(c.size) if log_k_per_coefficient is None else np.asarray(log_k_per_coefficient)
     out: dict = {"variable": variable, "coefficients": c.tolist(),
                  "coefficients_std": np.sqrt(np.clip(np.diag(cov), 0.0, None)).tolist()}
     if variable == "angle":
-        out.update(_angle_shape(c, data))
+        out.update(_angle_shape(c, data, b))
         return out
-    i_max, i_min = int(np.argmax(d)), int(np.argmin(d))
-    rising = d[-1] > d[0]
-    interior = 0 < (i_max if rising else i_min) < len(d) - 1 and \
-        abs(d[i_max] - max(d[0], d[-1])) > 0.25 * (np.max(d) - np.min(d))
-
-    def fmt(v):
-        return f"{v:.3g} {unit}"
-
-    if interior:
-        words = f"peaks at {fmt(x[i_max])} ({100 * d[i_max]:+.0f} %)"
+    lo, hi = span(variable, data)
+    if variable == "cycles":
+        hi = float(data.fit_cycles)
+    x, d, _ = curve(variable, c, cov, (lo, hi), float(data.fit_cycles), b)
+    unit = disc.UNITS[variable]
+    points = _turns(d)
+    values = [f"{100 * d[i]:+.0f} % at {x[i]:.3g} {unit}" for i in points]
+    if len(points) == 2:
+        words = f"{'rises' if d[-1] > d[0] else 'falls'} from {values[0]} to {values[1]}"
     else:
-        words = (f"{'rises' if rising else 'falls'} from {100 * d[0]:+.0f} % at {fmt(x[0])} "
-                 f"to {100 * d[-1]:+.0f} % at {fmt(x[-1])}")
-    out.update(shape=words, amplitude=float(np.max(np.abs(d))))
+        moves = ["up" if d[j] > d[i] else "down" for i, j in zip(points, points[1:])]
+        words = f"from {values[0]}, " + ", ".join(
+            f"{m} to {v}" for m, v in zip(moves, values[1:]))
+    out.update(shape=words, amplitude=float(np.max(np.abs(d))), turns=len(points) - 2,
+               range=[float(lo), float(hi)])
     return out
 
 

@@ -162,6 +162,9 @@ class RigHistory(eqx.Module):
     cycle_atol: float = eqx.field(static=True, default=1e-6)
     penetration_width: float | None = eqx.field(static=True, default=PENETRATION_WIDTH)
     p: SliderCrankParameters = TABLE_7_1
+    # the end of the fit window (None: ``cycles``): the cycle-count
+    # discrepancy's time scale (`quasi_static.cycle_grid`)
+    window: float | None = eqx.field(static=True, default=None)
 
     name: ClassVar[str] = "dynamic"
     # a fit on this model is the reference: nothing to check it against
@@ -170,15 +173,21 @@ class RigHistory(eqx.Module):
     calibrates_files: ClassVar[bool] = False
 
     @classmethod
-    def for_campaign(cls, cycles: float, checkpoints, settings) -> "RigHistory":
-        """The model of a campaign of ``cycles`` at the resolution of
-        ``settings`` (`fit.ModelSettings`): ``settings.dynamic_cycles`` dynamic
-        cycles, default the fewest with A <= `MAX_EXTRAPOLATION`."""
+    def for_campaign(cls, cycles: float, checkpoints, settings, window=None) -> "RigHistory":
+        """The model of a campaign of ``cycles`` (fit window ending at
+        ``window``) at the resolution of ``settings`` (`fit.ModelSettings`):
+        ``settings.dynamic_cycles`` dynamic cycles, default the fewest with A
+        <= `MAX_EXTRAPOLATION`."""
         del checkpoints  # the dynamic history reports every dynamic cycle
         d = settings.dynamic_cycles or max(1, math.ceil(cycles / MAX_EXTRAPOLATION))
         return cls(cycles=float(cycles), dynamic_cycles=d, n_theta=settings.n_theta,
                    force_samples=settings.force_samples, cycle_rtol=settings.cycle_rtol,
-                   cycle_atol=settings.cycle_rtol)
+                   cycle_atol=settings.cycle_rtol,
+                   window=None if window is None else float(window))
+
+    @property
+    def fit_window(self) -> float:
+        return self.cycles if self.window is None else min(self.window, self.cycles)
 
     def __check_init__(self):
         check_campaign_cycles(self.cycles)
@@ -219,7 +228,7 @@ class RigHistory(eqx.Module):
         grow = 1.0 + effects["creep"]
         term = _RigDynamicWear(mech, (JOINT,), jnp.asarray(self.period), settings,
                                saves=self.force_samples, effects=effects, grow=grow,
-                               total_cycles=self.cycles)
+                               total_cycles=self.fit_window)
         memory, ok = term.warm_up(y0, 1)
         stop = Stop(cycles=self.cycles)
         solver = Constant(self.extrapolation)

@@ -35,5 +35,21 @@ RIG_PARAMETERS: dict[str, RigParameter] = {
     "crank_inertia": RigParameter("inertia", "mechanism", "crank inertia about its centre"),
     "rod_inertia": RigParameter("inertia", "mechanism", "rod inertia about its centre"),
 }
+# How far a suspect may move from its stated value and still be a finding
+# (factors, by dimension): a rig measured with a rule and a balance is not off
+# by more than a factor 2 in a length or a wall, 4 in a mass or a spring
+# rate, 10 in an inertia derived from the geometry; a fit that asks for more
+# stands for a model error of another kind, not for that parameter.
+PLAUSIBLE_FACTOR = {"length": 2.0, "mass": 4.0, "stiffness": 4.0, "inertia": 10.0}
+
+
+def plausible_range(name: str) -> tuple[float, float] | None:
+    """(lowest, highest) factor on the stated value of suspect ``name`` that
+    is still a finding (None: no stated range)."""
+    p = RIG_PARAMETERS.get(name)
+    f = PLAUSIBLE_FACTOR.get(p.dimension or "") if p is not None else None
+    return None if f is None else (1.0 / f, f)
+
+
 NAMES = tuple(RIG_PARAMETERS)
 MECHANISM = tuple(n for n, p in RIG_PARAMETERS.items() if p.group == "mechanism")

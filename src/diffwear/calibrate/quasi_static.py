@@ -57,14 +57,31 @@ from .model import (
 DEFAULT_STEPS = 40
 # Load samples per cycle: the wear quadrature (the quasi-static model's 180)
 DEFAULT_SAMPLES = 180
+# Beyond the fit window (held-out inspections, a life), where the rate is
+# nearly steady, each step is this much longer than the one before it: the
+# rig's depth at 2x and 10x the window within 0.2 % of the window's own
+# spacing continued (tests/test_calibrate_quasi_static.py).
+EXTENSION_GROWTH = 1.1
 
 
-def cycle_grid(cycles: float, steps: int, checkpoints=()) -> np.ndarray:
-    """0 = N_0 < N_1 < ... = ``cycles``: quadratic spacing and every checkpoint
-    (cycle counts below ``cycles``; nodes closer than 1e-9 N merged)."""
-    base = cycles * (np.arange(steps + 1) / steps) ** 2
+def cycle_grid(cycles: float, steps: int, checkpoints=(), window: float | None = None
+               ) -> np.ndarray:
+    """0 = N_0 < N_1 < ... = ``cycles``: quadratic spacing up to ``window``
+    (default ``cycles``), then steps growing by `EXTENSION_GROWTH` from the
+    window's last, and every checkpoint (cycle counts below ``cycles``;
+    nodes closer than 1e-9 N merged).  The nodes up to ``window`` do not
+    depend on ``cycles``: a campaign's fit window is integrated on the same
+    grid whether or not later (held-out) measurements extend it."""
+    w = cycles if window is None else min(float(window), cycles)
+    base = w * (np.arange(steps + 1) / steps) ** 2
+    extension = []
+    n, dn = w, base[-1] - base[-2]
+    while n < cycles * (1.0 - 1e-9):
+        dn *= EXTENSION_GROWTH
+        n = min(n + dn, cycles)
+        extension.append(n)
     extra = [float(c) for c in checkpoints if 0.0 < float(c) < cycles]
-    grid = np.unique(np.concatenate([base, extra]))
+    grid = np.unique(np.concatenate([base, extension, extra]))
     keep = np.concatenate([[True], np.diff(grid) > 1e-9 * cycles])
     return grid[keep]
 
@@ -75,6 +92,9 @@ class QuasiStaticRigHistory(eqx.Module):
 
     cycles: float = eqx.field(static=True)
     checkpoints: tuple = eqx.field(static=True, default=())
+    # the end of the fit window (`Dataset.fit_cycles`; None: ``cycles``): the
+    # quadratic grid's end and the cycle-count discrepancy's time scale
+    window: float | None = eqx.field(static=True, default=None)
     steps: int = eqx.field(static=True, default=DEFAULT_STEPS)
     n_theta: int = eqx.field(static=True, default=90)
     samples: int = eqx.field(static=True, default=DEFAULT_SAMPLES)
@@ -87,12 +107,19 @@ class QuasiStaticRigHistory(eqx.Module):
     calibrates_files: ClassVar[bool] = True
 
     @classmethod
-    def for_campaign(cls, cycles: float, checkpoints, settings) -> "QuasiStaticRigHistory":
+    def for_campaign(cls, cycles: float, checkpoints, settings, window=None
+                     ) -> "QuasiStaticRigHistory":
         """The model of a campaign of ``cycles`` whose measurements are at
-        ``checkpoints`` (cycle counts on its grid), at the resolution of
-        ``settings`` (`fit.ModelSettings`)."""
+        ``checkpoints`` (cycle counts on its grid) and whose fit window ends at
+        ``window``, at the resolution of ``settings`` (`fit.ModelSettings`)."""
         return cls(cycles=float(cycles), checkpoints=tuple(sorted({float(c) for c in checkpoints})),
-                   steps=settings.steps, n_theta=settings.n_theta)
+                   steps=settings.steps, n_theta=settings.n_theta,
+                   window=None if window is None else float(window))
+
+    @property
+    def fit_window(self) -> float:
+        """The end of the fit window (module notes of `cycle_grid`)."""
+        return self.cycles if self.window is None else min(self.window, self.cycles)
 
     def __check_init__(self):
         check_campaign_cycles(self.cycles)
@@ -105,7 +132,7 @@ class QuasiStaticRigHistory(eqx.Module):
 
     @property
     def grid(self) -> np.ndarray:
-        return cycle_grid(self.cycles, self.steps, self.checkpoints)
+        return cycle_grid(self.cycles, self.steps, self.checkpoints, self.window)
 
     def describe(self) -> str:
         return (f"quasi-static model: {len(self.grid) - 1} steps in the cycle count, "
@@ -129,7 +156,7 @@ class QuasiStaticRigHistory(eqx.Module):
         loads = cycle_loads(mech, (self.joint,), y0, self.period, samples=self.samples)
         lo = loads.joints[0]
         term = _RigWear(QuasiStaticJoint.from_joint(el), lo, effects, 1.0 + effects["creep"],
-                        el.profile.theta, el.bushing_radius, el.law.depth, self.cycles)
+                        el.profile.theta, el.bushing_radius, el.law.depth, self.fit_window)
         solver = CycleGrid(jnp.asarray(self.grid))
         zeros = jnp.zeros(term.joint.n)
         state = initial_state((zeros,), jnp.full_like(lo.force, jnp.nan), ok=loads.ok)
@@ -158,7 +185,7 @@ class _RigWear(AbstractWearTerm):
     theta: Float[Array, " n"]
     bushing_radius: Float[Array, ""]
     bushing_depth: Float[Array, ""]
-    cycles: float = eqx.field(static=True)
+    window: float = eqx.field(static=True)   # the cycle-count discrepancy's time scale
 
     def cycle(self, h, memory) -> CycleWear:
         dw, _, eq = self.joint.cycle_wear(self.grow * h[0], self.loads, memory)
@@ -167,6 +194,6 @@ class _RigWear(AbstractWearTerm):
 
     def modulate(self, cw: CycleWear, h, n, dn) -> CycleWear:
         volume = worn_volume(h[0], self.bushing_radius, self.bushing_depth)
-        g = rate_factor(self.effects, h[0], volume, n, dn, self.theta, self.cycles)
+        g = rate_factor(self.effects, h[0], volume, n, dn, self.theta, self.window)
         return CycleWear(rate=(g * cw.rate[0],), ok=cw.ok, memory=cw.memory,
                          response=(self.grow * g[:, None] * cw.response[0],))

@@ -45,7 +45,7 @@ def _build(data: Dataset, settings):
     from .fit import Problem
     from .model import RigHistory
 
-    reference = settings.with_model(RigHistory).build(data.max_cycles)
+    reference = settings.with_model(RigHistory).build(data.max_cycles, (), data.fit_cycles)
     problem = Problem.from_dataset(data, settings).with_model(reference)
     x = jax.ShapeDtypeStruct((problem.n_base,), jnp.float64)
     effects = jax.tree.map(lambda a: jax.ShapeDtypeStruct(a.shape, a.dtype),

@@ -15,12 +15,13 @@ bedding-in), with the 1-sigma of that volume from the fit's covariance
 
 **Adoption.**  A candidate qualifies when (a) its fit-set chi-square falls by
 more than the chi-square critical value at p = 0.001 for the numbers it
-determines (`LR_CRITICAL`), (b) *what is reported* (the strength, or the
-identified form) stands `STRENGTH_SIGMAS` standard deviations from zero on
-the allowed side, at the uncertainty that is reported, and (c) with held-out
-data, its held-out chi-square is lower than the model's without it.  The
-penalised criterion chi2_fit + chi2_holdout + ln(n_fit) per determined
-number (BIC) ranks qualifying candidates.
+determines (`LR_CRITICAL`; for a learned discrepancy, its effective number
+of coefficients), (b) *what is reported* (the strength, or the identified
+form) stands `STRENGTH_SIGMAS` standard deviations from zero on the allowed
+side, at the uncertainty that is reported.  The penalised criterion
+chi2_fit + prior rows + ln(n_fit) per determined number (BIC) ranks the
+qualifying candidates.  Only the fit points enter: the held-out
+measurements are read once, after the choice, for the before/after report.
 
 **Ambiguity.**  The qualifying candidates whose criteria lie within
 `AMBIGUITY` of the best (2 ln B < 6, below "strong" evidence on Kass and
@@ -40,9 +41,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import chi2
 from .effects import EFFECTS, NAMES
 from .fit import FitResult, Fitter
 
+# adoption's test level: a chi-square drop this improbable under "no effect"
+P_ADOPT = 0.001
 # chi-square critical values at p = 0.001 for 1 and 2 fitted numbers
 LR_CRITICAL = {1: 10.83, 2: 13.82}
 STRENGTH_SIGMAS = 3.0   # |reported value| / its std of an adopted effect
@@ -94,15 +98,18 @@ class Assessment:
     value: float                       # what is reported: strength, or extra volume [m^3]
     std: float
     form: IdentifiedForm | None
-    held_out_better: bool
     qualifies: bool
     reasons: list = field(default_factory=list)
     criterion: float = math.inf
+    edf: float | None = None           # a discrepancy's effective number of coefficients
 
     @property
-    def numbers(self) -> int:
-        """Numbers the effect adds that the data determine (1, or 2 with a
-        shape determined apart from the strength)."""
+    def numbers(self) -> float:
+        """Numbers the candidate adds that the data determine (1, or 2 with a
+        shape determined apart from the strength; a discrepancy's effective
+        number of coefficients)."""
+        if self.edf is not None:
+            return self.edf
         return 1 + (self.shape_determined is True and self.form is None)
 
     @property
@@ -152,8 +159,9 @@ def _apart(fit: FitResult, effect: str) -> bool:
 
 
 def criterion(fit: FitResult) -> float:
-    """chi2_fit + chi2_holdout + ln(n_fit) per determined number (BIC)."""
-    return fit.chi2_fit + fit.chi2_holdout + determined_numbers(fit) * math.log(fit.n_fit)
+    """chi2_fit + the prior rows + ln(n_fit) per determined number (BIC, on
+    the fit points only)."""
+    return fit.chi2_fit + fit.prior_chi2 + determined_numbers(fit) * math.log(fit.n_fit)
 
 
 def volumes(fitter: Fitter, fit: FitResult, zero: str | None = None):
@@ -206,7 +214,6 @@ def assess(fitter: Fitter, effect: str, fit: FitResult, reference: FitResult,
             form.shape_determined = bool(determined)
             value, std = form.volume, form.std
     numbers = 1 + (determined is True and form is None)
-    held = fit.n_holdout == 0 or fit.chi2_holdout < reference.chi2_holdout
     reasons = []
     if not lr > LR_CRITICAL[numbers]:
         reasons.append(f"chi2 drop {lr:.3g} <= {LR_CRITICAL[numbers]}")
@@ -216,10 +223,23 @@ def assess(fitter: Fitter, effect: str, fit: FitResult, reference: FitResult,
         reasons.append(f"{what} {abs(z):.2g} sigma from zero (< {STRENGTH_SIGMAS:g})")
     if fit.strengths[effect] < eff.lower:
         reasons.append("strength outside its allowed range")
-    if not held:
-        reasons.append("held-out error not lower")
-    return Assessment(effect, fit, reference, lr, determined, value, std, form, held,
+    return Assessment(effect, fit, reference, lr, determined, value, std, form,
                       not reasons, reasons, criterion(fit))
+
+
+def assess_discrepancy(name: str, fit: FitResult, reference: FitResult) -> Assessment:
+    """Whether the discrepancy ``name`` (fitted in ``fit`` on top of
+    ``reference``) qualifies: its drop of the fit's penalised objective (the
+    chi-square and the prior rows) beyond the p = `P_ADOPT` critical value
+    for its effective number of coefficients (module notes)."""
+    edf = float(fit.notes.get("discrepancy_edf", fit.n_discrepancy))
+    lr = (reference.chi2_fit + reference.prior_chi2) - (fit.chi2_fit + fit.prior_chi2)
+    critical = chi2.isf(P_ADOPT, max(edf, 1e-3))
+    reasons = [] if lr > critical else [f"chi2 drop {lr:.3g} <= {critical:.3g} "
+                                        f"({edf:.2g} effective coefficients)"]
+    z = math.sqrt(max(lr, 0.0))  # the signed root of the likelihood ratio
+    return Assessment(name, fit, reference, lr, None, z, 1.0, None, not reasons, reasons,
+                      criterion(fit), edf)
 
 
 def separating_measurement(fitter: Fitter, a: FitResult, b: FitResult, data) -> dict:

@@ -30,9 +30,20 @@ from ..calibrate.identify import (  # noqa: E402
 )
 from ..calibrate.residual_structure import residual_structure, series_rms
 from ..calibrate.residual_words import describe_residuals  # noqa: E402
+from ..config import units
 from ..io import OutputDir  # noqa: E402
 from ..plots import calibration as plots_calibration
-from ..report import Block, Bullets, Figure, Report, Section, Table, render
+from ..report import (
+    Block,
+    Bullets,
+    Figure,
+    Report,
+    Section,
+    Table,
+    plus_minus,
+    render,
+    significant,
+)
 
 # SI units of the fitted parameters in the report (the dataset's own units are
 # converted on loading: k in mm^3/(N m) is 1e-9 1/Pa)
@@ -51,6 +62,7 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
     p = c.problem
     which = p.series_of_point
     final = c.final or c.base
+    band = None if c.posterior is None else c.posterior.predictive_band(p.sigma, p.y)
     fits = []
     for k, s in enumerate(c.dataset.series):
         m = which == k
@@ -59,29 +71,111 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
             name=s.name, kind=s.kind, unit=unit, xlabel=xlabel, scale=scale, x=s.x * xscale,
             y=s.y, sigma=s.sigma, holdout=s.holdout, base=c.base.prediction[m],
             chosen=None if final is c.base else final.prediction[m],
-            chosen_label=_final_label(final), cycles=s.cycles))
+            chosen_label=_final_label(final), cycles=s.cycles,
+            band=None if band is None else (band[0][m], band[1][m])))
     files = [plots_calibration.series_fit(out.file(f"fit_{f.name}.png"), f).name for f in fits]
     cycles = [s.cycle_counts for s in c.dataset.series]
     residuals = [c.base.residual[which == k] for k in range(len(c.dataset.series))]
     harmonics = residual_structure(c).get("force_residual_harmonics")
     files.append(plots_calibration.residual_structure(
         out.file("residual_structure.png"), fits, residuals, cycles, harmonics).name)
-    files.append(plots_calibration.candidates(
-        out.file("candidates.png"), [s.effect for s in c.scores],
-        [s.statistic for s in c.scores], LR_CRITICAL[1]).name)
-    d = c.discrepancy.chosen if c.discrepancy is not None else None
-    if d is not None:
-        f = d.model
-        span = learned.span(d.variable, c.dataset)
-        x, delta, band = learned.curve(d.variable, f.discrepancy_coefficients,
-                                       f.discrepancy_cov, span)
+    stage1 = c.selection.stages[0] if c.selection is not None and c.selection.stages else None
+    if stage1 is not None and stage1.assessed:
+        ranked = sorted(stage1.assessed.values(), key=lambda a: -a.likelihood_ratio)
+        adopted = [learned.label(m) for m in _members_of(final)]
+        files.append(plots_calibration.candidates(
+            out.file("candidates.png"), [learned.label(a.effect) for a in ranked],
+            [a.likelihood_ratio for a in ranked], [a.qualifies for a in ranked],
+            adopted).name)
+    if final.discrepancy is not None:
+        d = final.discrepancy
+        span = learned.span(d, c.dataset)
+        b = c.summary_discrepancy().get("log_k_per_coefficient")
+        x, delta, band_d = learned.curve(d, final.discrepancy_coefficients,
+                                         final.discrepancy_cov, span, c.dataset.fit_cycles, b)
         label = {"angle": "bushing angle [deg]", "pressure": "contact pressure [MPa]",
                  "sliding_speed": "sliding speed [mm/s]", "cycles": "cycles",
-                 "depth": "wear depth [mm]"}[d.variable]
+                 "depth": "wear depth [mm]"}[d]
         files.append(plots_calibration.discrepancy(
-            out.file("discrepancy.png"), x, delta, band, label,
-            f"learned discrepancy of k over {d.variable.replace('_', ' ')}").name)
+            out.file("discrepancy.png"), x, delta, band_d, label,
+            f"learned discrepancy of k over {disc_words(d)}", _covered(d, c)).name)
+    if c.posterior is not None:
+        post = c.posterior
+        columns = {_number_label(n, c.dataset): _in_dataset_unit(n, v, c.dataset)
+                   for n, v in post.layout.natural(post.z).items()
+                   if not n.startswith("delta_")}
+        files.append(plots_calibration.posterior(
+            out.file("posterior.png"), columns, post.weights,
+            f"posterior of the final model ({post.method})").name)
+    if c.forecast is not None and c.forecast.trajectory:
+        f = c.forecast
+        files.append(plots_calibration.life(
+            out.file("life.png"), f.trajectory, f.limit, _deepest(c.dataset), f.horizon,
+            (f.life["q05"], f.life["q95"])).name)
+        nxt = f.next_measurement or {}
+        if f.scores:
+            chosen = None
+            if nxt.get("kind") in f.scores:
+                cyc, val = f.scores[nxt["kind"]]
+                chosen = (nxt["cycles"], float(val[int(np.argmin(np.abs(cyc - nxt["cycles"])))]))
+            ylabel = ("separation of the two explanations [sigma]"
+                      if "expected_separation_sigma" in nxt else
+                      "life band narrowed by [share]")
+            files.append(plots_calibration.next_measurement(
+                out.file("next_measurement.png"), f.scores, ylabel, chosen).name)
     return files
+
+
+def _members_of(fit) -> list[str]:
+    return [*fit.effects, *([learned.candidate(fit.discrepancy)] if fit.discrepancy else [])]
+
+
+def disc_words(variable: str) -> str:
+    from ..calibrate.discrepancy import WORDS
+
+    return WORDS[variable]
+
+
+def _covered(variable: str, c: Calibration):
+    """The range of ``variable`` the fit data see, in the plot's units."""
+    data = c.dataset
+    if variable == "angle":
+        return learned.worn_arc(data)
+    if variable == "cycles":
+        return (0.0, float(data.fit_cycles))
+    if variable == "depth":
+        deepest = [float(np.max(s.y)) for s in data.series
+                   if s.kind == "profile" and not s.holdout.all()]
+        return (0.0, 1e3 * max(deepest)) if deepest else None
+    return None
+
+
+def _deepest(data) -> list[tuple]:
+    """(cycles, deepest reading, held out) of each measured profile."""
+    return [(float(s.cycles), float(np.max(s.y)), bool(s.holdout.all()))
+            for s in data.series if s.kind == "profile"]
+
+
+def _number_label(name: str, data) -> str:
+    unit = _unit_of(name, data)
+    return f"{name.replace('_', ' ')}" + (f" [{unit}]" if unit else "")
+
+
+def _unit_of(name: str, data) -> str | None:
+    """The unit a number is reported in: the dataset's own for its parameters."""
+    p = data.parameters.get(name)
+    if p is not None and p.unit:
+        return p.unit
+    dim = PARAMETERS.get(name)
+    return REPORT_UNITS.get(dim) if name in PARAMETERS else None
+
+
+def _in_dataset_unit(name: str, values, data):
+    p = data.parameters.get(name)
+    dim = PARAMETERS.get(name)
+    if p is not None and p.unit and dim:
+        return units.in_unit(1.0, p.unit, dim) * np.asarray(values)
+    return np.asarray(values)
 
 
 def _stage_line(k: int, st: dict) -> str:
@@ -105,8 +199,11 @@ def _final_label(f) -> str:
     return "with " + " + ".join(parts) if parts else "base model"
 
 
-def _fmt(v, digits=4):
-    return "n/a" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{digits}g}"
+def _param_text(name: str, value: float, std: float, data) -> str:
+    """A fitted number with its 1-sigma in the dataset's unit."""
+    scale = _in_dataset_unit(name, 1.0, data)
+    unit = _unit_of(name, data)
+    return plus_minus(value * float(scale), std * float(scale)) + (f" {unit}" if unit else "")
 
 
 def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
@@ -128,63 +225,63 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
                       "score test needs residual structure: profiles at several cycle counts, "
                       "a mass history or a force trace).")
     final = c.final or c.base
-    blocks.append(Section("Result", [
-        Bullets([*_effect_lines(summary),
-                 f"residual unexplained by the library: "
-                 f"{'**yes**' if summary['residual_unexplained'] else 'no'}"
-                 f" (chi2 {c.gof['chi2']:.1f} on {c.gof['dof']} dof; noise allows "
-                 f"{c.gof['limit']:.1f})",
-                 *_discrepancy_lines(summary)]),
-        Bullets([f"mechanism suspect: **{summary['suspect']}**"
-                 + _suspect_verdict(summary["suspects"][0])] if summary.get("suspect") else []),
-        Table(("", "base model", "final model"), [
-            ("held-out RMSE [sigma]", _fmt(summary["heldout_rmse_before"]),
-             _fmt(summary["heldout_rmse_after"])),
-            ("fit RMSE [sigma]", _fmt(summary["fit_rmse_before"]),
-             _fmt(summary["fit_rmse_after"])),
-            *((f"{n} [{REPORT_UNITS[PARAMETERS[n]]}]",
-               f"{_fmt(c.base.params[n])} +- {_fmt(c.base.params_std[n], 2)}",
-               f"{_fmt(final.params[n])} +- {_fmt(final.params_std[n], 2)}")
-              for n in d.fit_names)]),
+    gof = c.gof
+    check = summary["selection"]["prediction_check"]
+    why = [f"the fit points' chi2 {significant(gof['chi2'], 5)} on {gof['dof']} degrees of "
+           f"freedom ({'within' if gof['consistent_with_noise'] else '**above**'} the "
+           f"noise's {significant(gof['limit'], 5)})"]
+    if check is not None:
+        why.append(f"{'it predicts' if check['predicts'] else 'it **does not predict**'} the "
+                   f"inspection at {check['cycles']:,.0f} cycles from the earlier fit points "
+                   f"(Q {significant(check['statistic'], 4)} on {check['points']} points, "
+                   f"limit {significant(check['limit'], 4)})")
+    blocks.append(Section("Answer", [
+        Bullets([*_effect_lines(summary), *_discrepancy_lines(summary),
+                 ("the data are explained: " if not summary["residual_unexplained"] else
+                  "**the residual is unexplained** by these causes: ") + "; ".join(why)]),
+        Bullets(_suspect_lines(summary)),
+        f"How it was chosen: {summary['selection']['rule']}.",
     ]))
+    blocks.append(_error_section(c, summary))
+    blocks.append(_parameter_section(c, summary, final))
+    blocks += _life_blocks(summary)
     candidates = []
     for cand in summary["candidates"]:
         refitted = "refit_strength" in cand
         candidates.append((
-            cand["name"], _fmt(cand["score"]), _fmt(cand["p_value"], 2),
-            f"{_fmt(cand['refit_strength'])} +- {_fmt(cand['refit_strength_std'], 2)}"
-            if refitted else "",
-            _fmt(cand.get("refit_shape"), 3) if cand.get("refit_shape") else "",
-            _fmt(cand.get("refit_heldout_rmse")) if refitted else "",
+            cand["name"], significant(cand["score"], 3), significant(cand["p_value"], 2),
+            plus_minus(cand["refit_strength"], cand["refit_strength_std"]) if refitted else "",
+            significant(cand.get("refit_shape"), 3) if cand.get("refit_shape") else "",
             ("yes" if cand.get("qualifies") else "no") if refitted else ""))
     blocks.append(Section("Candidates", [
-        "Score test at zero strength from the base fit (module "
-        "`diffwear.calibrate.scores`; an effect with a shape is scored over its "
-        "prior and its p-value corrected for that); every candidate with a positive score "
-        "refitted with its shape.  A candidate qualifies with a likelihood-ratio drop above "
-        f"the chi-square critical value at p = 0.001 ({LR_CRITICAL[1]} for a strength, "
-        f"{LR_CRITICAL[2]} with a shape the data determine), what is reported (the "
-        f"strength, or the extra worn volume when the shape is not determined) >= "
-        f"{STRENGTH_SIGMAS:g} sigma from zero on the allowed side, and a lower held-out "
-        "chi2; the penalised criterion (BIC: ln n per determined number) ranks them, "
-        "forward selection adds one at a time (module `diffwear.calibrate.identify`), "
-        f"and the result must leave noise-sized residuals (chi2 <= dof + {GOF_SIGMAS} "
-        "sqrt(2 dof)).",
+        "Every candidate cause is scored at zero strength from the base fit (a score test; "
+        "an effect with a shape over its prior, its p-value corrected for that; a learned "
+        "discrepancy over all its coefficients at once) and refitted when the score asks "
+        "for it.  A library effect qualifies with a chi-square drop above the critical value "
+        f"at p = 0.001 ({LR_CRITICAL[1]} for a strength, {LR_CRITICAL[2]} with a shape the "
+        f"data determine) and what is reported (the strength, or the extra worn volume when "
+        f"the shape is not determined) >= {STRENGTH_SIGMAS:g} sigma from zero; a discrepancy "
+        "with a drop above the critical value for its effective number of coefficients.  BIC "
+        "(ln n per determined number) ranks them; forward selection adds one at a time; the "
+        f"result must leave noise-sized residuals (chi2 <= dof + {GOF_SIGMAS:g} sqrt(2 dof)) "
+        "and predict the fit window's last inspection.",
         Bullets([_stage_line(k, st) for k, st in enumerate(summary.get("stages", []))]),
-        Table(("effect", "score", "p", "refit strength", "refit shape", "held-out RMSE",
-               "qualifies"), candidates),
+        Table(("effect", "score", "p", "refit strength", "refit shape", "qualifies"),
+              candidates),
         "Library: " + "; ".join(f"`{e.name}`: {e.description}"
                                 + (f" ({e.source})" if e.source else "") for e in EFFECTS)]))
     if summary["suspects"]:
         blocks.append(Section("Mechanism suspects", [
-            "No wear effect explains the data, so the rig parameters the dataset neither "
-            "fits nor excludes (`suspect = false`) were scored the same way (derivative "
-            "in the logarithm of the parameter); when the residual is unexplained the "
-            "best is refitted and named, if its score passes p = 0.001 corrected for the "
-            "number of suspects.",
+            "No cause in the library explains the data, so the rig parameters the dataset "
+            "neither fits nor excludes (`suspect = false`) were scored the same way "
+            "(derivative in the logarithm of the parameter); when the residual is "
+            "unexplained the best is refitted and named, if its score passes p = 0.001 "
+            "corrected for the number of suspects and its refitted value stays within the "
+            "parameter's plausible range.",
             Table(("parameter", "score", "p", "stated", "first-step factor"),
-                  [(sp["name"], _fmt(sp["score"]), _fmt(sp["p_value"], 2), _fmt(sp["value"]),
-                    _fmt(sp["factor"], 3)) for sp in summary["suspects"][:6]])]))
+                  [(sp["name"], significant(sp["score"], 3), significant(sp["p_value"], 2),
+                    significant(sp["value"]), significant(sp["factor"], 3))
+                   for sp in summary["suspects"][:6]])]))
     limits = summary.get("detection_limits") or {}
     if limits:
         blocks.append(Section("Detection limits", [
@@ -192,54 +289,156 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
             f"detected ({STRENGTH_SIGMAS:g} sigma from zero at the final model, at the shape "
             "where the data are most sensitive to it): \"none\" reads \"none above these\".",
             Table(("effect", "detection limit (strength)", "at shape"),
-                  [(name, _fmt(v["strength"], 3), _fmt(v["shape"], 3) if v["shape"] else "")
+                  [(name, significant(v["strength"], 3),
+                    _limit_shape(name, v["shape"]) if v["shape"] else "")
                    for name, v in limits.items()])]))
-    check = summary.get("model_check")
-    if check:
+    mc = summary.get("model_check")
+    if mc:
         blocks.append(Section("Check on the dynamic model", [
-            f"The final fit evaluated, not refitted, on the {check['description']}:",
+            f"The final fit evaluated, not refitted, on the {mc['description']}:",
             Table(("", "fitted model", "dynamic model"), [
-                (f"chi2, {check['n_fit']} fit points", _fmt(check["chi2_fit_model"]),
-                 _fmt(check["chi2_fit"])),
-                (f"chi2, {check['n_holdout']} held-out points",
-                 _fmt(check["chi2_holdout_model"]), _fmt(check["chi2_holdout"]))]),
-            *([] if check.get("carries_over", True) else [
+                (f"chi2, {mc['n_fit']} fit points", significant(mc["chi2_fit_model"], 5),
+                 significant(mc["chi2_fit"], 5)),
+                (f"chi2, {mc['n_holdout']} held-out points",
+                 significant(mc["chi2_holdout_model"], 5), significant(mc["chi2_holdout"], 5))]),
+            *([] if mc.get("carries_over", True) else [
                 f"**Warning:** the fit does not carry over to the dynamic model (chi2 "
-                f"{_fmt(check['chi2_fit'])} against {_fmt(check['chi2_fit_model'])}): the "
-                "quasi-static model's own error may have chosen the effects; refit with "
-                "`--model dynamic` before trusting them."])]))
+                f"{significant(mc['chi2_fit'], 5)} against "
+                f"{significant(mc['chi2_fit_model'], 5)}): the quasi-static model's own error "
+                "may have chosen the effects; refit with `--model dynamic` before trusting "
+                "them."])]))
     structure = []
     for key, value in residual_structure(c).items():
         if isinstance(value, dict):
-            value = ", ".join(f"{k}: {_fmt(v, 3)}" for k, v in value.items())
+            value = ", ".join(f"{k}: {significant(v, 3)}" for k, v in value.items())
         elif isinstance(value, list):
-            value = ", ".join(_fmt(v, 3) for v in value)
+            value = ", ".join(significant(v, 3) for v in value)
+        elif isinstance(value, float):
+            value = significant(value, 3)
         structure.append(f"{key.replace('_', ' ')}: {value}")
     blocks += [
         Section("Residual structure (base fit)", [Bullets(summary["residual_words"]),
                                                   Bullets(structure)]),
         Section("Error per series", [Table(
             ("series", "RMS before [sigma]", "RMS after [sigma]"),
-            [(name, _fmt(before, 3), _fmt(after, 3))
+            [(name, significant(before, 3), significant(after, 3))
              for name, (before, after) in summary["series_rms"].items()])]),
-        Section("Plots", [*(Figure(f) for f in files), f"Wall time {c.wall_time_s:.0f} s."]),
+        Section("Plots", [*(Figure(f) for f in files),
+                          f"Wall time {c.wall_time_s:.0f} s."]),
     ]
     return Report(f"Calibration: {d.name}", blocks)
+
+
+def _limit_shape(effect: str, value: float) -> str:
+    shape = next(e.shape for e in EFFECTS if e.name == effect)
+    return f"{significant(value, 3)} {shape.unit}" if shape else significant(value, 3)
+
+
+def _error_section(c: Calibration, summary: dict) -> Section:
+    """The error before and after on the held-out points, which the choice did
+    not see, and the predictive bands' coverage."""
+    rows = [("held-out RMSE [sigma]", significant(summary["heldout_rmse_before"], 3),
+             significant(summary["heldout_rmse_after"], 3)),
+            ("fit RMSE [sigma]", significant(summary["fit_rmse_before"], 3),
+             significant(summary["fit_rmse_after"], 3))]
+    text = ("The held-out measurements were read once, after the choice: the error on "
+            "them is the error on data the answer did not see.")
+    cov = summary.get("heldout_coverage")
+    if cov is not None and cov == cov:
+        text += (f"  The final model's 90 % predictive band (model and noise) holds "
+                 f"{100 * cov:.0f} % of the held-out points"
+                 f" ({100 * summary['fit_coverage']:.0f} % of the fit points).")
+    return Section("Before and after, on data the choice did not see",
+                   [text, Table(("", "base model", "final model"), rows)])
+
+
+def _parameter_section(c: Calibration, summary: dict, final) -> Section:
+    d = c.dataset
+    post = summary.get("posterior")
+    numbers = (post or {}).get("numbers", {})
+    rows = []
+    for n in d.fit_names:
+        q = numbers.get(n)
+        scale = float(_in_dataset_unit(n, 1.0, d))
+        rows.append((f"{n} [{_unit_of(n, d) or '-'}]",
+                     plus_minus(c.base.params[n] * scale, c.base.params_std[n] * scale),
+                     plus_minus(final.params[n] * scale, final.params_std[n] * scale),
+                     "" if q is None else f"{significant(q['q05'] * scale, 4)} .. "
+                                          f"{significant(q['q95'] * scale, 4)}",
+                     "" if q is None or "r_hat" not in q else significant(q["r_hat"], 4),
+                     "" if q is None else f"{q['ess']:.0f}"))
+    for n, q in numbers.items():
+        if n in d.fit_names or n.startswith("delta_"):
+            continue
+        rows.append((n.replace("_", " "), "", plus_minus(q["mean"], q["std"]),
+                     f"{significant(q['q05'], 4)} .. {significant(q['q95'], 4)}",
+                     significant(q["r_hat"], 4) if "r_hat" in q else "", f"{q['ess']:.0f}"))
+    blocks: list[Block] = [Table(("number", "base fit", "final fit (1 sigma)",
+                                  "posterior 5-95 %", "R-hat", "ESS"), rows)]
+    disc = summary.get("discrepancy") or {}
+    k = disc.get("k_with")
+    if k and disc.get("k_without"):
+        name = next((n for n in d.fit_names if n == "k" or n.endswith("wear.coefficient")), "k")
+        without = disc["k_without"]
+        blocks.append(
+            f"The wear coefficient with the learned discrepancy (the discrepancy "
+            f"orthogonal to it over the data) is {_param_text(name, k['value'], k['std'], d)}; "
+            f"without it, {_param_text(name, without['value'], without['std'], d)}.")
+    if post:
+        diag = post["diagnostics"]
+        if post["method"] == "nuts":
+            how = (f"NUTS, {post['chains']} chains, {diag['draws_sampled']} draws; largest "
+                   f"R-hat {significant(diag['max_r_hat'], 4)}, smallest bulk ESS "
+                   f"{diag['min_ess']:.0f}, {diag['divergences']} divergent transitions")
+        elif "pareto_k" in diag:
+            verdict = ("near enough" if diag["gaussian_adequate"] else
+                       "**not** near enough: rerun with `--posterior nuts`")
+            how = (f"the Laplace (Gaussian) approximation at the fit, {post['draws']} draws "
+                   f"evaluated on the exact model and weighted by Pareto-smoothed importance "
+                   f"ratios; Pareto k {significant(diag['pareto_k'], 2)} ({verdict}), "
+                   f"effective draws {diag['ess']:.0f}")
+        else:
+            how = ("the Laplace (Gaussian) approximation at the fit, linearised (the dynamic "
+                   "model is too costly to evaluate at every draw)")
+        blocks.append(f"Posterior: {how}.")
+    return Section("Parameters", blocks)
+
+
+def _life_blocks(summary: dict) -> list[Block]:
+    life = summary.get("life")
+    if not life:
+        return []
+    beyond = life["beyond_run"]
+    band = (f"{life['q05']:,.0f} to {life['q95']:,.0f}" +
+            (f" (or beyond: {100 * beyond:.0f} % of the draws do not reach it by "
+             f"{life['run_to_cycles']:,.0f})" if beyond > 0 else ""))
+    depth = life["depth_at_horizon"]
+    lines = [f"cycles until the maximum wear depth reaches {significant(life['limit_mm'], 4)} "
+             f"mm: **{life['median']:,.0f}** (90 % band {band})",
+             f"maximum wear depth at {life['horizon_cycles']:,.0f} cycles: "
+             f"**{significant(depth['median'], 3)} mm** (90 % band "
+             f"{significant(depth['q05'], 3)} to {significant(depth['q95'], 3)} mm)"]
+    nxt = summary.get("next_measurement")
+    if nxt:
+        lines.append(f"the next measurement: {nxt['sentence']}")
+    return [Section("Life and the next measurement", [
+        "Under the chosen model (its effects and discrepancy included), over the "
+        "posterior's draws.", Bullets(lines)])]
 
 
 def _shape_text(entry: dict) -> str:
     shape = next(e.shape for e in EFFECTS if e.name == entry["name"])
     assert shape is not None  # called for effects with a fitted shape only
     lo, hi = entry["shape_interval"] or (math.nan, math.nan)
-    return (f"{shape.name.replace('_', ' ')} {_fmt(entry['shape'], 3)} {shape.unit} "
-            f"(1 sigma: {_fmt(lo, 3)}..{_fmt(hi, 3)})")
+    return (f"{shape.name.replace('_', ' ')} {significant(entry['shape'], 3)} {shape.unit} "
+            f"(1 sigma: {significant(lo, 3)} to {significant(hi, 3)})")
 
 
 def _effect_text(entry: dict) -> str:
     if "identified_form" in entry:
         return entry["identified_form"]["sentence"]
-    text = (f"**{entry['name']}**, strength {_fmt(entry['strength'])} +- "
-            f"{_fmt(entry['strength_std'], 2)} (1 sigma)")
+    text = (f"**{entry['name']}**, strength "
+            f"{plus_minus(entry['strength'], entry['strength_std'])} (1 sigma)")
     if entry.get("shape") is not None:
         text += f", {_shape_text(entry)}"
     return text
@@ -254,13 +453,11 @@ def _effect_lines(summary: dict) -> list[str]:
             lines.append(f"**{e['name']}**: these data cannot tell them apart; "
                          + "; ".join(f"{a['name']}: "
                                      + ", ".join(_effect_text(x) for x in a["effects"])
-                                     for a in e["alternatives"])
-                         + (f"; {e['separating_measurement']['sentence']}"
-                            if e.get("separating_measurement") else ""))
+                                     for a in e["alternatives"]))
         else:
             lines.append(_effect_text(e))
     for e in summary.get("effects_partial", []):
-        lines.append(f"partial candidate (leaves the residual above the noise): "
+        lines.append(f"partial candidate (leaves the residual unexplained): "
                      f"{_effect_text(e)}")
     return lines
 
@@ -270,18 +467,29 @@ def _discrepancy_lines(summary: dict) -> list[str]:
     if not d:
         return []
     if d.get("variable") is None:
-        return [f"discrepancy: {d['shape']}"]
-    return [f"learned discrepancy of k over **{d['variable'].replace('_', ' ')}**: {d['shape']}"
-            f"; held-out RMSE {_fmt(d['heldout_rmse_before'], 3)} -> "
-            f"{_fmt(d['heldout_rmse_after'], 3)} sigma (`discrepancy.png`)"]
+        return [f"learned discrepancy: {d['shape']}"]
+    return [f"learned discrepancy of k over **{disc_words(d['variable'])}**: {d['shape']}"
+            " (`discrepancy.png`)"]
 
 
 def _suspect_verdict(s: dict) -> str:
     if "explains" not in s:
         return ""
-    return (f"; refitted, {s['name']} = {_fmt(s['refit_value'])} +- {_fmt(s['refit_std'], 2)} "
+    return (f"; refitted, {s['name']} = {plus_minus(s['refit_value'], s['refit_std'])} SI "
             + ("explains the data (residuals at the noise)" if s["explains"] else
-               f"leaves chi2 {s['refit_chi2_fit']:.1f}: part of the residual only"))
+               f"leaves chi2 {significant(s['refit_chi2_fit'], 5)}: part of the residual "
+               "only"))
+
+
+def _suspect_lines(summary: dict) -> list[str]:
+    if not summary["suspects"]:
+        return []
+    lead = summary["suspects"][0]
+    if summary.get("suspect"):
+        return [f"mechanism suspect: **{summary['suspect']}**" + _suspect_verdict(lead)]
+    if "implausible" in lead:
+        return [f"no mechanism suspect: {lead['implausible']}"]
+    return []
 
 
 def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSettings(),

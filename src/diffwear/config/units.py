@@ -172,6 +172,22 @@ def _exact(number: str, unit: Unit) -> float:
     return value * math.pi**unit.pi_power
 
 
+def unit_of(text: str, dimension: str) -> str | None:
+    """The allowed spelling of the unit in quantity ``text`` ("5e-4 mm^3/(N m)"
+    -> "mm^3/(N m)"), None when it has none or names no unit of ``dimension``."""
+    m = _QUANTITY.fullmatch(text)
+    if m is None:
+        return None
+    u = normalise_unit(m.group("unit"))
+    return u if u in DIMENSIONS[dimension].units else None
+
+
+def in_unit(value: float, unit: str, dimension: str) -> float:
+    """SI ``value`` expressed in ``unit`` of ``dimension``."""
+    scale = DIMENSIONS[dimension].units[unit]
+    return value / (float(scale.scale) * math.pi ** scale.pi_power)
+
+
 def parse_quantity(text: str, dimension: str) -> float:
     """SI value of ``"<number> <unit>"`` in ``dimension`` (see `DIMENSIONS`)."""
     dim = DIMENSIONS[dimension]

@@ -32,15 +32,25 @@ class SeriesFit:
     chosen: np.ndarray | None  # the final model, when it is not the base fit
     chosen_label: str
     cycles: float | None
+    band: tuple | None = None  # (lower, upper) of the final model's 90 % predictive band
 
 
 def series_fit(path: Path, f: SeriesFit) -> Path:
-    """The data with error bars against the base fit and the final model."""
+    """The data with error bars against the base fit and the final model, with
+    the final model's 90 % predictive band (model and noise) where known."""
     fig, ax = plt.subplots(figsize=(8.4, 3.6))
-    ax.errorbar(f.x, f.y * f.scale, yerr=f.sigma * f.scale, fmt=".", ms=3, color="k",
-                label="data", alpha=0.7)
     order = np.argsort(f.x)
     few = f.x.size < 3  # a line through one or two points shows nothing: markers
+    if f.band is not None:
+        lo, hi = (np.asarray(b)[order] * f.scale for b in f.band)
+        if few:
+            ax.errorbar(f.x[order], 0.5 * (lo + hi), yerr=0.5 * (hi - lo), fmt="none",
+                        ecolor="C1", alpha=0.35, lw=6, label="90 % predictive band")
+        else:
+            ax.fill_between(f.x[order], lo, hi, color="C1", alpha=0.25, lw=0,
+                            label="90 % predictive band")
+    ax.errorbar(f.x, f.y * f.scale, yerr=f.sigma * f.scale, fmt=".", ms=3, color="k",
+                label="data (1 sigma)", alpha=0.7)
     ax.plot(f.x[order], f.base[order] * f.scale, "s" if few else "-", mfc="none",
             label="base fit")
     if f.chosen is not None:
@@ -49,8 +59,13 @@ def series_fit(path: Path, f: SeriesFit) -> Path:
     if f.holdout.any():
         ax.plot(f.x[f.holdout], f.y[f.holdout] * f.scale, "o", mfc="none", color="r", ms=6,
                 label="held out")
-    title = f.name + (f" (N = {f.cycles:g})" if f.cycles is not None else "")
-    ax.set(xlabel=f.xlabel, ylabel=f"{f.kind} [{f.unit}]", title=title)
+    what = {"profile": "wear depth", "volume": "worn volume", "max_depth": "maximum depth",
+            "force": "joint force"}.get(f.kind, f.kind)
+    title = {"profile": "worn profile", "volume": "worn volume (weighed)",
+             "max_depth": "maximum wear depth", "force": "joint force"}.get(f.kind, f.name)
+    if f.cycles is not None and f.kind in ("profile", "force"):
+        title += f" at {f.cycles:,.0f} cycles"
+    ax.set(xlabel=f.xlabel, ylabel=f"{what} [{f.unit}]", title=title)
     if "[deg]" in f.xlabel:
         ax.set_xticks(np.arange(0, 361, 45))
     legend_outside(ax)
@@ -66,7 +81,12 @@ def residual_structure(path: Path, fits: Sequence[SeriesFit], residuals: Sequenc
     for f, r, n in zip(fits, residuals, cycles):
         if f.kind == "profile":
             axes[0].plot(f.x, r, ".", ms=3, label=f"N = {f.cycles:g}")
-        axes[1].plot(n, r, ".", ms=3, label=f.name)
+        # few points (a weighing, a depth history) as large open markers drawn
+        # last, so that a profile's hundreds of points do not hide them
+        few = np.size(r) < 30
+        axes[1].plot(n, r, "D" if few else ".", ms=7 if few else 3,
+                     mfc="none" if few else None, zorder=3 if few else 2,
+                     label=f.name.replace("_", " "))
     axes[0].set(xlabel="bushing angle [deg]", ylabel="base residual [sigma]",
                 title="profile residual vs angle", xticks=np.arange(0, 361, 90))
     axes[1].set(xlabel="cycles", ylabel="base residual [sigma]", title="residual vs cycles")
@@ -85,22 +105,38 @@ def residual_structure(path: Path, fits: Sequence[SeriesFit], residuals: Sequenc
     return _save(fig, path)
 
 
-def candidates(path: Path, effects: Sequence[str], statistics: Sequence[float],
-               critical: float) -> Path:
-    """The score statistic of each candidate effect against its critical value."""
-    fig, ax = plt.subplots(figsize=(8.4, 3.2))
-    ax.barh(list(effects)[::-1], list(statistics)[::-1])
-    ax.axvline(critical, color="r", ls="--", lw=1, label="p = 0.001 (a strength)")
-    ax.set(xscale="symlog", xlabel="score statistic (chi-square(1) under 'no effect')")
+def candidates(path: Path, names: Sequence[str], drops: Sequence[float],
+               qualifies: Sequence[bool], adopted: Sequence[str]) -> Path:
+    """Each candidate's chi-square drop when refitted on the base model,
+    qualifying ones filled (the adoption's test), the adopted ones named; the
+    score tests only chose what to refit."""
+    fig, ax = plt.subplots(figsize=(8.4, 0.9 + 0.32 * max(len(names), 1)))
+    y = np.arange(len(names))[::-1]
+    d = np.maximum(np.asarray(drops, dtype=float), 1e-2)
+    colors = ["C0" if q else "0.75" for q in qualifies]
+    ax.barh(y, d, color=colors)
+    ax.set_yticks(y, [n + ("  (adopted)" if n in adopted else "") for n in names])
+    ax.barh([], [], color="C0", label="qualifies (p < 0.001)")
+    ax.barh([], [], color="0.75", label="does not qualify")
+    ax.set(xscale="log", xlabel="chi-square drop of the fit points when refitted",
+           title="candidate causes beside the base model")
     legend_outside(ax)
     return _save(fig, path)
 
 
-def discrepancy(path: Path, x, delta, band, xlabel: str, title: str) -> Path:
+def discrepancy(path: Path, x, delta, band, xlabel: str, title: str,
+                covered: tuple | None = None) -> Path:
     """The learned discrepancy delta(x) of the wear coefficient, in per cent,
-    with its 1-sigma band."""
+    with its 1-sigma band; ``covered``: the range of x the data see (shaded;
+    outside it the band is the prior's)."""
     fig, ax = plt.subplots(figsize=(6.4, 3.4))
     x, d, b = np.asarray(x), 100 * np.asarray(delta), 100 * np.asarray(band)
+    if covered is not None:
+        lo, hi = covered
+        spans = [(lo, hi)] if hi >= lo else [(lo, x.max()), (x.min(), hi)]
+        for k, (a, c) in enumerate(spans):
+            ax.axvspan(a, c, color="0.9", zorder=0,
+                       label=None if k else "range the data see")
     ax.fill_between(x, d - b, d + b, alpha=0.3, label="1 sigma")
     ax.plot(x, d, label="delta")
     ax.axhline(0.0, color="k", lw=0.6)
@@ -110,6 +146,65 @@ def discrepancy(path: Path, x, delta, band, xlabel: str, title: str) -> Path:
     if xlabel.startswith("bushing angle"):
         ax.set_xticks(np.arange(0, 361, 45))
         ax.set_xlim(0, 360)
+    legend_outside(ax)
+    return _save(fig, path)
+
+
+def posterior(path: Path, columns: dict, weights, title: str) -> Path:
+    """Each number's posterior: a weighted histogram of the draws, with its
+    5-95 % interval.  ``columns``: {label: values}."""
+    n = max(len(columns), 1)
+    cols = min(n, 4)
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.5 * rows), squeeze=False)
+    w = np.asarray(weights, dtype=float)
+    for ax, (label, values) in zip(axes.flat, columns.items()):
+        v = np.asarray(values, dtype=float)
+        ax.hist(v, bins=24, weights=w, color="C0", alpha=0.7)
+        order = np.argsort(v)
+        cw = np.cumsum(w[order]) / np.sum(w)
+        lo, hi = np.interp([0.05, 0.95], cw, v[order])
+        ax.axvline(lo, color="k", ls=":", lw=1)
+        ax.axvline(hi, color="k", ls=":", lw=1)
+        ax.set(xlabel=label, yticks=[])
+        ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
+    for ax in list(axes.flat)[n:]:
+        ax.set_axis_off()
+    fig.suptitle(title + " (dotted: 5 % and 95 %)", fontsize=10)
+    return _save(fig, path)
+
+
+def life(path: Path, trajectory: tuple, limit: float, measured: Sequence[tuple],
+         horizon: float, life_band: tuple) -> Path:
+    """The maximum wear depth over the forecast with its 90 % band, the
+    measured maxima (held-out ones open), the limit and the life's band."""
+    n, lo, mid, hi = (np.asarray(a, dtype=float) for a in trajectory)
+    fig, ax = plt.subplots(figsize=(8.4, 3.8))
+    ax.fill_between(n, lo * 1e3, hi * 1e3, color="C0", alpha=0.25, lw=0, label="90 % band")
+    ax.plot(n, mid * 1e3, color="C0", label="median")
+    for k, (cycles, depth, held) in enumerate(measured):
+        ax.plot(cycles, depth * 1e3, "D", ms=6, color="k", mfc="none" if held else "k",
+                label=("deepest measured (open: held out)" if k == 0 else None))
+    ax.axhline(limit * 1e3, color="r", ls="--", lw=1, label=f"limit {limit * 1e3:.3g} mm")
+    q05, q95 = life_band
+    if np.isfinite(q05):
+        ax.axvspan(q05, min(q95, n[-1]), color="r", alpha=0.08, label="life, 90 % band")
+    ax.axvline(horizon, color="0.5", ls=":", lw=1, label="horizon")
+    ax.set(xlabel="cycles", ylabel="maximum wear depth [mm]", xlim=(0, n[-1]), ylim=(0, None),
+           title="wear life forecast")
+    legend_outside(ax)
+    return _save(fig, path)
+
+
+def next_measurement(path: Path, scores: dict, ylabel: str, chosen: tuple | None) -> Path:
+    """What each candidate inspection (kind, cycle count) would teach."""
+    fig, ax = plt.subplots(figsize=(8.4, 3.2))
+    words = {"profile": "worn profile", "weighing": "weighing"}
+    for kind, (cycles, values) in scores.items():
+        ax.plot(cycles, values, "o-", ms=3, label=words.get(kind, kind))
+    if chosen is not None:
+        ax.plot(*chosen, "*", ms=14, color="r", label="the next measurement")
+    ax.set(xlabel="cycles at the inspection", ylabel=ylabel, title="the next measurement")
     legend_outside(ax)
     return _save(fig, path)
 

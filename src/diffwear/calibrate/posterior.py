@@ -1,0 +1,285 @@
+"""The posterior of a chosen model's numbers, and the bands it gives.
+
+The fit's unknowns z (the fitted rig parameters, the effects' strengths and
+shapes, the discrepancy's coefficients, each in units of its spread:
+`fit.Layout`) have the posterior
+
+    p(z | data) ~ exp(-(|r_fit(z)|^2 + |z_prior|^2) / 2)
+
+within the layout's bounds: the fit points' residuals in units of their
+stated noise, the unit Gaussian priors of shapes and discrepancy
+coefficients, and flat priors on the rest.  Two ways to it:
+
+* **Laplace, checked** (`method="laplace"`, the fast path): draws from the
+  Gaussian at the fit, N(z_hat, C) with C the Gauss-Newton covariance, each
+  evaluated on the exact model; the importance ratios p / q, Pareto
+  smoothed (Vehtari, Simpson, Gelman, Yao and Gabry, J. Mach. Learn. Res. 25
+  (2024) 72), weight the draws, and their Pareto k says whether the
+  Gaussian is near enough: below `PARETO_K_OK` the weighted draws stand for
+  the posterior; above it the report says the Gaussian is not to be trusted
+  and names the sampler.
+* **NUTS** (`method="nuts"`): the No-U-Turn sampler (Hoffman and Gelman, J.
+  Mach. Learn. Res. 15 (2014) 1593; blackjax) on the same compiled model,
+  its gradient -J^T r from the same forward-mode derivative program as the
+  fit, the Gauss-Newton covariance as its inverse mass matrix (so that only
+  the step size is adapted), `CHAINS` chains, the rank-normalised split
+  R-hat and the bulk effective sample size of each number reported (Vehtari,
+  Gelman, Simpson, Carpenter and Buerkner, Bayesian Anal. 16 (2021) 667).
+
+Either way the posterior is a set of weighted draws with the model's
+predictions at every measured point, so the predictive band of a
+measurement (model and noise) and any derived number (the life,
+`forecast`) come from the same draws.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import InputError, SolverError
+from .fit import FitResult, Fitter
+
+METHODS = ("laplace", "nuts")
+# "linear": the Laplace draws' predictions by the fit's linearisation, for a
+# model too costly to evaluate at every draw (the dynamic model)
+DRAWS = 160          # Laplace draws evaluated on the exact model
+# Pareto k of the importance ratios below which the weighted Gaussian draws
+# stand for the posterior (0.7: Vehtari et al. 2024, Sec. 3.2, for a few
+# hundred draws)
+PARETO_K_OK = 0.7
+CHAINS = 4
+WARMUP = 150
+SAMPLES = 250
+BAND = 0.90           # the predictive band's probability
+SEED = 20091         # draws are repeatable
+
+
+@dataclass
+class Posterior:
+    """Weighted draws of a fit's unknowns and the model's residuals at them."""
+
+    method: str
+    fit: FitResult
+    z: np.ndarray                # (S, d) unknowns
+    weights: np.ndarray          # (S,) normalised
+    residuals: np.ndarray        # (S, points) residual r = (model - data) / sigma
+    diagnostics: dict = field(default_factory=dict)
+    chains: int = 1
+
+    @property
+    def layout(self):
+        return self.fit.notes["layout"]
+
+    def numbers(self) -> dict:
+        """{name: {mean, std, q05, q95, (r_hat, ess)}} of each number in SI (a
+        wear coefficient in 1/Pa = m^3/(N m))."""
+        values = self.layout.natural(self.z)
+        out = {}
+        for k, (name, col) in enumerate(values.items()):
+            entry = _weighted_summary(col, self.weights)
+            if "r_hat" in self.diagnostics:
+                entry["r_hat"] = float(self.diagnostics["r_hat"][k])
+                entry["ess"] = float(self.diagnostics["ess"][k])
+            else:
+                entry["ess"] = float(self.diagnostics.get("ess", math.nan))
+            out[name] = entry
+        return out
+
+    def predictive_band(self, sigma: np.ndarray, y: np.ndarray, level: float = BAND):
+        """(lower, upper) of the ``level`` predictive band of every point in
+        data units: the mixture over the draws of the model's prediction plus
+        the point's Gaussian noise."""
+        pred = self.residuals * sigma + y                   # (S, n)
+        lo = _mixture_quantile(pred, sigma, self.weights, 0.5 * (1.0 - level))
+        hi = _mixture_quantile(pred, sigma, self.weights, 0.5 * (1.0 + level))
+        return lo, hi
+
+    def coverage(self, sigma, y, rows, level: float = BAND) -> float:
+        """Share of the points ``rows`` inside their ``level`` predictive band."""
+        if not np.any(rows):
+            return math.nan
+        lo, hi = self.predictive_band(sigma, y, level)
+        inside = (y >= lo) & (y <= hi)
+        return float(np.mean(inside[rows]))
+
+    def entry(self) -> dict:
+        return {"method": self.method, "draws": int(self.z.shape[0]), "chains": self.chains,
+                "diagnostics": {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
+                                for k, v in self.diagnostics.items()},
+                "numbers": self.numbers()}
+
+
+def _weighted_summary(x: np.ndarray, w: np.ndarray) -> dict:
+    mean = float(np.sum(w * x))
+    std = math.sqrt(max(float(np.sum(w * (x - mean) ** 2)), 0.0))
+    return {"mean": mean, "std": std, "q05": _weighted_quantile(x, w, 0.05),
+            "q95": _weighted_quantile(x, w, 0.95)}
+
+
+def _weighted_quantile(x: np.ndarray, w: np.ndarray, q: float) -> float:
+    order = np.argsort(x)
+    cw = np.cumsum(w[order])
+    cw = (cw - 0.5 * w[order]) / cw[-1]
+    return float(np.interp(q, cw, x[order]))
+
+
+def _normal_cdf(x):
+    return 0.5 * (1.0 + _erf(x / math.sqrt(2.0)))
+
+
+_erf = np.vectorize(math.erf, otypes=[float])
+
+
+def _mixture_quantile(means: np.ndarray, sigma: np.ndarray, w: np.ndarray, q: float,
+                      iterations: int = 60) -> np.ndarray:
+    """Per point (column), the ``q`` quantile of sum_s w_s N(means[s], sigma^2)
+    (bisection on the mixture's CDF)."""
+    lo = means.min(axis=0) - 8.0 * sigma
+    hi = means.max(axis=0) + 8.0 * sigma
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        cdf = np.einsum("s,sn->n", w, _normal_cdf((mid[None] - means) / sigma[None]))
+        below = cdf < q
+        lo = np.where(below, mid, lo)
+        hi = np.where(below, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def _log_target(fitter: Fitter, fit: FitResult, r_all: np.ndarray, z: np.ndarray) -> float:
+    """log p(z | data) up to a constant (module notes), -inf outside the bounds."""
+    lay = fit.notes["layout"]
+    rows = fit.notes["rows"]
+    if np.any(z < lay.lower) or np.any(z > lay.upper) or not np.all(np.isfinite(r_all[rows])):
+        return -math.inf
+    r = r_all[rows]
+    prior = lay.prior_rows(z)
+    return -0.5 * float(r @ r + prior @ prior)
+
+
+def laplace(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED) -> Posterior:
+    """Gaussian draws at the fit, evaluated on the exact model and weighted by
+    Pareto-smoothed importance ratios (module notes)."""
+    from blackjax.diagnostics import psis_weights
+
+    lay = fit.notes["layout"]
+    z_hat = np.asarray(fit.notes["z"], float)
+    cov = _symmetric(np.asarray(fit.notes["cov"], float))
+    root = _root(cov)
+    rng = np.random.default_rng(seed)
+    eps = rng.standard_normal((draws, z_hat.size))
+    z = z_hat + eps @ root.T
+    residuals = np.stack([fitter.residuals(lay.pack(zi)) for zi in z])
+    log_p = np.array([_log_target(fitter, fit, r, zi) for r, zi in zip(residuals, z)])
+    log_q = -0.5 * np.sum(eps ** 2, axis=1)
+    finite = np.isfinite(log_p)
+    log_ratio = np.where(finite, log_p - log_q, -np.inf)
+    if finite.sum() < 10:
+        raise SolverError("posterior: the model fails at most draws near the fit "
+                          f"({int(finite.sum())} of {draws} finite); the Gaussian "
+                          "approximation cannot be checked")
+    ref = np.max(log_ratio[finite])
+    lw, k = psis_weights(jnp.asarray(np.where(finite, log_ratio - ref, -1e300)))
+    w = np.exp(np.asarray(lw, float))
+    w = np.where(finite, w, 0.0)
+    w /= w.sum()
+    k = float(k)
+    diagnostics = {"pareto_k": k, "ess": float(1.0 / np.sum(w ** 2)),
+                   "gaussian_adequate": bool(k < PARETO_K_OK),
+                   "failed_draws": int((~finite).sum())}
+    # the failed draws keep their rows (their weight is zero)
+    residuals = np.where(np.isfinite(residuals), residuals, 0.0)
+    return Posterior("laplace", fit, z, w, residuals, diagnostics)
+
+
+def nuts(fitter: Fitter, fit: FitResult, chains: int = CHAINS, warmup: int = WARMUP,
+         samples: int = SAMPLES, seed: int = SEED) -> Posterior:
+    """NUTS on the exact model (module notes)."""
+    import blackjax
+    from blackjax.diagnostics import ess_bulk, rhat
+
+    lay = fit.notes["layout"]
+    if fit.dof < 1:
+        raise InputError(f"posterior sampling: {fit.n_fit} fit points for {lay.size} numbers "
+                         "leave no degree of freedom; allowed: more fit points than numbers "
+                         "(or --posterior laplace)")
+    logdensity = fitter.log_posterior(fit)
+    cov = _symmetric(np.asarray(fit.notes["cov"], float))
+    z_hat = jnp.asarray(fit.notes["z"], dtype=float)
+    root = jnp.asarray(_root(cov))
+    key = jax.random.PRNGKey(seed)
+
+    @jax.jit
+    def one_chain(key):
+        k_init, k_warm, k_run = jax.random.split(key, 3)
+        start = z_hat + 0.5 * root @ jax.random.normal(k_init, z_hat.shape)
+        adapt = blackjax.window_adaptation(
+            blackjax.nuts, logdensity, is_mass_matrix_diagonal=False,
+            initial_inverse_mass_matrix=jnp.asarray(cov), initial_step_size=0.5,
+            imm_shrinkage_to_previous=0.9)
+        (state, params), _ = adapt.run(k_warm, start, num_steps=warmup)
+        kernel = blackjax.nuts(logdensity, **params).step
+
+        def step(state, k):
+            state, info = kernel(k, state)
+            return state, (state.position, info.is_divergent)
+
+        _, (positions, divergent) = jax.lax.scan(step, state, jax.random.split(k_run, samples))
+        return positions, divergent
+
+    positions, divergent = [], []
+    for k in jax.random.split(key, chains):
+        p, d = one_chain(k)
+        positions.append(np.asarray(p))
+        divergent.append(np.asarray(d))
+    chain_z = np.stack(positions)                      # (chains, samples, d)
+    values = lay.natural(chain_z.reshape(-1, lay.size))
+    stacked = np.stack([v.reshape(chains, samples) for v in values.values()], axis=-1)
+    r_hat = np.array([float(rhat(jnp.asarray(stacked[..., i]))) for i in range(lay.size)])
+    ess = np.array([float(ess_bulk(jnp.asarray(stacked[..., i]))) for i in range(lay.size)])
+    z = chain_z.reshape(-1, lay.size)
+    thin = max(1, z.shape[0] // DRAWS)   # the predictions at a spread of the draws
+    z_kept = z[::thin]
+    residuals = np.stack([fitter.residuals(lay.pack(zi)) for zi in z_kept])
+    w = np.full(z_kept.shape[0], 1.0 / z_kept.shape[0])
+    diagnostics = {"r_hat": r_hat, "ess": ess, "max_r_hat": float(np.max(r_hat)),
+                   "min_ess": float(np.min(ess)),
+                   "divergences": int(np.sum(divergent)), "draws_sampled": int(z.shape[0])}
+    return Posterior("nuts", fit, z_kept, w, residuals, diagnostics, chains)
+
+
+def linear(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED) -> Posterior:
+    """Gaussian draws at the fit with the predictions linearised, unchecked:
+    for a model whose every evaluation costs a minute (module notes)."""
+    lay = fit.notes["layout"]
+    z_hat = np.asarray(fit.notes["z"], float)
+    root = _root(_symmetric(np.asarray(fit.notes["cov"], float)))
+    eps = np.random.default_rng(seed).standard_normal((draws, z_hat.size))
+    z = z_hat + eps @ root.T
+    jac = fitter.linearise(np.asarray(fit.notes["v"]), lay.tangents).jac
+    residuals = fit.residual[None] + (z - z_hat) @ jac.T
+    w = np.full(draws, 1.0 / draws)
+    return Posterior("laplace, linearised", fit, z, w, residuals,
+                     {"ess": float(draws), "checked": False})
+
+
+def posterior(fitter: Fitter, fit: FitResult, method: str = "laplace") -> Posterior:
+    if method not in (*METHODS, "linear"):
+        raise InputError(f"--posterior {method!r}: allowed {', '.join(METHODS)}")
+    if method == "nuts":
+        return nuts(fitter, fit)
+    return laplace(fitter, fit) if method == "laplace" else linear(fitter, fit)
+
+
+def _symmetric(a: np.ndarray) -> np.ndarray:
+    return 0.5 * (a + a.T)
+
+
+def _root(cov: np.ndarray) -> np.ndarray:
+    """A matrix square root R (R R^T = cov) of a positive semi-definite ``cov``."""
+    lam, vec = np.linalg.eigh(cov)
+    return vec * np.sqrt(np.clip(lam, 0.0, None))

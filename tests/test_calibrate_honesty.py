@@ -1,0 +1,209 @@
+"""The calibration's choice on the fit data alone, the discrepancy that keeps
+k identified, the forward check inside the fit window, the posterior with
+its bands, the life and the next measurement: each against an independent
+value (closed forms, a second computation, central differences)."""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+jax.config.update("jax_enable_x64", True)
+
+from diffwear.calibrate import chi2, load_dataset  # noqa: E402
+from diffwear.calibrate import discrepancy as disc  # noqa: E402
+from diffwear.calibrate.dataset import write_dataset  # noqa: E402
+from diffwear.calibrate.effects import EffectValues  # noqa: E402
+from diffwear.calibrate.fit import Fitter, ModelSettings, Problem  # noqa: E402
+from diffwear.calibrate.forecast import _crossing, check_request  # noqa: E402
+from diffwear.calibrate.learned import _turns, describe  # noqa: E402
+from diffwear.calibrate.model import rig_defaults  # noqa: E402
+from diffwear.calibrate.posterior import _mixture_quantile, _weighted_quantile  # noqa: E402
+from diffwear.calibrate.quasi_static import cycle_grid  # noqa: E402
+from diffwear.calibrate.synthetic import Plan, synthesize  # noqa: E402
+from diffwear.calibrate.validation import forward_check  # noqa: E402
+from diffwear.errors import InputError  # noqa: E402
+
+SMALL_PLAN = Plan(cycles=1000.0, profile_cycles=(250.0, 500.0, 750.0, 1000.0),
+                  volume_cycles=tuple(125.0 * i for i in range(1, 9)), force_cycles=(0.0,),
+                  profile_angles=48, force_angles=48, holdout_from_cycles=750.0)
+SMALL = ModelSettings(n_theta=48, force_samples=49, steps=12)
+
+
+# ------------------------------------------------------------ closed forms
+@pytest.mark.parametrize("dof", [1.0, 2.0, 4.0])
+def test_chi2_survival_against_closed_forms(dof):
+    for x in (0.3, 2.0, 10.83, 40.0):
+        want = {1.0: math.erfc(math.sqrt(x / 2)), 2.0: math.exp(-x / 2),
+                4.0: math.exp(-x / 2) * (1 + x / 2)}[dof]
+        assert chi2.sf(x, dof) == pytest.approx(want, rel=1e-12)
+        assert chi2.isf(want, dof) == pytest.approx(x, rel=1e-9)
+    # a fractional number of degrees of freedom lies between its neighbours
+    assert chi2.isf(0.001, 1.0) < chi2.isf(0.001, 1.5) < chi2.isf(0.001, 2.0)
+
+
+def test_grid_in_the_fit_window_does_not_depend_on_later_measurements():
+    """The nodes up to the fit window's end are the same whether the run ends
+    there or goes on to held-out inspections (or a life); beyond, the steps
+    grow from the window's last."""
+    short = cycle_grid(16050.0, 40, (5350.0, 10700.0))
+    long = cycle_grid(21400.0, 40, (5350.0, 10700.0, 21400.0), window=16050.0)
+    np.testing.assert_array_equal(long[:short.size], short)
+    steps = np.diff(long[short.size - 1:])
+    assert steps[0] > np.diff(short)[-1] and long[-1] == 21400.0
+    assert np.all(steps[1:-1] / steps[:-2] == pytest.approx(1.1))
+
+
+def test_mixture_quantile_of_one_component_is_the_normal_quantile():
+    means = np.array([[1.0, -2.0]])
+    sigma = np.array([0.5, 2.0])
+    hi = _mixture_quantile(means, sigma, np.array([1.0]), 0.95)
+    np.testing.assert_allclose(hi, means[0] + 1.6448536269514722 * sigma, rtol=1e-9)
+    # two equal components placed symmetrically: the median is their middle
+    mid = _mixture_quantile(np.array([[-1.0], [1.0]]), np.array([1.0]),
+                            np.array([0.5, 0.5]), 0.5)
+    assert abs(mid[0]) < 1e-9
+    x = np.arange(101.0)
+    assert _weighted_quantile(x, np.full(101, 1 / 101), 0.5) == pytest.approx(50.0)
+
+
+def test_crossing_of_a_limit_by_linear_interpolation():
+    n = np.array([0.0, 10.0, 20.0, 30.0])
+    d = np.array([0.0, 1.0, 3.0, 4.0])
+    assert _crossing(n, d, 2.0) == pytest.approx(15.0)
+    assert _crossing(n, d, 5.0) == math.inf
+
+
+def test_turns_name_up_down_and_up_again():
+    x = np.linspace(0.0, 1.0, 300)
+    assert len(_turns(0.4 * np.sin(3 * np.pi * x))) == 5   # ends and three turns
+    assert _turns(x ** 2) == [0, 299]
+
+
+# ------------------------------------------------------------ the small campaign
+@pytest.fixture(scope="module")
+def small(tmp_path_factory):
+    """A small campaign with an angle-dependent k (two lobes), fitted by its
+    base model."""
+    folder = tmp_path_factory.mktemp("honest") / "lobes"
+    d = rig_defaults()
+    c = np.zeros(disc.SIZES["angle"])
+    c[2], c[3] = 0.5, 0.3
+    synthesize(folder, name="small-lobes", seed=5, plan=SMALL_PLAN,
+               settings=ModelSettings(n_theta=48, force_samples=49),
+               effects=EffectValues.zero().with_discrepancy("angle", c),
+               truth={"k": 1.2 * d["k"], "free_length": d["free_length"] + 0.01})
+    data = load_dataset(folder)
+    fitter = Fitter(Problem.from_dataset(data, SMALL))
+    return data, fitter, fitter.fit(None)
+
+
+@pytest.fixture(scope="module")
+def lobes(small):
+    """The small campaign fitted with the angle discrepancy."""
+    data, fitter, base = small
+    return fitter.fit((), start=base, discrepancy="angle")
+
+
+def test_deleting_the_held_out_series_leaves_every_fit_unchanged(small, tmp_path):
+    """The fit window's model, its grid and its probes do not see the held-out
+    measurements: the base fit is the same to round-off without them."""
+    data, fitter, base = small
+    kept = [s for s in data.series if not s.holdout.all()]
+    params = {n: p for n, p in data.parameters.items()}
+    trimmed = write_dataset(tmp_path / "trim", name="trim", parameters=params,
+                            series=[s for s in kept], bushing_density=data.bushing_density,
+                            holdout_from_cycles=data.holdout_from_cycles)
+    assert trimmed.fit_cycles == data.fit_cycles == 625.0   # the last fitted weighing
+    p2 = Problem.from_dataset(trimmed, SMALL)
+    assert p2.probe_cycles == fitter.problem.probe_cycles
+    other = Fitter(p2).fit(None)
+    assert other.params["k"] == pytest.approx(base.params["k"], rel=1e-10)
+    assert other.chi2_fit == pytest.approx(base.chi2_fit, rel=1e-10)
+
+
+def test_identified_k_is_orthogonal_to_the_discrepancy_and_keeps_its_uncertainty(small, lobes):
+    """Beside the learned discrepancy the reported k is the identified one:
+    in its coordinates every discrepancy direction is orthogonal to k's over
+    the fit points, its 1-sigma is the covariance's along that direction, it
+    stays of the order of k's without the discrepancy, and the model's k is
+    it times exp(b.c)."""
+    from diffwear.calibrate.fit import identified_k
+
+    data, fitter, base = small
+    fit = lobes
+    jac = fit.notes["jacobian"]
+    nd = fit.n_discrepancy
+    d = slice(jac.shape[1] - nd, jac.shape[1])
+    a = identified_k(jac, 0, d)
+    moved = jac[:, d] + np.outer(jac[:, 0], a)
+    assert np.max(np.abs(jac[:, 0] @ moved)) < 1e-9 * np.linalg.norm(jac[:, 0]) * np.max(
+        np.linalg.norm(moved, axis=0))
+    e = np.zeros(jac.shape[1])
+    e[0], e[d] = 1.0, -a
+    tau = fitter.problem.tau[0]
+    want = fit.params["k"] * tau * math.sqrt(e @ fit.notes["cov"] @ e)
+    assert fit.params_std["k"] == pytest.approx(want, rel=1e-12)
+    assert fit.params_std["k"] <= 3.0 * base.params_std["k"]
+    b = fit.notes["log_k_per_coefficient"]
+    model_k = float(fitter.problem.base(jnp.asarray(fit.notes["x"]))["k"])
+    assert model_k == pytest.approx(
+        fit.params["k"] * math.exp(b @ fit.discrepancy_coefficients), rel=1e-12)
+    # the two lobes are found over the worn arc
+    shape = describe("angle", fit.discrepancy_coefficients, fit.discrepancy_cov, data, b)
+    assert shape["lobes"] == 2
+
+
+def test_log_posterior_gradient_against_central_differences(small):
+    """The sampler's gradient (-J^T r from the forward-mode program, through a
+    custom VJP) against central differences of the log posterior."""
+    data, fitter, base = small
+    fit = fitter.fit("run_in", start=base, s0=0.5)
+    log_p = jax.jit(fitter.log_posterior(fit))
+    z = np.asarray(fit.notes["z"]) + 0.05
+    g = np.asarray(jax.grad(log_p)(jnp.asarray(z)))
+    eps = 1e-5
+    for i in range(z.size):
+        e = np.zeros(z.size)
+        e[i] = eps
+        fd = (float(log_p(jnp.asarray(z + e))) - float(log_p(jnp.asarray(z - e)))) / (2 * eps)
+        assert g[i] == pytest.approx(fd, rel=1e-5, abs=1e-6)
+    # and its value is the fit's objective
+    r = fitter.residuals(fit.notes["layout"].pack(np.asarray(fit.notes["z"])))
+    rows = np.asarray(fit.notes["rows"])
+    prior = fit.notes["layout"].prior_rows(np.asarray(fit.notes["z"]))
+    assert float(log_p(jnp.asarray(fit.notes["z"]))) == pytest.approx(
+        -0.5 * (r[rows] @ r[rows] + prior @ prior), rel=1e-10)
+
+
+def test_forward_check_against_a_direct_predictive_covariance(small):
+    """Q of the forward check (Woodbury) against the predictive covariance
+    I + J C J^T formed and solved directly."""
+    data, fitter, base = small
+    check = forward_check(fitter, base)
+    assert check is not None and check.cycles == 500.0
+    from diffwear.calibrate.validation import split
+
+    earlier, later, _ = split(fitter, base)
+    f = fitter.fit((), start=base, rows=earlier)
+    jac = fitter.linearise(f.notes["v"], f.notes["layout"].tangents).jac[later]
+    s = np.eye(int(later.sum())) + jac @ f.notes["cov"] @ jac.T
+    r = f.residual[later]
+    assert check.statistic == pytest.approx(float(r @ np.linalg.solve(s, r)), rel=1e-8)
+    # the base model misses the lobes: it does not predict; with them it does
+    assert not check.predicts
+    lobes = fitter.fit((), start=base, discrepancy="angle")
+    assert forward_check(fitter, lobes).predicts
+
+
+def test_forecast_requests_are_checked(small):
+    data, fitter, base = small
+    with pytest.raises(InputError, match="--horizon 900"):
+        check_request(data, None, 900.0, None)
+    with pytest.raises(InputError, match="deeper than the bushing wall"):
+        check_request(data, 8e-3, None, 6e-3)
+    check_request(data, 1e-3, 2000.0, 6e-3)

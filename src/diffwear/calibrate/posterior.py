@@ -275,6 +275,22 @@ def posterior(fitter: Fitter, fit: FitResult, method: str = "laplace") -> Poster
     return laplace(fitter, fit) if method == "laplace" else linear(fitter, fit)
 
 
+# NUTS needs this many fit points beyond the base parameters (a posterior
+# from fewer is the prior's shape: the sampler has nothing to explore)
+MIN_SAMPLING_DOF = 10
+
+
+def require_sampling(data, problem) -> None:
+    """Refuse (InputError) a sampler asked for on a dataset with too few fit
+    points to give a posterior."""
+    n = int(np.sum(~problem.holdout))
+    if n - problem.n_base < MIN_SAMPLING_DOF:
+        raise InputError(f"{data.path}: --posterior nuts on {n} fit point(s) for "
+                         f"{problem.n_base} fitted parameter(s): too few data to sample a "
+                         f"posterior; allowed: at least {problem.n_base + MIN_SAMPLING_DOF} fit "
+                         "points, or --posterior laplace")
+
+
 def _symmetric(a: np.ndarray) -> np.ndarray:
     return 0.5 * (a + a.T)
 

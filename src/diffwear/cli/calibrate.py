@@ -20,6 +20,7 @@ from ..calibrate.dataset import PARAMETERS, Dataset  # noqa: E402
 from ..calibrate.discrepancy import VARIABLES
 from ..calibrate.effects import EFFECTS  # noqa: E402
 from ..calibrate.fit import ModelSettings  # noqa: E402
+from ..calibrate.forecast import Outlook
 from ..calibrate.frame_check import frame_warnings  # noqa: E402
 from ..calibrate.identify import (  # noqa: E402
     GOF_SIGMAS,
@@ -493,10 +494,12 @@ def _suspect_lines(summary: dict) -> list[str]:
 
 
 def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSettings(),
-        top: int = 3, check: bool = True, discrepancy=VARIABLES, log=print) -> dict:
+        top: int = 3, check: bool = True, discrepancy=VARIABLES, outlook=Outlook(),
+        log=print) -> dict:
     """The loop on a loaded dataset (`load_dataset`: bad input is found before
     ``out`` exists), writing the outputs listed in the module notes."""
-    c = calibrate(data, settings, top=top, check=check, discrepancy=discrepancy, log=log)
+    c = calibrate(data, settings, top=top, check=check, discrepancy=discrepancy,
+                  outlook=outlook, log=log)
     summary = c.summary()
     final = c.final or c.base
     summary["series_rms"] = series_rms(c, final)

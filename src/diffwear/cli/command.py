@@ -293,8 +293,10 @@ def _life(args: argparse.Namespace) -> int:
 
 def _calibrate(args: argparse.Namespace) -> int:
     from ..calibrate import load_dataset
-    from ..calibrate.fit import ModelSettings
+    from ..calibrate.fit import ModelSettings, Problem
+    from ..calibrate.forecast import Outlook
     from ..calibrate.identify import discrepancy_variables, require_fit_points
+    from ..calibrate.posterior import require_sampling
     from ..io import OutputDir
     from . import objects
     from .calibrate import run
@@ -312,10 +314,18 @@ def _calibrate(args: argparse.Namespace) -> int:
     settings.build(data.max_cycles)
     if settings.model.checked_on_dynamic and not args.no_dynamic_check:
         settings.with_model(objects.calibration_model("dynamic")).build(data.max_cycles)
+    outlook = Outlook(method=args.posterior,
+                      limit=None if args.limit is None else args.limit * 1e-3,
+                      horizon=args.horizon)
+    # a bad limit or horizon, or a sampler the data cannot feed, before --out is touched
+    problem = Problem.from_dataset(data, settings)
+    outlook.resolved(data, problem)
+    if args.posterior == "nuts":
+        require_sampling(data, problem)
     out = OutputDir(args.out, overwrite=args.overwrite)
     log = _log(args)
     run(data, out, settings=settings, top=args.top, check=not args.no_dynamic_check,
-        discrepancy=variables, log=log)
+        discrepancy=variables, outlook=outlook, log=log)
     return 0
 
 
@@ -487,9 +497,11 @@ def build_parser() -> argparse.ArgumentParser:
                        "selection (every candidate refitted in the form the data determine; "
                        "two equally good candidates reported as such), name the mechanism "
                        "parameter the data ask for when no effect explains them, learn and "
-                       "name a discrepancy of the wear coefficient when nothing in the "
-                       "library does, state each effect's detection limit, check the result "
-                       "on the dynamic model, and report the held-out error before and after: "
+                       "name a discrepancy of the wear coefficient beside the library's "
+                       "effects, all on the fit data alone; state each effect's detection "
+                       "limit, check the result on the dynamic model, give the posterior, "
+                       "the predictive bands, the life with its band and the next "
+                       "measurement, and report the held-out error before and after: "
                        "report.md, summary.json, residuals.csv, plots.",
                        epilog="Exit codes: 0 success, 2 bad input, 3 solver failure.")
     p.add_argument("data", help="dataset folder (dataset.toml + CSV files), e.g. "
@@ -498,8 +510,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--top", type=int, default=3,
                    help="kept for compatibility: every candidate is refitted at each stage")
     p.add_argument("--discrepancy", default="all", metavar="VARIABLES",
-                   help="variables a learned discrepancy of k is searched over when the "
-                        "library leaves the residual unexplained: comma-separated from angle, "
+                   help="variables over which a learned discrepancy of k is a candidate "
+                        "beside the library's effects: comma-separated from angle, "
                         "pressure, sliding_speed, cycles, depth; 'all' (default) or 'none'")
     p.add_argument("--model", choices=CALIBRATION_MODELS, default="quasi-static",
                    help="the forward model fitted (default quasi-static; dynamic: the "
@@ -509,6 +521,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-dynamic-check", action="store_true",
                    help="skip evaluating the final fit on the dynamic model")
     p.add_argument("--n-theta", type=int, default=90, help="profile grid nodes (default 90)")
+    p.add_argument("--posterior", choices=("laplace", "nuts"), default="laplace",
+                   help="the posterior of the chosen model's numbers: laplace (default: the "
+                        "Gaussian at the fit, checked by importance sampling on the exact "
+                        "model) or nuts (the No-U-Turn sampler; minutes)")
+    p.add_argument("--limit", type=float, default=None, metavar="MM",
+                   help="maximum wear depth [mm] that ends the life (default: the bushing wall)")
+    p.add_argument("--horizon", type=float, default=None, metavar="CYCLES",
+                   help="cycle count up to which the depth is forecast and the next inspection "
+                        "is sought (default: twice the last inspection)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_calibrate)
     return parser

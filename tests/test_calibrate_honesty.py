@@ -220,3 +220,23 @@ def test_forecast_requests_are_checked():
     with pytest.raises(InputError, match="deeper than the bushing wall"):
         check_request(data, 8e-3, None, 6e-3)
     check_request(data, 1e-3, 2000.0, 6e-3)
+
+
+@pytest.mark.extended  # two minutes: NUTS on the small campaign's model
+def test_nuts_agrees_with_the_checked_laplace_posterior_where_it_is_gaussian(small):
+    """On a near-Gaussian posterior (the base model's two parameters) NUTS and
+    the importance-checked Laplace draws agree on each number's mean and
+    spread, and the chains mix (R-hat near 1)."""
+    from diffwear.calibrate.posterior import laplace, nuts
+
+    data, fitter, base = small
+    lap = laplace(fitter, base)
+    assert lap.diagnostics["pareto_k"] < 0.7
+    mc = nuts(fitter, base, chains=2, warmup=60, samples=120)
+    a, b = lap.numbers(), mc.numbers()
+    for name in ("k", "free_length"):
+        assert b[name]["mean"] == pytest.approx(a[name]["mean"], abs=0.3 * a[name]["std"])
+        assert b[name]["std"] == pytest.approx(a[name]["std"], rel=0.3)
+        assert b[name]["r_hat"] < 1.05
+    # and both agree with the Gauss-Newton 1-sigma of the fit
+    assert a["k"]["std"] == pytest.approx(base.params_std["k"], rel=0.25)

@@ -554,7 +554,7 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
               if a.criterion - ranked[0].criterion <= (1.0 - PATH_SHARE) * gain]
     learned_first = [a for a in ranked if learned.variable_of(a.effect) is not None]
     if learned_first and learned_first[0] not in starts:
-        starts.append(learned_first[0])
+        starts = [*starts[:PATHS - 1], learned_first[0]]
     # Each path grown first without the dynamic model's check (one dynamic
     # evaluation costs as much as several refits; those a check would need
     # are queued to run beside the fits); then the best path not yet checked
@@ -607,8 +607,13 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
             f"{predicting[0].name} does")
     pool = predicting or order
     window = [p for p in pool if p.criterion - pool[0].criterion < AMBIGUITY]
+    # Occam's window: among comparable models the simplest, first by causes
+    # (one effect is a simpler explanation than a pair that fits as well),
+    # then by the numbers the data determine
+    fewest = min(len(_members(p.model)) for p in window)
+    window = [p for p in window if len(_members(p.model)) == fewest]
     simplest = min(p.numbers for p in window)
-    window = [p for p in window if p.numbers <= simplest + OCCAM_TOLERANCE]  # Occam's window
+    window = [p for p in window if p.numbers <= simplest + OCCAM_TOLERANCE]
     best = window[0]
     stage1.added = _members(best.model)[0] if _members(best.model) else None
     stages = [stage1, *best.stages]
@@ -811,6 +816,11 @@ def _candidate(s: Score, refit: FitResult | None, qualifies: bool,
            "first_step": s.first_step}
     if failure:
         out["refit_failed"] = failure
+    if learned.variable_of(s.effect) is not None:   # a discrepancy: no strength or shape
+        if refit is not None:
+            out.update(refit_chi2_fit=refit.chi2_fit, qualifies=qualifies,
+                       effective_coefficients=refit.notes.get("discrepancy_edf"))
+        return out
     shape = EFFECTS[NAMES.index(s.effect)].shape
     if shape is not None:
         out["scored_shape"] = shape.default * math.exp(s.log_shape)

@@ -186,17 +186,24 @@ def _resampled(post: Posterior, size: int) -> np.ndarray:
 
 
 def _first_estimate(fitter: Fitter, fit: FitResult, limit: float) -> float:
-    """A first life estimate: the deepest fitted profile's mean rate carried
-    on (early, as the rate falls while the bore conforms; `LIFE_MARGIN`)."""
+    """A first life estimate: the deepest fitted profile carried on at the rate
+    between the last two fitted profiles (late: past any run-in), else at its
+    mean rate."""
     p = fitter.problem
     rows = np.asarray(fit.notes["rows"], bool) & np.asarray(p.kind_of_point == "profile")
     window = float(getattr(p.model, "fit_window", p.model.cycles))
     if not rows.any():
         return 10.0 * window
     counts = np.asarray(p.cycles_of_point)[rows]
-    last = counts == counts.max()
-    deepest = float(np.max(fit.prediction[rows][last]))
-    return counts.max() * limit / deepest if deepest > 0 else 10.0 * window
+    seen = np.unique(counts)
+    deepest = [float(np.max(fit.prediction[rows][counts == c])) for c in seen]
+    if seen.size >= 2 and deepest[-1] > deepest[-2]:
+        rate = (deepest[-1] - deepest[-2]) / (seen[-1] - seen[-2])
+    else:
+        rate = deepest[-1] / seen[-1] if deepest[-1] > 0 else 0.0
+    if not rate > 0:
+        return 10.0 * window
+    return float(seen[-1] + max(limit - deepest[-1], 0.0) / rate)
 
 
 def forecast(fitter: Fitter, post: Posterior, data, limit: float, horizon: float,

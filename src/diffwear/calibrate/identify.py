@@ -1010,8 +1010,9 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
     if dynamic is not None:
         result.check = model_check(problem, final, dynamic)
         c = result.check
-        log(f"check on the {c['model']} model: chi2 {c['chi2_fit']} on the fit points "
-            f"(fitted model {final.chi2_fit:.1f}), held out {c['chi2_holdout']}")
+        shown = (f"chi2 {c['chi2_fit']:.1f} on the fit points, {c['chi2_holdout']:.1f} held "
+                 "out" if c["ok"] else "the model failed")
+        log(f"check on the {c['model']} model: {shown} (fitted model {final.chi2_fit:.1f})")
         if not c["carries_over"]:
             log("warning: the fit does not carry over to the dynamic model; the quasi-static "
                 "model's own error may have chosen the effects (refit with --model dynamic)")

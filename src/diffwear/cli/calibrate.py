@@ -23,6 +23,7 @@ from ..calibrate.fit import ModelSettings  # noqa: E402
 from ..calibrate.forecast import Outlook
 from ..calibrate.frame_check import frame_warnings  # noqa: E402
 from ..calibrate.identify import (  # noqa: E402
+    AMBIGUITY,
     GOF_SIGMAS,
     LR_CRITICAL,
     STRENGTH_SIGMAS,
@@ -82,12 +83,12 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
         out.file("residual_structure.png"), fits, residuals, cycles, harmonics).name)
     stage1 = c.selection.stages[0] if c.selection is not None and c.selection.stages else None
     if stage1 is not None and stage1.assessed:
-        ranked = sorted(stage1.assessed.values(), key=lambda a: -a.likelihood_ratio)
+        ranked = sorted(stage1.assessed.values(), key=lambda a: a.criterion)
         adopted = [learned.label(m) for m in _members_of(final)]
         files.append(plots_calibration.candidates(
             out.file("candidates.png"), [learned.label(a.effect) for a in ranked],
-            [a.likelihood_ratio for a in ranked], [a.qualifies for a in ranked],
-            adopted).name)
+            [a.criterion for a in ranked], [a.qualifies for a in ranked],
+            adopted, AMBIGUITY).name)
     if final.discrepancy is not None:
         d = final.discrepancy
         span = learned.span(d, c.dataset)
@@ -107,7 +108,8 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
                    if not n.startswith("delta_")}
         files.append(plots_calibration.posterior(
             out.file("posterior.png"), columns, post.weights,
-            f"posterior of the final model ({post.method})").name)
+            "posterior of the final model (" + ("NUTS" if post.method == "nuts" else
+                                                "Laplace, importance-weighted") + ")").name)
     if c.forecast is not None and c.forecast.trajectory:
         f = c.forecast
         files.append(plots_calibration.life(
@@ -181,13 +183,14 @@ def _in_dataset_unit(name: str, values, data):
 
 def _stage_line(k: int, st: dict) -> str:
     """One forward-selection stage in words."""
-    qualified = [e for e, c in st["candidates"].items() if c["qualifies"]]
+    qualified = [learned.label(e) for e, c in st["candidates"].items() if c["qualifies"]]
     text = (f"stage {k + 1}: {len(st['candidates'])} refitted, qualifying: "
             f"{', '.join(qualified) or 'none'}")
     if st.get("added"):
-        text += f"; added **{st['added']}**"
+        text += f"; added **{learned.label(st['added'])}**"
     if st.get("dropped"):
-        text += f"; dropped {', '.join(st['dropped'])} (no longer qualifying beside the rest)"
+        text += (f"; dropped {', '.join(learned.label(e) for e in st['dropped'])} (no longer "
+                 "qualifying beside the rest)")
     if st.get("ambiguous"):
         text += f"; **{' or '.join(st['ambiguous'])}**: too close to tell apart"
     if st.get("failed"):
@@ -248,11 +251,14 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
     blocks += _life_blocks(summary)
     candidates = []
     for cand in summary["candidates"]:
-        refitted = "refit_strength" in cand
+        refitted = "refit_chi2_fit" in cand
         candidates.append((
-            cand["name"], significant(cand["score"], 3), significant(cand["p_value"], 2),
-            plus_minus(cand["refit_strength"], cand["refit_strength_std"]) if refitted else "",
+            learned.label(cand["name"]), significant(cand["score"], 3),
+            significant(cand["p_value"], 2),
+            plus_minus(cand["refit_strength"], cand["refit_strength_std"])
+            if "refit_strength" in cand else "",
             significant(cand.get("refit_shape"), 3) if cand.get("refit_shape") else "",
+            significant(cand["refit_chi2_fit"], 5) if refitted else "",
             ("yes" if cand.get("qualifies") else "no") if refitted else ""))
     blocks.append(Section("Candidates", [
         "Every candidate cause is scored at zero strength from the base fit (a score test; "
@@ -267,8 +273,8 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
         f"result must leave noise-sized residuals (chi2 <= dof + {GOF_SIGMAS:g} sqrt(2 dof)) "
         "and predict the fit window's last inspection.",
         Bullets([_stage_line(k, st) for k, st in enumerate(summary.get("stages", []))]),
-        Table(("effect", "score", "p", "refit strength", "refit shape", "qualifies"),
-              candidates),
+        Table(("candidate", "score", "p", "refit strength", "refit shape", "refit chi2",
+               "qualifies"), candidates),
         "Library: " + "; ".join(f"`{e.name}`: {e.description}"
                                 + (f" ({e.source})" if e.source else "") for e in EFFECTS)]))
     if summary["suspects"]:
@@ -279,10 +285,11 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
             "unexplained the best is refitted and named, if its score passes p = 0.001 "
             "corrected for the number of suspects and its refitted value stays within the "
             "parameter's plausible range.",
-            Table(("parameter", "score", "p", "stated", "first-step factor"),
+            Table(("parameter", "score", "p", "stated [SI]", "factor asked for"),
                   [(sp["name"], significant(sp["score"], 3), significant(sp["p_value"], 2),
-                    significant(sp["value"]), significant(sp["factor"], 3))
-                   for sp in summary["suspects"][:6]])]))
+                    significant(sp["value"]), _factor_words(sp))
+                   for sp in summary["suspects"][:6]]),
+            _suspects_verdict(summary)]))
     limits = summary.get("detection_limits") or {}
     if limits:
         blocks.append(Section("Detection limits", [
@@ -328,6 +335,28 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
                           f"Wall time {c.wall_time_s:.0f} s."]),
     ]
     return Report(f"Calibration: {d.name}", blocks)
+
+
+def _factor_words(sp: dict) -> str:
+    """The factor a suspect's score (or refit) asks for, or that it lies
+    beyond the parameter's plausible range."""
+    bounds = sp.get("plausible_range")
+    if bounds and not bounds[0] <= sp["factor"] <= bounds[1]:
+        return f"beyond {significant(bounds[0], 2)}x-{significant(bounds[1], 2)}x"
+    return f"{significant(sp['factor'], 3)}x"
+
+
+def _suspects_verdict(summary: dict) -> str:
+    """Why the suspects table names a suspect or none."""
+    if summary.get("suspect"):
+        return f"Named: {summary['suspect']}."
+    lead = summary["suspects"][0]
+    if "implausible" in lead:
+        return f"None named: {lead['implausible']}."
+    if not summary["residual_unexplained"]:
+        return ("None named: the chosen model explains the data, so no parameter is asked to "
+                "explain a residual (the scores are listed for reference).")
+    return ("None named: no score passes p = 0.001 corrected for the number of suspects.")
 
 
 def _limit_shape(effect: str, value: float) -> str:

@@ -105,22 +105,33 @@ def residual_structure(path: Path, fits: Sequence[SeriesFit], residuals: Sequenc
     return _save(fig, path)
 
 
-def candidates(path: Path, names: Sequence[str], drops: Sequence[float],
-               qualifies: Sequence[bool], adopted: Sequence[str]) -> Path:
-    """Each candidate's chi-square drop when refitted on the base model,
-    qualifying ones filled (the adoption's test), the adopted ones named; the
-    score tests only chose what to refit."""
+def candidates(path: Path, names: Sequence[str], criteria: Sequence[float],
+               qualifies: Sequence[bool], adopted: Sequence[str], window: float) -> Path:
+    """Each candidate refitted on the base model: its penalised criterion
+    (BIC, on the fit points) above the best candidate's, qualifying ones
+    filled, the adopted ones named; the comparable window shaded (within it
+    the simplest wins).  Bars beyond the axis are cut at its end."""
+    from matplotlib.patches import Patch
+
     fig, ax = plt.subplots(figsize=(8.4, 0.9 + 0.32 * max(len(names), 1)))
+    c = np.asarray(criteria, dtype=float)
+    gap = c - np.min(c[np.asarray(qualifies, bool)]) if any(qualifies) else c - np.min(c)
+    top = max(10 * window, 1.0)
     y = np.arange(len(names))[::-1]
-    d = np.maximum(np.asarray(drops, dtype=float), 1e-2)
     colors = ["C0" if q else "0.75" for q in qualifies]
-    ax.barh(y, d, color=colors)
+    ax.barh(y, np.clip(gap, 0.0, top), color=colors, left=0.0)
+    ax.axvspan(0, window, color="C2", alpha=0.12, lw=0)
+    for yi, g in zip(y, gap):
+        if g > top:
+            ax.text(top, yi, f" {g:,.0f} ", ha="right", va="center", fontsize=7, color="w")
     ax.set_yticks(y, [n + ("  (adopted)" if n in adopted else "") for n in names])
-    ax.barh([], [], color="C0", label="qualifies (p < 0.001)")
-    ax.barh([], [], color="0.75", label="does not qualify")
-    ax.set(xscale="log", xlabel="chi-square drop of the fit points when refitted",
-           title="candidate causes beside the base model")
-    legend_outside(ax)
+    handles = [Patch(color="C0", label="qualifies (p < 0.001)"),
+               Patch(color="0.75", label="does not qualify"),
+               Patch(color="C2", alpha=0.12, label=f"comparable (within {window:g})")]
+    ax.set(xlim=(0, top), xlabel="criterion (BIC on the fit points) above the best candidate's",
+           title="candidate causes refitted on the base model")
+    ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+              borderaxespad=0.0)
     return _save(fig, path)
 
 
@@ -176,23 +187,41 @@ def posterior(path: Path, columns: dict, weights, title: str) -> Path:
 
 def life(path: Path, trajectory: tuple, limit: float, measured: Sequence[tuple],
          horizon: float, life_band: tuple) -> Path:
-    """The maximum wear depth over the forecast with its 90 % band, the
-    measured maxima (held-out ones open), the limit and the life's band."""
+    """The maximum wear depth with its 90 % band: over the campaign and its
+    horizon beside the measured maxima (held-out ones open), and over the
+    whole life to the limit, with the life's band."""
     n, lo, mid, hi = (np.asarray(a, dtype=float) for a in trajectory)
-    fig, ax = plt.subplots(figsize=(8.4, 3.8))
-    ax.fill_between(n, lo * 1e3, hi * 1e3, color="C0", alpha=0.25, lw=0, label="90 % band")
-    ax.plot(n, mid * 1e3, color="C0", label="median")
+    fig, (near, far) = plt.subplots(1, 2, figsize=(11.0, 3.8),
+                                    gridspec_kw={"width_ratios": [1, 1.3]})
+    for ax in (near, far):
+        ax.fill_between(n, lo * 1e3, hi * 1e3, color="C0", alpha=0.25, lw=0,
+                        label="90 % band")
+        ax.plot(n, mid * 1e3, color="C0", label="median")
     for k, (cycles, depth, held) in enumerate(measured):
-        ax.plot(cycles, depth * 1e3, "D", ms=6, color="k", mfc="none" if held else "k",
-                label=("deepest measured (open: held out)" if k == 0 else None))
-    ax.axhline(limit * 1e3, color="r", ls="--", lw=1, label=f"limit {limit * 1e3:.3g} mm")
+        near.plot(cycles, depth * 1e3, "D", ms=6, color="k", mfc="none" if held else "k",
+                  label=("deepest measured (open: held out)" if k == 0 else None))
+    near.axvline(horizon, color="0.5", ls=":", lw=1, label="horizon")
+    upto = 1.1 * horizon
+    inside = n <= upto
+    near.set(xlim=(0, upto), ylim=(0, 1.15e3 * max(float(np.max(hi[inside], initial=0.0)),
+                                                   max((d for _, d, _ in measured),
+                                                       default=0.0))),
+             xlabel="cycles", ylabel="maximum wear depth [mm]",
+             title="the campaign and its horizon")
+    far.axhline(limit * 1e3, color="r", ls="--", lw=1, label=f"limit {limit * 1e3:.3g} mm")
     q05, q95 = life_band
     if np.isfinite(q05):
-        ax.axvspan(q05, min(q95, n[-1]), color="r", alpha=0.08, label="life, 90 % band")
-    ax.axvline(horizon, color="0.5", ls=":", lw=1, label="horizon")
-    ax.set(xlabel="cycles", ylabel="maximum wear depth [mm]", xlim=(0, n[-1]), ylim=(0, None),
-           title="wear life forecast")
-    legend_outside(ax)
+        far.axvspan(q05, min(q95, n[-1]), color="r", alpha=0.08, label="life, 90 % band")
+    far.set(xlabel="cycles", xlim=(0, n[-1]), ylim=(0, None), title="to the limit")
+    handles, labels = [], []
+    for ax in (near, far):
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    far.legend(handles, labels, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+               borderaxespad=0.0)
+    fig.suptitle("wear life forecast", fontsize=11)
     return _save(fig, path)
 
 

@@ -316,6 +316,16 @@ def test_dynamic_check_in_its_own_process_equals_the_dynamic_model_here(small_da
     (["calibrate", "design_studies/calibration/thesis_rig", "--out", "X", "--top", "0"], "--top"),
     (["calibrate", "design_studies/calibration/thesis_rig", "--out", "X", "--n-theta", "5"],
      "--n-theta"),
+    # a horizon before the last inspection, a limit beyond the bushing wall, a
+    # sampler on two points
+    (["calibrate", "design_studies/calibration/synthetic_run_in", "--out", "X",
+      "--horizon", "1500"], "--horizon 1500: the horizon must lie beyond the dataset's last"),
+    (["calibrate", "design_studies/calibration/synthetic_run_in", "--out", "X",
+      "--limit", "9"], "deeper than the bushing wall"),
+    (["calibrate", "design_studies/calibration/synthetic_run_in", "--out", "X",
+      "--limit", "-1"], "--limit -1 mm: allowed a depth > 0"),
+    (["calibrate", "design_studies/calibration/thesis_rig", "--out", "X",
+      "--posterior", "nuts"], "too few data to sample a posterior"),
 ])
 def test_calibrate_cli_bad_input(args, fragment, tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(ROOT)

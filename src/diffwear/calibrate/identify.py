@@ -243,7 +243,6 @@ class Selection:
     adopted: list                      # Assessment of each adopted member, in the joint fit
     stages: list
     ambiguous: tuple | None = None     # (Path, Path)
-    separation: dict | None = None
     paths: list = field(default_factory=list)   # every path's end, best criterion first
 
 
@@ -622,11 +621,11 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
         log(f"{best.name} or {other.name}: these data cannot tell them apart (criteria "
             f"{best.criterion:.1f} and {other.criterion:.1f})")
         stage1.ambiguous = (best, other)
-        return Selection(base, [], stages, (best, other), None, order)
+        return Selection(base, [], stages, (best, other), order)
     others = sorted((p for p in (*order, *trailing) if p is not best), key=lambda p: p.criterion)
     log(f"selected: {best.name} (criterion {best.criterion:.1f}; other paths: "
         + (", ".join(f"{p.name} {p.criterion:.1f}" for p in others) or "none") + ")")
-    return Selection(best.model, list(best.adopted.values()), stages, None, None, order)
+    return Selection(best.model, list(best.adopted.values()), stages, None, order)
 
 
 def _words(a: Assessment) -> str:
@@ -680,14 +679,17 @@ class Calibration:
         if sel is not None and sel.ambiguous is not None:
             a, b = sel.ambiguous
             sentence = f"{a.name} or {b.name}: these data cannot tell them apart"
-            if sel.separation:
-                sentence += "; " + sel.separation["sentence"]
+            separation = None if self.forecast is None else self.forecast.next_measurement
+            if separation and "expected_separation_sigma" in separation:
+                sentence += "; " + separation["sentence"]
             effects.append({
                 "name": f"{a.name} or {b.name}", "ambiguous": True,
                 "alternatives": [{"name": p.name, "criterion": p.criterion,
-                                  "effects": [x.entry() for x in p.adopted.values()]}
+                                  "effects": [x.entry() for e, x in p.adopted.items()
+                                              if learned.variable_of(e) is None],
+                                  "discrepancy": p.model.discrepancy}
                                  for p in (a, b)],
-                "separating_measurement": sel.separation, "sentence": sentence})
+                "separating_measurement": separation, "sentence": sentence})
         first = effects[0] if effects else None
         out = {
             "dataset": self.dataset.name,

@@ -1,5 +1,4 @@
-"""Which effects the data show: identifiability, adoption, ambiguity and the
-measurement that would separate two explanations.
+"""Which effects the data show: identifiability, adoption and ambiguity.
 
 **Identifiability.**  A fitted shape (a run-in's time scale, a film's depth)
 is *determined* when the data shrink its prior: its posterior standard
@@ -26,12 +25,11 @@ measurements are read once, after the choice, for the before/after report.
 **Ambiguity.**  The qualifying candidates whose criteria lie within
 `AMBIGUITY` of the best (2 ln B < 6, below "strong" evidence on Kass and
 Raftery's scale, J. Am. Stat. Assoc. 90 (1995) 773) form the window of
-comparable explanations; within it the simplest ones (fewest determined
-numbers) stay, as in Occam's window (Madigan and Raftery, J. Am. Stat.
-Assoc. 89 (1994) 1535).  One left is the answer; two or more are an answer
-of their own: "A or B", with both fits and the measurement that would
-separate them, found from the two models' worn-volume predictions
-(`separating_measurement`).
+comparable explanations; within it the simplest ones (fewest causes, then
+fewest determined numbers) stay, as in Occam's window (Madigan and
+Raftery, J. Am. Stat. Assoc. 89 (1994) 1535).  One left is the answer; two
+or more are an answer of their own: "A or B", with both fits and the
+inspection that would separate them (`forecast`).
 """
 
 from __future__ import annotations
@@ -55,7 +53,6 @@ STRENGTH_SIGMAS = 3.0   # |reported value| / its std of an adopted effect
 # data see them come out at 0.01-0.07)
 SHAPE_DETERMINED = 0.3
 AMBIGUITY = 6.0         # criterion difference of two equally good candidates
-SEPARATION_SIGMAS = 3.0  # a measurement separates two models at this many sigma
 # Effects stated, when their shape is not determined, by the extra volume
 # worn before the first inspection (an early effect); the others by the
 # extra volume at the last fitted inspection.
@@ -240,39 +237,3 @@ def assess_discrepancy(name: str, fit: FitResult, reference: FitResult) -> Asses
     z = math.sqrt(max(lr, 0.0))  # the signed root of the likelihood ratio
     return Assessment(name, fit, reference, lr, None, z, 1.0, None, not reasons, reasons,
                       criterion(fit), edf)
-
-
-def separating_measurement(fitter: Fitter, a: FitResult, b: FitResult, data) -> dict:
-    """Where the worn volumes predicted by fits ``a`` and ``b`` differ most in
-    units of the dataset's weighing precision (or, without a weighing, in
-    mm^3): the inspection that would tell the two apart."""
-    probes = np.asarray(fitter.problem.probe_cycles, float)
-    va, _ = volumes(fitter, a)
-    vb, _ = volumes(fitter, b)
-    weighings = [s.sigma for s in data.series if s.kind == "volume"]
-    sigma = min(weighings) if weighings else None
-    diff = np.abs(va - vb)
-    score = diff / sigma if sigma else diff
-    k = int(np.argmax(score))
-    out = {"cycles": float(probes[k]), "volume_a_mm3": float(va[k] * 1e9),
-           "volume_b_mm3": float(vb[k] * 1e9), "difference_mm3": float(diff[k] * 1e9),
-           "sigma_mm3": sigma * 1e9 if sigma else None}
-    measured = sorted({float(c) for s in data.series if s.kind != "force"
-                       for c in np.unique(s.cycle_counts)})
-    first = measured[0] if measured else math.inf
-    when = (f"an inspection earlier than the first ({first:g} cycles), at about "
-            f"{probes[k]:.0f} cycles" if probes[k] < first else
-            f"an inspection or weighing at about {probes[k]:.0f} cycles")
-    if sigma:
-        sep = float(score[k])
-        out["separation_sigma"] = sep
-        enough = sep >= SEPARATION_SIGMAS
-        out["sentence"] = (
-            f"{when} would separate them: the two models predict {va[k] * 1e9:.3g} and "
-            f"{vb[k] * 1e9:.3g} mm^3 there ({sep:.2g} sigma of the stated weighing)"
-            + ("" if enough else f"; a weighing {SEPARATION_SIGMAS / max(sep, 1e-9):.2g}x "
-               "more precise is needed"))
-    else:
-        out["sentence"] = (f"{when} would separate them best: the two models' worn volumes "
-                           f"differ most there ({diff[k] * 1e9:.3g} mm^3); weigh the bushing")
-    return out

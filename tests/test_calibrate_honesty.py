@@ -222,7 +222,7 @@ def test_forecast_requests_are_checked():
     check_request(data, 1e-3, 2000.0, 6e-3)
 
 
-@pytest.mark.extended  # two minutes: NUTS on the small campaign's model
+@pytest.mark.long  # minutes: NUTS on the small campaign's model
 def test_nuts_agrees_with_the_checked_laplace_posterior_where_it_is_gaussian(small):
     """On a near-Gaussian posterior (the base model's two parameters) NUTS and
     the importance-checked Laplace draws agree on each number's mean and
@@ -232,11 +232,11 @@ def test_nuts_agrees_with_the_checked_laplace_posterior_where_it_is_gaussian(sma
     data, fitter, base = small
     lap = laplace(fitter, base)
     assert lap.diagnostics["pareto_k"] < 0.7
-    mc = nuts(fitter, base, chains=2, warmup=60, samples=120)
+    mc = nuts(fitter, base, chains=2, warmup=60, samples=150)
     a, b = lap.numbers(), mc.numbers()
     for name in ("k", "free_length"):
         assert b[name]["mean"] == pytest.approx(a[name]["mean"], abs=0.3 * a[name]["std"])
         assert b[name]["std"] == pytest.approx(a[name]["std"], rel=0.3)
-        assert b[name]["r_hat"] < 1.05
+        assert b[name]["r_hat"] < 1.1   # two short chains (R-hat's own scatter ~0.03)
     # and both agree with the Gauss-Newton 1-sigma of the fit
     assert a["k"]["std"] == pytest.approx(base.params_std["k"], rel=0.25)

@@ -298,11 +298,12 @@ def _next_measurement(ext: _Extended, fit: FitResult, data, candidates, limit,
         scores[kind] = (np.asarray(candidates, float), np.asarray(gains))
     assert best is not None
     gain, kind, cycles = best
+    before, after = math.sqrt(var0), math.sqrt(var0) * (1.0 - gain)
     return {"kind": kind, "cycles": cycles, "life_band_reduction": gain,
-            "life_std_cycles": math.sqrt(var0),
+            "life_std_cycles": before, "life_std_after_cycles": after,
             "sentence": (f"a {'worn profile' if kind == 'profile' else 'weighing'} at about "
-                         f"{cycles:,.0f} cycles would narrow the life's band most: by "
-                         f"{100 * gain:.0f} % (its standard deviation, linearised)")}
+                         f"{cycles:,.0f} cycles would narrow the life's band most: its "
+                         f"1-sigma from {before:,.0f} to {after:,.0f} cycles (linearised)")}
 
 
 def _separating(ext: _Extended, alternatives, candidates, kinds, scores: dict) -> dict:

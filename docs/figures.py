@@ -73,11 +73,16 @@ class _Folder:
         return self.path / name
 
 
-def _wear_study_figures(run: str, folder: Path, clearance_mm: float) -> None:
+def _wear_study_figures(run: str, folder: Path) -> None:
     """The wear study's own figures (`diffwear.plots.wear.wear_figures`) from
-    its stored curves: profile, history, first/last cycle's locus and force."""
+    its stored curves: profile, history, first/last cycle's locus and force,
+    with what the study draws beside them (its joint's clearance and wall, the
+    thesis figures it compares with, what it is calibrated to)."""
     from diffwear.plots.wear import Lines, wear_figures
+    from diffwear.studies import rig_21400, wear_5000
 
+    module = {"rig-21400": rig_21400, "wear-5000": wear_5000}[run]
+    design = module.DESIGN
     s = _summary(run)
     profile = read_csv(STUDIES / run / "wear_profile.csv")
     history = read_csv(STUDIES / run / "wear_history.csv")
@@ -97,7 +102,10 @@ def _wear_study_figures(run: str, folder: Path, clearance_mm: float) -> None:
                  history=(history["cycles"][later], history["max_depth_mm"][later],
                           history["volume_mm3"][later]),
                  crank=crank, first=first, last=last, thesis=s["thesis"],
-                 lines=Lines(clearance_mm=clearance_mm))
+                 lines=Lines(clearance_mm=1e3 * float(design.clearance),
+                             wall_mm=1e3 * float(design.wall),
+                             cf=getattr(module, "CF", ""),
+                             calibrated=getattr(module, "CALIBRATED", "")))
 
 
 _WEAR_STUDY_PNGS: dict[str, dict[str, bytes]] = {}  # run -> its figures, drawn once
@@ -109,12 +117,9 @@ def wear_study(run: str, figure: str) -> Callable[[Path], None]:
     def draw(path: Path) -> None:
         import tempfile
 
-        from diffwear.presets import RIG_JOINT, WEAR_5000
-
         if run not in _WEAR_STUDY_PNGS:
-            clearance = {"rig-21400": RIG_JOINT, "wear-5000": WEAR_5000}[run].clearance
             with tempfile.TemporaryDirectory() as tmp:
-                _wear_study_figures(run, Path(tmp), 1e3 * float(clearance))
+                _wear_study_figures(run, Path(tmp))
                 _WEAR_STUDY_PNGS[run] = {p.name: p.read_bytes() for p in Path(tmp).glob("*.png")}
         path.write_bytes(_WEAR_STUDY_PNGS[run][figure])
     return draw

@@ -205,9 +205,13 @@ def test_the_wear_profile_is_in_degrees_with_its_legend_off_the_flanks(study_fig
     assert ax.get_xlim() == (0.0, 360.0)
     _assert_angles_in_degrees(fig)
     assert _assert_legends_clear(fig)
-    # the 6.3 mm wall is 14x the wear: named, not drawn to scale
-    wall = _horizontal_at(ax, 6.342, "bushing wall")
-    assert "above the axis" in wall.get_label() and ax.get_ylim()[1] < 6.342
+    # the 6.3 mm wall is 14x the wear: not drawn, so not a legend entry, but
+    # named in the legend's title
+    assert not [ln for ln in ax.get_lines() if "bushing wall" in ln.get_label()]
+    assert ax.get_ylim()[1] < 6.342
+    legend = fig.axes[-1].get_legend()
+    assert legend.get_title().get_text() == "bushing wall 6.342 mm: off this scale"
+    assert "bushing wall" not in " ".join(t.get_text() for t in legend.get_texts())
 
 
 def test_the_wear_history_title_says_the_cycles_reached(study_figures):

@@ -326,7 +326,7 @@ def rig_tornado(output: str) -> Callable[[Path], None]:
     """The rig's elasticities of ``output`` by reverse-mode AD (stored study
     ``rig_sensitivity.json``), as `diffwear.plots.sweep.tornado` draws them."""
     def draw(path: Path) -> None:
-        from diffwear.plots.sweep import tornado
+        from diffwear.plots.sweep import quantity, tornado
         from diffwear.sweep.sensitivity import Sensitivity
 
         s = json.loads((RESULTS / "rig_sensitivity.json").read_text())
@@ -336,8 +336,8 @@ def rig_tornado(output: str) -> Callable[[Path], None]:
                     for o, es in s["elasticity_ad"].items()}
         settings = s["settings"]
         tornado(path, Sensitivity(s["point"], y, gradient), output,
-                title=f"rig, {settings['cycles']:,.0f} cycles: sensitivity of {output} "
-                      "(reverse-mode AD)")
+                title=f"rig, {settings['cycles']:,.0f} cycles: sensitivity of the "
+                      f"{quantity(output).split(' [')[0]} (reverse-mode AD)")
     return draw
 
 
@@ -348,7 +348,7 @@ def rig_sweep_heatmap(output: str) -> Callable[[Path], None]:
     def draw(path: Path) -> None:
         from diffwear.cli.sweep import label, shown
         from diffwear.config.sweep import load_sweep
-        from diffwear.plots.sweep import heatmap
+        from diffwear.plots.sweep import heatmap, quantity
 
         spec = load_sweep(ROOT / "design_studies" / "sweep_rig_clearance_k.toml")
         rows = read_csv(STUDIES / "sweep-rig-clearance-k" / "results.csv")
@@ -358,8 +358,9 @@ def rig_sweep_heatmap(output: str) -> Callable[[Path], None]:
         y, x = (np.unique(rows[columns[name]]) for name in (gy, gx))
         z = rows[output].reshape(y.size, x.size)
         heatmap(path, shown(spec, gx, x), shown(spec, gy, y), z,
-                xlabel=label(spec, gx), ylabel=label(spec, gy),
-                title=f"rig, 21,400 cycles, quasi-static joint model: {output}")
+                xlabel=label(spec, gx), ylabel=label(spec, gy), zlabel=quantity(output),
+                title=f"rig, 21,400 cycles, quasi-static joint model: "
+                      f"{quantity(output).split(' [')[0]}")
     return draw
 
 

@@ -215,16 +215,23 @@ def _figures(spec: SweepSpec, res: SweepResult, out: OutputDir) -> list[str]:
         x = shown(spec, g, res.axis(g))
         for k in names:
             files.append(plots_sweep.line(out.file(f"{k}.png"), x, res.grid(k),
-                                          xlabel=label(spec, g), ylabel=k,
-                                          title=f"{title}: {k}").name)
+                                          xlabel=label(spec, g),
+                                          ylabel=plots_sweep.quantity(k),
+                                          title=f"{title}: {_words(k)}").name)
     elif len(res.grid_names) == 2:
         gy, gx = res.grid_names
         x, y = shown(spec, gx, res.axis(gx)), shown(spec, gy, res.axis(gy))
         for k in names:
             files.append(plots_sweep.heatmap(out.file(f"{k}.png"), x, y, res.grid(k),
                                              xlabel=label(spec, gx), ylabel=label(spec, gy),
-                                             title=f"{title}: {k}").name)
+                                             zlabel=plots_sweep.quantity(k),
+                                             title=f"{title}: {_words(k)}").name)
     return files
+
+
+def _words(output: str) -> str:
+    """An output's name in words, without its unit: "max_depth_mm" -> "max wear depth"."""
+    return plots_sweep.quantity(output).split(" [")[0]
 
 
 def _report(spec: SweepSpec, res: SweepResult, summary: dict, figures: list[str]) -> Report:

@@ -99,7 +99,8 @@ def run_wear_study(out, study: WearStudy, *, cycles, model: AbstractWearModel, l
             study.thesis_cycles):
         why = (f"the thesis's values are for {int(study.thesis_cycles):,} cycles and this "
                f"run has {int(cycles):,}: not compared")
-        study = study._replace(thesis={}, cf="", calibrated="", extra_report=(*study.extra_report, Bullets([why])),
+        study = study._replace(thesis={}, cf="", calibrated="",
+                               extra_report=(*study.extra_report, Bullets([why])),
                                extra_summary={**study.extra_summary,
                                               "thesis_not_compared": why})
     extra_summary, extra_report = dict(study.extra_summary), list(study.extra_report)

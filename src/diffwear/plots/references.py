@@ -68,12 +68,13 @@ def maxima_strip(ax: Axes, values: Sequence[tuple[str, float]], *, unit: str = "
     x = np.arange(len(values))
     others = 0
     for k, (label, value) in enumerate(values):
-        if k == 0:
-            marker, color = "o", "tab:blue"
+        if k == 0 or label.startswith("diffwear"):  # the runs: filled circles
+            marker, color = "o", f"C{k}"
         else:
             marker, color = style(label, others)
             others += marker in {m for m, _ in OTHER}
-        ax.plot([k], [value], marker, ms=7, mfc="none" if k else color, mew=1.4, color=color)
+        ax.plot([k], [value], marker, ms=7, mfc=color if marker == "o" else "none", mew=1.4,
+                color=color)
         ax.annotate(f"{value:.3g}", (k, value), xytext=(0, 7), textcoords="offset points",
                     ha="center", fontsize=7)
     ax.set_xticks(x, [tick(lab) for lab, _ in values], fontsize=6.5)
@@ -84,8 +85,9 @@ def maxima_strip(ax: Axes, values: Sequence[tuple[str, float]], *, unit: str = "
 
 
 def tick(label: str) -> str:
-    """A reference's label as a two-line tick: "thesis EFM (Table 7-4)" ->
-    "EFM\nTable 7-4"."""
+    """A reference's label as a tick of a few short lines: "thesis EFM (Table
+    7-4)" -> "EFM\nTable 7-4", "diffwear (FEM route, +-4 deg mean)" ->
+    "diffwear\nFEM route\n+-4 deg mean"."""
     label = label.removeprefix("thesis ")
     head, _, source = label.partition(" (")
-    return head + ("\n" + source.rstrip(")") if source else "")
+    return "\n".join([head, *source.rstrip(")").split(", ")] if source else [head])

@@ -433,10 +433,11 @@ def results_against_thesis(path: Path) -> None:
             marker, color = STYLES[kind]
             ax.plot(ours / value, i + shift[kind], marker, ms=7, mfc="none", mew=1.5,
                     color=color,
-                    label="the measurement" if kind == "measured" else f"thesis {kind}")
+                    label="against the measurement" if kind == "measured"
+                    else f"against thesis {kind}")
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles))
-    ax.legend(unique.values(), [f"against {n}" for n in unique], fontsize=8,
+    ax.legend(unique.values(), list(unique), fontsize=8,
               loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.axvline(1.0, color="k", lw=0.8)
     ax.set_yticks(range(len(rows)), [r[0] for r in rows], fontsize=8)

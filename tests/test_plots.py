@@ -10,6 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from figure_checks import assert_legend_names_drawn
 from matplotlib.lines import Line2D
 
 from diffwear import plots
@@ -49,9 +50,11 @@ def _display_points(ax, per_segment: int = 40) -> np.ndarray:
 
 
 def _assert_legends_clear(fig):
-    """No legend's box holds a data point of any axes of the figure, and
-    nothing is cut off at the figure's edge."""
+    """No legend's box holds a data point of any axes of the figure, every
+    legend entry names an artist drawn inside its axes, and nothing is cut
+    off at the figure's edge."""
     _assert_inside_the_figure(fig)
+    assert_legend_names_drawn(fig)
     points = np.concatenate([_display_points(ax) for ax in fig.axes] + [np.zeros((0, 2))])
     legends = [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
     for leg in legends:

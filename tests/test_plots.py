@@ -455,6 +455,9 @@ def test_a_users_file_worn_through_its_wall_has_it_in_its_figures(tmp_path):
                      "--model", "quasi-static", "--out", str(out), "--quiet"]) == 3
     joint = json.loads((out / "summary.json").read_text())["joints"]["crank_rod"]
     assert joint["status"] == STATUS_PIERCED and 100 < joint["cycles"] < 100000
+    report = (out / "report.md").read_text()
+    assert "compiling the motion's integrator and the quasi-static wear model" in report
+    assert "dynamic wear model" not in report
     wear = figures["wear.png"]
     title = wear.texts[0].get_text().replace("\n", " ")
     assert f"wear after {joint['cycles']:,.0f} cycles (stopped: wall reached)" in title

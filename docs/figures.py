@@ -407,6 +407,88 @@ def agreement(path: Path) -> None:
     plt.close(fig)
 
 
+def _record(name: str) -> dict:
+    return json.loads((RECORDS / f"{name}.json").read_text())
+
+
+def performance_costs(path: Path) -> None:
+    """The performance page's figure, from the benchmark records: left, the
+    run time of the rig's wear over N crank cycles by route (each recorded
+    run a marker; the every-cycle route's time proportional to N, dotted
+    beyond its run); right, the time of a sweep against its number of
+    designs, on the 2-core CPU (a process per core; linear in the count,
+    dotted beyond the recorded run) and in the GPU first look (its recorded
+    runs only: a batch's throughput grows with its size)."""
+    from diffwear.plots.references import side_by_side
+    from diffwear.studies.rig_21400 import THESIS
+
+    plt = _pyplot()
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11.5, 6.2))
+
+    # ---- left: the rig's wear over N cycles
+    every = json.loads((RESULTS / "wear_convergence_2000.json").read_text())
+    n_every = every["cycles"]
+    t_every = every["runs"]["every cycle (A = 1)"]["wall_time_s_incl_compile"]
+    n = np.geomspace(1e2, 1e6, 50)
+    a.plot([n_every], [t_every], "o", color="tab:red", ms=6,
+           label=f"dynamic, every cycle simulated (Tsit5; {n_every:,} cycles, incl. compile)")
+    a.plot(n, t_every * n / n_every, ":", color="tab:red", lw=1.2,
+           label="  the same, proportional to N")
+    full = _record("full_2d4674c_quiet")["cases"]["rig-21400 (constant A)"]
+    rodas = _record("study_and_exudyn_static_ground")["runs"]["rig-21400 (Rodas4)"]["case"]
+    quasi = _record("quasi_static")["cases"]["rig-21400 quasi-static"]
+    n_rig = 21400.0
+    for t, marker, color, label in (
+            (full["run_s"], "s", "tab:green", "dynamic, 51 simulated cycles (Tsit5)"),
+            (rodas["run_s"], "D", "tab:purple", "dynamic, 51 simulated cycles (Rodas4)"),
+            (quasi["run_s"], "^", "tab:blue", "quasi-static (wear ODE in N)")):
+        a.plot([n_rig], [t], marker, color=color, ms=7, label=f"{label}: {t:.3g} s")
+    side_by_side(a, n_rig, [(f"thesis {ref}: {THESIS[ref]['time_h']:g} h",
+                             3600.0 * THESIS[ref]["time_h"])
+                            for ref in ("EFM (Table 7-4)", "FEM (Table 7-4)")], first_pt=-4.5)
+    a.set(xscale="log", yscale="log", xlabel="crank cycles of wear N",
+          ylabel="run time [s] (after compiling)", xlim=(1e2, 1e6), ylim=(0.05, 2e5),
+          title="Ch. 7 rig: wear over N cycles (2-core CPU)")
+    a.grid(alpha=0.3, which="both")
+    a.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14))
+
+    # ---- right: a sweep over designs
+    lives = _record("quasi_static")["cases"]["quasi-static life sweep, 1000 designs"]
+    sweep = _record("cpu_sweep")["cases"]
+    rig_qs = next(v for k, v in sweep.items() if "quasi-static rig" in k)
+    rig_dyn = next(v for k, v in sweep.items() if "dynamic rig" in k)
+    gpu = _record("gpu_first_look")["cases"]
+    designs = np.geomspace(1, 1e5, 50)
+    cpu = (("Ch. 8 lives (quasi-static)", lives["designs"], lives["run_s"], "tab:blue"),
+           ("rig, 21,400 cycles (quasi-static)", rig_qs["points"], rig_qs["auto_s"],
+            "tab:orange"),
+           ("rig, 21,400 cycles (dynamic, 50 dynamic cycles)", rig_dyn["points"], rig_dyn["auto_s"],
+            "tab:green"))
+    for label, count, t, color in cpu:
+        b.plot([count], [t], "o", color=color, ms=6, label=f"CPU: {label}")
+        b.plot(designs, t * designs / count, ":", color=color, lw=1.1)
+    first = (("quasi-static two-joint lives (Ch. 8 box)", "gpu_designs", "tab:blue"),
+             ("quasi-static rig, 21,400 cycles", "gpu_points", "tab:orange"),
+             ("dynamic rig, 21,400 cycles at 3 dynamic cycles", "gpu_points", "tab:green"))
+    for case, key, color in first:
+        g = gpu[case]
+        b.plot([g[key]], [g["gpu_s"]], "D", mfc="none", mew=1.4, color=color, ms=7,
+               label=f"GPU first look: {case} ({g[key]:,})")
+    b.set(xscale="log", yscale="log", xlabel="designs (sweep points)",
+          ylabel="run time [s] (after compiling)", xlim=(1, 1e5), ylim=(0.1, 1e5),
+          title="A sweep against its number of designs")
+    b.grid(alpha=0.3, which="both")
+    b.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14))
+    fig.text(0.01, 0.01, "Dotted: a recorded run scaled linearly (cost proportional to cycles "
+                         "or designs).  Records: benchmarks/records/ (full_2d4674c_quiet, "
+                         "study_and_exudyn_static_ground, quasi_static, cpu_sweep,\n"
+                         "gpu_first_look) and design_studies/results/wear_convergence_2000.json.",
+             fontsize=7, va="bottom")
+    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
 def results_against_thesis(path: Path) -> None:
     """The wear studies' depth and volume, diffwear over each of the thesis's
     values (its EFM and FEM models, the measurement)."""
@@ -714,6 +796,7 @@ FIGURES: dict[str, Callable[[Path], None]] = {
     "figures/ch8_life_map_joint1.png": life_map(1),
     "figures/ch8_life_map_joint2.png": life_map(2),
     "figures/quasi_static_agreement.png": agreement,
+    "figures/performance_costs.png": performance_costs,
     "figures/rig_sweep_max_depth.png": rig_sweep_heatmap("max_depth_mm"),
     "figures/rig_tornado_max_depth.png": rig_tornado("max_depth_mm"),
     "figures/rig_tornado_volume.png": rig_tornado("volume_mm3"),

@@ -43,8 +43,8 @@ def side_by_side(ax: Axes, x: float, values: Sequence[tuple[str, float]], *,
     for k, (label, value) in enumerate(values):
         marker, color = style(label, others)
         others += marker in {m for m, _ in OTHER}
-        shift = offset_copy(ax.transData, fig=ax.figure, x=first_pt + k * STEP_PT, y=0.0,
-                            units="points")
+        shift = offset_copy(ax.transData, fig=ax.get_figure(root=True),
+                            x=first_pt + k * STEP_PT, y=0.0, units="points")
         ax.plot([x], [value], marker, ms=ms, mfc="none", mew=1.4, color=color,
                 transform=shift, label=label)
         # an offset transform keeps the point out of the data limits: put it in

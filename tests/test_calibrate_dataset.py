@@ -640,3 +640,22 @@ def test_metres_in_a_millimetre_column_is_named_beside_a_fit_at_the_noise_level(
     (w,) = s["unit_warnings"]
     assert w["series"] == "max_depth" and 0.5e-3 < w["factor"] < 2e-3
     assert "metres in a millimetre column" in (out / "report.md").read_text()
+
+
+def test_the_manifest_is_written_without_the_unit_conversions_noise(tmp_path):
+    """k = 5.05e-13 1/Pa is written 0.000505 mm^3/(N m) (not the conversion's
+    0.0005050000000000001), a clearance of 9.533 - 9.5 mm as 0.033 mm (not
+    0.032999999999999474) and reads back within 1e-12; the series' data keep
+    their round-trip digits."""
+    x = np.linspace(0.0, 2 * np.pi, 37)[:-1]
+    y = 1e-5 * (1 + np.cos(x)) / 3  # digits to the last bit
+    params = {"k": Parameter("k", 5.05e-13, 0.3 * 5.05e-13, True),
+              "clearance": Parameter("clearance", 9.533e-3 - 9.5e-3)}
+    d = write_dataset(tmp_path / "ds", name="noise", parameters=params,
+                      series=[Series("p", "profile", "p.csv", 1000, x, y, 2e-6)])
+    text = (tmp_path / "ds" / "dataset.toml").read_text()
+    assert 'k = { value = "0.000505 mm^3/(N m)", std = "0.0001515 mm^3/(N m)"' in text
+    assert 'clearance = { value = "0.033 mm" }' in text
+    assert d.parameters["k"].value == pytest.approx(5.05e-13, rel=1e-12)
+    assert d.parameters["clearance"].value == pytest.approx(3.3e-5, rel=1e-12)
+    np.testing.assert_allclose(d.series[0].y, y, rtol=1e-15)

@@ -231,3 +231,42 @@ def test_failed_points_exit_3_and_results_kept(tmp_path, capsys, monkeypatch):
         rows = list(csv.DictReader(fh))
     assert float(rows[0]["max_depth_mm"]) == pytest.approx(5.05e-4 * 0.02)  # k[mm^3/Nm] x c[mm]
     assert rows[1]["max_depth_mm"] == "nan"
+
+
+class _Linear(_Fragile):
+    """Depth = k [mm^3/(N m)] x clearance [mm]: a closed form, every point ok."""
+
+    def __call__(self, p):
+        import jax.numpy as jnp
+
+        return {"max_depth_mm": p["k"] * 1e9 * p["clearance"] * 1e3,
+                "status": jnp.zeros(())}
+
+
+def test_summary_and_report_give_the_grid_in_the_files_units(tmp_path, monkeypatch):
+    """A sweep file writes k in mm^3/(N m): summary.json's ``grid`` and the
+    max's place are in that unit (5.05e-4, not 5.05e-13 1/Pa, and without
+    the conversion's last-digit noise), ``grid_si`` keeps SI; the report
+    says where the max is with units and names the output in words."""
+    import dataclasses
+
+    from diffwear.config import sweep as cfg
+
+    monkeypatch.setitem(cfg.MODELS, "rig-wear",
+                        dataclasses.replace(cfg.MODELS["rig-wear"], build=_Linear))
+    f = tmp_path / "s.toml"
+    f.write_text('model = "rig-wear"\n[grid]\nclearance = ["0.02 mm", "0.05 mm"]\n'
+                 'k = ["5.05e-4 mm^3/(N m)", "1.01e-3 mm^3/(N m)"]\n')
+    out = tmp_path / "out"
+    assert main(["sweep", str(f), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["grid"]["k"] == {"unit": "mm^3/(N m)", "values": [5.05e-4, 1.01e-3]}
+    assert summary["grid"]["clearance"] == {"unit": "mm", "values": [0.02, 0.05]}
+    np.testing.assert_allclose(summary["grid_si"]["k_per_Pa"], [5.05e-13, 1.01e-12],
+                               rtol=1e-15)
+    top = summary["outputs"]["max_depth_mm"]
+    assert top["argmax"] == {"clearance": 0.05, "k": 1.01e-3}
+    assert top["max"] == pytest.approx(1.01e-3 * 0.05, rel=1e-12)
+    report = (out / "report.md").read_text()
+    assert "| max wear depth [mm] (`max_depth_mm`) |" in report
+    assert "clearance = 0.05 mm, k = 0.00101 mm^3/(N m)" in report

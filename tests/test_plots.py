@@ -10,6 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from figure_checks import assert_legend_names_drawn
 from matplotlib.lines import Line2D
 
 from diffwear import plots
@@ -49,9 +50,11 @@ def _display_points(ax, per_segment: int = 40) -> np.ndarray:
 
 
 def _assert_legends_clear(fig):
-    """No legend's box holds a data point of any axes of the figure, and
-    nothing is cut off at the figure's edge."""
+    """No legend's box holds a data point of any axes of the figure, every
+    legend entry names an artist drawn inside its axes, and nothing is cut
+    off at the figure's edge."""
     _assert_inside_the_figure(fig)
+    assert_legend_names_drawn(fig)
     points = np.concatenate([_display_points(ax) for ax in fig.axes] + [np.zeros((0, 2))])
     legends = [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
     for leg in legends:
@@ -205,9 +208,13 @@ def test_the_wear_profile_is_in_degrees_with_its_legend_off_the_flanks(study_fig
     assert ax.get_xlim() == (0.0, 360.0)
     _assert_angles_in_degrees(fig)
     assert _assert_legends_clear(fig)
-    # the 6.3 mm wall is 14x the wear: named, not drawn to scale
-    wall = _horizontal_at(ax, 6.342, "bushing wall")
-    assert "above the axis" in wall.get_label() and ax.get_ylim()[1] < 6.342
+    # the 6.3 mm wall is 14x the wear: not drawn, so not a legend entry, but
+    # named in the legend's title
+    assert not [ln for ln in ax.get_lines() if "bushing wall" in ln.get_label()]
+    assert ax.get_ylim()[1] < 6.342
+    legend = fig.axes[-1].get_legend()
+    assert legend.get_title().get_text() == "bushing wall 6.342 mm: off this scale"
+    assert "bushing wall" not in " ".join(t.get_text() for t in legend.get_texts())
 
 
 def test_the_wear_history_title_says_the_cycles_reached(study_figures):
@@ -448,6 +455,9 @@ def test_a_users_file_worn_through_its_wall_has_it_in_its_figures(tmp_path):
                      "--model", "quasi-static", "--out", str(out), "--quiet"]) == 3
     joint = json.loads((out / "summary.json").read_text())["joints"]["crank_rod"]
     assert joint["status"] == STATUS_PIERCED and 100 < joint["cycles"] < 100000
+    report = (out / "report.md").read_text()
+    assert "compiling the motion's integrator and the quasi-static wear model" in report
+    assert "dynamic wear model" not in report
     wear = figures["wear.png"]
     title = wear.texts[0].get_text().replace("\n", " ")
     assert f"wear after {joint['cycles']:,.0f} cycles (stopped: wall reached)" in title

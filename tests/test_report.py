@@ -26,3 +26,24 @@ def test_tables_refuse_ragged_rows_and_bad_alignment():
         Table(("a", "b"), [(1, 2), (3,)])
     with pytest.raises(ValueError, match="align"):
         Table(("a", "b"), [(1, 2)], align="lc")
+
+
+def test_a_run_reports_compiling_the_wear_model_that_ran():
+    """The run report's compile time names the wear model that was compiled:
+    none without wear, the quasi-static one when it ran (never "dynamic")."""
+    from diffwear.cli.run import _compiled_wear
+
+    assert _compiled_wear({}) == ""
+    assert _compiled_wear({"joints": {"a": {"model": "quasi-static", "compile_time_s": 9.1}}}) \
+        == " and the quasi-static wear model"
+    assert _compiled_wear({"joints": {"a": {"model": "dynamic", "compile_time_s": 9.1},
+                                      "b": {"model": "dynamic"}}}) \
+        == " and the dynamic wear model"
+
+
+def test_a_wear_studys_peak_is_given_in_degrees():
+    """2.9670597 rad (the rig's grid point 85 of 180) is 170 deg."""
+    from diffwear.studies._report import peak_line
+
+    line = peak_line({"max_wear_angle_rad": 2 * 3.141592653589793 * 85 / 180})
+    assert line.startswith("peak wear at θ = 170 deg (2.967 rad;")

@@ -782,11 +782,26 @@ _WRITE_UNITS = {"wear coefficient": "mm^3/(N m)", "length": "mm", "volume": "mm^
                 "force": "N", "density": "kg/m^3"}
 
 
+# Significant digits of a manifest's numbers (parameters, uncertainties): the
+# unit conversion and arithmetic leave last-digit noise in a float (5.05e-4
+# mm^3/(N m) from 5.05e-13 1/Pa reads 0.0005050000000000001; 9.533 - 9.5 mm
+# reads 0.032999999999999474); 12 digits drop it and keep 1e-12 of the value,
+# far below any parameter's uncertainty.  The series' data keep round-trip digits.
+MANIFEST_DIGITS = 12
+
+
+def _manifest_num(value: float) -> str:
+    """A manifest's number to `MANIFEST_DIGITS` significant digits, shortest form."""
+    value = float(value)
+    return _num(float(f"{value:.{MANIFEST_DIGITS}g}")) if math.isfinite(value) else _num(value)
+
+
 def _quantity_text(value: float, dimension: str) -> str:
-    """``"<number> <unit>"`` of an SI value (scaled by the unit's exact factor)."""
+    """``"<number> <unit>"`` of an SI value (scaled by the unit's exact factor),
+    to `MANIFEST_DIGITS` significant digits."""
     unit = _WRITE_UNITS[dimension]
     u = units.DIMENSIONS[dimension].units[unit]
-    return _toml_string(f"{_in_unit(value, u.scale)} {unit}")
+    return _toml_string(f"{_manifest_num(float(_in_unit(value, u.scale)))} {unit}")
 
 
 def _rule_holdout(s: Series, holdout_from: float | None) -> np.ndarray:
@@ -811,7 +826,7 @@ def _manifest_text(name, description, preset, parameters, series, bushing_densit
                              f"mismatch ({p.name!r}); allowed: {PARAMETER_RULE}")
         dimension = PARAMETERS[key]
         def text(v, d: str | None = dimension) -> str:
-            return _num(v) if d is None else _quantity_text(v, d)
+            return _manifest_num(v) if d is None else _quantity_text(v, d)
         items = [] if p.value is None else [f"value = {text(p.value)}"]
         if p.std is not None:
             items.append(f"std = {text(p.std)}")
@@ -892,8 +907,11 @@ def write_dataset(folder: str | Path, *, name: str, parameters: Mapping[str, Par
     """Write ``dataset.toml`` and one CSV per series (``Series.file``, relative
     to ``folder``) in the documented format; return the dataset loaded back.
 
-    Values are written in mm, mm^3, N, rad and cycles with round-trip digits
-    (`repr`), so loading gives the SI values back to ~1 ulp.  Volume series are
+    Values are written in mm, mm^3, N, rad and cycles: the series' data with
+    round-trip digits (`repr`), so loading gives the SI values back to ~1
+    ulp; the manifest's parameters and uncertainties to 12 significant digits
+    (`MANIFEST_DIGITS`: 5.05e-4 mm^3/(N m), not the conversion's
+    0.0005050000000000001).  Volume series are
     written as ``volume_mm3`` with their ``basis``.  Per-point ``holdout`` is
     written as the series' ``role`` or left to ``holdout_from_cycles``; anything
     else is refused.  Everything is checked (by loading a copy in a temporary

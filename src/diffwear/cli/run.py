@@ -221,6 +221,14 @@ def _run_time_meaning(s: dict) -> str:
             + ", files and figures")
 
 
+def _compiled_wear(s: dict) -> str:
+    """" and the quasi-static wear model": the wear models whose compilation
+    the compile time holds (those that ran and were timed)."""
+    timed = sorted({w["model"] for w in (s.get("joints") or {}).values()
+                    if "compile_time_s" in w})
+    return f" and the {'/'.join(timed)} wear model" if timed else ""
+
+
 def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
     mech, sim = mfile.mechanism, mfile.simulation
     t = s["start_up_transient"]
@@ -249,9 +257,7 @@ def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
              f"{t['length_s']:.4g} s" if t["settled"] else "did not settle",
              "time the reported forces take to settle onto the forced motion (below)"),
             ("compile time", f"{s['compile_time_s']:.2f} s",
-             "compiling the motion's integrator"
-             + (" and the dynamic wear model" if s.get("joints") and any(
-                 "compile_time_s" in w for w in s["joints"].values()) else "")),
+             "compiling the motion's integrator" + _compiled_wear(s)),
             ("run time", f"{s['run_time_s']:.2f} s", _run_time_meaning(s))]),
         _transient_text(s, sim.duration),
     ]

@@ -10,7 +10,9 @@ Outputs in the results folder (`io.OutputDir`: never over earlier results):
                     installed (extra ``diffwear[netcdf]``); skipped otherwise
     <output>.png    heatmap over a 2-D grid, line plot over a 1-D grid (none for
                     3-D and more: use the tables)
-    summary.json    settings, axes, per-output min/max and where, failed points,
+    summary.json    settings, axes (``grid``: in the units the tables and plots
+                    show, e.g. k in mm^3/(N m); ``grid_si``: in SI), per-output
+                    min/max and where (in ``grid``'s units), failed points,
                     timing (written last: marks a finished run)
     report.md       what was run and what came out, linking the rest
     input.toml      copy of the sweep file
@@ -58,6 +60,18 @@ def label(spec: SweepSpec, name: str) -> str:
 
 def shown(spec: SweepSpec, name: str, values):
     return np.asarray(values, dtype=float) * spec.params[name].display_scale
+
+
+def shown_value(spec: SweepSpec, name: str, value) -> float:
+    """One value of axis ``name`` in its shown unit, to 12 significant digits
+    (the unit conversion's last-digit noise, e.g. 0.0005050000000000001, cut)."""
+    return float(f"{float(shown(spec, name, value)):.12g}")
+
+
+def with_unit(spec: SweepSpec, name: str, value) -> str:
+    """"k = 0.0005252 mm^3/(N m)": a grid value in its shown unit, 4 digits."""
+    unit = spec.params[name].display_unit
+    return f"{name} = {float(shown(spec, name, value)):.4g}" + (f" {unit}" if unit else "")
 
 
 def failed_points(res: SweepResult) -> np.ndarray:
@@ -153,14 +167,17 @@ def write(spec: SweepSpec, res: SweepResult, out: OutputDir, *, input_text=None,
         i_min = int(np.flatnonzero(ok)[np.argmin(col[ok])])
         i_max = int(np.flatnonzero(ok)[np.argmax(col[ok])])
         outputs[k] = {"min": float(col[i_min]), "max": float(col[i_max]),
-                      "argmin": {g: float(res[g][i_min]) for g in res.grid_names},
-                      "argmax": {g: float(res[g][i_max]) for g in res.grid_names}}
+                      "argmin": {g: shown_value(spec, g, res[g][i_min]) for g in res.grid_names},
+                      "argmax": {g: shown_value(spec, g, res[g][i_max]) for g in res.grid_names}}
     info = res.info
     summary = {
         "file": spec.file, "title": spec.title, "model": spec.model_name,
         "settings": spec.settings,
         "base_si": {column_name(spec, k): v for k, v in spec.base.items()
                     if k not in spec.grid},
+        "grid": {k: {"unit": spec.params[k].display_unit,
+                     "values": [shown_value(spec, k, x) for x in v]}
+                 for k, v in spec.grid.items()},
         "grid_si": {column_name(spec, k): v.tolist() for k, v in spec.grid.items()},
         "grid_shape": list(res.grid_shape), "points": len(res),
         "outputs": outputs,
@@ -215,16 +232,31 @@ def _figures(spec: SweepSpec, res: SweepResult, out: OutputDir) -> list[str]:
         x = shown(spec, g, res.axis(g))
         for k in names:
             files.append(plots_sweep.line(out.file(f"{k}.png"), x, res.grid(k),
-                                          xlabel=label(spec, g), ylabel=k,
-                                          title=f"{title}: {k}").name)
+                                          xlabel=label(spec, g),
+                                          ylabel=plots_sweep.quantity(k),
+                                          title=f"{title}: {_words(k)}").name)
     elif len(res.grid_names) == 2:
         gy, gx = res.grid_names
         x, y = shown(spec, gx, res.axis(gx)), shown(spec, gy, res.axis(gy))
         for k in names:
             files.append(plots_sweep.heatmap(out.file(f"{k}.png"), x, y, res.grid(k),
                                              xlabel=label(spec, gx), ylabel=label(spec, gy),
-                                             title=f"{title}: {k}").name)
+                                             zlabel=plots_sweep.quantity(k),
+                                             title=f"{title}: {_words(k)}").name)
     return files
+
+
+def _settings_words(settings: dict) -> str:
+    """"cycles 21,400, dynamic_cycles 50, wear_model quasi-static"."""
+    if not settings:
+        return "(defaults)"
+    return ", ".join(f"{k} {v:,.6g}" if isinstance(v, float) else f"{k} {v}"
+                     for k, v in settings.items())
+
+
+def _words(output: str) -> str:
+    """An output's name in words, without its unit: "max_depth_mm" -> "max wear depth"."""
+    return plots_sweep.quantity(output).split(" [")[0]
 
 
 def _report(spec: SweepSpec, res: SweepResult, summary: dict, figures: list[str]) -> Report:
@@ -233,13 +265,15 @@ def _report(spec: SweepSpec, res: SweepResult, summary: dict, figures: list[str]
         if s["min"] is None:
             outputs.append((k, "-", "-", "-"))
             continue
-        at = ", ".join(f"{g} = {float(shown(spec, g, v)):.4g}" for g, v in s["argmax"].items())
-        outputs.append((k, f"{s['min']:.6g}", f"{s['max']:.6g}", at))
+        at = ", ".join(with_unit(spec, g, v / spec.params[g].display_scale)
+                       for g, v in s["argmax"].items())
+        outputs.append((f"{plots_sweep.quantity(k)} (`{k}`)", f"{s['min']:.6g}",
+                        f"{s['max']:.6g}", at))
     pps = summary["points_per_s"]
     failed = summary["failed_points"]
     blocks: list[Block] = [
         f"Model `{spec.model_name}` from `{spec.file}`; settings "
-        f"{spec.settings or '(defaults)'}; {len(res)} points "
+        f"{_settings_words(spec.settings)}; {len(res)} points "
         f"({' x '.join(f'{g} {n}' for g, n in zip(res.grid_names, res.grid_shape))}).",
         Table(("axis", "values"),
               [(label(spec, g), ", ".join(f"{v:.4g}" for v in shown(spec, g, res.axis(g))))

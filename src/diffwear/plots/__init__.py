@@ -5,7 +5,9 @@ command selects Agg (files only); a notebook keeps its inline backend.
 `panels`: stacked time series, contact loci, wear profiles, a lubricated
 joint's film over the cycle (shared);
 `layout`: the rules they share (legends off the data, zero curves left out,
-the bushing wall and the depth limit on depth axes); `files`: where a
+the bushing wall and the depth limit on depth axes); `references`: the
+thesis's values beside a run (one open marker per kind, side by side, and a
+strip of maxima); `files`: where a
 figure becomes a file (`captured` reads the figures back, for tests);
 `wear`: the wear studies; `pin_pivot`: the pin-pivot study; `design`: the
 bushing design's life maps; `calibration`: the calibration's fits, residual

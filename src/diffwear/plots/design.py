@@ -14,7 +14,7 @@ def life_map(path, maps: dict, j: int, answer, thesis) -> None:
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
     d, h = maps["d_m"] * 1e3, maps["h_m"] * 1e3
     c = ax.contourf(d, h, maps[f"cyc{j}"].T / 1e3, levels=12, cmap="viridis")
-    fig.colorbar(c, ax=ax, label=f"cyc{j} [thousand cycles]")
+    fig.colorbar(c, ax=ax, label=f"joint {j} life [thousand cycles to 2 mm wear]")
     ax.plot(answer[j - 1] * 1e3, answer[j + 1] * 1e3, "r*", ms=12, label="equal-life answer")
     ax.plot(thesis[j - 1] * 1e3, thesis[j + 1] * 1e3, "wo", mec="k", label="thesis Table 8-4")
     ax.set_xlabel(f"bushing diameter d{j} [mm]")

@@ -1,6 +1,8 @@
 """Layout rules every figure follows: legends beside the axes (never over the
 data), series that are zero to round-off left out (and named), the bushing
-wall and the depth limit drawn as labelled lines on a wear-depth axis."""
+wall and the depth limit drawn as labelled lines on a wear-depth axis (a wall
+far above the wear named in words, never a legend entry for a line not
+drawn)."""
 
 from __future__ import annotations
 
@@ -25,8 +27,9 @@ ROUND_OFF = 1e-9
 TITLE_WIDTH = 70
 
 # A bushing wall more than this many times the deepest wear (or the limit)
-# is named in the legend but not drawn to scale: on the same axis the wear
-# would be squeezed into the bottom third of the panel.
+# is not drawn (on the same axis the wear would be squeezed into the bottom
+# third of the panel) and so not in the legend: `depth_references` names it
+# in words.
 WALL_IN_VIEW = 3.0
 
 
@@ -40,9 +43,12 @@ def legend_outside(ax: Axes, *, fontsize: float = 8, below: bool = False,
                    **kwargs) -> Legend | None:
     """The axes' legend right of its frame, top-aligned (``below``: under the
     axis label, for axes with a colour bar on the right), off the data (none
-    when nothing is labelled)."""
-    if not ax.get_legend_handles_labels()[0]:
+    when nothing is labelled and no ``title`` is given: a legend may hold only
+    its title, a note such as a wall off the scale)."""
+    if not ax.get_legend_handles_labels()[0] and not kwargs.get("title"):
         return None
+    if kwargs.get("title"):
+        kwargs.setdefault("title_fontsize", fontsize)
     if below:
         return ax.legend(fontsize=fontsize, loc="upper center", bbox_to_anchor=(0.5, -0.16),
                          borderaxespad=0.0, **kwargs)
@@ -64,12 +70,14 @@ def nonzero(curves: Mapping[str, ArrayLike], *, log: bool = False
 
 
 def depth_references(ax: Axes, deepest_mm: float, *, walls_mm: Mapping[str, float] | None = None,
-                     limit_mm: float | None = None) -> None:
+                     limit_mm: float | None = None) -> str:
     """On a wear-depth axis [mm]: the depth ``limit_mm`` and each joint's
     bushing wall (``walls_mm`` by joint name; "" for a single joint) as
     labelled horizontal lines, and the y range from 0 to the deepest of the
-    wear, the limit and every wall within `WALL_IN_VIEW` of them (a wall
-    further up is labelled "above the axis")."""
+    wear, the limit and every wall within `WALL_IN_VIEW` of them.  A wall
+    further up is not drawn (so not in the legend): the returned note names
+    it ("bushing wall 6.342 mm: off this scale"; "" when every wall is drawn),
+    for the caller's legend title or caption."""
     top = max(deepest_mm, limit_mm or 0.0)
     if limit_mm is not None:
         ax.axhline(limit_mm, color="tab:red", ls="--", lw=1.0,
@@ -78,12 +86,14 @@ def depth_references(ax: Axes, deepest_mm: float, *, walls_mm: Mapping[str, floa
     finite = {k: w for k, w in (walls_mm or {}).items() if math.isfinite(w)}
     if len(set(finite.values())) == 1:  # one wall for all: one line
         finite = {"": next(iter(finite.values()))}
+    off_scale = []
     for joint, wall in finite.items():
-        in_view = scale <= 0 or wall <= WALL_IN_VIEW * scale
-        if in_view:
-            top = max(top, wall)
-        ax.axhline(wall, color="k", ls="-.", lw=1.0,
-                   label=f"bushing wall{' ' + joint if joint else ''}: {wall:g} mm"
-                         + ("" if in_view else " (above the axis)"))
+        name = f"bushing wall{' ' + joint if joint else ''}"
+        if scale > 0 and wall > WALL_IN_VIEW * scale:
+            off_scale.append(f"{name} {wall:.4g} mm")
+            continue
+        top = max(top, wall)
+        ax.axhline(wall, color="k", ls="-.", lw=1.0, label=f"{name}: {wall:.4g} mm")
     if top > 0:
         ax.set_ylim(-0.04 * top, 1.08 * top)
+    return (", ".join(off_scale) + ": off this scale") if off_scale else ""

@@ -99,9 +99,10 @@ def wear_panels(path: Path, profiles: Mapping[str, tuple[np.ndarray, np.ndarray]
                 lives: Mapping[str, float | None] | None = None) -> Path:
     """Per joint: the worn profile against the bushing angle [deg] and the peak
     depth against cycles, both in mm (inputs in m); on both, each joint's
-    bushing wall (``walls`` [m]) and the depth ``limit`` [m] as labelled
-    lines, and on the history the cycles at which each joint reaches the
-    limit (``lives``, where within the run).  Legend off the data."""
+    bushing wall (``walls`` [m]; one far above the wear named in the
+    legend's title instead) and the depth ``limit`` [m] as labelled lines,
+    and on the history the cycles at which each joint reaches the limit
+    (``lives``, where within the run).  Legend off the data."""
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 3.8))
     for name, (theta, depth) in profiles.items():
         a.plot(*closed_profile(theta, np.asarray(depth) * 1e3), label=name)
@@ -111,8 +112,8 @@ def wear_panels(path: Path, profiles: Mapping[str, tuple[np.ndarray, np.ndarray]
                         + [float(np.max(p, initial=0.0)) for _, p in histories.values()])
     walls_mm = {k: w * 1e3 for k, w in (walls or {}).items()}
     limit_mm = None if limit is None else limit * 1e3
-    for ax in (a, b):
-        depth_references(ax, deepest, walls_mm=walls_mm, limit_mm=limit_mm)
+    notes = [depth_references(ax, deepest, walls_mm=walls_mm, limit_mm=limit_mm)
+             for ax in (a, b)]
     for name, life in (lives or {}).items():
         if limit_mm is not None and life is not None and np.isfinite(life) and histories \
                 and life <= max(float(np.max(c, initial=0.0)) for c, _ in histories.values()):
@@ -123,7 +124,7 @@ def wear_panels(path: Path, profiles: Mapping[str, tuple[np.ndarray, np.ndarray]
     b.set(xlabel="cycles", ylabel="max wear depth [mm]")
     for ax in (a, b):
         ax.grid(alpha=0.3)
-    legend_outside(b)
+    legend_outside(b, title=notes[-1] or None)  # a wall off the scale: named, not drawn
     fig.suptitle(wrapped(title, 100), fontsize=10)
     return save(fig, path, dpi=110)
 

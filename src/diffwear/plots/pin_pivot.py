@@ -5,6 +5,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
+from . import references
 from .files import save
 from .layout import legend_outside
 from .panels import closed  # profiles on -180 .. 180 deg, closed at +180
@@ -50,8 +51,10 @@ def history_figure(path, *, sweeps, max_pin_mm, max_pivot_mm, fit_pin, fit_pivot
         ds, dpin, dpiv = direct
         ax.plot(ds / 1e3, dpin, "--", lw=1.0, label="pin (direct run)")
         ax.plot(ds / 1e3, dpiv, "--", lw=1.0, label="pivot (direct run)")
-    for (label, value), mk in zip(thesis.items(), ("s", "^", "D")):
-        ax.plot(target / 1e3, value, mk, color="k", ms=6, label=f"thesis: {label} {value} mm")
+    # the thesis's values at the target, side by side (2.028 and 2.0 mm coincide)
+    references.side_by_side(ax, target / 1e3, [(f"thesis {label}: {value} mm", value)
+                                               for label, value in thesis.items()])
+    references.room_right(ax, 0.0, target / 1e3, len(thesis))
     ax.set_xlabel("sweeps [x 1000] (one sweep = -30 -> 30 deg; a test cycle = 2 sweeps)")
     ax.set_ylabel("max wear depth [mm]")
     ax.grid(alpha=0.3)

@@ -13,6 +13,41 @@ from ..errors import InputError
 from .files import save
 from .layout import legend_outside, wrapped
 
+# What the sweeps' and the sensitivity's code names stand for, as a reader of
+# the field names them (`quantity`; `diffwear.sweep.models` defines them).
+NAMES = {
+    "k": "wear coefficient k", "clearance": "radial clearance c",
+    "depth": "bushing depth h", "diameter": "pin diameter d", "mu": "friction coefficient μ",
+    "free_length": "spring free length L0", "restitution": "restitution e_r",
+    "max_depth": "max wear depth", "volume": "worn volume",
+    "mean_joint_force": "mean joint force", "life": "life",
+}
+UNITS = {"mm": "mm", "mm3": "mm³", "N": "N", "um": "µm", "m": "m", "cycles": "cycles",
+         "s": "s"}
+
+
+def quantity(name: str) -> str:
+    """A code name in words with its unit: "max_depth_mm" -> "max wear
+    depth [mm]", "volume_mm3" -> "worn volume [mm³]", "k" -> "wear
+    coefficient k"; a name it does not know stays as it is."""
+    head, _, unit = name.rpartition("_")
+    if head and unit in UNITS:
+        return f"{NAMES.get(head, head.replace('_', ' '))} [{UNITS[unit]}]"
+    return NAMES.get(name, name)
+
+
+def sampled_ticks(axis, values) -> None:
+    """Ticks at a short grid's sampled values (<= 10), none between: a cell's
+    centre is where its value was sampled."""
+    from matplotlib.ticker import FixedLocator, NullLocator
+
+    values = np.asarray(values, dtype=float)
+    if values.size > 10:
+        return
+    axis.set_major_locator(FixedLocator(values))
+    axis.set_minor_locator(NullLocator())
+    axis.set_ticklabels([f"{v:.4g}" for v in values])
+
 
 def geometric(v) -> bool:
     """True for a positive grid of constant ratio (drawn on a log axis)."""
@@ -23,16 +58,21 @@ def geometric(v) -> bool:
     return bool(np.allclose(r, r[0], rtol=1e-6) and not np.isclose(r[0], 1.0))
 
 
-def heatmap(path, x, y, z, *, xlabel: str, ylabel: str, title: str, annotate: bool = True):
+def heatmap(path, x, y, z, *, xlabel: str, ylabel: str, title: str, zlabel: str = "",
+            annotate: bool = True):
     """Heatmap of z[i, j] at (x[j], y[i]) (cells centred on the values; log axes
-    for geometric grids); values written in the cells up to 10 x 10."""
+    for geometric grids; ticks at the sampled values); the colour bar labelled
+    ``zlabel`` (the quantity and its unit); values written in the cells up to
+    10 x 10."""
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
     mesh = ax.pcolormesh(x, y, z, shading="nearest", cmap="viridis")
-    fig.colorbar(mesh, ax=ax)
+    fig.colorbar(mesh, ax=ax, label=zlabel)
     if geometric(x):
         ax.set_xscale("log")
     if geometric(y):
         ax.set_yscale("log")
+    sampled_ticks(ax.xaxis, x)
+    sampled_ticks(ax.yaxis, y)
     if annotate and z.shape[0] <= 10 and z.shape[1] <= 10:
         for i, yi in enumerate(y):
             for j, xj in enumerate(x):
@@ -64,19 +104,23 @@ def tornado(path, sens, output: str, *, rel_change: float = 0.1,
     +-``rel_change`` (bars sorted by size; = +-elasticity x change)."""
     e = {p: sens.elasticity(output, p) for p in sens.wrt}
     order = sorted(e, key=lambda p: abs(e[p]) if math.isfinite(e[p]) else -1)
-    fig, ax = plt.subplots(figsize=(6.4, 0.45 * len(order) + 1.4))
+    fig, ax = plt.subplots(figsize=(6.4, 0.45 * len(order) + 1.7))
     for i, p in enumerate(order):
         d = 100 * e[p] * rel_change
-        ax.barh(i, d, color="tab:red", alpha=0.8)
-        ax.barh(i, -d, color="tab:blue", alpha=0.8)
-        ax.text(abs(d), i, f"  e = {e[p]:+.2f}", va="center", fontsize=8)
-    ax.set_yticks(range(len(order)), order)
+        ax.barh(i, d, color="tab:red", alpha=0.8,
+                label=f"p × {1 + rel_change:g}" if i == 0 else None)
+        ax.barh(i, -d, color="tab:blue", alpha=0.8,
+                label=f"p × {1 - rel_change:g}" if i == 0 else None)
+        ax.text(abs(d), i, f"  ε = {e[p]:+.2f}", va="center", fontsize=8)
+    ax.set_yticks(range(len(order)), [quantity(p) for p in order])
     ax.axvline(0, color="k", lw=0.8)
-    ax.set_xlabel(f"change of {output} [%] for p x (1 +- {rel_change:g}) "
-                  "(red: +, blue: -; linearised)")
-    ax.set_title(wrapped(title or f"sensitivity of {output} ({sens.method})"), fontsize=9)
+    name = quantity(output).split(" [")[0]
+    ax.set_xlabel(f"change of {name} [%] (linearised)\n"
+                  "ε = (p / y) ∂y/∂p: the elasticity of y to the parameter p")
+    legend_outside(ax)
+    ax.set_title(wrapped(title or f"sensitivity of {name} ({sens.method})"), fontsize=9)
     lim = max([abs(100 * v * rel_change) for v in e.values() if math.isfinite(v)] + [1e-12])
-    ax.set_xlim(-1.35 * lim, 1.35 * lim)
+    ax.set_xlim(-1.35 * lim, 1.75 * lim)  # room right for the largest bar's ε
     return save(fig, path, dpi=110)
 
 

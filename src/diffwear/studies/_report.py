@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from ..report import Figure, Report, Table, render
 
 
@@ -26,7 +28,8 @@ COMPARISON_WORDS = ("max wear depth: the deepest point of the worn bushing profi
 
 def peak_line(summary: dict) -> str:
     """Where the profile is deepest, in the bushing frame (a bullet item)."""
-    return (f"peak wear at theta = {summary['max_wear_angle_rad']:.3f} rad (bushing frame, "
+    angle = summary["max_wear_angle_rad"]
+    return (f"peak wear at θ = {math.degrees(angle):.0f} deg ({angle:.3f} rad; bushing frame, "
             "from the rod axis crank->slider)")
 
 

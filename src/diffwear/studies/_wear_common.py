@@ -67,7 +67,9 @@ class WearStudy(NamedTuple):
     its wear joint of ``design`` (``p``: its traced inputs, `params_of`), the
     state ``y0`` and ``period`` [s] of a cycle, the ``thesis``'s values (for
     ``thesis_cycles`` cycles), the report's ``description`` and what it adds
-    to the summary and the report."""
+    to the summary and the report; for the figures, the thesis figures the
+    profile compares with (``cf``) and what of the thesis's values the run is
+    calibrated to (``calibrated``, words; `diffwear.plots.wear.Lines`)."""
 
     name: str
     mech_of: Callable
@@ -80,6 +82,8 @@ class WearStudy(NamedTuple):
     thesis_cycles: int | None = None
     extra_summary: dict = {}
     extra_report: tuple = ()
+    cf: str = ""
+    calibrated: str = ""
 
 
 def run_wear_study(out, study: WearStudy, *, cycles, model: AbstractWearModel, log,
@@ -95,7 +99,8 @@ def run_wear_study(out, study: WearStudy, *, cycles, model: AbstractWearModel, l
             study.thesis_cycles):
         why = (f"the thesis's values are for {int(study.thesis_cycles):,} cycles and this "
                f"run has {int(cycles):,}: not compared")
-        study = study._replace(thesis={}, extra_report=(*study.extra_report, Bullets([why])),
+        study = study._replace(thesis={}, cf="", calibrated="",
+                               extra_report=(*study.extra_report, Bullets([why])),
                                extra_summary={**study.extra_summary,
                                               "thesis_not_compared": why})
     extra_summary, extra_report = dict(study.extra_summary), list(study.extra_report)
@@ -226,7 +231,8 @@ def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearE
                                    lines=plots_wear.Lines(
                                        clearance_mm=float(design.clearance) * 1e3,
                                        wall_mm=float(design.wall) * 1e3, label=model.label,
-                                       markers=model.step_words, status=status))
+                                       markers=model.step_words, status=status,
+                                       cf=study.cf, calibrated=study.calibrated))
     settings = model.describe(cycles)
     summary = {
         "study": study.name, "cycles": float(res.cycles), "cycles_requested": float(cycles),

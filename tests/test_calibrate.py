@@ -485,8 +485,18 @@ def test_discrepancy_bases_closed_forms():
     c[disc.SLICES["angle"]][2 * (m - 1) + 1] = a * math.sin(m * peak)
     np.testing.assert_allclose(np.asarray(disc.factor(jnp.asarray(c), "angle", theta)),
                                1 + a * np.cos(m * (theta - peak)), rtol=1e-13)
-    phi = np.asarray(disc.basis("cycles", jnp.array([0.0, 500.0, 1000.0]), 1000.0))
-    np.testing.assert_allclose(phi, [[-1, 1, -1], [0, -0.5, 0], [1, 1, 1]], atol=1e-15)
+    phi = np.asarray(disc.basis("cycles", jnp.array([0.0, 500.0, 1000.0, 1500.0]), 1000.0))
+    # Legendre over the fit window, held beyond it
+    np.testing.assert_allclose(phi, [[-1, 1, -1], [0, -0.5, 0], [1, 1, 1], [1, 1, 1]],
+                               atol=1e-15)
+    # depth: a layer's step is zero on the unworn surface, half-way at its depth,
+    # whole well below it
+    d = np.array(disc.LAYERS)
+    phi = np.asarray(disc.basis("depth", jnp.asarray([0.0, d[2], 5 * d[-1]])))
+    np.testing.assert_array_equal(phi[0], 0.0)
+    s0 = 0.5 * (1 + np.tanh(-1 / disc.LAYER_WIDTH))
+    assert phi[1, 2] == pytest.approx(0.5 - s0, rel=1e-12)
+    np.testing.assert_allclose(phi[2], 1.0 - s0, rtol=1e-9)
     # log-scaled pressure: xi = tanh(1) one decade above 1 MPa; xi = -1 at zero pressure
     phi = np.asarray(disc.basis("pressure", jnp.array([1e7, 0.0])))
     np.testing.assert_allclose(phi[0], np.tanh(1.0) ** np.arange(1, 4), rtol=1e-13)
@@ -516,9 +526,13 @@ def test_discrepancy_is_described_by_its_shape():
     d = describe("angle", c, np.eye(c.size) * 1e-4, arc)
     assert d["lobes"] == 3 and d["worn_arc_deg"] == pytest.approx([81.0, 239.5], abs=0.6)
     np.testing.assert_allclose(d["peaks_deg"], [23, 143, 263], atol=1.0)
-    data = SimpleNamespace(max_cycles=1000.0, series=[])
+    data = SimpleNamespace(max_cycles=1000.0, fit_cycles=1000.0, series=[])
     d = describe("cycles", np.array([0.3, 0.0, 0.0]), np.eye(3) * 1e-4, data)
     assert d["shape"] == "rises from -30 % at 0 cycles to +30 % at 1e+03 cycles"
+    # up, down and up again: each turn named
+    d = describe("cycles", np.array([0.0, 0.0, 0.4]), np.eye(3) * 1e-4, data)
+    assert d["turns"] == 2 and d["shape"].startswith("from -40 % at 0 cycles, up to")
+    assert d["shape"].endswith("up to +40 % at 1e+03 cycles")
 
 
 def test_detection_limit_is_three_sigma_of_the_joint_least_squares():

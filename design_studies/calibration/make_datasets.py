@@ -87,6 +87,8 @@ def coating(thickness: float, inside: float, width: float = 15e-6):
         through = 0.5 * (1.0 + jnp.tanh((depth - thickness) / width))
         return inside + (1.0 - inside) * through
 
+    factor.words = (f"a layer {thickness * 1e3:g} mm thick wearing at {inside:.2g} x the bulk's "
+                    "rate")
     return EffectValues.zero().with_outside(factor)
 
 
@@ -101,6 +103,7 @@ def humidity(amplitude: float, period: float, phase: float = 0.0,
     def factor(theta, depth, cycles):
         return 1.0 + amplitude * jnp.sin(2.0 * jnp.pi * cycles / period + phase) + 0.0 * depth
 
+    factor.words = f"k x (1 + {amplitude:g} sin(2 pi N / {period:,.0f}))"
     return (base or EffectValues.zero()).with_outside(factor)
 
 

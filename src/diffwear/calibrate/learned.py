@@ -141,7 +141,7 @@ def span(variable: str, data) -> tuple:
     if variable == "cycles":
         return (0.0, float(data.max_cycles))
     deepest = max((float(np.max(s.y)) for s in data.series if s.kind == "profile"),
-                  default=disc.H_REF)
+                  default=disc.LAYERS[-1])
     return (0.0, max(deepest, 1e-6))
 
 

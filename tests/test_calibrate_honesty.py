@@ -219,7 +219,7 @@ def test_forecast_requests_are_checked():
         check_request(data, None, 900.0, None)
     with pytest.raises(InputError, match="deeper than the bushing wall"):
         check_request(data, 8e-3, None, 6e-3)
-    check_request(data, 1e-3, 2000.0, 6e-3)
+    check_request(data, 1e-3, 3000.0, 6e-3)
 
 
 @pytest.mark.long  # minutes: NUTS on the small campaign's model

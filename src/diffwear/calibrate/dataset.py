@@ -84,7 +84,8 @@ class Parameter:
     std: float | None = None  # 1-sigma prior width, SI
     fit: bool = False
     suspect: bool = True
-    unit: str | None = None   # the unit the dataset wrote it in (reports use it)
+    # the unit the dataset wrote it in (reports use it; not part of its value)
+    unit: str | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True, eq=False)

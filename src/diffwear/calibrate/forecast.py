@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, SolverError
 from .fit import FitResult, Fitter, ModelSettings, Problem
 from .model import Observation
 from .posterior import BAND, Posterior, _weighted_quantile
@@ -163,14 +163,21 @@ def _crossing(cycles: np.ndarray, depth: np.ndarray, limit: float) -> float:
     return float(cycles[i - 1] + (limit - d0) / (d1 - d0) * (cycles[i] - cycles[i - 1]))
 
 
-def _band(values: np.ndarray, w: np.ndarray) -> dict:
+def _band(values: np.ndarray, w: np.ndarray, end: float = math.inf) -> dict:
+    """Median and `BAND` of weighted ``values``; a value beyond the run (inf)
+    stands at the run's ``end``, a lower bound, and its share is reported."""
     lo, hi = 0.5 * (1 - BAND), 0.5 * (1 + BAND)
-    finite = np.isfinite(values)
-    capped = np.where(finite, values, np.nanmax(np.where(finite, values, -np.inf))
-                      if finite.any() else 0.0)
-    return {"median": _weighted_quantile(capped, w, 0.5), "q05": _weighted_quantile(capped, w, lo),
-            "q95": _weighted_quantile(capped, w, hi),
-            "beyond_run": float(np.sum(w[~finite])), "band": BAND}
+    beyond = np.isposinf(values)
+    capped = np.where(beyond, end, values)
+    known = np.isfinite(capped)
+    if not known.any():
+        return {"median": math.nan, "q05": math.nan, "q95": math.nan,
+                "beyond_run": float(np.sum(w[beyond])), "band": BAND}
+    cw = w[known] / np.sum(w[known])
+    return {"median": _weighted_quantile(capped[known], cw, 0.5),
+            "q05": _weighted_quantile(capped[known], cw, lo),
+            "q95": _weighted_quantile(capped[known], cw, hi),
+            "beyond_run": float(np.sum(w[beyond])), "band": BAND}
 
 
 def _resampled(post: Posterior, size: int) -> np.ndarray:
@@ -227,18 +234,22 @@ def forecast(fitter: Fitter, post: Posterior, data, limit: float, horizon: float
         runs.append(d)
         lives.append(_crossing(n, d, limit))
         depths.append(float(np.interp(horizon, n, d)))
-    w = np.full(len(draws), 1.0 / len(draws))
     runs_ = np.asarray(runs)
+    ok = np.all(np.isfinite(runs_), axis=1)   # a draw whose run failed stands for nothing
+    if not ok.any():
+        raise SolverError("forecast: the model fails on every posterior draw past the campaign")
+    runs_ = runs_[ok]
+    w = np.full(int(ok.sum()), 1.0 / int(ok.sum()))
     trajectory = (n, *(np.array([_weighted_quantile(runs_[:, j], w, q)
                                  for j in range(n.size)])
                        for q in (0.5 * (1 - BAND), 0.5, 0.5 * (1 + BAND))))
-    life = _band(np.asarray(lives), w)
-    life.update(run_to_cycles=float(n[-1]))
+    life = _band(np.asarray(lives)[ok], w, float(n[-1]))
+    life.update(run_to_cycles=float(n[-1]), failed_draws=int((~ok).sum()))
     depth = {k: (v * 1e3 if k in ("median", "q05", "q95") else v)
-             for k, v in _band(np.asarray(depths), w).items()}
+             for k, v in _band(np.asarray(depths)[ok], w).items()}
     depth["unit"] = "mm"
     scores: dict = {}
-    nxt = _next_measurement(ext, fit, data, candidates, limit, alternatives, scores)
+    nxt = _next_measurement(ext, fit, data, candidates, limit, alternatives, scores, horizon)
     return Forecast(limit, horizon, life, depth, nxt, trajectory, scores)
 
 
@@ -259,7 +270,7 @@ def _rows(ext: _Extended, kind: str, k: int) -> slice:
 
 
 def _next_measurement(ext: _Extended, fit: FitResult, data, candidates, limit,
-                      alternatives, scores: dict) -> dict | None:
+                      alternatives, scores: dict, horizon: float = 0.0) -> dict | None:
     """The best inspection (module notes); each candidate's score in ``scores``."""
     kinds = _kinds(data)
     if not kinds:
@@ -271,15 +282,18 @@ def _next_measurement(ext: _Extended, fit: FitResult, data, candidates, limit,
     n = ext.depth_cycles
     d = pred[ext.parts["depth"]]
     life = _crossing(n, d, limit)
-    if not math.isfinite(life):
-        return {"kind": None, "sentence": "the life lies beyond the forecast run; no inspection "
-                "is scored against it"}
-    i = int(np.searchsorted(n, life))
-    i = min(max(i, 1), n.size - 1)
-    frac = (life - n[i - 1]) / (n[i] - n[i - 1])
-    dd_dz = (1 - frac) * jac[ext.parts["depth"]][i - 1] + frac * jac[ext.parts["depth"]][i]
-    slope = (d[i] - d[i - 1]) / (n[i] - n[i - 1])
-    g = -dd_dz / slope                        # d life / dz
+    target = "life"
+    if math.isfinite(life):
+        i = int(np.searchsorted(n, life))
+        i = min(max(i, 1), n.size - 1)
+        frac = (life - n[i - 1]) / (n[i] - n[i - 1])
+        dd_dz = (1 - frac) * jac[ext.parts["depth"]][i - 1] + frac * jac[ext.parts["depth"]][i]
+        slope = (d[i] - d[i - 1]) / (n[i] - n[i - 1])
+        g = -dd_dz / slope                    # d life / dz
+    else:  # the fit's own run does not reach the limit: the depth at the horizon instead
+        target = "depth"
+        i = int(np.argmin(np.abs(n - horizon)))
+        g = jac[ext.parts["depth"]][i]
     var0 = float(g @ cov @ g)
     if not var0 > 0:
         return None
@@ -299,11 +313,19 @@ def _next_measurement(ext: _Extended, fit: FitResult, data, candidates, limit,
     assert best is not None
     gain, kind, cycles = best
     before, after = math.sqrt(var0), math.sqrt(var0) * (1.0 - gain)
-    return {"kind": kind, "cycles": cycles, "life_band_reduction": gain,
-            "life_std_cycles": before, "life_std_after_cycles": after,
-            "sentence": (f"a {'worn profile' if kind == 'profile' else 'weighing'} at about "
-                         f"{cycles:,.0f} cycles would narrow the life's band most: its "
-                         f"1-sigma from {before:,.0f} to {after:,.0f} cycles (linearised)")}
+    what = "worn profile" if kind == "profile" else "weighing"
+    if target == "life":
+        return {"kind": kind, "cycles": cycles, "life_band_reduction": gain,
+                "life_std_cycles": before, "life_std_after_cycles": after,
+                "sentence": (f"a {what} at about {cycles:,.0f} cycles would narrow the life's "
+                             f"band most: its 1-sigma from {before:,.0f} to {after:,.0f} "
+                             "cycles (linearised)")}
+    return {"kind": kind, "cycles": cycles, "depth_band_reduction": gain,
+            "depth_std_mm": 1e3 * before, "depth_std_after_mm": 1e3 * after,
+            "sentence": (f"a {what} at about {cycles:,.0f} cycles would narrow the band of the "
+                         f"depth at {horizon:,.0f} cycles most: its 1-sigma from "
+                         f"{1e3 * before:.3g} to {1e3 * after:.3g} mm (linearised; the fit's "
+                         "own run does not reach the limit)")}
 
 
 def _separating(ext: _Extended, alternatives, candidates, kinds, scores: dict) -> dict:

@@ -123,7 +123,8 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
                 chosen = (nxt["cycles"], float(val[int(np.argmin(np.abs(cyc - nxt["cycles"])))]))
             ylabel = ("separation of the two explanations [sigma]"
                       if "expected_separation_sigma" in nxt else
-                      "life band narrowed by [share]")
+                      "life band narrowed by [share]" if "life_band_reduction" in nxt else
+                      "depth band narrowed by [share]")
             files.append(plots_calibration.next_measurement(
                 out.file("next_measurement.png"), f.scores, ylabel, chosen).name)
     return files

@@ -202,15 +202,15 @@ def life(path: Path, trajectory: tuple, limit: float, measured: Sequence[tuple],
                   label=("deepest measured (open: held out)" if k == 0 else None))
     near.axvline(horizon, color="0.5", ls=":", lw=1, label="horizon")
     upto = 1.1 * horizon
-    inside = n <= upto
-    near.set(xlim=(0, upto), ylim=(0, 1.15e3 * max(float(np.max(hi[inside], initial=0.0)),
-                                                   max((d for _, d, _ in measured),
-                                                       default=0.0))),
+    inside = (n <= upto) & np.isfinite(hi)
+    top = max(float(np.max(hi[inside], initial=0.0)), max((d for _, d, _ in measured),
+                                                          default=0.0))
+    near.set(xlim=(0, upto), ylim=(0, 1.15e3 * top if top > 0 else 1.0),
              xlabel="cycles", ylabel="maximum wear depth [mm]",
              title="the campaign and its horizon")
     far.axhline(limit * 1e3, color="r", ls="--", lw=1, label=f"limit {limit * 1e3:.3g} mm")
     q05, q95 = life_band
-    if np.isfinite(q05):
+    if np.isfinite(q05) and np.isfinite(q95):
         far.axvspan(q05, min(q95, n[-1]), color="r", alpha=0.08, label="life, 90 % band")
     far.set(xlabel="cycles", xlim=(0, n[-1]), ylim=(0, None), title="to the limit")
     handles, labels = [], []

@@ -561,20 +561,28 @@ class Fitter:
     def layout(self, effects=(), discrepancy: str | None = None) -> "Layout":
         return Layout.of(self, tuple(effects), discrepancy)
 
+    def refine(self, fit: "FitResult", z) -> "FitResult":
+        """``fit``'s model fitted again from the unknowns ``z`` (a point of its
+        layout where the posterior's draws found it higher than at the fit)."""
+        lay = fit.notes["layout"]
+        return self.fit(lay.effects, discrepancy=lay.discrepancy, rows=fit.notes["rows"],
+                        z0=np.asarray(z, float))
+
     def fit(self, effect: str | tuple | None = None, x0=None, s0=0.0, log_shape0=0.0, *,
             discrepancy: str | None = None, start: "FitResult | None" = None,
-            rows: np.ndarray | None = None) -> FitResult:
+            rows: np.ndarray | None = None, z0: np.ndarray | None = None) -> FitResult:
         """Fit the base parameters with ``effect`` (a name, a tuple of names or
         None) and the learned discrepancy over ``discrepancy`` (a variable of
         `discrepancy.VARIABLES`, or None).  Starting point: ``x0`` (the model's
         fitted unknowns), ``s0`` / ``log_shape0`` (a number for a single effect,
         a dict by name for several), or ``start``, an earlier fit whose numbers
-        are reused where it shares the effects.  ``rows``: the points fitted
-        (default: every point not held out); the others are predicted."""
+        are reused where it shares the effects, or ``z0``, the unknowns
+        themselves.  ``rows``: the points fitted (default: every point not held
+        out); the others are predicted."""
         p = self.problem
         effects = () if effect is None else (effect,) if isinstance(effect, str) else tuple(effect)
         lay = self.layout(effects, discrepancy)
-        z0 = lay.start(x0, s0, log_shape0, start)
+        z0 = lay.start(x0, s0, log_shape0, start) if z0 is None else z0
         what = "base model" + "".join(f" + {e}" for e in effects) \
             + (f" + discrepancy in {discrepancy}" if discrepancy else "")
         fit_rows = ~p.holdout if rows is None else np.asarray(rows, bool)

@@ -49,7 +49,7 @@ from .fit import SCALES, FitResult, Fitter, ModelSettings, Problem
 from .forecast import Forecast, Outlook, forecast
 from .parameters import RIG_PARAMETERS, plausible_range
 from .plausibility import check_depths, unit_slips
-from .posterior import Posterior
+from .posterior import Posterior, refined
 from .posterior import posterior as posterior_of
 from .reference import DynamicCheck
 from .scores import (
@@ -919,7 +919,10 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
     final = c.final or c.base
     t0 = time.perf_counter()
     exact = getattr(fitter.problem.model, "name", "") == "quasi-static"
-    c.posterior = posterior_of(fitter, final, outlook.method if exact else "linear")
+    c.posterior = refined(fitter, posterior_of(fitter, final,
+                                               outlook.method if exact else "linear"), log)
+    if c.posterior.fit is not final:   # the same model at a better minimum
+        c.final = final = c.posterior.fit
     p = c.problem
     c.coverage = {"fit": c.posterior.coverage(p.sigma, p.y, ~p.holdout),
                   "heldout": c.posterior.coverage(p.sigma, p.y, p.holdout)}

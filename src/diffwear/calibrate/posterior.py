@@ -196,9 +196,14 @@ def laplace(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED
     w = np.where(finite, w, 0.0)
     w /= w.sum()
     k = float(k)
+    at_fit = -0.5 * (fit.chi2_fit + fit.prior_chi2)
+    best = int(np.argmax(np.where(finite, log_p, -np.inf)))
     diagnostics = {"pareto_k": k, "ess": float(1.0 / np.sum(w ** 2)),
                    "gaussian_adequate": bool(k < PARETO_K_OK),
-                   "failed_draws": int((~finite).sum())}
+                   "failed_draws": int((~finite).sum()),
+                   # a draw the posterior puts higher than the fit: the fit stopped
+                   # short of its minimum (`refined`)
+                   "best_draw_gain": float(log_p[best] - at_fit), "best_draw": best}
     # the failed draws keep their rows (their weight is zero)
     residuals = np.where(np.isfinite(residuals), residuals, 0.0)
     return Posterior("laplace", fit, z, w, residuals, diagnostics)
@@ -273,6 +278,31 @@ def linear(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED)
     w = np.full(draws, 1.0 / draws)
     return Posterior("laplace, linearised", fit, z, w, residuals,
                      {"ess": float(draws), "checked": False})
+
+
+# A draw this much higher in log posterior than the fit (a chi-square lower
+# by twice it) means the fit stopped short of its minimum: it is refined
+# from that draw and the posterior drawn again
+REFINE_GAIN = 2.0
+
+
+def refined(fitter: Fitter, post: Posterior, log=print) -> Posterior:
+    """``post`` again at a refined fit when one of its draws lies higher than
+    the fit (`REFINE_GAIN`); else ``post``."""
+    gain = post.diagnostics.get("best_draw_gain", 0.0)
+    if not gain > REFINE_GAIN:
+        return post
+    try:
+        fit = fitter.refine(post.fit, post.z[post.diagnostics["best_draw"]])
+    except SolverError:
+        return post
+    if not fit.chi2_fit + fit.prior_chi2 < post.fit.chi2_fit + post.fit.prior_chi2:
+        return post
+    log(f"posterior: a draw lay {gain:.1f} above the fit in log posterior; the fit refined "
+        f"from it (chi2 {post.fit.chi2_fit:.1f} -> {fit.chi2_fit:.1f})")
+    again = posterior(fitter, fit, post.method)
+    again.diagnostics["refined_from_chi2"] = post.fit.chi2_fit
+    return again
 
 
 def posterior(fitter: Fitter, fit: FitResult, method: str = "laplace") -> Posterior:

@@ -923,6 +923,8 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
                                                outlook.method if exact else "linear"), log)
     if c.posterior.fit is not final:   # the same model at a better minimum
         c.final = final = c.posterior.fit
+        for a in (*c.adopted, *c.partial, *([c.discrepancy] if c.discrepancy else [])):
+            a.fit = final
     p = c.problem
     c.coverage = {"fit": c.posterior.coverage(p.sigma, p.y, ~p.holdout),
                   "heldout": c.posterior.coverage(p.sigma, p.y, p.holdout)}

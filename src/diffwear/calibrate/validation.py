@@ -46,6 +46,9 @@ class PredictiveCheck:
     n: int                # points of the inspection
     rmse: float           # RMS residual of the inspection at the earlier fit [sigma]
     failure: str | None = None
+    # -2 ln of the inspection's predictive density (up to a constant): Q + ln
+    # det(I + J C J^T), the prequential score (lower predicts better)
+    log_score: float = math.inf
 
     @property
     def limit(self) -> float:
@@ -62,12 +65,12 @@ class PredictiveCheck:
         verdict = "predicts" if self.predicts else "does not predict"
         return (f"{verdict} the inspection at {self.cycles:g} cycles from the earlier fit points "
                 f"(Q {self.statistic:.1f} on {self.n} points, limit {self.limit:.1f}; "
-                f"RMS {self.rmse:.2f} sigma)")
+                f"RMS {self.rmse:.2f} sigma; predictive score {self.log_score:.1f})")
 
     def entry(self) -> dict:
         return {"cycles": self.cycles, "statistic": self.statistic, "points": self.n,
                 "limit": self.limit, "rmse": self.rmse, "predicts": self.predicts,
-                "failure": self.failure}
+                "log_score": self.log_score, "failure": self.failure}
 
 
 def split(fitter: Fitter, fit: FitResult) -> tuple | None:
@@ -115,4 +118,9 @@ def forward_check(fitter: Fitter, fit: FitResult, data=None) -> PredictiveCheck 
     inner = precision + jac.T @ jac
     jr = jac.T @ r
     q = float(r @ r - jr @ np.linalg.lstsq(inner, jr, rcond=None)[0])
-    return PredictiveCheck(last, q, int(later.sum()), float(np.sqrt(np.mean(r ** 2))))
+    # ln det(I + J C J^T) = ln det(I + R^T J^T J R), R R^T = C (a small matrix)
+    lam, vec = np.linalg.eigh(0.5 * (cov + cov.T))
+    root = vec * np.sqrt(np.clip(lam, 0.0, None))
+    logdet = float(np.linalg.slogdet(np.eye(root.shape[1]) + root.T @ (jac.T @ jac) @ root)[1])
+    return PredictiveCheck(last, q, int(later.sum()), float(np.sqrt(np.mean(r ** 2))),
+                           log_score=q + logdet)

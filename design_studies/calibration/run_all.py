@@ -39,7 +39,7 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="*", default=None, help="dataset names")
     ap.add_argument("--jobs", type=int, default=1, help="calibrations at once")
     args, extra = ap.parse_known_args(argv)
-    names = [n for n in datasets() if not args.only or n in args.only]
+    names = datasets() if not args.only else [n for n in args.only if n in datasets()]
     with ThreadPoolExecutor(args.jobs) as pool:
         codes = list(pool.map(lambda n: calibrate(n, extra), names))
     return max(codes, default=0)

@@ -11,6 +11,7 @@ and figures are read from there.
 from __future__ import annotations
 
 import argparse
+import shutil
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -26,8 +27,11 @@ def datasets() -> list[str]:
 
 def calibrate(name: str, extra: list[str]) -> int:
     RESULTS.mkdir(exist_ok=True)
+    # the stored run is this script's own output: replaced whole (a run of an
+    # earlier version may lack the files' list that --overwrite reads)
+    shutil.rmtree(RESULTS / name, ignore_errors=True)
     cmd = [sys.executable, "-m", "diffwear.cli", "calibrate", str(HERE / name),
-           "--out", str(RESULTS / name), "--overwrite", *extra]
+           "--out", str(RESULTS / name), *extra]
     with open(RESULTS / f"{name}.log", "w") as log:
         rc = subprocess.call(cmd, stdout=log, stderr=subprocess.STDOUT)
     print(f"{name}: exit {rc}", flush=True)

@@ -533,44 +533,6 @@ def results_against_thesis(path: Path) -> None:
     plt.close(fig)
 
 
-def calibration_fit(campaign: str, series: str) -> Callable[[Path], None]:
-    """A stored calibration's fit of one measured series (what ``diffwear
-    calibrate`` draws as ``fit_<series>.png``), redrawn by
-    `diffwear.plots.calibration.series_fit` from the run's ``residuals.csv``
-    (x in rad; data and models in SI; residuals in units of the series'
-    1-sigma, so sigma = |data - base model| / |base residual|, taken as the
-    least-squares slope over the series)."""
-    def draw(path: Path) -> None:
-        from diffwear.cli.calibrate import UNIT
-        from diffwear.plots.calibration import SeriesFit, series_fit
-
-        folder = ROOT / "design_studies" / "calibration" / "results" / campaign
-        summary = json.loads((folder / "summary.json").read_text())
-        k = summary["series"].index(series)
-        r = read_csv(folder / "residuals.csv")
-        m = r["series"] == k
-        kind = series.rsplit("_", 1)[0]
-        kind = "volume" if kind == "worn" else kind
-        scale, unit, xlabel, xscale = UNIT[kind]
-        gap, res = r["data"][m] - r["base_model"][m], r["base_residual"][m]
-        sigma = abs(np.dot(gap, res) / np.dot(res, res))
-        final = summary.get("discrepancy") or {}
-        label = "with " + " + ".join(
-            [e["name"] for e in summary.get("effects_identified", [])]
-            + ([f"discrepancy in {final['variable']}"] if final.get("variable") else []))
-        changed = not np.array_equal(r["final_model"][m], r["base_model"][m])
-        series_fit(path, SeriesFit(
-            name=series, kind=kind, unit=unit, xlabel=xlabel, scale=scale,
-            x=r["x"][m] * xscale, y=r["data"][m], sigma=float(sigma),
-            holdout=r["held_out"][m] > 0, base=r["base_model"][m],
-            chosen=r["final_model"][m] if changed else None, chosen_label=label,
-            cycles=float(series.rsplit("_", 1)[1]) if kind == "profile" else None))
-
-    return draw
-
-
-# ---------------------------------------------------------------- lubrication
-# design_studies/lubrication_figure_data.py writes these
 LUBRICATION = STUDIES / "lubrication"
 
 
@@ -800,8 +762,6 @@ FIGURES: dict[str, Callable[[Path], None]] = {
     "figures/rig_sweep_max_depth.png": rig_sweep_heatmap("max_depth_mm"),
     "figures/rig_tornado_max_depth.png": rig_tornado("max_depth_mm"),
     "figures/rig_tornado_volume.png": rig_tornado("volume_mm3"),
-    "figures/calibration_three_lobe_k_profile_16050.png":
-        calibration_fit("campaign_three_lobe_k", "profile_16050"),
     "figures/lubrication_short_bearing.png": lubrication_short_bearing,
     "figures/lubrication_sommerfeld.png": lubrication_sommerfeld,
     "figures/lubrication_life_viscosity.png": lubrication_life_viscosity,

@@ -510,6 +510,32 @@ def test_a_run_stopped_at_the_wall_reports_what_it_reached(tmp_path, capsys, mod
     assert f"after {cycles:.0f} cycles (max depth {depth:.4f} mm" in err
 
 
+def test_a_motion_the_integrator_cannot_finish_is_written_up_to_where_it_stopped(
+        tmp_path, capsys):
+    """The ideal slider-crank takes about 2,300 steps per revolution: with a
+    budget of 600 it stops part way.  Exit 3, and the folder holds the states
+    reached (the trajectory's times, up to the stop), a report that opens with
+    where and why it stopped, and the stop in summary.json."""
+    text = (SHIPPED_MECHANISMS / "ideal_slider_crank.toml").read_text()
+    assert "max_steps = 2_000_000" in text
+    path = tmp_path / "short_budget.toml"
+    path.write_text(text.replace("max_steps = 2_000_000", "max_steps = 600"))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 3
+    err = capsys.readouterr().err
+    assert "maximum number of solver steps" in err and "results written to" in err
+    summary = json.loads((out / "summary.json").read_text())
+    stop = summary["stopped"]["at_time_s"]
+    assert 0.0 < stop < 2.0
+    with open(out / "trajectory.csv") as f:
+        t = [float(row["t_s"]) for row in csv.DictReader(f)]
+    # 401 saved states over 2 s, 0.005 s apart: those up to the stop, all finite
+    assert t[-1] == stop and len(t) == round(stop / 0.005) + 1
+    report = (out / "report.md").read_text()
+    assert report.index("## Stopped early") < report.index("## Joint reactions")
+    assert f"stopped at t = {stop:.6g} s of the 2 s" in report
+
+
 FOUR_BAR = SHIPPED_MECHANISMS / "four_bar_wear.toml"
 
 

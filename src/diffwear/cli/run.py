@@ -74,10 +74,13 @@ def _trajectory_columns(mech: Mechanism, r: Results) -> dict:
 
 def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simulate_time: float,
           input_text: str | None = None, started: float | None = None,
-          wear: dict | None = None, compile_time: float = 0.0) -> dict:
+          wear: dict | None = None, compile_time: float = 0.0,
+          stopped: str | None = None) -> dict:
     """Write every output file; returns the summary (also ``summary.json``).
     ``simulate_time``: the motion's integration [s], ``compile_time`` [s]
-    included."""
+    included.  ``stopped``: why the integration ended before the duration
+    (``r`` then holds the states reached); everything is written, then the run
+    fails with `SolverError`."""
     mech, sim = mfile.mechanism, mfile.simulation
     transient = start_up_transient(mfile, r)
     settled = settled_part(r.ts, transient)
@@ -167,6 +170,10 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
         figures.append(out.path / wear["figure"])
         figures += [out.path / f"film_{j}.png" for j, w in wear["joints"].items()
                     if "lubricant" in w]
+    if stopped is not None:
+        summary["stopped"] = {"at_time_s": float(r.ts[-1]), "reason": stopped}
+        warnings.append((f"the integration stopped at t = {r.ts[-1]:.6g} s of "
+                         f"{sim.duration:g} s: {stopped}", True))
     summary["compile_time_s"] = compile_time
     summary["run_time_s"] = wall - compile_time
     out.text("report.md", render(_report(mfile, summary, [f.name for f in figures])))
@@ -261,6 +268,13 @@ def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
             ("run time", f"{s['run_time_s']:.2f} s", _run_time_meaning(s))]),
         _transient_text(s, sim.duration),
     ]
+    if s.get("stopped"):
+        stop = s["stopped"]
+        blocks.insert(0, Section("Stopped early", [
+            f"**The integration stopped at t = {stop['at_time_s']:.6g} s of the "
+            f"{sim.duration:g} s asked for**: {stop['reason']}  The tables, files and "
+            "figures below hold the states up to there (a wear run needs the whole motion: "
+            "its wear was not computed)."]))
     if s["reactions"]:
         blocks.append(Section("Joint reactions", [
             "Wrench the joint exerts **on** the named body: force in global axes, moment about "
@@ -392,11 +406,12 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
     check_motion(mfile, y0)
     out = OutputDir(out_dir, overwrite=overwrite, resume=resume)
     log(f"[{mfile.file}] integrating {mfile.simulation.duration:g} s (first run compiles) ...")
-    timed = integrate_timed(mfile, y0)
+    # a motion the integrator cannot finish is written up to where it stopped
+    timed = integrate_timed(mfile, y0, partial=True)
     traj = timed.trajectory
     results = postprocess(mfile, traj)
     wear = None
-    if cycles is not None:
+    if cycles is not None and timed.failure is None:
         log(f"[{mfile.file}] wear over {cycles:,.0f} cycles ({model} model) ...")
         evolved = mechanism_wear.evolve_file(
             mfile, y0, cycles=cycles, limit=limit,
@@ -406,7 +421,8 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
     summary = write(mfile, results, out, steps=int(traj.num_steps),
                     simulate_time=timed.compile_time_s + timed.run_time_s,
                     compile_time=timed.compile_time_s, input_text=input_text, started=started,
-                    wear=wear)
+                    wear=wear, stopped=None if timed.failure is None
+                    else timed.failure.removeprefix(f"{mfile.file}: "))
     for w in summary["warnings"]:
         print(f"diffwear: warning: {w}", file=sys.stderr)
     log(f"[{mfile.file}] max constraint violation {summary['max_constraint_violation']:.2e}; "

@@ -48,6 +48,17 @@ class Trajectory(eqx.Module):
     def succeeded(self):
         return self.result == diffrax.RESULTS.successful
 
+    def reached(self) -> "Trajectory":
+        """The saved states the integration reached before it stopped (all of
+        them on success): the leading rows with finite times and states
+        (diffrax fills the saved times it never reached with inf).  Call
+        outside ``jit``."""
+        ts, ys = np.asarray(self.ts), np.asarray(self.ys)
+        ok = np.isfinite(ts) & np.all(np.isfinite(ys), axis=-1)
+        n = ok.size if ok.all() else int(np.argmin(ok))
+        return eqx.tree_at(lambda t: (t.ts, t.ys), self,
+                           (jnp.asarray(ts[:n]), jnp.asarray(ys[:n])))
+
     def raise_if_failed(self, what: str = "simulation", mech: Mechanism | None = None
                         ) -> "Trajectory":
         """Raise `SolverError` if the integrator failed or produced non-finite values.

@@ -31,7 +31,7 @@ from ..dynamics import (
 )
 from ..dynamics.kinematics import check_cycle_motion
 from ..dynamics.simulate import Trajectory
-from ..errors import InputError
+from ..errors import InputError, SolverError
 from ..mechanism import Mechanism
 from ..mechanism.constraints import Driver
 from ..quasistatic.loads import fully_driven, ideal_parent
@@ -81,11 +81,16 @@ class Timed(NamedTuple):
     trajectory: Trajectory
     compile_time_s: float   # compiling the integrator's program
     run_time_s: float       # running the compiled program
+    failure: str | None = None  # why the integrator stopped early (``partial=True``);
+                                # ``trajectory`` then holds the states it reached
 
 
-def integrate_timed(mfile: MechanismFile, y0, t0: float = 0.0) -> Timed:
+def integrate_timed(mfile: MechanismFile, y0, t0: float = 0.0, *,
+                    partial: bool = False) -> Timed:
     """`integrate`, compiled ahead of the run so that the report can give the
-    compile time and the run time apart."""
+    compile time and the run time apart.  A failed integration raises
+    `SolverError`; with ``partial=True`` it returns the states reached and the
+    failure's message instead, when at least two saved states were reached."""
     args = (mfile.mechanism, y0, mfile.simulation, jax.numpy.asarray(float(t0)))
     start = time.perf_counter()
     # equinox's jit wrapper lowers ahead of time; its type is hidden by the decorator
@@ -93,8 +98,14 @@ def integrate_timed(mfile: MechanismFile, y0, t0: float = 0.0) -> Timed:
     compiled_at = time.perf_counter()
     traj = jax.block_until_ready(compiled(*args))
     done = time.perf_counter()
-    return Timed(traj.raise_if_failed(mfile.file, mfile.mechanism), compiled_at - start,
-                 done - compiled_at)
+    try:
+        return Timed(traj.raise_if_failed(mfile.file, mfile.mechanism), compiled_at - start,
+                     done - compiled_at)
+    except SolverError as err:
+        reached = traj.reached()
+        if not partial or reached.ts.shape[0] < 2:
+            raise
+        return Timed(reached, compiled_at - start, done - compiled_at, failure=str(err))
 
 
 class Results(NamedTuple):

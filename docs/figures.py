@@ -563,8 +563,8 @@ def lubrication_short_bearing(path: Path) -> None:
               "long": mu * omega * r**3 * m["long_length_m"] / c**2}
     closed = {"short": _short_steady, "long": _long_steady}
     words = {"short": f"short bearing (L/D = {m['short_length_m'] / (2 * r):g}), "
-                      "W / (μωRL³/c²)",
-             "long": f"long bearing (L/D = {m['long_length_m'] / (2 * r):g}), W / (μωR³L/c²)"}
+                      "W / (ηωRL³/c²)",
+             "long": f"long bearing (L/D = {m['long_length_m'] / (2 * r):g}), W / (ηωR³L/c²)"}
     eps = d["eps"]
     line = np.linspace(0.01, 0.96, 300)
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.9))
@@ -574,9 +574,9 @@ def lubrication_short_bearing(path: Path) -> None:
         b.plot(line, attitude, color=color, lw=1.3, label=f"{name} bearing: closed form")
         radial, tangential = d[f"{name}_radial_N"], d[f"{name}_tangential_N"]
         a.plot(eps, np.hypot(radial, tangential) / scales[name], "o", ms=4.5, mfc="none",
-               color=color, label=f"{name} bearing: the law (`film`)")
+               color=color, label=f"{name} bearing: diffwear's film law")
         b.plot(eps, np.degrees(np.arctan2(tangential, -radial)), "o", ms=4.5, mfc="none",
-               color=color, label=f"{name} bearing: the law (`film`)")
+               color=color, label=f"{name} bearing: diffwear's film law")
     a.set(yscale="log", xlabel="eccentricity ratio ε", ylabel="dimensionless load",
           xlim=(0, 1), title="Steady load")
     b.set(xlabel="eccentricity ratio ε", ylabel="attitude angle φ [deg]", xlim=(0, 1),
@@ -586,7 +586,7 @@ def lubrication_short_bearing(path: Path) -> None:
     for ax in (a, b):
         ax.grid(alpha=0.3, which="both")
     fig.suptitle("Steady films against Hamrock, Schmid & Jacobson's closed forms "
-                 f"(R {1e3 * r:g} mm, c {1e6 * c:g} µm, μ {mu:g} Pa s, ω {omega:g} rad/s)",
+                 f"(R {1e3 * r:g} mm, c {1e6 * c:g} µm, η {mu:g} Pa s, ω {omega:g} rad/s)",
                  fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=DPI)
@@ -609,13 +609,13 @@ def lubrication_sommerfeld(path: Path) -> None:
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.8))
     a.plot(s, eps, lw=1.3, label="short bearing, closed form ε(S)")
     a.plot(d["sommerfeld"], d["eps_quasi_static"], "o", ms=4.5, mfc="none",
-           label="LubricatedQuasiStaticJoint.pin_offset")
+           label="diffwear: quasi-static equilibrium")
     b.plot(s, attitude, lw=1.3, label="short bearing, closed form φ(S)")
     b.plot(d["sommerfeld"], d["attitude_deg"], "o", ms=4.5, mfc="none",
-           label="LubricatedQuasiStaticJoint.pin_offset")
-    a.set(xscale="log", xlabel="Sommerfeld number S = (R/c)² μN / P", ylim=(0, 1),
+           label="diffwear: quasi-static equilibrium")
+    a.set(xscale="log", xlabel="Sommerfeld number S = (R/c)² ηN / P", ylim=(0, 1),
           ylabel="eccentricity ratio ε", title="Eccentricity of the equilibrium")
-    b.set(xscale="log", xlabel="Sommerfeld number S = (R/c)² μN / P", ylim=(0, 95),
+    b.set(xscale="log", xlabel="Sommerfeld number S = (R/c)² ηN / P", ylim=(0, 95),
           ylabel="attitude angle φ [deg]", title="Attitude of the equilibrium")
     a.legend(fontsize=7, loc="upper right")
     b.legend(fontsize=7, loc="lower right")
@@ -645,16 +645,16 @@ def lubrication_life_viscosity(path: Path) -> None:
         x0, y0, slope = t["viscosity_Pa_s"], t["life_cycles"], t["dlife_dmu_cycles_per_Pa_s"]
         x = x0 * np.array([0.7, 1.0 / 0.7])
         ax.plot(x, y0 + slope * (x - x0), color="tab:red", lw=2.2, alpha=0.8,
-                label="d(life)/dμ by jax.jvp (tangent)" if k == 0 else None)
+                label="d(life)/dη by jax.jvp (tangent)" if k == 0 else None)
     top = float(np.nanmax(life[done])) if done.any() else s["dry"]["life_cycles"]
     for x in mu[~done]:
         ax.annotate("", xy=(x, 1.12 * top), xytext=(x, 0.97 * top),
                     arrowprops={"arrowstyle": "->", "color": "tab:green", "lw": 1.5})
     if (~done).any():
         ax.plot([], [], color="tab:green", marker=r"$\uparrow$", ls="none", ms=9,
-                label=f"runs in: 50 µm never reached (μ ≥ {mu[~done].min():g} Pa s)")
+                label=f"runs in: 50 µm never reached (η ≥ {mu[~done].min():g} Pa s)")
     st = s["settings"]
-    ax.set(xscale="log", xlabel="viscosity μ [Pa s]", ylabel="cycles to 50 µm wear",
+    ax.set(xscale="log", xlabel="viscosity η [Pa s]", ylabel="cycles to 50 µm wear",
            ylim=(0, 1.18 * top),
            title=f"Ch. 7 rig, crank-rod joint lubricated (short-bearing film, σ = "
                  f"{1e6 * st['roughness_m']:g} µm): life against viscosity")
@@ -670,35 +670,47 @@ def lubrication_slider_crank(path: Path) -> None:
     """The lubricated Table 2-1 slider-crank over one crank revolution
     (stored dynamic runs): the film parameter and the journal orbit."""
     plt = _pyplot()
-    from matplotlib.ticker import FixedLocator, ScalarFormatter
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
 
     d = read_csv(LUBRICATION / "slider_crank.csv")
     m = json.loads((LUBRICATION / "slider_crank.json").read_text())
-    fig, (a, b) = plt.subplots(1, 2, figsize=(10.5, 4.6),
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10.5, 5.4),
                                gridspec_kw={"width_ratios": [1.5, 1]})
     colors = ["tab:blue", "tab:orange"]
     for mu, color in zip(m["viscosities_Pa_s"], colors):
         tag = f"mu_{1e3 * mu:g}mPas"  # as design_studies/lubrication_figure_data.py
-        a.plot(d["t_s"], d[f"{tag}_film_ratio"], color=color, lw=1.2, label=f"μ = {mu:g} Pa s")
+        a.plot(d["t_s"], d[f"{tag}_film_ratio"], color=color, lw=1.2, label=f"η = {mu:g} Pa s")
         b.plot(d[f"{tag}_x_over_c"], d[f"{tag}_y_over_c"], color=color, lw=1.1,
-               label=f"μ = {mu:g} Pa s")
+               label=f"η = {mu:g} Pa s")
     a.axhline(3.0, color="tab:red", ls="--", lw=1.0, label="λ = 3: asperities touch")
     a.axhline(1.0, color="k", ls=":", lw=1.0, label="λ = 1: boundary")
-    # linear up to 3 (a thin film's lambda falls below 0: the pin pressed past
-    # the mean surfaces into the asperities), logarithmic above
-    a.set_yscale("symlog", linthresh=3.0, linscale=1.5)
-    a.yaxis.set_major_locator(FixedLocator([-2, 0, 1, 2, 3, 10, 30, 100]))
-    a.yaxis.set_major_formatter(ScalarFormatter())
+    # a logarithmic axis down to lambda = 0.1; below it (and where lambda < 0:
+    # the pin pressed past the mean surfaces into the asperities) the time is
+    # shaded in the oil's colour instead of drawn
+    floor = 0.1
+    for mu, color in zip(m["viscosities_Pa_s"], colors):
+        ratio = d[f"mu_{1e3 * mu:g}mPas_film_ratio"]
+        below = ratio < floor
+        if below.any():
+            a.fill_between(d["t_s"], floor, 0.2, where=below, color=color, alpha=0.35,
+                           step="mid", lw=0,
+                           label=f"η = {mu:g} Pa s: λ < {floor:g} (asperity interference "
+                                 f"down to λ = {ratio.min():.1f})")
+    a.set_yscale("log")
+    a.yaxis.set_major_locator(FixedLocator([0.1, 0.3, 1, 3, 10, 30, 100]))
+    a.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    a.yaxis.set_minor_formatter(NullFormatter())
     a.set(xlabel="time [s] (one crank revolution, pin centred at t = 0)",
-          ylabel="film parameter λ = h_min / σ", xlim=(0, m["duration_s"]), ylim=(-3.5, 130),
+          ylabel="film parameter λ = h_min / σ", xlim=(0, m["duration_s"]), ylim=(floor, 130),
           title=f"Film parameter (σ = {1e6 * m['roughness_m']:g} µm, "
                 f"c = {1e3 * m['clearance_m']:g} mm)")
-    a.legend(fontsize=7, loc="upper center", ncol=2)
+    a.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     reach = 1.0
     if "dry_x_over_c" in d:
-        b.plot(d["dry_x_over_c"], d["dry_y_over_c"], color="0.45", lw=0.8, ls="--",
-               label="dry (EFM): impacts")
         reach = float(np.max(np.hypot(d["dry_x_over_c"], d["dry_y_over_c"])))
+        b.plot(d["dry_x_over_c"], d["dry_y_over_c"], color="0.45", lw=0.8, ls="--",
+               label=f"dry (EFM): impacts, up to e/c = {reach:.1f}\n(the pin sinks into "
+                     "the elastic layer)")
     circle = np.linspace(0.0, 2.0 * np.pi, 200)
     b.plot(np.cos(circle), np.sin(circle), color="k", lw=0.8, label="clearance circle")
     lim = 1.05 * max(reach, 1.0)
@@ -734,7 +746,7 @@ def lubrication_rig_film(path: Path) -> None:
                  f"worn, {cycles:,.0f} cycles": (f["h_min_um_worn"] * 1e-6,
                                                  f["asperity_share_worn"])},
                 onset=ONSET_FILM_RATIO * sigma, onset_ratio=ONSET_FILM_RATIO, roughness=sigma,
-                title=f"rig_lubricated, crank-rod joint (μ = "
+                title=f"rig_lubricated, crank-rod joint (η = "
                       f"{joint['lubricant']['viscosity_Pa_s'] * 1e3:g} mPa s, σ = "
                       f"{joint['lubricant']['roughness_um']:g} µm): quasi-static equilibrium "
                       "over the cycle, unworn and worn bushing")

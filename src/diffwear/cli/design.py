@@ -221,7 +221,9 @@ def _report(s: dict) -> Report:
     blocks: list[Block] = [
         "Table 2-1 slider-crank, PTFE bushings in the rod at crank-rod (1) and rod-slider (2), "
         "k 5.05e-4 mm^3/(N m), mu 0.13, limit 2 mm, Table 8-3 box. Optimiser: " + how + ".",
-        Table(("problem", "d1 mm", "d2 mm", "h1 mm", "h2 mm", "cyc1", "cyc2", "gap",
+        "Lives in cycles to the 2 mm limit: joint 1 (crank-rod) and joint 2 (rod-slider); "
+        "gap: their difference over their mean.",
+        Table(("problem", "d1 mm", "d2 mm", "h1 mm", "h2 mm", "life 1", "life 2", "gap",
                "PTFE cm^3", "model runs"), [
             _row("equal life (from box centre)", s),
             *[_row(title, s[key]) for key, title in (
@@ -242,7 +244,7 @@ def _report(s: dict) -> Report:
             + (f" ({r['asked_cycles']:,.0f} cycles asked: out of reach, the best 10th "
                f"percentile in the box is {r['best_percentile_in_box']:,.0f})"
                if r["asked_cycles"] > r["target_cycles"] else "") + ":",
-            Table(("design", "h1 mm", "h2 mm", "cyc1 (median k)", "cyc2 (median k)",
+            Table(("design", "h1 mm", "h2 mm", "life 1 (median k)", "life 2 (median k)",
                    "P10 of weaker life", "PTFE cm^3"), [
                 ("deterministic least material", f"{det['h1_mm']:.2f}", f"{det['h2_mm']:.2f}",
                  f"{det['cyc1']:,.0f}", f"{det['cyc2']:,.0f}", f"{det['percentile']:,.0f}",
@@ -264,9 +266,9 @@ def _report(s: dict) -> Report:
                 + ("it confirms the reported percentile." if mc["confirms"] else
                    "**the reported percentile lies outside it**."))
     blocks += [
-        f"Thesis optimum (Table 8-4) in our {t['model']} model: cyc1 = {t['cyc1']:,.0f}, cyc2 = "
-        f"{t['cyc2']:,.0f}, gap {100 * t['rel_gap']:.1f} % (thesis full model: 121,600 / "
-        "117,600, 3.3 %).",
+        f"Thesis optimum (Table 8-4) in our {t['model']} model: lives {t['cyc1']:,.0f} "
+        f"(joint 1) and {t['cyc2']:,.0f} (joint 2) cycles, gap {100 * t['rel_gap']:.1f} % "
+        "(thesis full model: 121,600 / 117,600, 3.3 %).",
         f"Trend over the Table 8-3 box (from the life maps, {s['trend']['map_model']}; "
         "thesis: life rises strongly with "
         "depth and falls weakly with diameter): life rises with depth: "

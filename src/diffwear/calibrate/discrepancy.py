@@ -5,8 +5,10 @@ smooth multiplicative correction of Archard's coefficient over one candidate
 variable x at a time, in the spirit of Kennedy and O'Hagan's model
 discrepancy (J. R. Stat. Soc. B 63 (2001) 425): delta is a short linear
 expansion with a Gaussian smoothness prior on its coefficients, fitted by the
-same compiled exact-derivative program as the parameters, and the variable
-whose delta cuts the held-out error is the one the model lacks.
+same compiled exact-derivative program as the parameters.  Each variable's
+delta is a candidate beside the library's effects in the one forward
+selection on the fit data (`diffwear.calibrate.selection`): the variable
+chosen there is the one the model lacks.
 
 =================  ==================================================  ==========
 variable           basis phi_j(x) (delta = sum c_j phi_j)              prior std

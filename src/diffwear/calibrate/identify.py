@@ -1,35 +1,39 @@
-"""Find the effects the base model lacks: score tests, forward selection with
-identifiability, ambiguity and detection limits; a learned discrepancy when
-the library has nothing; and the mechanism parameter that explains the data
-when no wear effect does.
+"""Find what the base model lacks, on the fit data alone: library effects and
+learned discrepancies in one forward selection, a check that the chosen
+model predicts, mechanism suspects, detection limits, then the posterior,
+the life and the next measurement.
 
 1. Fit the base model (the dataset's fitted parameters, every effect at zero).
-2. Forward selection (`select`): at each stage every effect not yet in the
-   model is scored at the current model (`scores`) and **every** candidate
-   with a positive score is refitted on top of it (a failed refit is
-   retried from other starts and, if it still fails, named with its reason).
-   Each refit is judged in its identified form (`selection`): a shape the
-   data do not determine is not counted, and what is reported (the
-   strength, or the extra worn volume of the identified form) must stand
-   `STRENGTH_SIGMAS` from zero at its reported uncertainty.  The best
-   qualifying candidate by the penalised criterion joins the model, unless
-   the next is within `AMBIGUITY` of it (then the answer is "A or B", with
-   the measurement that would separate them); the effects already in the
-   model are then re-judged in the joint fit and dropped if they no longer
-   qualify.  The loop stops when nothing qualifies.
-3. Goodness of fit: the chosen model must leave fit-point residuals
+2. Forward selection (`select`): at each stage every candidate not yet in
+   the model, the library's effects and a discrepancy k (1 + delta(x)) over
+   each supported variable (`learned`) alike, is scored at the current model
+   (`scores`) and refitted on top of it (a failed refit is retried from
+   other starts and, if it still fails, named with its reason; beside other
+   members only candidates scoring above `LATER_SCORE` are refitted).  Each
+   refit is judged in its identified form (`selection`): adopted on its
+   chi-square drop at p = 0.001 for the numbers the data determine (a
+   discrepancy's effective number of coefficients included), ranked by BIC
+   (`selection.criterion`: no held-out term).  Members already in the model
+   are re-judged in the joint fit and dropped if they no longer qualify.
+   Paths grow from the best few single candidates (`PATHS`), the best
+   discrepancy among them.
+3. Prediction inside the fit window (`validation.forward_check`): each
+   path's model, refitted on the points before the window's last
+   inspection, must predict that inspection; only predicting models
+   compete, the fewest members first (Occam's window, `OCCAM_TOLERANCE`),
+   and a runner-up within `AMBIGUITY` makes the answer "A or B".  The held-
+   out points are read once, after the choice, for the before/after report.
+4. Goodness of fit: the chosen model must leave fit-point residuals
    consistent with the stated noise, chi2 <= dof + `GOF_SIGMAS` sqrt(2 dof);
    otherwise ``residual_unexplained`` is true.
-4. Mechanism suspects: when no effect is identified, every rig parameter the
-   dataset neither fits nor excludes (``suspect = false``) is scored; when the
-   residual is unexplained and the best score passes p = 0.001 corrected for
-   the number of suspects, it is refitted ("the force trace asks for a 2x
-   longer crank").
-5. Discrepancy (`learned`): when the residual is still unexplained (no
-   suspect explains it), k (1 + delta(x)) is fitted over each variable; the
-   one that cuts the held-out error is named with delta's shape in words.
-6. Detection limits: at the final model, the smallest strength of each
-   effect not named that these data would have detected (`scores`).
+5. Mechanism suspects: when no member is adopted or the residual is
+   unexplained, every rig parameter the dataset neither fits nor excludes is
+   scored and the best refitted; a suspect outside its plausible range
+   (`parameters.plausible_range`) is not a finding.
+6. Detection limits at the final model (`scores`); beside a discrepancy, k
+   identified orthogonal to it (`FitResult.identified_k`).
+7. The posterior (`posterior`), the life and the next measurement
+   (`forecast`).
 """
 
 from __future__ import annotations

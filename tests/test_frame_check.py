@@ -67,9 +67,16 @@ def test_the_calibration_report_names_the_declaration():
     mass = Series("mass", "volume", "mass.csv", None, [1000.0, 2000.0], [1e-9, 2e-9], 1e-10,
                   basis="mass")
     which = np.concatenate([np.zeros(THETA.size, int), np.ones(2, int)])
+    base = SimpleNamespace(prediction=np.concatenate([groove(THETA), [1e-9, 2e-9]]))
     c = SimpleNamespace(dataset=SimpleNamespace(series=(profile, mass)),
                         problem=SimpleNamespace(series_of_point=which),
-                        base=SimpleNamespace(prediction=np.concatenate(
-                            [groove(THETA), [1e-9, 2e-9]])))
+                        base=base, final=None, chosen=base)
+    base.residual = (base.prediction - np.concatenate([profile.y, mass.y])) / SIGMA
     (w,) = frame_warnings(c)
     assert w["series"] == "bore" and 'bushing_angle_sense = "clockwise"' in w["message"]
+    assert "as given as well" not in w["message"]
+    # a chosen model that fits the profile as given (a lobed k can mimic a
+    # mirror) leaves both readings open, and the warning says so
+    c.final = SimpleNamespace(residual=np.full(which.size, 0.5))
+    (w,) = frame_warnings(c)
+    assert f"fits it as given as well (chi2 {0.25 * THETA.size:.0f})" in w["message"]

@@ -374,6 +374,7 @@ class Fitter:
         # fits kept by the caller, by (effects, discrepancy): a model reached
         # on two selection paths is fitted once
         self.fits: dict = {}
+        self._k_free: dict = {}   # discrepancy variable -> unit vector (`k_direction`)
 
     def _pack(self, x, strength=None, log_shape=None, u=None, discrepancy=None) -> np.ndarray:
         v = np.zeros(self.n_packed)
@@ -561,6 +562,36 @@ class Fitter:
     def layout(self, effects=(), discrepancy: str | None = None) -> "Layout":
         return Layout.of(self, tuple(effects), discrepancy)
 
+    def base_fit(self) -> "FitResult":
+        """The base model's fit (every effect at zero), fitted once."""
+        key: tuple = (frozenset(), None)
+        if key not in self.fits:
+            self.fits[key] = self.fit(None)
+        return self.fits[key]
+
+    def k_direction(self, variable: str) -> np.ndarray | None:
+        """The direction, in the discrepancy's coefficients (prior units), along
+        which k (1 + delta) changes like k itself over the data: g = J_d^T J_k
+        over the fit points at the base fit, normalised; None when k is not
+        fitted.  The discrepancy is held orthogonal to it (`Layout.of`), so that
+        a part of delta constant over the data cannot trade against k: k stays
+        identified, and the posterior has no valley along which k and delta's
+        near-constant part exchange (a valley that is straight only to first
+        order: along it the exact posterior falls off orders of magnitude
+        faster than its Gauss-Newton quadratic).  Computed once per variable,
+        at the base fit, from the fit points alone."""
+        if self.k_index is None:
+            return None
+        if variable not in self._k_free:
+            base = self.base_fit()
+            lay = Layout.of(self, (), variable, constrained=False)
+            rows = ~self.problem.holdout
+            jac = self.linearise(lay.pack(lay.start(None, 0.0, 0.0, base)), lay.tangents).jac
+            g = jac[rows][:, self.problem.n_base:].T @ jac[rows][:, self.k_index]
+            norm = float(np.linalg.norm(g))
+            self._k_free[variable] = g / norm if norm > 0 else None
+        return self._k_free[variable]
+
     def refine(self, fit: "FitResult", z) -> "FitResult":
         """``fit``'s model fitted again from the unknowns ``z`` (a point of its
         layout where the posterior's draws found it higher than at the fit)."""
@@ -644,9 +675,16 @@ class Layout:
     upper: np.ndarray
     prior_index: np.ndarray      # z entries with a unit Gaussian prior row
     prior_jacobian: np.ndarray
+    # the discrepancy's coefficients act through P z_d (P = I - u u^T, u the
+    # direction `Fitter.k_direction`); identity when unconstrained
+    projection: np.ndarray | None = None
+    # beside a discrepancy: a of `identified_k` at the fit (x_id = x_k - a.z_d),
+    # so that every report of k, the posterior's included, is the identified one
+    k_identification: np.ndarray | None = None
 
     @classmethod
-    def of(cls, fitter: Fitter, effects: tuple, discrepancy: str | None) -> "Layout":
+    def of(cls, fitter: Fitter, effects: tuple, discrepancy: str | None,
+           constrained: bool = True) -> "Layout":
         for e in effects:
             if e not in NAMES:
                 raise InputError(f"unknown effect {e!r}; allowed: {', '.join(NAMES)}")
@@ -670,14 +708,29 @@ class Layout:
             t[o + i] = fitter._unit(2, [k])[0] * LOG_STD[k]
             lower[o + i], upper[o + i] = -SHAPE_PRIOR_SIGMAS, SHAPE_PRIOR_SIGMAS
         o += len(shaped)
+        projection = None
         if discrepancy:
             sl = disc.SLICES[discrepancy]
             t[o:] = fitter._unit(4, range(sl.start, sl.stop)) \
                 * disc.prior_std(discrepancy)[:, None]
+            u = fitter.k_direction(discrepancy) if constrained else None
+            if u is not None:
+                projection = np.eye(nd) - np.outer(u, u)
+                t[o:] = projection @ t[o:]
         prior = np.arange(nb + len(effects), size)
         pj = np.zeros((prior.size, size))
         pj[np.arange(prior.size), prior] = 1.0
-        return cls(fitter, effects, shaped, discrepancy, size, t, lower, upper, prior, pj)
+        return cls(fitter, effects, shaped, discrepancy, size, t, lower, upper, prior, pj,
+                   projection)
+
+    def discrepancy_coefficients(self, z) -> np.ndarray:
+        """The coefficients delta acts with at unknowns ``z`` (..., size), in
+        the discrepancy's own units (P z_d times the prior scale)."""
+        assert self.discrepancy is not None, "a layout without a discrepancy"
+        zd = np.asarray(z)[..., self.size - disc.SIZES[self.discrepancy]:]
+        if self.projection is not None:
+            zd = zd @ self.projection
+        return zd * disc.prior_std(self.discrepancy)
 
     @property
     def n_base(self) -> int:
@@ -701,7 +754,10 @@ class Layout:
         nb = self.n_base
         out = {}
         for i, name in enumerate(p.fit_names):
-            out[name] = float(p.base0[name]) * np.exp(p.tau[i] * z[:, i])
+            x = z[:, i]
+            if i == self.fitter.k_index and self.k_identification is not None:
+                x = x - z[:, self.size - self.k_identification.size:] @ self.k_identification
+            out[name] = float(p.base0[name]) * np.exp(p.tau[i] * x)
         for i, e in enumerate(self.effects):
             out[e] = z[:, nb + i] * SCALES[NAMES.index(e)]
         o = nb + len(self.effects)
@@ -711,9 +767,9 @@ class Layout:
             out[shape.name] = shape.default * np.exp(z[:, o + i] * shape.log_std)
         o += len(self.shaped)
         if self.discrepancy:
-            scale = disc.prior_std(self.discrepancy)
-            for j in range(scale.size):
-                out[f"delta_{self.discrepancy}_{j + 1}"] = z[:, o + j] * scale[j]
+            coef = self.discrepancy_coefficients(z)
+            for j in range(coef.shape[1]):
+                out[f"delta_{self.discrepancy}_{j + 1}"] = coef[:, j]
         return out
 
     def start(self, x0, s0, log_shape0, start: FitResult | None) -> np.ndarray:
@@ -772,14 +828,16 @@ class Layout:
         b = None
         if self.discrepancy:
             scale = disc.prior_std(self.discrepancy)
-            coef = z[o:] * scale
-            cov_d = cov[o:, o:] * np.outer(scale, scale)
+            coef = self.discrepancy_coefficients(z)
+            proj = np.eye(len(scale)) if self.projection is None else self.projection
+            cov_d = (proj @ cov[o:, o:] @ proj) * np.outer(scale, scale)
             ki = self.fitter.k_index
             if ki is not None:
                 # the wear coefficient identified beside the discrepancy
                 # (`identified_k`): its value and 1-sigma replace the model's
                 k = ki
                 a = identified_k(jac_fit, k, slice(o, self.size))
+                self.k_identification = a
                 e = np.zeros(self.size)
                 e[k], e[o:] = 1.0, -a
                 x_id = x[k] - a @ z[o:]

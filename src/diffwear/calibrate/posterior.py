@@ -11,14 +11,17 @@ stated noise, the unit Gaussian priors of shapes and discrepancy
 coefficients, and flat priors on the rest.  Two ways to it:
 
 * **Laplace, checked** (`method="laplace"`, the fast path): draws around the
-  fit with the Gauss-Newton covariance C (a Student-t of 5 degrees of
-  freedom with the Gaussian's scale), each evaluated on the exact model;
+  fit along the Gauss-Newton covariance's principal directions, each scaled
+  to the exact posterior's fall-off along it (`_matched_root`), from a
+  Student-t of 5 degrees of freedom, each evaluated on the exact model;
   the importance ratios p / q, Pareto
   smoothed (Vehtari, Simpson, Gelman, Yao and Gabry, J. Mach. Learn. Res. 25
   (2024) 72), weight the draws, and their Pareto k says whether the
   Gaussian is near enough: below `PARETO_K_OK` the weighted draws stand for
-  the posterior; above it the report says the Gaussian is not to be trusted
-  and names the sampler.
+  the posterior; above it the draws stand for the matched Gaussian,
+  unweighted (importance weights resting on a few draws would give bands
+  far too narrow), and the report says the Gaussian is unchecked and names
+  the sampler.
 * **NUTS** (`method="nuts"`): the No-U-Turn sampler (Hoffman and Gelman, J.
   Mach. Learn. Res. 15 (2014) 1593; blackjax) on the same compiled model,
   its gradient -J^T r from the same forward-mode derivative program as the
@@ -164,6 +167,54 @@ def _log_target(fitter: Fitter, fit: FitResult, r_all: np.ndarray, z: np.ndarray
     return -0.5 * float(r @ r + prior @ prior)
 
 
+# The proposal's scale along each principal direction of the Gauss-Newton
+# covariance is matched to the exact posterior there (`_matched_root`), from
+# probes at these multiples of the Gaussian's 1-sigma, kept within this range
+PROBES = (0.5, 1.0)
+MATCHED_RANGE = (0.05, 2.0)
+
+
+def _matched_root(fitter: Fitter, fit: FitResult, cov: np.ndarray):
+    """A square root of the proposal's covariance: the Gauss-Newton
+    covariance's principal directions, each scaled to where the exact log
+    posterior has fallen by 1/2 (its 1-sigma if it were Gaussian there).
+
+    Where the data inform a direction only at second order (a discrepancy's
+    coefficients where the pin barely wears: zero first-order effect, a large
+    one a step away) the exact posterior falls off like a s^2 + b s^4, not
+    s^2 / 2, and draws at the Gaussian's scale all land far out in its tail
+    (the importance weights then rest on one draw).  The fall-off measured at
+    `PROBES` (both signs averaged) gives a and b; the scale is the root of
+    a s^2 + b s^4 = 1/2.  Returns (root, the scale factors)."""
+    lay = fit.notes["layout"]
+    z_hat = np.asarray(fit.notes["z"], float)
+    at_fit = -0.5 * (fit.chi2_fit + fit.prior_chi2)
+    lam, vec = np.linalg.eigh(cov)
+    sd = np.sqrt(np.clip(lam, 0.0, None))
+    factors = np.ones(lam.size)
+    for i in np.flatnonzero(sd > 0):
+        fall = []
+        for step in PROBES:
+            drops = []
+            for sign in (-1.0, 1.0):
+                z = z_hat + sign * step * sd[i] * vec[:, i]
+                drops.append(at_fit - _log_target(fitter, fit, fitter.residuals(lay.pack(z)), z))
+            fall.append(float(np.mean(drops)))
+        (s1, d1), (s2, d2) = zip(PROBES, fall)
+        if not (np.isfinite(d1) and np.isfinite(d2)):
+            factors[i] = MATCHED_RANGE[0] if not np.isfinite(d1) else s1
+            continue
+        # d(s) = a s^2 + b s^4 through the two probes
+        m = np.array([[s1 ** 2, s1 ** 4], [s2 ** 2, s2 ** 4]])
+        a, b = np.clip(np.linalg.solve(m, [d1, d2]), 0.0, None)
+        if b > 0:
+            root_s2 = (-a + math.sqrt(a * a + 2.0 * b)) / (2.0 * b)
+        else:
+            root_s2 = 0.5 / a if a > 0 else MATCHED_RANGE[1] ** 2
+        factors[i] = float(np.clip(math.sqrt(root_s2), *MATCHED_RANGE))
+    return vec * (sd * factors), factors
+
+
 def laplace(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED) -> Posterior:
     """Gaussian draws at the fit, evaluated on the exact model and weighted by
     Pareto-smoothed importance ratios (module notes)."""
@@ -172,7 +223,7 @@ def laplace(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED
     lay = fit.notes["layout"]
     z_hat = np.asarray(fit.notes["z"], float)
     cov = _symmetric(np.asarray(fit.notes["cov"], float))
-    root = _root(cov)
+    root, factors = _matched_root(fitter, fit, cov)
     rng = np.random.default_rng(seed)
     # a Student-t proposal with the Gaussian's scale: its heavier tails keep
     # the importance ratios bounded where the posterior's tails are heavier
@@ -196,14 +247,24 @@ def laplace(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED
     w = np.where(finite, w, 0.0)
     w /= w.sum()
     k = float(k)
+    adequate = bool(k < PARETO_K_OK)
+    ess = float(1.0 / np.sum(w ** 2))
+    if not adequate:
+        # the exact model does not confirm the Gaussian: weights that rest on
+        # a few draws would give bands far too narrow, so the draws stand for
+        # the (matched) Gaussian itself, unchecked: weights N / t
+        log_n = -0.5 * np.sum(eps ** 2, axis=1)
+        w = np.where(finite, np.exp(log_n - log_q - np.max((log_n - log_q)[finite])), 0.0)
+        w /= w.sum()
     at_fit = -0.5 * (fit.chi2_fit + fit.prior_chi2)
     best = int(np.argmax(np.where(finite, log_p, -np.inf)))
-    diagnostics = {"pareto_k": k, "ess": float(1.0 / np.sum(w ** 2)),
-                   "gaussian_adequate": bool(k < PARETO_K_OK),
+    diagnostics = {"pareto_k": k, "ess": ess, "gaussian_adequate": adequate,
+                   "weights": "importance" if adequate else "gaussian, unchecked",
                    "failed_draws": int((~finite).sum()),
                    # a draw the posterior puts higher than the fit: the fit stopped
                    # short of its minimum (`refined`)
-                   "best_draw_gain": float(log_p[best] - at_fit), "best_draw": best}
+                   "best_draw_gain": float(log_p[best] - at_fit), "best_draw": best,
+                   "matched_scales": factors.tolist()}
     # the failed draws keep their rows (their weight is zero)
     residuals = np.where(np.isfinite(residuals), residuals, 0.0)
     return Posterior("laplace", fit, z, w, residuals, diagnostics)

@@ -422,12 +422,19 @@ def _parameter_section(c: Calibration, summary: dict, final) -> Section:
                    f"R-hat {significant(diag['max_r_hat'], 4)}, smallest bulk ESS "
                    f"{diag['min_ess']:.0f}, {diag['divergences']} divergent transitions")
         elif "pareto_k" in diag:
-            verdict = ("near enough" if diag["gaussian_adequate"] else
-                       "**not** near enough: rerun with `--posterior nuts`")
-            how = (f"the Laplace (Gaussian) approximation at the fit, {post['draws']} draws "
-                   f"evaluated on the exact model and weighted by Pareto-smoothed importance "
-                   f"ratios; Pareto k {significant(diag['pareto_k'], 2)} ({verdict}), "
-                   f"effective draws {diag['ess']:.0f}")
+            k_text = ("n/a" if diag["pareto_k"] is None or not math.isfinite(diag["pareto_k"])
+                      else significant(diag["pareto_k"], 2))
+            if diag["gaussian_adequate"]:
+                verdict = (f"Pareto k {k_text}: near enough; effective draws "
+                           f"{diag['ess']:.0f}")
+            else:
+                verdict = (f"Pareto k {k_text}: **not** confirmed, so the bands below are the "
+                           "Gaussian's, unchecked (its draws unweighted); a checked posterior "
+                           "needs `--posterior nuts`")
+            how = (f"the Laplace (Gaussian) approximation at the fit, scaled along each "
+                   f"principal direction to the exact posterior's fall-off, {post['draws']} "
+                   f"draws evaluated on the exact model and weighted by Pareto-smoothed "
+                   f"importance ratios; {verdict}")
         else:
             how = ("the Laplace (Gaussian) approximation at the fit, linearised (the dynamic "
                    "model is too costly to evaluate at every draw)")

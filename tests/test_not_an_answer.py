@@ -1,0 +1,124 @@
+"""A result that was not computed is NaN, and so are its derivatives, forward
+and reverse: a 0 would read to an optimiser as a flat optimum.  Each test
+puts a failing point in a vmapped batch beside computed ones, whose values and
+derivatives must be those they have alone (central differences and closed
+forms beside them)."""
+
+import math
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from diffwear.wear.status import (
+    STATUS_INCOMPLETE,
+    STATUS_OK,
+    STATUS_PIERCED,
+    STATUS_SOLVER,
+    not_an_answer,
+    not_computed,
+)
+
+FOUR_BAR = (Path(__file__).resolve().parents[1] / "src" / "diffwear" / "config" / "mechanisms"
+            / "four_bar_wear.toml")
+
+
+def _life(k):
+    """A closed form with a failure: 3 / k for k < 1, else not computed."""
+    return not_an_answer(3.0 / k, k >= 1.0, (k,))
+
+
+def test_not_computed_names_the_failures_only():
+    status = jnp.array([STATUS_OK, STATUS_PIERCED, STATUS_SOLVER, STATUS_INCOMPLETE, 4])
+    assert np.asarray(not_computed(status)).tolist() == [False, False, True, True, False]
+
+
+def test_a_failing_point_in_a_batch_is_nan_with_nan_derivatives_the_others_exact():
+    """d(3/k)/dk = -3/k^2: -12 at 0.5, -48 at 0.25; the point at k = 2 fails."""
+    ks = jnp.array([0.5, 2.0, 0.25])
+    value, grad = jax.vmap(jax.value_and_grad(_life))(ks)
+    forward = jax.vmap(jax.jacfwd(_life))(ks)
+    for got in (value, grad, forward):
+        assert math.isnan(float(got[1]))
+    assert np.asarray(value)[[0, 2]] == pytest.approx([6.0, 12.0], rel=1e-15)
+    assert np.asarray(grad)[[0, 2]] == pytest.approx([-12.0, -48.0], rel=1e-15)
+    assert np.asarray(forward)[[0, 2]] == pytest.approx([-12.0, -48.0], rel=1e-15)
+    # the gradient of the batch's sum: NaN at the failing point only
+    total = np.asarray(jax.grad(lambda k: jnp.sum(jax.vmap(_life)(k)))(ks))
+    assert math.isnan(total[1]) and total[[0, 2]] == pytest.approx([-12.0, -48.0], rel=1e-15)
+
+
+def test_a_failed_value_that_is_finite_is_made_nan_too():
+    """A failure whose raw value is finite (the last profile an evolution
+    reached) is not an answer either."""
+    def depth(k):
+        return not_an_answer(jnp.array([1.0, 2.0]) * k, jnp.array([False, True]), (k,))
+
+    value = np.asarray(depth(2.0))
+    assert value[0] == 2.0 and math.isnan(value[1])
+    jac = np.asarray(jax.jacfwd(depth)(2.0))
+    assert jac[0] == 1.0 and math.isnan(jac[1])
+    assert math.isnan(float(jax.grad(lambda k: depth(k)[1])(2.0)))
+
+
+def _zero_load_setup():
+    from diffwear.config.loader import loads
+    from diffwear.models import QuasiStatic
+    from diffwear.quasistatic.loads import CycleLoads, JointLoads
+
+    # a coarse grid and few steps: the point is the failure, not the life's accuracy
+    mfile = loads(FOUR_BAR.read_text().replace("n_theta = 90", "n_theta = 24"))
+    samples = 36
+
+    def life(scale, limit=1e-5):
+        """The coupler-rocker joint's life under a constant 100 N load in the
+        bushing frame times ``scale`` (0: a joint that carries no load), the
+        pin turning once a second."""
+        force = jnp.broadcast_to(scale * jnp.array([0.0, -100.0]), (samples, 2))
+        lo = CycleLoads(joints=(JointLoads(force=force, omega=jnp.full(samples, 2 * jnp.pi),
+                                           period=jnp.asarray(1.0)),), ok=jnp.asarray(True))
+        model = QuasiStatic(samples=samples, steps=4).with_loads(lo)
+        res = model.life(mfile.mechanism, ("coupler_rocker",), jnp.zeros(1), period=1.0,
+                         limit=limit)
+        return res.cycles[0], res.status
+
+    return life
+
+
+def test_the_life_of_a_joint_that_carries_no_load_is_not_an_answer():
+    """No load: the pin's equilibrium has no solution (status 2), the life is
+    NaN; a loaded joint beside it has its life."""
+    life = jax.jit(_zero_load_setup())
+    cycles, status = life(0.0)
+    assert math.isnan(float(cycles)) and int(status) == STATUS_SOLVER
+    cycles, status = life(1.0)
+    assert np.isfinite(float(cycles)) and int(status) == STATUS_OK
+
+
+@pytest.mark.extended
+def test_the_zero_load_life_has_nan_derivatives_in_a_batch_beside_loaded_ones():
+    """A batch of load scales (1, 0, 2): the unloaded point's life and its
+    derivatives (reverse and forward, by the load and by the limit) are NaN;
+    the loaded points' lives and derivatives are those they have alone, and
+    the derivatives agree with central differences."""
+    life = _zero_load_setup()
+
+    def cycles(scale):
+        return life(scale)[0]
+
+    scales = jnp.array([1.0, 0.0, 2.0])
+    value, grad = jax.jit(jax.vmap(jax.value_and_grad(cycles)))(scales)
+    forward = jax.jit(jax.vmap(jax.jacfwd(cycles)))(scales)
+    for got in (value, grad, forward):
+        assert math.isnan(float(got[1]))
+    alone = jax.jit(cycles)
+    for i in (0, 2):
+        assert float(value[i]) == pytest.approx(float(alone(scales[i])), rel=1e-12)
+        eps = 1e-6
+        central = (float(alone(scales[i] + eps)) - float(alone(scales[i] - eps))) / (2 * eps)
+        assert float(grad[i]) == pytest.approx(central, rel=1e-5)
+        assert float(forward[i]) == pytest.approx(float(grad[i]), rel=1e-10)
+    by_limit = jax.jit(jax.value_and_grad(lambda lim: life(0.0, lim)[0]))(1e-5)
+    assert all(math.isnan(float(v)) for v in by_limit)

@@ -564,6 +564,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if target is None:
             raise
         failed = output_error(err, target)
+        _OPEN[-1].mark_incomplete(str(failed))
         print(f"diffwear: error: {failed}", file=sys.stderr)
         return failed.exit_code
     finally:

@@ -388,6 +388,8 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
         mechanism_wear.check_joints(mfile, wear_model, joints)
         mechanism_wear.bushing_walls(mfile, joints, limit)
         mechanism_wear.drive_period(mfile)
+    if resume:
+        mechanism_wear.check_resumed_file(mfile, out_dir)
     y0 = initial_state(mfile)
     check_motion(mfile, y0)
     out = OutputDir(out_dir, overwrite=overwrite, resume=resume)

@@ -200,7 +200,7 @@ def _run(args: argparse.Namespace) -> int:
     runner.run(mfile, args.out, overwrite=args.overwrite, input_text=text, log=log,
                cycles=args.cycles, limit=limit, model=args.model or "quasi-static",
                method=args.method or "constant", resume=args.resume is not None,
-               progress=not args.quiet)
+               progress=not args.quiet, yes=args.yes)
     return 0
 
 
@@ -461,6 +461,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", metavar="DIR",
                    help="continue the interrupted dynamic wear run whose checkpoint.npz is in "
                         "DIR (its cycles, method and limit are read from it)")
+    p.add_argument("--yes", action="store_true",
+                   help="run a mechanism whose compile is estimated beyond the compile budget "
+                        "(10 min on 2 cores; without it such a file is refused with the "
+                        "estimate)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_run)
 

@@ -248,3 +248,22 @@ def test_overwrite_beside_a_users_file_names_it_and_says_what_to_do(tmp_path, ca
     assert len(err) == 1 and "(notes.txt)" in err[0]
     assert "removes only the files a run wrote" in err[0] and "move them out" in err[0]
     assert _snapshot(out) == before
+
+
+def test_a_resumed_run_that_finishes_clears_the_incomplete_mark(tmp_path):
+    """A run stopped after its checkpoint and first file: the refusal names
+    INCOMPLETE's reason; --resume continues it, and its summary removes the
+    mark (from the folder and from the run's list of files)."""
+    out = tmp_path / "stopped"
+    first = OutputDir(out)
+    first.file("checkpoint.npz").write_bytes(b"state")
+    first.csv("trajectory.csv", {"t_s": [0.0]})
+    first.mark_incomplete("cannot write wear.png: the disk holding it is full")
+    release_all()
+    with pytest.raises(InputError, match=r"interrupted run .*INCOMPLETE: cannot write wear\.png"):
+        OutputDir(out)
+    resumed = OutputDir(out, resume=True)
+    assert "INCOMPLETE" not in resumed.files
+    resumed.json("summary.json", {"files": resumed.files})
+    assert "INCOMPLETE" not in _listing(out)
+    assert "INCOMPLETE" not in (out / MANIFEST).read_text().split()

@@ -109,8 +109,9 @@ class OutputDir:
         if ((self.path / CHECKPOINT).exists() and not (self.path / "summary.json").exists()
                 and not (overwrite or resume)):
             raise InputError(
-                f"--out {self.path}: holds an interrupted run ({CHECKPOINT}, no summary.json); "
-                f"pass --resume {self.path} to continue it, or --overwrite to start over")
+                f"--out {self.path}: holds an interrupted run ({CHECKPOINT}, no "
+                f"summary.json{stopped}); pass --resume {self.path} to continue it, or "
+                "--overwrite to start over")
         unfinished = [n for n in previous if n != CHECKPOINT]
         if unfinished and not (self.path / "summary.json").exists() and not (overwrite or resume):
             shown = [n for n in unfinished if n != INCOMPLETE]

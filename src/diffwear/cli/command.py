@@ -562,6 +562,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return err.exit_code
     except KeyboardInterrupt:
         print(_interrupted(args, tuple(_OPEN)), file=sys.stderr)
+        for out in _OPEN:  # a run that wrote part of its results: marked as such
+            if out.files:
+                out.mark_incomplete("the run was interrupted (Ctrl-C) before it finished")
         return 130
     except OSError as err:  # a figure or archive write that failed (a full disk)
         target = _OPEN[-1].abandon_last() if _OPEN and err.errno in _DISK_ERRNOS else None

@@ -72,18 +72,28 @@ def _zero_load_setup():
     mfile = loads(FOUR_BAR.read_text().replace("n_theta = 90", "n_theta = 24"))
     samples = 36
 
-    def life(scale, limit=1e-5):
-        """The coupler-rocker joint's life under a constant 100 N load in the
-        bushing frame times ``scale`` (0: a joint that carries no load), the
-        pin turning once a second."""
+    def model(scale):
+        """The quasi-static model given a constant 100 N load in the bushing
+        frame times ``scale`` (0: a joint that carries no load), the pin
+        turning once a second."""
         force = jnp.broadcast_to(scale * jnp.array([0.0, -100.0]), (samples, 2))
         lo = CycleLoads(joints=(JointLoads(force=force, omega=jnp.full(samples, 2 * jnp.pi),
                                            period=jnp.asarray(1.0)),), ok=jnp.asarray(True))
-        model = QuasiStatic(samples=samples, steps=4).with_loads(lo)
-        res = model.life(mfile.mechanism, ("coupler_rocker",), jnp.zeros(1), period=1.0,
-                         limit=limit)
+        return QuasiStatic(samples=samples, steps=4).with_loads(lo)
+
+    def life(scale, limit=1e-5):
+        """The coupler-rocker joint's cycles to ``limit`` [m] of wear."""
+        res = model(scale).life(mfile.mechanism, ("coupler_rocker",), jnp.zeros(1), period=1.0,
+                                limit=limit)
         return res.cycles[0], res.status
 
+    def evolve(scale, cycles=200.0):
+        """Its peak wear depth [m] after ``cycles``."""
+        res = model(scale).evolve(mfile.mechanism, ("coupler_rocker",), jnp.zeros(1),
+                                  period=1.0, cycles=cycles)
+        return jnp.max(res.depth[0]), res.status
+
+    life.evolve = evolve
     return life
 
 
@@ -122,3 +132,28 @@ def test_the_zero_load_life_has_nan_derivatives_in_a_batch_beside_loaded_ones():
         assert float(forward[i]) == pytest.approx(float(grad[i]), rel=1e-10)
     by_limit = jax.jit(jax.value_and_grad(lambda lim: life(0.0, lim)[0]))(1e-5)
     assert all(math.isnan(float(v)) for v in by_limit)
+
+
+@pytest.mark.extended
+def test_the_zero_load_evolution_has_no_final_profile_and_nan_derivatives():
+    """The evolution of an unloaded joint (status 2) has a NaN final
+    profile, NaN derivatives forward and reverse; a loaded one beside it in
+    the batch keeps its depth, its derivative agreeing with central
+    differences."""
+    depth = _zero_load_setup().evolve
+
+    def peak(scale):
+        return depth(scale)[0]
+
+    scales = jnp.array([1.0, 0.0])
+    value, grad = jax.jit(jax.vmap(jax.value_and_grad(peak)))(scales)
+    forward = jax.jit(jax.vmap(jax.jacfwd(peak)))(scales)
+    assert int(jax.jit(depth)(0.0)[1]) == STATUS_SOLVER
+    for got in (value, grad, forward):
+        assert math.isnan(float(got[1])) and np.isfinite(float(got[0]))
+    alone = jax.jit(peak)
+    eps = 1e-6
+    central = (float(alone(1.0 + eps)) - float(alone(1.0 - eps))) / (2 * eps)
+    assert float(value[0]) == pytest.approx(float(alone(1.0)), rel=1e-12)
+    assert float(grad[0]) == pytest.approx(central, rel=1e-5)
+    assert float(forward[0]) == pytest.approx(float(grad[0]), rel=1e-10)

@@ -6,6 +6,7 @@ forms beside them)."""
 
 import math
 from pathlib import Path
+from typing import ClassVar
 
 import jax
 import jax.numpy as jnp
@@ -157,3 +158,59 @@ def test_the_zero_load_evolution_has_no_final_profile_and_nan_derivatives():
     assert float(value[0]) == pytest.approx(float(alone(1.0)), rel=1e-12)
     assert float(grad[0]) == pytest.approx(central, rel=1e-5)
     assert float(forward[0]) == pytest.approx(float(grad[0]), rel=1e-10)
+
+
+def test_a_failed_sweep_point_is_nan_with_nan_derivatives_beside_exact_ones():
+    """The rig-wear sweep model on a stand-in wear model whose final profile
+    is the clearance c everywhere (so max depth = c exactly: the smooth max
+    of a constant) and which fails (status 2) above c = 0.04 mm: in a
+    vmapped batch the failed point's outputs and derivatives are NaN, the
+    other's depth is 1e3 c mm with derivative 1e3 mm/m."""
+    from diffwear.models import AbstractWearModel, WearEvolution
+    from diffwear.sweep.models import JOINT, RigWear
+
+    class Uniform(AbstractWearModel):
+        name: ClassVar[str] = "uniform"
+        exact_gradients: ClassVar[bool] = True
+
+        def life(self, mech, joints, y0, *, period, limit):
+            raise NotImplementedError
+
+        def evolve(self, mech, joints, y0, *, period, cycles, wall_thickness=None):
+            el = mech.element(JOINT)
+            c = el.bushing_radius - el.pin_radius
+            depth = jnp.full(el.profile.n, c)
+            status = jnp.where(c > 0.04e-3, STATUS_SOLVER, STATUS_OK)
+            nan = jnp.full(1, jnp.nan)
+            return WearEvolution(depth=(depth,), cycles=jnp.asarray(cycles),
+                                 joint_cycles=jnp.asarray([cycles]), status=status,
+                                 joint_status=status[None], contact_margin=nan,
+                                 contact_margin_worn=nan, history=())
+
+        def joint_force(self, mech, joint, y0, *, period, evolution, samples=180):
+            return jnp.full(samples, 100.0)
+
+        def cycle_histories(self, mech, joint, y0, *, period, evolution):
+            raise NotImplementedError
+
+    rig = RigWear(wear_model=Uniform(), n_theta=12)
+    base = rig.defaults
+
+    def depth_mm(c):
+        return rig({**base, "clearance": c})["max_depth_mm"]
+
+    @jax.jit
+    def batch(cs):
+        value, grad = jax.vmap(jax.value_and_grad(depth_mm))(cs)
+        return value, grad, jax.vmap(jax.jacfwd(depth_mm))(cs)
+
+    value, grad, forward = batch(jnp.array([0.02e-3, 0.05e-3]))
+    assert float(value[0]) == pytest.approx(0.02, rel=1e-12)
+    assert float(grad[0]) == pytest.approx(1e3, rel=1e-9)
+    assert float(forward[0]) == pytest.approx(1e3, rel=1e-9)
+    for got in (value, grad, forward):
+        assert math.isnan(float(got[1]))
+    outputs = jax.jit(rig)({**base, "clearance": 0.05e-3})
+    assert int(outputs["status"]) == STATUS_SOLVER
+    assert all(math.isnan(float(outputs[k]))
+               for k in ("max_depth_mm", "volume_mm3", "mean_joint_force_N"))

@@ -267,3 +267,25 @@ def test_a_resumed_run_that_finishes_clears_the_incomplete_mark(tmp_path):
     resumed.json("summary.json", {"files": resumed.files})
     assert "INCOMPLETE" not in _listing(out)
     assert "INCOMPLETE" not in (out / MANIFEST).read_text().split()
+
+
+def test_a_run_interrupted_after_its_first_files_is_marked_incomplete(tmp_path, capsys,
+                                                                      monkeypatch):
+    """Ctrl-C while the third file is written: exit 130, and INCOMPLETE
+    says the run was interrupted; the next run is refused naming it."""
+    real_savetxt = np.savetxt
+
+    def savetxt(target, *a, **k):
+        if "reaction_driver" in str(target):
+            raise KeyboardInterrupt
+        return real_savetxt(target, *a, **k)
+
+    monkeypatch.setattr(np, "savetxt", savetxt)
+    out = tmp_path / "stopped"
+    assert main([*RUN, "--out", str(out)]) == 130
+    assert "interrupted (Ctrl-C)" in (out / "INCOMPLETE").read_text()
+    assert "trajectory.csv" in _listing(out) and "summary.json" not in _listing(out)
+    monkeypatch.setattr(np, "savetxt", real_savetxt)
+    capsys.readouterr()
+    assert main([*RUN, "--out", str(out)]) == 2
+    assert "INCOMPLETE: the run was interrupted" in capsys.readouterr().err

@@ -120,6 +120,7 @@ def test_a_full_disk_leaves_no_truncated_file_and_one_line(tmp_path, capsys, mon
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "trajectory.png" in err[0] and "full" in err[0]
     assert "trajectory.png" not in _listing(out)
+    assert "trajectory.png" in (out / "INCOMPLETE").read_text()  # a figure's failure too
 
 
 def test_a_write_cut_short_by_a_kill_is_not_taken_for_a_users_file(tmp_path):

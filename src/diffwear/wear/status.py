@@ -46,9 +46,13 @@ def not_an_answer(value, failed, inputs):
     another output of the same call by an input they share is NaN too (the
     other joint's life of a two-joint life by the mechanism's parameters;
     the failing point's column of a Jacobian of a whole batch)."""
-    leaves = jax.tree.leaves(eqx.filter(inputs, eqx.is_inexact_array))
-    probe = sum((jnp.sum(jnp.where(jnp.isfinite(v), v, 0.0)) for v in leaves),
-                jnp.zeros(()))
     value = jnp.asarray(value)
+    leaves = [jnp.ravel(v).astype(value.dtype)
+              for v in jax.tree.leaves(eqx.filter(inputs, eqx.is_inexact_array))
+              if jnp.issubdtype(v.dtype, jnp.floating)]
+    # one concatenation and one sum, whatever the number of leaves (a large
+    # mechanism has thousands: the traced program stays small)
+    flat = jnp.concatenate(leaves) if leaves else jnp.zeros(0, value.dtype)
+    probe = jnp.sum(jnp.where(jnp.isfinite(flat), flat, 0.0))
     poison = jnp.where(jnp.broadcast_to(failed, jnp.shape(value)), jnp.nan, 0.0)
     return jnp.where(jnp.broadcast_to(failed, jnp.shape(value)), jnp.nan, value) + poison * probe

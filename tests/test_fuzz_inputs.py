@@ -386,6 +386,8 @@ def csv_files(draw):
                             "mass.csv": "cycles,mass_furlong\n0,0\n2000,0.1\n"})
 @example(doc=_with(DATASET, ("series", 0, "uncertainty"), "0 um"), csvs={
     n: "\n".join(v) + "\n" for n, v in CSVS.items()})
+@example(doc=_with(DATASET, ("parameters", "clearance"), {"std": "5 um"}), csvs={
+    n: "\n".join(v) + "\n" for n, v in CSVS.items()})  # found by the long run: no value
 @given(doc=st.one_of(st.just(DATASET), mutated(DATASET)), csvs=csv_files())
 def test_fuzz_dataset(tmp_path_factory, doc, csvs, capsys):
     from diffwear.calibrate import load_dataset
@@ -409,7 +411,9 @@ def test_fuzz_dataset(tmp_path_factory, doc, csvs, capsys):
             assert np.all(np.isfinite(s.x)) and np.all(np.isfinite(s.y))
             assert np.all(np.isfinite(s.sigma)) and np.all(np.asarray(s.sigma) > 0)
         for p in d.parameters.values():
-            assert math.isfinite(p.value) and (p.std is None or math.isfinite(p.std))
+            # no value: the preset's (documented), else a finite one
+            assert p.value is None or math.isfinite(p.value)
+            assert p.std is None or (math.isfinite(p.std) and p.std > 0)
     assert _files(tmp) == before
 
 

@@ -214,3 +214,36 @@ def test_a_failed_sweep_point_is_nan_with_nan_derivatives_beside_exact_ones():
     assert int(outputs["status"]) == STATUS_SOLVER
     assert all(math.isnan(float(outputs[k]))
                for k in ("max_depth_mm", "volume_mm3", "mean_joint_force_N"))
+
+
+def test_a_failed_calibration_prediction_is_nan_with_nan_derivatives():
+    """A calibration problem on a stand-in model: the prediction is 1e12 k
+    with k = 5e-13 e^x (the fitted unknown x on its log scale), and the model
+    fails above k = 1e-12 (x > ln 2).  At x = 0: 0.5, derivative 0.5; at
+    x = 1 the prediction and its derivatives are NaN, in one vmapped batch."""
+    from typing import NamedTuple
+
+    from diffwear.calibrate.fit import Problem
+
+    class History(NamedTuple):
+        value: jnp.ndarray
+        ok: jnp.ndarray
+
+    def model(base, effects):
+        return History(base["k"] * 1e12, base["k"] < 1e-12)
+
+    problem = Problem(model, (lambda h: jnp.atleast_1d(h.value),), y=np.zeros(1),
+                      sigma=np.ones(1), holdout=np.zeros(1, bool), series_of_point=np.zeros(1),
+                      fit_names=("k",), base0={"k": jnp.asarray(5e-13)}, tau=np.ones(1))
+
+    def predict(x):
+        return problem.predict(jnp.atleast_1d(x), jnp.zeros(2))[0]
+
+    xs = jnp.array([0.0, 1.0])
+    value, grad = jax.vmap(jax.value_and_grad(predict))(xs)
+    forward = jax.vmap(jax.jacfwd(predict))(xs)
+    assert float(value[0]) == pytest.approx(0.5, rel=1e-12)
+    assert float(grad[0]) == pytest.approx(0.5, rel=1e-12)
+    assert float(forward[0]) == pytest.approx(0.5, rel=1e-12)
+    for got in (value, grad, forward):
+        assert math.isnan(float(got[1]))

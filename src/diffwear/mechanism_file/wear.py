@@ -151,11 +151,7 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
         el = mech.element(name)
         hist = res.history[k]
         valid = np.asarray(hist.valid)
-        depth = np.asarray(res.depth[k])
-        if not np.all(np.isfinite(depth)):
-            # a failed joint's final profile is not an answer (NaN): the run
-            # reports the last profile it reached, beside its status
-            depth = np.asarray(hist.depth)[valid][-1]
+        depth = np.asarray(res.depth[k])  # as far as it got (`WearEvolution.reached`)
         out[name] = {
             "theta": np.asarray(el.profile.theta), "depth": depth,
             "history_cycles": np.asarray(hist.cycles)[valid],

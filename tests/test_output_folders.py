@@ -290,3 +290,15 @@ def test_a_run_interrupted_after_its_first_files_is_marked_incomplete(tmp_path, 
     capsys.readouterr()
     assert main([*RUN, "--out", str(out)]) == 2
     assert "INCOMPLETE: the run was interrupted" in capsys.readouterr().err
+
+
+def test_a_users_file_named_incomplete_is_the_users(tmp_path, capsys):
+    """A folder of one's own holding a file named INCOMPLETE (not diffwear's
+    words): refused as a user's file, and --overwrite leaves it."""
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "INCOMPLETE").write_text("my list of unfinished things\n")
+    for extra in ([], ["--overwrite"]):
+        assert main([*RUN, "--out", str(out), *extra]) == 2
+        assert "(INCOMPLETE)" in capsys.readouterr().err
+    assert (out / "INCOMPLETE").read_text() == "my list of unfinished things\n"

@@ -71,6 +71,7 @@ CHECKPOINT = "checkpoint.npz"  # an interrupted wear study's state (`studies._we
 LOCK = ".diffwear-lock"        # holds the pid of the process writing the folder
 MANIFEST = ".diffwear-files"   # the names of the files a run wrote, one per line
 INCOMPLETE = "INCOMPLETE"      # a run that stopped before its summary, and why
+_INCOMPLETE_NOTE = "The files here are those written before the run stopped."
 _OWN = {LOCK, MANIFEST}
 # names a file manager leaves in any folder: not the user's results
 _DESKTOP = {".DS_Store", "Thumbs.db", "desktop.ini"}
@@ -154,6 +155,16 @@ class OutputDir:
             why = []
         return f"; {INCOMPLETE}: {why[0] if why else 'it stopped before its summary'}"
 
+    @staticmethod
+    def _ours(marker: Path) -> bool:
+        """``INCOMPLETE`` as `mark_incomplete` writes it (or empty: a full disk
+        took even its words), not a user's file of that name."""
+        try:
+            text = marker.read_text(errors="replace")
+        except OSError:
+            return False
+        return not text.strip() or _INCOMPLETE_NOTE in text
+
     def mark_incomplete(self, why: str) -> None:
         """Leave ``INCOMPLETE`` (saying ``why``) in a folder whose run stopped
         before its summary.  Best effort: on a full disk the file may stay
@@ -163,10 +174,8 @@ class OutputDir:
         marker = self.path / INCOMPLETE
         try:
             with open(marker, "w", encoding="utf-8") as fh:
-                fh.write(f"{why.strip()}\n"
-                         "The files here are those written before the run stopped. "
-                         "Run again with --overwrite (or --resume where the run kept a "
-                         "checkpoint).\n")
+                fh.write(f"{why.strip()}\n{_INCOMPLETE_NOTE} Run again with --overwrite "
+                         "(or --resume where the run kept a checkpoint).\n")
         except OSError:
             pass
 
@@ -192,8 +201,8 @@ class OutputDir:
                 pass
         if CHECKPOINT in present:  # an interrupted run's state (listed once it ends)
             listed.add(CHECKPOINT)
-        if INCOMPLETE in present:  # a stopped run's marker (written unlisted)
-            listed.add(INCOMPLETE)
+        if INCOMPLETE in present and (listed or self._ours(self.path / INCOMPLETE)):
+            listed.add(INCOMPLETE)  # a stopped run's marker (written unlisted)
         foreign = sorted(present - listed)
         if foreign:
             shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more"

@@ -102,3 +102,71 @@ def test_the_api_refuses_against_a_given_memory(files, tmp_path):
     mfile = load(_write(files, tmp_path, "chain", 5))
     with pytest.raises(InputError, match="more than this machine's"):
         size.check_size(mfile, memory=1)
+
+
+def test_a_file_beyond_the_compile_budget_asks_for_yes(files, tmp_path, capsys, monkeypatch):
+    """A 1,500-link chain (1,501 elements, 4,500 coordinates) is 1.35 + 0.397 x
+    1501 + 0.0064 x 4500 = 627 s by the fit, beyond the 600 s budget.  The
+    same rule on a 100-link chain (43 s) against a budget lowered to 30 s:
+    refused without --yes (exit 2, the estimate and the flag named, nothing
+    written); with --yes it goes on (here stopped at the initial state).
+    The API's default runs it."""
+    from diffwear.cli import run as run_cli
+
+    def fit(elements, coordinates):
+        return (size.SECONDS_BASE + elements * size.SECONDS_PER_ELEMENT
+                + coordinates * size.SECONDS_PER_COORDINATE)
+
+    assert fit(1501, 4500) > size.COMPILE_BUDGET_SECONDS == 600.0 > fit(1, 30_000)
+    monkeypatch.setattr(size, "COMPILE_BUDGET_SECONDS", 30.0)
+    path = _write(files, tmp_path, "chain", 100)
+    est = size.estimate(load(path)).seconds
+    assert est == pytest.approx(fit(101, 300), rel=1e-12) and est > 30.0
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "beyond the compile budget of 30 s" in err
+    assert f"about {est:.0f} s" in err and "--yes" in err
+    assert not out.exists()
+
+    class Stop(Exception):
+        pass
+
+    def stop(mfile):
+        raise Stop
+
+    monkeypatch.setattr(run_cli, "initial_state", stop)
+    with pytest.raises(Stop):
+        main(["run", str(path), "--out", str(out), "--quiet", "--yes"])
+    assert not out.exists()
+    assert size.check_size(load(path)) is None  # the API: runs it (below the warning)
+
+
+def test_a_long_compile_says_its_progress(files, tmp_path, capsys, monkeypatch):
+    """A run warned about (the warning threshold lowered to a small file's
+    estimate) says, while it compiles, how long it has run against the
+    estimate: lines 0.05 s apart over a 0.3 s compile stand-in."""
+    import time
+
+    from diffwear.cli import run as run_cli
+
+    class Stop(Exception):
+        pass
+
+    def compile_then_stop(mfile, y0):
+        time.sleep(0.3)
+        raise Stop
+
+    monkeypatch.setattr(size, "WARN_SECONDS", 0.0)
+    monkeypatch.setattr(size, "PROGRESS_EVERY_SECONDS", 0.05)
+    monkeypatch.setattr(run_cli, "integrate_timed", compile_then_stop)
+    monkeypatch.setattr(run_cli, "initial_state", lambda mfile: None)
+    monkeypatch.setattr(run_cli, "check_motion", lambda mfile, y0: None)
+    path = _write(files, tmp_path, "chain", 3)
+    with pytest.raises(Stop):
+        main(["run", str(path), "--out", str(tmp_path / "out")])
+    lines = [ln for ln in capsys.readouterr().err.splitlines()
+             if "compiling and integrating" in ln]
+    est = size.estimate(load(path)).seconds
+    assert len(lines) >= 3 and all(f"of an estimated {est:.0f} s" in ln for ln in lines)
+    assert lines[0].startswith("diffwear: compiling and integrating: 0 s so far")

@@ -120,6 +120,7 @@ def test_a_full_disk_leaves_no_truncated_file_and_one_line(tmp_path, capsys, mon
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "trajectory.png" in err[0] and "full" in err[0]
     assert "trajectory.png" not in _listing(out)
+    assert "trajectory.png" in (out / "INCOMPLETE").read_text()  # a figure's failure too
 
 
 def test_a_write_cut_short_by_a_kill_is_not_taken_for_a_users_file(tmp_path):
@@ -147,3 +148,157 @@ def test_a_killed_runs_files_are_not_mixed_with_a_new_runs(tmp_path):
         OutputDir(out)
     OutputDir(out, overwrite=True)
     assert "contact_0.csv" not in _listing(out)
+
+
+def _snapshot(folder):
+    return {p.name: p.read_bytes() for p in folder.iterdir()}
+
+
+def _checkpoint_of(folder, meta):
+    """A checkpoint as a wear run leaves it, recording ``meta``."""
+    from diffwear.wear import Checkpoint, save_checkpoint
+    from diffwear.wear.engine import initial_state
+
+    folder.mkdir()
+    state = jax.tree.map(np.asarray, initial_state((np.zeros(3),),
+                                                   {"y": np.zeros(2), "t": np.asarray(0.0)}))
+    save_checkpoint(folder / "checkpoint.npz", Checkpoint(state, {"cycles": np.zeros(1)}, 1),
+                    meta)
+
+
+def test_a_resume_of_another_files_checkpoint_is_refused_and_touches_nothing(tmp_path, capsys):
+    """The checkpoint of a run of another file: exit 2 naming both files, and
+    the folder byte for byte as it was (no manifest, no lock left)."""
+    from diffwear.choices import SHIPPED_MECHANISMS
+
+    out = tmp_path / "other"
+    _checkpoint_of(out, {"mfile": "run rig.toml", "file_crc32": "00000000", "model": "dynamic",
+                         "cycles": 10.0})
+    before = _snapshot(out)
+    assert main(["run", str(SHIPPED_MECHANISMS / "four_bar_wear.toml"), "--resume", str(out),
+                 "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "'run rig.toml'" in err and "'run four_bar_wear.toml'" in err
+    assert _snapshot(out) == before
+
+
+def test_a_folder_opened_to_resume_and_left_is_as_it_was(tmp_path):
+    """Opening a folder (to resume, or a new one) writes nothing before the
+    first result: a refusal after it leaves no manifest and no lock."""
+    out = tmp_path / "interrupted"
+    _checkpoint_of(out, {"cycles": 10.0})
+    before = _snapshot(out)
+    OutputDir(out, resume=True)
+    release_all()
+    assert _snapshot(out) == before
+    OutputDir(tmp_path / "new")
+    release_all()
+    assert not (tmp_path / "new").exists()
+
+
+def test_a_run_stopped_by_a_full_disk_is_marked_incomplete(tmp_path, capsys, monkeypatch):
+    """ENOSPC on the third file: exit 4, and INCOMPLETE beside the files
+    written before it, saying why; the next run is refused naming it,
+    --overwrite replaces the run and removes the mark."""
+    real_savetxt = np.savetxt
+
+    def savetxt(target, *a, **k):
+        if "reaction_driver" in str(target):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_savetxt(target, *a, **k)
+
+    monkeypatch.setattr(np, "savetxt", savetxt)
+    out = tmp_path / "full"
+    assert main([*RUN, "--out", str(out)]) == 4
+    assert "marked INCOMPLETE" in capsys.readouterr().err
+    names = _listing(out)
+    assert "INCOMPLETE" in names and "trajectory.csv" in names and "summary.json" not in names
+    why = (out / "INCOMPLETE").read_text()
+    assert "reaction_driver.csv" in why and "full" in why and "--overwrite" in why
+    monkeypatch.setattr(np, "savetxt", real_savetxt)
+    assert main([*RUN, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "did not finish" in err and "INCOMPLETE: cannot write reaction_driver.csv" in err
+    assert main([*RUN, "--out", str(out), "--overwrite"]) == 0
+    assert "INCOMPLETE" not in _listing(out) and "summary.json" in _listing(out)
+
+
+def test_a_disk_full_at_the_first_file_still_leaves_a_folder_the_next_run_takes(tmp_path):
+    """A stop before anything was listed: INCOMPLETE alone is diffwear's
+    (refused as an unfinished run, taken by --overwrite), not a user's file."""
+    out = tmp_path / "first"
+    folder = OutputDir(out)
+    folder.mark_incomplete("cannot write trajectory.csv: the disk holding it is full")
+    release_all()
+    with pytest.raises(InputError, match="did not finish .*INCOMPLETE: cannot write"):
+        OutputDir(out)
+    OutputDir(out, overwrite=True)
+    assert "INCOMPLETE" not in _listing(out)
+
+
+def test_overwrite_beside_a_users_file_names_it_and_says_what_to_do(tmp_path, capsys):
+    out = tmp_path / "run"
+    previous = OutputDir(out)
+    previous.csv("trajectory.csv", {"x": [1.0]})
+    previous.json("summary.json", {"files": ["trajectory.csv"]})
+    release_all()
+    (out / "notes.txt").write_text("mine")
+    before = _snapshot(out)
+    assert main([*RUN, "--out", str(out), "--overwrite"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "(notes.txt)" in err[0]
+    assert "removes only the files a run wrote" in err[0] and "move them out" in err[0]
+    assert _snapshot(out) == before
+
+
+def test_a_resumed_run_that_finishes_clears_the_incomplete_mark(tmp_path):
+    """A run stopped after its checkpoint and first file: the refusal names
+    INCOMPLETE's reason; --resume continues it, and its summary removes the
+    mark (from the folder and from the run's list of files)."""
+    out = tmp_path / "stopped"
+    first = OutputDir(out)
+    first.file("checkpoint.npz").write_bytes(b"state")
+    first.csv("trajectory.csv", {"t_s": [0.0]})
+    first.mark_incomplete("cannot write wear.png: the disk holding it is full")
+    release_all()
+    with pytest.raises(InputError, match=r"interrupted run .*INCOMPLETE: cannot write wear\.png"):
+        OutputDir(out)
+    resumed = OutputDir(out, resume=True)
+    assert "INCOMPLETE" not in resumed.files
+    resumed.json("summary.json", {"files": resumed.files})
+    assert "INCOMPLETE" not in _listing(out)
+    assert "INCOMPLETE" not in (out / MANIFEST).read_text().split()
+
+
+def test_a_run_interrupted_after_its_first_files_is_marked_incomplete(tmp_path, capsys,
+                                                                      monkeypatch):
+    """Ctrl-C while the third file is written: exit 130, and INCOMPLETE
+    says the run was interrupted; the next run is refused naming it."""
+    real_savetxt = np.savetxt
+
+    def savetxt(target, *a, **k):
+        if "reaction_driver" in str(target):
+            raise KeyboardInterrupt
+        return real_savetxt(target, *a, **k)
+
+    monkeypatch.setattr(np, "savetxt", savetxt)
+    out = tmp_path / "stopped"
+    assert main([*RUN, "--out", str(out)]) == 130
+    assert "interrupted (Ctrl-C)" in (out / "INCOMPLETE").read_text()
+    assert "trajectory.csv" in _listing(out) and "summary.json" not in _listing(out)
+    monkeypatch.setattr(np, "savetxt", real_savetxt)
+    capsys.readouterr()
+    assert main([*RUN, "--out", str(out)]) == 2
+    assert "INCOMPLETE: the run was interrupted" in capsys.readouterr().err
+
+
+def test_a_users_file_named_incomplete_is_the_users(tmp_path, capsys):
+    """A folder of one's own holding a file named INCOMPLETE (not diffwear's
+    words): refused as a user's file, and --overwrite leaves it."""
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "INCOMPLETE").write_text("my list of unfinished things\n")
+    for extra in ([], ["--overwrite"]):
+        assert main([*RUN, "--out", str(out), *extra]) == 2
+        assert "(INCOMPLETE)" in capsys.readouterr().err
+    assert (out / "INCOMPLETE").read_text() == "my list of unfinished things\n"

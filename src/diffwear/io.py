@@ -28,7 +28,15 @@ Files are written under a temporary name and renamed when complete (the
 CSV, JSON and text writers; figures and archives name their target through
 `OutputDir.file`, and a failed write removes it), so a full disk leaves no
 truncated file: the error is an `OutputError` (exit code 4) naming the
-file and the folder.
+file and the folder.  A run stopped before its summary by a failed write or
+an interrupt leaves a file ``INCOMPLETE`` saying why (empty where even that
+could not be written): the user sees it beside the results, and the next run
+into the folder refuses it unless it is overwritten or resumed; the
+summary of a finished run removes it.
+
+A refused run leaves the folder as it was: nothing is written into it before
+the first result (the manifest is written with the first file; the lock is
+removed when the process ends).
 """
 
 from __future__ import annotations
@@ -62,6 +70,8 @@ def _jsonable(value):
 CHECKPOINT = "checkpoint.npz"  # an interrupted wear study's state (`studies._wear_common`)
 LOCK = ".diffwear-lock"        # holds the pid of the process writing the folder
 MANIFEST = ".diffwear-files"   # the names of the files a run wrote, one per line
+INCOMPLETE = "INCOMPLETE"      # a run that stopped before its summary, and why
+_INCOMPLETE_NOTE = "The files here are those written before the run stopped."
 _OWN = {LOCK, MANIFEST}
 # names a file manager leaves in any folder: not the user's results
 _DESKTOP = {".DS_Store", "Thumbs.db", "desktop.ini"}
@@ -91,22 +101,26 @@ class OutputDir:
         if self.path.exists() and not self.path.is_dir():
             raise InputError(f"--out {self.path}: exists and is not a directory")
         previous, partial = self._previous_files()
+        stopped = self._stopped()
         if (self.path / "summary.json").exists() and not overwrite:
             raise InputError(
-                f"--out {self.path}: already holds results (summary.json); choose another "
-                "folder or pass --overwrite"
+                f"--out {self.path}: already holds results (summary.json{stopped}); choose "
+                "another folder or pass --overwrite"
             )
         if ((self.path / CHECKPOINT).exists() and not (self.path / "summary.json").exists()
                 and not (overwrite or resume)):
             raise InputError(
-                f"--out {self.path}: holds an interrupted run ({CHECKPOINT}, no summary.json); "
-                f"pass --resume {self.path} to continue it, or --overwrite to start over")
+                f"--out {self.path}: holds an interrupted run ({CHECKPOINT}, no "
+                f"summary.json{stopped}); pass --resume {self.path} to continue it, or "
+                "--overwrite to start over")
         unfinished = [n for n in previous if n != CHECKPOINT]
         if unfinished and not (self.path / "summary.json").exists() and not (overwrite or resume):
+            shown = [n for n in unfinished if n != INCOMPLETE]
+            listing = ", ".join(shown[:5]) + (" ..." if len(shown) > 5 else "")
             raise InputError(
                 f"--out {self.path}: holds the files of a run that did not finish "
-                f"({', '.join(unfinished[:5])}{' ...' if len(unfinished) > 5 else ''}); pass "
-                "--overwrite to replace them, or choose another folder")
+                f"({(listing + stopped) if listing else stopped[2:]}); pass --overwrite to "
+                "replace them, or choose another folder")
         existed = self.path.exists()
         try:
             self.path.mkdir(parents=True, exist_ok=True)
@@ -115,14 +129,55 @@ class OutputDir:
                              f"({err.strerror}); allowed: a folder you can write to") from None
         self.created = not existed
         self.files: list[str] = []
+        self.finished = False
+        self._listed = False  # the manifest written by this run
         self._lock()
         _OPEN.append(self)
         self._remove(partial)
         if resume:  # the interrupted run's files stay; this run adds to its list
-            self.files = [n for n in previous if (self.path / n).is_file()]
+            self.files = [n for n in previous
+                          if n != INCOMPLETE and (self.path / n).is_file()]
         elif overwrite:
             self._remove(previous)
-        self._write_manifest()
+            self._write_manifest()
+        # otherwise the manifest is written with the first file: a run refused
+        # before it (a checkpoint of another run) leaves the folder as it was
+
+    def _stopped(self) -> str:
+        """'; INCOMPLETE: why' where a previous run here stopped before its
+        summary (for the refusals), else ''."""
+        marker = self.path / INCOMPLETE
+        if not marker.is_file():
+            return ""
+        try:
+            why = marker.read_text(errors="replace").strip().splitlines()
+        except OSError:
+            why = []
+        return f"; {INCOMPLETE}: {why[0] if why else 'it stopped before its summary'}"
+
+    @staticmethod
+    def _ours(marker: Path) -> bool:
+        """``INCOMPLETE`` as `mark_incomplete` writes it (or empty: a full disk
+        took even its words), not a user's file of that name."""
+        try:
+            text = marker.read_text(errors="replace")
+        except OSError:
+            return False
+        return not text.strip() or _INCOMPLETE_NOTE in text
+
+    def mark_incomplete(self, why: str) -> None:
+        """Leave ``INCOMPLETE`` (saying ``why``) in a folder whose run stopped
+        before its summary.  Best effort: on a full disk the file may stay
+        empty, or not be made at all (the error message says the same)."""
+        if self.finished:
+            return
+        marker = self.path / INCOMPLETE
+        try:
+            with open(marker, "w", encoding="utf-8") as fh:
+                fh.write(f"{why.strip()}\n{_INCOMPLETE_NOTE} Run again with --overwrite "
+                         "(or --resume where the run kept a checkpoint).\n")
+        except OSError:
+            pass
 
     def _previous_files(self) -> tuple[list[str], set[str]]:
         """(the files a previous diffwear run wrote here: its manifest, or its
@@ -146,10 +201,18 @@ class OutputDir:
                 pass
         if CHECKPOINT in present:  # an interrupted run's state (listed once it ends)
             listed.add(CHECKPOINT)
+        if INCOMPLETE in present and (listed or self._ours(self.path / INCOMPLETE)):
+            listed.add(INCOMPLETE)  # a stopped run's marker (written unlisted)
         foreign = sorted(present - listed)
         if foreign:
             shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more"
                                               if len(foreign) > 5 else "")
+            if listed & present:
+                raise InputError(
+                    f"--out {self.path}: holds files diffwear did not write ({shown}) beside "
+                    "a previous run's; --overwrite removes only the files a run wrote "
+                    f"(listed in {MANIFEST}), never these, and does not write beside them: "
+                    "move them out of the folder and rerun, or choose another folder")
             what = ("files diffwear did not write" if listed or not present
                     else "files that are not a diffwear output")
             raise InputError(f"--out {self.path}: holds {what} ({shown}); allowed: a new "
@@ -172,6 +235,7 @@ class OutputDir:
     def _write_manifest(self) -> None:
         names = "".join(f"{n}\n" for n in dict.fromkeys(self.files))
         self._atomic(MANIFEST, lambda tmp: tmp.write_text(names))
+        self._listed = True
 
     def _lock(self) -> None:
         lock = self.path / LOCK
@@ -209,8 +273,9 @@ class OutputDir:
         """The path to write ``name`` to, listed in the manifest first (so that
         an interrupted run's files are known and a later --overwrite removes
         them)."""
-        if name not in self.files:
-            self.files.append(name)
+        if name not in self.files or not self._listed:
+            if name not in self.files:
+                self.files.append(name)
             self._write_manifest()
         return self.path / name
 
@@ -225,7 +290,8 @@ class OutputDir:
 
     def _atomic(self, name: str, write) -> Path:
         """``write(tmp)`` to a temporary name, renamed to ``name`` when done;
-        a failure leaves neither (`OutputError` naming the file and folder)."""
+        a failure leaves neither (`OutputError` naming the file and folder)
+        and marks the run `INCOMPLETE`."""
         target = self.path / name
         tmp = self.path / f".{name}.partial"
         try:
@@ -233,7 +299,10 @@ class OutputDir:
             os.replace(tmp, target)
         except OSError as err:
             tmp.unlink(missing_ok=True)
-            raise output_error(err, target) from None
+            failed = output_error(err, target)
+            if name != MANIFEST or self.files:
+                self.mark_incomplete(str(failed))
+            raise failed from None
         return target
 
     def csv(self, name: str, columns: Mapping[str, ArrayLike], fmt: str = "%.10g") -> Path:
@@ -249,6 +318,8 @@ class OutputDir:
         body = json.dumps(_jsonable(payload), indent=2, sort_keys=False) + "\n"
         target = self._atomic(name, lambda tmp: tmp.write_text(body))
         if name == "summary.json":  # the run is finished: the folder is free again
+            self.finished = True
+            (self.path / INCOMPLETE).unlink(missing_ok=True)  # a resumed run's earlier stop
             self.release()
         return target
 
@@ -262,8 +333,9 @@ def output_error(err: OSError, target: Path) -> OutputError:
     full = err.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC))
     why = ("the disk holding it is full" if full else err.strerror or str(err))
     return OutputError(f"cannot write {target.name} in {target.parent}: {why}; the "
-                       "incomplete file was removed (free space, then rerun with --overwrite, "
-                       "or --resume where the run keeps a checkpoint)")
+                       f"incomplete file was removed and the run marked {INCOMPLETE} there "
+                       "(free space, then rerun with --overwrite, or --resume where the run "
+                       "keeps a checkpoint)")
 
 
 def release_all() -> list[OutputDir]:

@@ -37,6 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import InputError, SolverError
+from ..wear.status import not_an_answer
 from . import discrepancy as disc
 from .dataset import Dataset
 from .effects import EFFECTS, NAMES, SHAPED, EffectValues, log_shape
@@ -204,8 +205,9 @@ class Problem:
     def predict(self, x, effects: EffectValues, log_multipliers=None):
         h = self.model(self.base(x, log_multipliers), effects)
         pred = jnp.concatenate([o(h) for o in self.observations])
-        # a model failure poisons every prediction: reported, not fitted
-        return jnp.where(h.ok, pred, jnp.nan)
+        # a model failure poisons every prediction: reported, not fitted; NaN
+        # with NaN derivatives (a 0 would read as a flat optimum)
+        return not_an_answer(pred, ~h.ok, (x, effects, log_multipliers))
 
     def residual(self, x, effects: EffectValues, log_multipliers=None):
         return (self.predict(x, effects, log_multipliers) - self.y) / self.sigma
@@ -217,8 +219,9 @@ class Problem:
         pred = jnp.concatenate([o(h) for o in self.observations])
         volume = Observation("volume", np.asarray(self.probe_cycles, float))(h) \
             if self.probe_cycles else jnp.zeros(0)
-        pred = jnp.where(h.ok, pred, jnp.nan)
-        return (pred - self.y) / self.sigma, jnp.where(h.ok, volume, jnp.nan)
+        inputs = (x, effects, log_multipliers)
+        pred = not_an_answer(pred, ~h.ok, inputs)
+        return (pred - self.y) / self.sigma, not_an_answer(volume, ~h.ok, inputs)
 
 
 SCALES = np.array([e.scale for e in EFFECTS])

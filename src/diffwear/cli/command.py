@@ -200,7 +200,7 @@ def _run(args: argparse.Namespace) -> int:
     runner.run(mfile, args.out, overwrite=args.overwrite, input_text=text, log=log,
                cycles=args.cycles, limit=limit, model=args.model or "quasi-static",
                method=args.method or "constant", resume=args.resume is not None,
-               progress=not args.quiet)
+               progress=not args.quiet, yes=args.yes)
     return 0
 
 
@@ -461,6 +461,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", metavar="DIR",
                    help="continue the interrupted dynamic wear run whose checkpoint.npz is in "
                         "DIR (its cycles, method and limit are read from it)")
+    p.add_argument("--yes", action="store_true",
+                   help="run a mechanism whose compile is estimated beyond the compile budget "
+                        "(10 min on 2 cores; without it such a file is refused with the "
+                        "estimate)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_run)
 
@@ -558,12 +562,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         return err.exit_code
     except KeyboardInterrupt:
         print(_interrupted(args, tuple(_OPEN)), file=sys.stderr)
+        for out in _OPEN:  # a run that wrote part of its results: marked as such
+            if out.files:
+                out.mark_incomplete("the run was interrupted (Ctrl-C) before it finished")
         return 130
     except OSError as err:  # a figure or archive write that failed (a full disk)
         target = _OPEN[-1].abandon_last() if _OPEN and err.errno in _DISK_ERRNOS else None
         if target is None:
             raise
         failed = output_error(err, target)
+        _OPEN[-1].mark_incomplete(str(failed))
         print(f"diffwear: error: {failed}", file=sys.stderr)
         return failed.exit_code
     finally:

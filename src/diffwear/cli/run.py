@@ -43,6 +43,7 @@ from ..mechanism_file import (
     integrate_timed,
     postprocess,
     settled_part,
+    size,
     start_up_transient,
 )
 from ..mechanism_file import wear as mechanism_wear
@@ -378,15 +379,19 @@ def _to_limit(w: dict) -> str:
 def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
         input_text: str | None = None, cycles: float | None = None,
         limit: float | None = None, model: str = "quasi-static", method: str = "constant",
-        resume: bool = False, progress: bool = False, log: Callable[..., None] = print) -> dict:
+        resume: bool = False, progress: bool = False, yes: bool = True,
+        log: Callable[..., None] = print) -> dict:
     """Assemble, integrate, write; with ``cycles`` also the wear of every
     clearance joint with a wear law (`diffwear.mechanism_file`) on ``model``
     ("quasi-static" or "dynamic", the latter with ``method`` and checkpoints
     in ``out_dir``, which ``resume=True`` continues), and with ``limit`` [m]
-    the cycles to that depth.  Bad input fails before ``out_dir`` is touched."""
+    the cycles to that depth.  Bad input fails before ``out_dir`` is touched,
+    and so does, unless ``yes``, a file whose compile is estimated beyond the
+    compile budget (`diffwear.mechanism_file.size`); a long compile says its
+    progress (with ``progress``)."""
     started = time.perf_counter()
     check_step_budget(mfile)
-    slow = check_size(mfile)
+    slow = check_size(mfile, yes=yes)
     if slow is not None:  # said now, before the wait
         print(f"diffwear: warning: {slow}", file=sys.stderr)
     if cycles is None and (resume or model != "quasi-static" or method != "constant"):
@@ -402,12 +407,18 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
         mechanism_wear.check_joints(mfile, wear_model, joints)
         mechanism_wear.bushing_walls(mfile, joints, limit)
         mechanism_wear.drive_period(mfile)
+    if resume:
+        mechanism_wear.check_resumed_file(mfile, out_dir)
     y0 = initial_state(mfile)
     check_motion(mfile, y0)
     out = OutputDir(out_dir, overwrite=overwrite, resume=resume)
     log(f"[{mfile.file}] integrating {mfile.simulation.duration:g} s (first run compiles) ...")
     # a motion the integrator cannot finish is written up to where it stopped
-    timed = integrate_timed(mfile, y0, partial=True)
+    if slow is not None and progress:  # a long compile: a line now and then, never silence
+        with size.progress_line("compiling and integrating", size.estimate(mfile).seconds):
+            timed = integrate_timed(mfile, y0, partial=True)
+    else:
+        timed = integrate_timed(mfile, y0, partial=True)
     traj = timed.trajectory
     results = postprocess(mfile, traj)
     wear = None

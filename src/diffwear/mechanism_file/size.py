@@ -12,13 +12,21 @@ free bodies and of pendulum chains (``benchmarks/compile_size.py``, record
     memory  = a + b elements^2 + c coordinates
 
 which the coefficients below copy.  The time is that of a 2-core machine;
-faster machines take less, so the estimate is a warning, never a refusal.
+faster machines take less, so a long estimate is a warning with a progress
+line while it compiles (nothing looks hung), and beyond the compile budget a
+question: the command runs it with ``--yes`` only.  The memory estimate is a
+refusal where the machine has less.
 """
 
 from __future__ import annotations
 
 import os
-from typing import NamedTuple
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import NamedTuple, TextIO
 
 from ..config import MechanismFile
 from ..errors import InputError
@@ -32,8 +40,14 @@ BYTES_BASE = 488173449.4486675
 BYTES_PER_ELEMENT_SQUARED = 132248.11285424372
 BYTES_PER_COORDINATE = 90094.8726219042
 
-# A wait worth saying before it starts.
+# A wait worth saying before it starts (and a progress line through it).
 WARN_SECONDS = 60.0
+# The compile budget: an estimate beyond it runs only when asked for (--yes).
+# Ten minutes: the 10,000 free bodies a hostile-input trial ran (about 3 min,
+# 3.2 GB) stay within it; a 1,500-link chain (about 10 min) does not.
+COMPILE_BUDGET_SECONDS = 600.0
+# Seconds between the lines of `progress_line`.
+PROGRESS_EVERY_SECONDS = 10.0
 
 
 class SizeEstimate(NamedTuple):
@@ -69,10 +83,16 @@ def physical_memory() -> int | None:
         return None
 
 
-def check_size(mfile: MechanismFile, memory: int | None = None) -> str | None:
+def _minutes(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.0f} min"
+
+
+def check_size(mfile: MechanismFile, memory: int | None = None, *, yes: bool = True
+               ) -> str | None:
     """Refuse (`InputError`) a file whose estimated memory exceeds ``memory``
-    (default: this machine's); return a warning when its estimated time
-    passes `WARN_SECONDS`, else None."""
+    (default: this machine's), and, unless ``yes``, one whose estimated
+    compile exceeds `COMPILE_BUDGET_SECONDS`; return a warning when its
+    estimated time passes `WARN_SECONDS`, else None."""
     est = estimate(mfile)
     memory = physical_memory() if memory is None else memory
     if memory is not None and est.bytes > memory:
@@ -81,6 +101,13 @@ def check_size(mfile: MechanismFile, memory: int | None = None) -> str | None:
             f"{est.bytes / 1e9:.1f} GB of memory, more than this machine's "
             f"{memory / 1e9:.1f} GB; allowed: a mechanism whose estimate fits (fewer joints, "
             "force elements or bodies), or a machine with more memory")
+    if est.seconds > COMPILE_BUDGET_SECONDS and not yes:
+        raise InputError(
+            f"{mfile.file}: {est.describe()}: compiling it is estimated to take about "
+            f"{_minutes(est.seconds)} and {est.bytes / 1e9:.1f} GB of memory on a 2-core "
+            f"machine, beyond the compile budget of {_minutes(COMPILE_BUDGET_SECONDS)}; "
+            "allowed: --yes to run it anyway (a progress line shows the compile; Ctrl-C "
+            "stops it cleanly), or a mechanism with fewer joints, force elements or bodies")
     if est.seconds > WARN_SECONDS:
         return (f"{mfile.file}: {est.describe()}: compiling it is estimated to take about "
                 f"{est.seconds / 60:.0f} min and {est.bytes / 1e9:.1f} GB of memory on a 2-core "
@@ -89,4 +116,48 @@ def check_size(mfile: MechanismFile, memory: int | None = None) -> str | None:
     return None
 
 
-__all__ = ["SizeEstimate", "check_size", "estimate", "physical_memory"]
+@contextmanager
+def progress_line(what: str, seconds: float, stream: TextIO | None = None,
+                  every: float | None = None) -> Iterator[None]:
+    """While the block runs, say every ``every`` seconds (default
+    `PROGRESS_EVERY_SECONDS`) on ``stream`` (default stderr) how long ``what``
+    has run against its estimate of ``seconds``: one line rewritten in place
+    on a terminal, a line each time otherwise (a log file)."""
+    out = sys.stderr if stream is None else stream
+    every = PROGRESS_EVERY_SECONDS if every is None else every
+    start = time.perf_counter()
+    stop = threading.Event()
+    try:
+        tty = out.isatty()
+    except (AttributeError, ValueError):
+        tty = False
+    said = []
+
+    def tick() -> None:
+        while not stop.wait(every):
+            text = (f"diffwear: {what}: {time.perf_counter() - start:.0f} s so far, of an "
+                    f"estimated {_minutes(seconds)}")
+            try:
+                out.write(f"\r{text}" if tty else f"{text}\n")
+                out.flush()
+            except (OSError, ValueError):  # a closed stream: stop saying it
+                return
+            said.append(text)
+
+    thread = threading.Thread(target=tick, name="diffwear-progress", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        if tty and said:
+            try:
+                out.write("\n")
+                out.flush()
+            except (OSError, ValueError):
+                pass
+
+
+__all__ = ["COMPILE_BUDGET_SECONDS", "SizeEstimate", "check_size", "estimate",
+           "physical_memory", "progress_line"]

@@ -95,6 +95,28 @@ def likely_causes(mfile: MechanismFile, name: str) -> list[str]:
     return out
 
 
+def file_meta(mfile: MechanismFile) -> dict:
+    """What a checkpoint records of the file it belongs to: its name and the
+    CRC-32 of its bytes (an edited file is another file)."""
+    return {"mfile": f"run {Path(mfile.file).name}",
+            "file_crc32": f"{zlib.crc32(Path(mfile.file).read_bytes()):08x}"}
+
+
+def check_resumed_file(mfile: MechanismFile, folder) -> None:
+    """--resume ``folder``: `InputError` unless its checkpoint belongs to a
+    run of this file (checked before the folder is touched)."""
+    from ..io import CHECKPOINT
+    from ..wear.chunked import load_checkpoint
+
+    _, saved = load_checkpoint(Path(folder) / CHECKPOINT)
+    for key, value in file_meta(mfile).items():
+        if key in saved and saved[key] != value:
+            raise InputError(
+                f"--resume {folder}: the checkpoint belongs to a run with {key} = "
+                f"{saved[key]!r}, this run has {key} = {value!r}; resume it with the file "
+                "it was started from (unchanged), or start this file in another folder")
+
+
 def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None = None,
                 model: AbstractWearModel | None = None,
                 checkpoints: Checkpoints | None = None) -> dict:
@@ -114,9 +136,8 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     walls = bushing_walls(mfile, joints, limit)
     mech = mfile.mechanism
     if checkpoints is not None:
-        meta = {"mfile": f"run {Path(mfile.file).name}", **model.describe(cycles),
+        meta = {**file_meta(mfile), **model.describe(cycles),
                 "limit_mm": None if limit is None else round(limit * 1e3, 12),
-                "file_crc32": f"{zlib.crc32(Path(mfile.file).read_bytes()):08x}",
                 "cycles": float(cycles),
                 "n_theta": int(mech.element(joints[0]).profile.n)}
         checkpoints = checkpoints._replace(meta={**checkpoints.meta, **meta})
@@ -128,9 +149,9 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     out = {}
     for k, name in enumerate(joints):
         el = mech.element(name)
-        depth = np.asarray(res.depth[k])
         hist = res.history[k]
         valid = np.asarray(hist.valid)
+        depth = np.asarray(res.depth[k])  # as far as it got (`WearEvolution.reached`)
         out[name] = {
             "theta": np.asarray(el.profile.theta), "depth": depth,
             "history_cycles": np.asarray(hist.cycles)[valid],

@@ -6,6 +6,8 @@ import abc
 from typing import Any, Callable, ClassVar
 
 import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from ..errors import InputError
@@ -40,6 +42,21 @@ class WearEvolution(eqx.Module):
     contact_margin_worn: Float[Array, " J"]
     history: tuple
     detail: Any = None
+
+    def reached(self) -> "WearEvolution":
+        """This (concrete) evolution with each joint's profile as far as it
+        got: where the final profile is not an answer (NaN: the joint's model
+        failed or its steps ran out, `diffwear.wear.status.not_computed`), the
+        last profile of its history.  What the report of a run that stopped
+        early shows beside its status; never differentiated."""
+        depth = []
+        for d, h in zip(self.depth, self.history):
+            if h is None or bool(np.all(np.isfinite(np.asarray(d)))):
+                depth.append(d)
+                continue
+            valid = np.asarray(h.valid)
+            depth.append(jnp.asarray(np.asarray(h.depth)[valid][-1]))
+        return eqx.tree_at(lambda e: e.depth, self, tuple(depth))
 
 
 class AbstractWearModel(eqx.Module):
@@ -114,7 +131,8 @@ class AbstractWearModel(eqx.Module):
             ) -> tuple[WearEvolution, RunTimes]:
         """`evolve` of the mechanism ``mech_of(p)`` compiled once and run, both
         timed.  ``checkpoints``: the output folder and settings of a run kept
-        in checkpoints; this model runs whole (a resume is an `InputError`)."""
+        in checkpoints; this model runs whole (a resume is an `InputError`).
+        A joint that stopped early has the profile it reached (`WearEvolution.reached`)."""
         if checkpoints is not None and checkpoints.resume:
             raise InputError(f"--resume: the {self.name} model runs whole, without "
                              "checkpoints (seconds); run it again instead")
@@ -123,7 +141,8 @@ class AbstractWearModel(eqx.Module):
             return self.evolve(mech_of(p), joints, y0, period=period, cycles=cycles,
                                wall_thickness=wall_thickness)
 
-        return timed(evolution, p, y0)
+        res, times = timed(evolution, p, y0)
+        return res.reached(), times  # a run that stopped early: its results so far
 
     def prepared(self, mech: Mechanism, joints: tuple[str, ...], y0, period
                  ) -> "AbstractWearModel":

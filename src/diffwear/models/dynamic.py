@@ -24,6 +24,7 @@ from ..wear.evolution import EvolutionResult, Evolver, worn_mechanism
 from ..wear.extrapolation import AbstractExtrapolation, Constant
 from ..wear.life import LifeResult, dynamic_cycles_to_limit
 from ..wear.profile_ode import ProfileHistory
+from ..wear.status import not_an_answer, not_computed
 from ._base import AbstractWearModel, WearEvolution
 
 
@@ -86,7 +87,12 @@ class Dynamic(AbstractWearModel):
         if wall_thickness is not None:
             wall = jnp.reshape(jnp.asarray(wall_thickness, dtype=float), (-1,))[0]
         ev = self.evolver(mech, joints[0], cycles, period=period, wall_thickness=wall)
-        return as_evolution(ev.solve(y0))
+        evolution = as_evolution(ev.solve(y0))
+        # a failed or cut-short evolution has no final profile: NaN with NaN
+        # derivatives (the profiles reached stay in ``history`` and ``detail``)
+        depth = not_an_answer(evolution.depth[0], not_computed(evolution.status),
+                              (self, mech, y0, period, cycles, wall_thickness))
+        return eqx.tree_at(lambda e: e.depth, evolution, (depth,))
 
     def run(self, mech_of, p, joints, y0, *, period, cycles, wall_thickness=None,
             checkpoints: Checkpoints | None = None) -> tuple[WearEvolution, RunTimes]:

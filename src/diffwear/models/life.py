@@ -5,7 +5,8 @@ from __future__ import annotations
 import equinox as eqx
 from jaxtyping import Array, Float
 
-from .._checks import require_float64
+from .._checks import check_positive, require_float64
+from ..contact.clearance_joint import ClearanceJoint
 from ..errors import InputError
 from ..mechanism import Mechanism
 from ..wear.life import LifeResult, not_computed_is_nan
@@ -29,10 +30,36 @@ def cycles_to_limit(mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, "
     if not callable(getattr(model, "life", None)):
         raise InputError(f"cycles_to_limit: model must be a wear model (Dynamic(), "
                          f"QuasiStatic()), got {model!r}")
+    check_wearing_joints("cycles_to_limit", mech, joints)
+    # a depth limit and a cycle period: positive and finite (checked when concrete)
+    check_positive("cycles_to_limit: limit [m]", limit)
+    check_positive("cycles_to_limit: period [s]", period)
     res = model.life(mech, tuple(joints), y0, period=period, limit=limit)
     # a life not computed (NaN) has NaN derivatives, never a silent 0
     return eqx.tree_at(lambda r: r.cycles, res,
                        not_computed_is_nan(res.cycles, (model, mech, y0, period, limit)))
 
 
-__all__ = ["cycles_to_limit"]
+def check_wearing_joints(what: str, mech: Mechanism, joints) -> None:
+    """`InputError` unless ``joints`` names one or more distinct clearance
+    joints of ``mech`` that have a wear law."""
+    if isinstance(joints, str):
+        raise InputError(f"{what}: joints must be a tuple of joint names, got the string "
+                         f"{joints!r}; allowed: ({joints!r},)")
+    joints = tuple(joints)
+    wearing = sorted(f.name for f in mech.forces
+                     if isinstance(f, ClearanceJoint) and f.wear is not None)
+    if not joints:
+        raise InputError(f"{what}: no joint named; allowed: one or more of the mechanism's "
+                         f"clearance joints with a wear law {wearing}")
+    repeated = sorted({j for j in joints if joints.count(j) > 1})
+    if repeated:
+        raise InputError(f"{what}: joint {repeated[0]!r} is named twice; allowed: distinct "
+                         f"joints of {wearing}")
+    unknown = [j for j in joints if j not in wearing]
+    if unknown:
+        raise InputError(f"{what}: {unknown[0]!r} is not a clearance joint with a wear law "
+                         f"of the mechanism; allowed: {wearing or 'none (add a wear law)'}")
+
+
+__all__ = ["cycles_to_limit", "check_wearing_joints"]

@@ -39,7 +39,13 @@ from ..quasistatic.loads import CycleLoads, JointLoads, clearance_joints, cycle_
 from ..quasistatic.lubricated import joint_model
 from ..wear.life import LifeResult
 from ..wear.profile_ode import ProfileSolution, integrate_profile
-from ..wear.status import STATUS_CONTACT_LOSS, STATUS_INCOMPLETE, STATUS_OK, STATUS_SOLVER
+from ..wear.status import (
+    STATUS_CONTACT_LOSS,
+    STATUS_OK,
+    STATUS_SOLVER,
+    not_an_answer,
+    not_computed,
+)
 from ._base import AbstractWearModel, WearEvolution
 
 
@@ -193,9 +199,11 @@ class QuasiStatic(AbstractWearModel):
                    "joint_status": joint_status,
                    "contact_margin": jnp.stack([m[0] for _, m in per_joint]),
                    "contact_margin_worn": jnp.stack([m[1] for _, m in per_joint])}
-        # a joint whose cycle model failed has no life: NaN, and NaN derivatives
-        failed = (joint_status == STATUS_SOLVER) | (joint_status == STATUS_INCOMPLETE)
-        lives = jnp.where(failed, jnp.nan, jnp.stack([s.life for s in sols]))
+        # a joint whose cycle model failed (a joint that carries no load: its
+        # equilibrium has no solution) or whose slots ran out has no life: NaN,
+        # with NaN derivatives by every input (never a silent 0)
+        lives = not_an_answer(jnp.stack([s.life for s in sols]), not_computed(joint_status),
+                              (self, mech, y0, period, limit))
         return LifeResult(cycles=lives,
                           depth=tuple(s.depth for s in sols), status=status,
                           dynamic_cycles=jnp.zeros((), int), history=history)
@@ -236,8 +244,14 @@ class QuasiStatic(AbstractWearModel):
         joint_status, status = self._status(per_joint, ok)
         sols = [s for s, _ in per_joint]
         joint_cycles = jnp.stack([s.cycles for s in sols])
+        # a joint whose cycle model failed, or whose slots ran out before
+        # ``cycles``, has no final profile: NaN with NaN derivatives (the
+        # profiles it reached stay in ``history``)
+        inputs = (self, mech, y0, period, cycles, wall_thickness)
+        failed = not_computed(joint_status)
         return WearEvolution(
-            depth=tuple(s.depth for s in sols), cycles=jnp.min(joint_cycles),
+            depth=tuple(not_an_answer(s.depth, failed[k], inputs) for k, s in enumerate(sols)),
+            cycles=jnp.min(joint_cycles),
             joint_cycles=joint_cycles, status=status, joint_status=joint_status,
             contact_margin=jnp.stack([m[0] for _, m in per_joint]),
             contact_margin_worn=jnp.stack([m[1] for _, m in per_joint]),

@@ -38,6 +38,7 @@ from ..presets import (
 )
 from ..wear import Constant, CycleSettings, smooth_max, worn_volume
 from ..wear.cycle import CYCLE_ATOL, CYCLE_RTOL
+from ..wear.status import not_an_answer, not_computed
 
 JOINT = "crank_rod"
 
@@ -124,10 +125,14 @@ class RigWear(eqx.Module):
         force = model.joint_force(mech, JOINT, y0, period=self.period, evolution=res,
                                   samples=self.force_samples - 1)
         depth = res.depth[0]
+        # a failed point's outputs are NaN with NaN derivatives (its status says why)
+        failed = not_computed(res.status)
         return {
-            "max_depth_mm": smooth_max(depth, self.temperature) * 1e3,
-            "volume_mm3": worn_volume(depth, el.bushing_radius, el.law.depth) * 1e9,
-            "mean_joint_force_N": jnp.mean(force),
+            "max_depth_mm": not_an_answer(smooth_max(depth, self.temperature) * 1e3, failed,
+                                          params),
+            "volume_mm3": not_an_answer(
+                worn_volume(depth, el.bushing_radius, el.law.depth) * 1e9, failed, params),
+            "mean_joint_force_N": not_an_answer(jnp.mean(force), failed, params),
             "status": res.status.astype(float),
         }
 
@@ -172,7 +177,11 @@ class ClearanceForce(eqx.Module):
         ctrl = diffrax.PIDController(rtol=self.rtol, atol=self.atol, pcoeff=0.3, icoeff=0.4)
         traj = simulate(mech, y0, ts[-1], ts=ts, stepsize_controller=ctrl)
         f = contact_history(mech, JOINT, traj.ys).force_magnitude[self.transient_cycles * n:]
-        return {"peak_force_N": jnp.max(f), "rms_force_N": safe_norm(f) / math.sqrt(f.shape[-1]),
+        # a failed integration's forces are NaN with NaN derivatives
+        failed = ~traj.succeeded
+        return {"peak_force_N": not_an_answer(jnp.max(f), failed, params),
+                "rms_force_N": not_an_answer(safe_norm(f) / math.sqrt(f.shape[-1]), failed,
+                                             params),
                 "integrator_steps": jnp.asarray(traj.num_steps, dtype=float)}
 
 

@@ -64,7 +64,6 @@ averages over the roughness).
 from __future__ import annotations
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
@@ -73,6 +72,7 @@ from ..mechanism import Mechanism
 from .dynamic_term import CycleSettings, DynamicWear
 from .engine import Stop, initial_state, integrate
 from .implicit import DepthGain
+from .status import not_an_answer
 
 
 class LifeResult(eqx.Module):
@@ -94,16 +94,9 @@ class LifeResult(eqx.Module):
 
 def not_computed_is_nan(cycles, inputs):
     """``cycles`` whose derivatives by every float leaf of ``inputs`` are NaN
-    once any life is NaN (not computed).  A gradient through ``jnp.where(ok,
-    life, nan)`` is 0 where not ok, which an optimiser reads as a flat
-    optimum; a NaN scaled into the tangent does not survive the selects
-    upstream in reverse mode.  So a term NaN x (sum of the inputs) is added
-    where a life is NaN (0 x it elsewhere: the value and the derivatives of
-    the computed lives are unchanged; infinite leaves are left out)."""
-    leaves = jax.tree.leaves(eqx.filter(inputs, eqx.is_inexact_array))
-    probe = sum((jnp.sum(jnp.where(jnp.isfinite(v), v, 0.0)) for v in leaves),
-                jnp.zeros(()))
-    return cycles + jnp.where(jnp.isnan(cycles), jnp.nan, 0.0) * probe
+    where a life is NaN (not computed): `diffwear.wear.status.not_an_answer`
+    (the value and the derivatives of the computed lives are unchanged)."""
+    return not_an_answer(cycles, jnp.isnan(cycles), inputs)
 
 
 def dynamic_cycles_to_limit(
@@ -152,7 +145,9 @@ def dynamic_cycles_to_limit(
     memory, ok = term.warm_up(y0, warmup_cycles)
     state = initial_state(term.zeros(), memory, evaluations=warmup_cycles, ok=ok)
     final, hist = integrate(term, solver, state, stop=stop, slots=n_slots)
+    # a life not reached is NaN with NaN derivatives, never a silent 0
     return LifeResult(
-        cycles=final.life, depth=final.h, status=final.status,
+        cycles=not_computed_is_nan(final.life, (mech, y0, period, limit, cycle)),
+        depth=final.h, status=final.status,
         dynamic_cycles=final.evaluations,
         history={k: hist[k] for k in ("cycles", "max_depth", "step", "valid")})

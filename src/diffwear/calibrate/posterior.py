@@ -91,8 +91,8 @@ class Posterior:
             if "r_hat" in self.diagnostics:
                 entry["r_hat"] = float(self.diagnostics["r_hat"][k])
                 entry["ess"] = float(self.diagnostics["ess"][k])
-            else:
-                entry["ess"] = float(self.diagnostics.get("ess", math.nan))
+            else:  # the effective number of the draws as weighted
+                entry["ess"] = float(1.0 / np.sum(self.weights ** 2))
             out[name] = entry
         return out
 

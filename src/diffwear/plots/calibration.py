@@ -8,6 +8,7 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.ticker import FuncFormatter
 
 from .files import save
 from .layout import legend_outside
@@ -213,6 +214,8 @@ def life(path: Path, trajectory: tuple, limit: float, measured: Sequence[tuple],
     if np.isfinite(q05) and np.isfinite(q95):
         far.axvspan(q05, min(q95, n[-1]), color="r", alpha=0.08, label="life, 90 % band")
     far.set(xlabel="cycles", xlim=(0, n[-1]), ylim=(0, None), title="to the limit")
+    for ax in (near, far):  # 300000 reads 300k: the ticks never run together
+        ax.xaxis.set_major_formatter(FuncFormatter(_cycles_tick))
     handles, labels = [], []
     for ax in (near, far):
         for h, lab in zip(*ax.get_legend_handles_labels()):
@@ -221,8 +224,15 @@ def life(path: Path, trajectory: tuple, limit: float, measured: Sequence[tuple],
                 labels.append(lab)
     far.legend(handles, labels, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0),
                borderaxespad=0.0)
-    fig.suptitle("wear life forecast", fontsize=11)
+    fig.suptitle("Wear life: maximum depth over the posterior's draws", fontsize=11)
     return _save(fig, path)
+
+
+def _cycles_tick(value: float, _pos=None) -> str:
+    """A cycle count as a tick label: 5000, 40k, 1.2M."""
+    if abs(value) >= 1e6:
+        return f"{value / 1e6:g}M"
+    return f"{value / 1e3:g}k" if abs(value) >= 1e4 else f"{value:g}"
 
 
 def next_measurement(path: Path, scores: dict, ylabel: str, chosen: tuple | None) -> Path:

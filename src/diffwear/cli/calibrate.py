@@ -108,8 +108,7 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
                    if not n.startswith("delta_")}
         files.append(plots_calibration.posterior(
             out.file("posterior.png"), columns, post.weights,
-            "posterior of the final model (" + ("NUTS" if post.method == "nuts" else
-                                                "Laplace, importance-weighted") + ")").name)
+            "posterior of the final model (" + _posterior_words(post) + ")").name)
     if c.forecast is not None and c.forecast.trajectory:
         f = c.forecast
         files.append(plots_calibration.life(
@@ -440,6 +439,16 @@ def _parameter_section(c: Calibration, summary: dict, final) -> Section:
                    "model is too costly to evaluate at every draw)")
         blocks.append(f"Posterior: {how}.")
     return Section("Parameters", blocks)
+
+
+def _posterior_words(post) -> str:
+    """How the posterior's draws were made and weighted, for a figure title."""
+    if post.method == "nuts":
+        return "NUTS"
+    if post.diagnostics.get("weights") == "gaussian, unchecked":
+        return "Laplace, unchecked: the importance check failed"
+    return "Laplace, importance-weighted" if "pareto_k" in post.diagnostics \
+        else "Laplace, linearised"
 
 
 def _life_blocks(summary: dict) -> list[Block]:

@@ -153,7 +153,7 @@ def test_a_long_compile_says_its_progress(files, tmp_path, capsys, monkeypatch):
     class Stop(Exception):
         pass
 
-    def compile_then_stop(mfile, y0):
+    def compile_then_stop(mfile, y0, **options):
         time.sleep(0.3)
         raise Stop
 

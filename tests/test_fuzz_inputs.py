@@ -520,3 +520,35 @@ def test_fuzz_cycles_to_limit_arguments(worn_crank, monkeypatch, limit, period, 
         event("reached the model")
         assert math.isfinite(limit) and limit > 0 and math.isfinite(period) and period > 0
         assert joints == ("crank_rod",)
+
+
+COUNTS = st.one_of(st.integers(-3, 400), st.floats(allow_nan=True, allow_infinity=True),
+                   st.booleans(), st.none(), st.text(max_size=3))
+
+
+@example(kind="quasi-static", settings={"steps": 0})
+@example(kind="dynamic", settings={"dynamic_cycles": 0})
+@given(kind=st.sampled_from(["quasi-static", "dynamic"]),
+       settings=st.fixed_dictionaries({}, optional={
+           "samples": COUNTS, "steps": COUNTS, "warmup_cycles": COUNTS, "max_steps": COUNTS,
+           "load_rtol": st.floats(allow_nan=True, allow_infinity=True),
+           "dynamic_cycles": COUNTS, "max_dynamic": COUNTS}))
+def test_fuzz_wear_model_settings(kind, settings):
+    """A wear model built with counts of any kind: an `InputError` naming the
+    setting, or a model whose counts are integers >= 1 (warm-up >= 0)."""
+    from diffwear.models import Dynamic, QuasiStatic
+
+    cls = QuasiStatic if kind == "quasi-static" else Dynamic
+    own = {k: v for k, v in settings.items() if k in cls.__dataclass_fields__}
+    try:
+        model = cls(**own)
+    except InputError as err:
+        event("refused")
+        assert f"{cls.__name__}: " in str(err), str(err)
+        return
+    event("built")
+    for name in ("samples", "steps", "dynamic_cycles", "max_steps", "max_dynamic"):
+        value = getattr(model, name, 1)
+        assert value is None or (isinstance(value, int) and not isinstance(value, bool)
+                                 and value >= 1), (name, value)
+    assert isinstance(model.warmup_cycles, int) and model.warmup_cycles >= 0

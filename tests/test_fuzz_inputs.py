@@ -340,6 +340,13 @@ DATASET = {
         {"kind": "force", "file": "force.csv", "cycles": 1000, "uncertainty": "5 N"},
     ],
 }
+# the same data on the shipped rig as a mechanism file: parameters by path
+DATASET_FILE = {**DATASET, "rig": {"mechanism": "rig", "bushing_density": "2250 kg/m^3"},
+                "parameters": {
+                    "joints.crank_rod.wear.coefficient": {"std": "1.5e-4 mm^3/(N m)",
+                                                          "fit": True},
+                    "forces.slider_spring.free_length": {"std": "164 mm", "fit": True},
+                    "bodies.slider.mass": {}}}
 CSVS = {
     "profile.csv": ["theta_deg,depth_um", "0,0", "90,12.5", "180,20", "270,3"],
     "mass.csv": ["cycles,mass_g", "0,0", "2000,0.1", "21400,0.2616"],
@@ -388,7 +395,8 @@ def csv_files(draw):
     n: "\n".join(v) + "\n" for n, v in CSVS.items()})
 @example(doc=_with(DATASET, ("parameters", "clearance"), {"std": "5 um"}), csvs={
     n: "\n".join(v) + "\n" for n, v in CSVS.items()})  # found by the long run: no value
-@given(doc=st.one_of(st.just(DATASET), mutated(DATASET)), csvs=csv_files())
+@given(doc=st.one_of(st.just(DATASET), mutated(DATASET), mutated(DATASET_FILE)),
+       csvs=csv_files())
 def test_fuzz_dataset(tmp_path_factory, doc, csvs, capsys):
     from diffwear.calibrate import load_dataset
 

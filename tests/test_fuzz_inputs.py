@@ -199,6 +199,18 @@ FOUR_BAR = tomllib.loads((MECHANISMS / "four_bar_wear.toml").read_text())
 SLIDER = tomllib.loads((MECHANISMS / "clearance_slider_crank.toml").read_text())
 
 
+def _sane(mech) -> None:
+    """What an accepted mechanism must hold whatever the file said: bodies
+    with mass and inertia, pins smaller than their bores."""
+    from diffwear.contact.clearance_joint import ClearanceJoint
+
+    for body in mech.bodies:
+        assert float(body.mass) > 0 and float(body.inertia) > 0, body
+    for f in mech.forces:
+        if isinstance(f, ClearanceJoint):
+            assert 0 < float(f.pin_radius) < float(f.bushing_radius), f.name
+
+
 def _check_mechanism_file(tmp: Path, text: str, capsys) -> None:
     from diffwear.config import load
     from diffwear.mechanism_file.motion import check_step_budget
@@ -219,6 +231,7 @@ def _check_mechanism_file(tmp: Path, text: str, capsys) -> None:
         event("accepted")
         assert _finite_leaves(mfile.mechanism), "a non-finite number was accepted"
         assert math.isfinite(mfile.simulation.duration) and mfile.simulation.duration > 0
+        _sane(mfile.mechanism)
     assert _files(tmp) == before
 
 

@@ -573,3 +573,33 @@ def test_fuzz_wear_model_settings(kind, settings):
         assert value is None or (isinstance(value, int) and not isinstance(value, bool)
                                  and value >= 1), (name, value)
     assert isinstance(model.warmup_cycles, int) and model.warmup_cycles >= 0
+
+
+@example(n_theta=0, limit=2e-3, x=np.full(4, 0.02))
+@example(n_theta=90, limit=-1.0, x=np.full(4, 0.02))
+@example(n_theta=90, limit=2e-3, x=np.array([np.nan, 0.02, 0.02, 0.02]))
+@given(n_theta=st.one_of(st.integers(-5, 1000), st.floats(allow_nan=True)),
+       limit=st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.just(2e-3)),
+       x=st.one_of(ARRAYS, st.just(np.full(4, 0.02))))
+def test_fuzz_two_joint_life(monkeypatch, n_theta, limit, x):
+    """The Ch. 8 design objective built and called with anything: an
+    `InputError`, or the life computed (stubbed) only for a grid in [12, 720],
+    a positive finite limit and four finite design values."""
+    import importlib
+
+    two_joint = importlib.import_module("diffwear.design.two_joint")
+
+    def reached(*a, **k):
+        raise _Reached
+
+    monkeypatch.setattr(two_joint, "_evaluate", reached)
+    try:
+        two_joint.TwoJointLife(n_theta=n_theta, limit=limit)(x)
+    except InputError:
+        event("refused")
+        return
+    except _Reached:
+        event("reached the life")
+        assert isinstance(n_theta, int) and 12 <= n_theta <= 720
+        assert math.isfinite(limit) and limit > 0
+        assert np.shape(x) == (4,) and np.all(np.isfinite(np.asarray(x, dtype=float)))

@@ -29,10 +29,11 @@ def pytest_configure(config):
     """Hypothesis profiles of the input fuzzing (tests/test_fuzz_inputs.py):
     ``short`` in the default run (200 examples a surface, about 20 s for all
     seven on 2 cores; derandomised: the same examples every run, so a failure
-    reproduces), ``long`` under --long (25,000 random examples a surface:
-    about 10 min for each file surface on 2 cores, measured at 6,000 in 1.3-2.6
-    min; failures kept in the example database to replay); ``medium`` (400)
-    by name, ``--hypothesis-profile=medium``."""
+    reproduces), ``long`` under --long (25,000 random examples a surface,
+    measured on a loaded 2-core machine: 3 to 16 min for each file surface,
+    under a minute for each API one, 51 min for all; failures kept in the
+    example database to replay); ``medium`` (400) by name,
+    ``--hypothesis-profile=medium``."""
     from hypothesis import HealthCheck, settings
 
     common = dict(deadline=None, print_blob=True,

@@ -225,6 +225,7 @@ def test_failed_points_exit_3_and_results_kept(tmp_path, capsys, monkeypatch):
     assert main(["sweep", str(f), "--out", str(out), "--quiet"]) == 3
     err = capsys.readouterr().err
     assert "1 of 2 sweep points failed" in err and "'clearance': 5e-05" in err
+    assert "status 2: the cycle model failed" in err  # why, in words
     summary = json.loads((out / "summary.json").read_text())
     assert summary["failed_points"] == [1]
     with open(out / "results.csv", newline="") as fh:
@@ -270,3 +271,22 @@ def test_summary_and_report_give_the_grid_in_the_files_units(tmp_path, monkeypat
     report = (out / "report.md").read_text()
     assert "| max wear depth [mm] (`max_depth_mm`) |" in report
     assert "clearance = 0.05 mm, k = 0.00101 mm^3/(N m)" in report
+
+
+def test_a_point_whose_run_ended_early_is_a_failed_point():
+    """Status 3 (the run ended before its target: no answer) fails a point
+    as status 2 does; 1 (the wall reached) and 4 (a contact warning) carry an
+    answer and do not; a NaN output fails it whatever its status."""
+    from diffwear.cli.sweep import failed_points, failure_words
+
+    class Result:
+        outputs = {"max_depth_mm": np.array([0.1, 0.2, 0.3, 0.4, np.nan, 0.6]),
+                   "status": np.array([0.0, 1.0, 2.0, 3.0, 0.0, 4.0])}
+
+        def __len__(self):
+            return 6
+
+    bad = failed_points(Result())
+    assert bad.tolist() == [2, 3, 4]
+    words = failure_words(Result(), bad)
+    assert "status 2: the cycle model failed" in words and "status 3: the run ended" in words

@@ -199,6 +199,18 @@ FOUR_BAR = tomllib.loads((MECHANISMS / "four_bar_wear.toml").read_text())
 SLIDER = tomllib.loads((MECHANISMS / "clearance_slider_crank.toml").read_text())
 
 
+def _sane(mech) -> None:
+    """What an accepted mechanism must hold whatever the file said: bodies
+    with mass and inertia, pins smaller than their bores."""
+    from diffwear.contact.clearance_joint import ClearanceJoint
+
+    for body in mech.bodies:
+        assert float(body.mass) > 0 and float(body.inertia) > 0, body
+    for f in mech.forces:
+        if isinstance(f, ClearanceJoint):
+            assert 0 < float(f.pin_radius) < float(f.bushing_radius), f.name
+
+
 def _check_mechanism_file(tmp: Path, text: str, capsys) -> None:
     from diffwear.config import load
     from diffwear.mechanism_file.motion import check_step_budget
@@ -219,6 +231,7 @@ def _check_mechanism_file(tmp: Path, text: str, capsys) -> None:
         event("accepted")
         assert _finite_leaves(mfile.mechanism), "a non-finite number was accepted"
         assert math.isfinite(mfile.simulation.duration) and mfile.simulation.duration > 0
+        _sane(mfile.mechanism)
     assert _files(tmp) == before
 
 
@@ -340,6 +353,13 @@ DATASET = {
         {"kind": "force", "file": "force.csv", "cycles": 1000, "uncertainty": "5 N"},
     ],
 }
+# the same data on the shipped rig as a mechanism file: parameters by path
+DATASET_FILE = {**DATASET, "rig": {"mechanism": "rig", "bushing_density": "2250 kg/m^3"},
+                "parameters": {
+                    "joints.crank_rod.wear.coefficient": {"std": "1.5e-4 mm^3/(N m)",
+                                                          "fit": True},
+                    "forces.slider_spring.free_length": {"std": "164 mm", "fit": True},
+                    "bodies.slider.mass": {}}}
 CSVS = {
     "profile.csv": ["theta_deg,depth_um", "0,0", "90,12.5", "180,20", "270,3"],
     "mass.csv": ["cycles,mass_g", "0,0", "2000,0.1", "21400,0.2616"],
@@ -388,7 +408,8 @@ def csv_files(draw):
     n: "\n".join(v) + "\n" for n, v in CSVS.items()})
 @example(doc=_with(DATASET, ("parameters", "clearance"), {"std": "5 um"}), csvs={
     n: "\n".join(v) + "\n" for n, v in CSVS.items()})  # found by the long run: no value
-@given(doc=st.one_of(st.just(DATASET), mutated(DATASET)), csvs=csv_files())
+@given(doc=st.one_of(st.just(DATASET), mutated(DATASET), mutated(DATASET_FILE)),
+       csvs=csv_files())
 def test_fuzz_dataset(tmp_path_factory, doc, csvs, capsys):
     from diffwear.calibrate import load_dataset
 
@@ -520,3 +541,65 @@ def test_fuzz_cycles_to_limit_arguments(worn_crank, monkeypatch, limit, period, 
         event("reached the model")
         assert math.isfinite(limit) and limit > 0 and math.isfinite(period) and period > 0
         assert joints == ("crank_rod",)
+
+
+COUNTS = st.one_of(st.integers(-3, 400), st.floats(allow_nan=True, allow_infinity=True),
+                   st.booleans(), st.none(), st.text(max_size=3))
+
+
+@example(kind="quasi-static", settings={"steps": 0})
+@example(kind="dynamic", settings={"dynamic_cycles": 0})
+@given(kind=st.sampled_from(["quasi-static", "dynamic"]),
+       settings=st.fixed_dictionaries({}, optional={
+           "samples": COUNTS, "steps": COUNTS, "warmup_cycles": COUNTS, "max_steps": COUNTS,
+           "load_rtol": st.floats(allow_nan=True, allow_infinity=True),
+           "dynamic_cycles": COUNTS, "max_dynamic": COUNTS}))
+def test_fuzz_wear_model_settings(kind, settings):
+    """A wear model built with counts of any kind: an `InputError` naming the
+    setting, or a model whose counts are integers >= 1 (warm-up >= 0)."""
+    from diffwear.models import Dynamic, QuasiStatic
+
+    cls = QuasiStatic if kind == "quasi-static" else Dynamic
+    own = {k: v for k, v in settings.items() if k in cls.__dataclass_fields__}
+    try:
+        model = cls(**own)
+    except InputError as err:
+        event("refused")
+        assert f"{cls.__name__}: " in str(err), str(err)
+        return
+    event("built")
+    for name in ("samples", "steps", "dynamic_cycles", "max_steps", "max_dynamic"):
+        value = getattr(model, name, 1)
+        assert value is None or (isinstance(value, int) and not isinstance(value, bool)
+                                 and value >= 1), (name, value)
+    assert isinstance(model.warmup_cycles, int) and model.warmup_cycles >= 0
+
+
+@example(n_theta=0, limit=2e-3, x=np.full(4, 0.02))
+@example(n_theta=90, limit=-1.0, x=np.full(4, 0.02))
+@example(n_theta=90, limit=2e-3, x=np.array([np.nan, 0.02, 0.02, 0.02]))
+@given(n_theta=st.one_of(st.integers(-5, 1000), st.floats(allow_nan=True)),
+       limit=st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.just(2e-3)),
+       x=st.one_of(ARRAYS, st.just(np.full(4, 0.02))))
+def test_fuzz_two_joint_life(monkeypatch, n_theta, limit, x):
+    """The Ch. 8 design objective built and called with anything: an
+    `InputError`, or the life computed (stubbed) only for a grid in [12, 720],
+    a positive finite limit and four finite design values."""
+    import importlib
+
+    two_joint = importlib.import_module("diffwear.design.two_joint")
+
+    def reached(*a, **k):
+        raise _Reached
+
+    monkeypatch.setattr(two_joint, "_evaluate", reached)
+    try:
+        two_joint.TwoJointLife(n_theta=n_theta, limit=limit)(x)
+    except InputError:
+        event("refused")
+        return
+    except _Reached:
+        event("reached the life")
+        assert isinstance(n_theta, int) and 12 <= n_theta <= 720
+        assert math.isfinite(limit) and limit > 0
+        assert np.shape(x) == (4,) and np.all(np.isfinite(np.asarray(x, dtype=float)))

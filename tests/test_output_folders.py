@@ -302,3 +302,17 @@ def test_a_users_file_named_incomplete_is_the_users(tmp_path, capsys):
         assert main([*RUN, "--out", str(out), *extra]) == 2
         assert "(INCOMPLETE)" in capsys.readouterr().err
     assert (out / "INCOMPLETE").read_text() == "my list of unfinished things\n"
+
+
+def test_a_file_run_resuming_a_studys_checkpoint_is_refused_before_the_folder(tmp_path,
+                                                                              capsys):
+    from diffwear.choices import SHIPPED_MECHANISMS
+
+    out = tmp_path / "study"
+    _checkpoint_of(out, {"study": "wear-5000", "model": "dynamic", "cycles": 10.0})
+    before = _snapshot(out)
+    assert main(["run", str(SHIPPED_MECHANISMS / "four_bar_wear.toml"), "--resume", str(out),
+                 "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "the study 'wear-5000'" in err and "'run four_bar_wear.toml'" in err
+    assert _snapshot(out) == before

@@ -42,6 +42,7 @@ from ..report import Block, Figure, Report, Table, render
 from ..sweep.execution import Auto, Batched
 from ..sweep.result import SweepResult
 from ..sweep.runner import sweep
+from ..wear.status import STATUS_INCOMPLETE, STATUS_SOLVER, STATUS_TEXT
 
 SKIP_PLOTS = ("status",)
 
@@ -78,9 +79,18 @@ def failed_points(res: SweepResult) -> np.ndarray:
     bad = np.zeros(len(res), dtype=bool)
     for col in res.outputs.values():
         bad |= ~np.isfinite(col)
-    if "status" in res.outputs:
-        bad |= res.outputs["status"] == 2
+    if "status" in res.outputs:  # no answer: the model failed or ran out of steps
+        bad |= np.isin(res.outputs["status"], (STATUS_SOLVER, STATUS_INCOMPLETE))
     return np.flatnonzero(bad)
+
+
+def failure_words(res: SweepResult, bad: np.ndarray) -> str:
+    """'; status 2: why' for each failure status among the points ``bad``."""
+    if "status" not in res.outputs or not bad.size:
+        return ""
+    codes = sorted({int(c) for c in np.asarray(res.outputs["status"])[bad]
+                    if np.isfinite(c) and int(c) in (STATUS_SOLVER, STATUS_INCOMPLETE)})
+    return "".join(f"; status {c}: {STATUS_TEXT[c]}" for c in codes)
 
 
 def device_platform(device: str) -> str:
@@ -196,8 +206,8 @@ def write(spec: SweepSpec, res: SweepResult, out: OutputDir, *, input_text=None,
     if bad.size:
         first = [{g: float(res[g][i]) for g in res.grid_names} for i in bad[:3]]
         raise SolverError(f"{spec.file}: {bad.size} of {len(res)} sweep points failed (outputs "
-                          f"not finite or status 2), e.g. {first}; every result is in "
-                          f"{out.path}/results.csv")
+                          f"not finite or a failure status{failure_words(res, bad)}), e.g. "
+                          f"{first}; every result is in {out.path}/results.csv")
     return summary
 
 

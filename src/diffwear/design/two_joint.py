@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .._checks import check_finite, concrete
+from .._checks import check_finite, check_int_option, check_positive, concrete
 from ..contact import centred_state
 from ..dynamics import consistent_state
 from ..errors import InputError, SolverError
@@ -119,6 +119,14 @@ class TwoJointLife(eqx.Module):
     # of the contact arc carry less load.
     penetration_width: float = eqx.field(static=True, default=1e-6)
     p: SliderCrankParameters = TABLE_2_1
+
+    def __check_init__(self):
+        if not isinstance(self.wear_model, AbstractWearModel):
+            raise InputError(f"TwoJointLife: wear_model must be a wear model (QuasiStatic(), "
+                             f"Dynamic()), got {self.wear_model!r}")
+        # the profile grid: the range the design command allows (12 to 720 nodes)
+        check_int_option("TwoJointLife: n_theta", self.n_theta, 12, 720)
+        check_positive("TwoJointLife: limit [m]", self.limit)
 
     @property
     def exact_gradients(self) -> bool:

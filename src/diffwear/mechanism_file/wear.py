@@ -109,7 +109,13 @@ def check_resumed_file(mfile: MechanismFile, folder) -> None:
     from ..wear.chunked import load_checkpoint
 
     _, saved = load_checkpoint(Path(folder) / CHECKPOINT)
-    for key, value in file_meta(mfile).items():
+    mine = file_meta(mfile)
+    if "mfile" not in saved:  # a study's checkpoint, not a file's run
+        whose = f"the study {saved['study']!r}" if "study" in saved else "another command"
+        raise InputError(f"--resume {folder}: the checkpoint belongs to a run of {whose}, "
+                         f"not of a mechanism file ({mine['mfile']!r}); resume it with the "
+                         "command that started it, or start this file in another folder")
+    for key, value in mine.items():
         if key in saved and saved[key] != value:
             raise InputError(
                 f"--resume {folder}: the checkpoint belongs to a run with {key} = "

@@ -15,6 +15,7 @@ from typing import ClassVar
 import equinox as eqx
 import jax.numpy as jnp
 
+from .._checks import check_int_option
 from ..contact import MixedLubrication, contact_history
 from ..errors import InputError
 from ..wear.chunked import Checkpoints, RunTimes, run_evolution
@@ -60,6 +61,15 @@ class Dynamic(AbstractWearModel):
     extrapolation: AbstractExtrapolation | None = None
     dynamic_cycles: int = eqx.field(static=True, default=50)
     max_dynamic: int | None = eqx.field(static=True, default=None)
+
+    def __check_init__(self):
+        # counts of slots and cycles: a zero or negative one has nothing to
+        # integrate (an `InputError` here, not a failure in the traced program)
+        check_int_option("Dynamic: steps", self.steps, 1)
+        check_int_option("Dynamic: warmup_cycles", self.warmup_cycles, 0)
+        check_int_option("Dynamic: dynamic_cycles", self.dynamic_cycles, 1)
+        if self.max_dynamic is not None:
+            check_int_option("Dynamic: max_dynamic", self.max_dynamic, 1)
 
     def life(self, mech, joints, y0, *, period, limit) -> LifeResult:
         return dynamic_cycles_to_limit(

@@ -31,7 +31,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .._checks import require_float64
+from .._checks import check_int_option, check_range, require_float64
 from ..contact import ContactHistory
 from ..mechanism import GROUND, Mechanism
 from ..mechanism.geometry import safe_angle, safe_norm
@@ -93,6 +93,18 @@ class QuasiStatic(AbstractWearModel):
     contact_mass: Float[Array, ""] | None = None
     fixed_loads: CycleLoads | None = None
     max_steps: int | None = eqx.field(static=True, default=None)
+
+    def __check_init__(self):
+        # counts of the quadrature and of the wear ODE: a zero or negative one
+        # has no cycle to integrate (an `InputError` here, not a shape error
+        # or a division by zero in the traced program)
+        check_int_option("QuasiStatic: samples", self.samples, 1)
+        check_int_option("QuasiStatic: steps", self.steps, 1)
+        check_int_option("QuasiStatic: warmup_cycles", self.warmup_cycles, 0)
+        if self.max_steps is not None:
+            check_int_option("QuasiStatic: max_steps", self.max_steps, 1)
+        check_range("QuasiStatic: load_rtol", self.load_rtol, 0.0, 1.0, low_open=True,
+                    high_open=True)
 
     def describe(self, cycles) -> dict:
         return {"model": self.name, "load_samples_per_cycle": self.samples}

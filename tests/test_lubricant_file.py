@@ -98,6 +98,7 @@ def test_a_thicker_oil_keeps_a_thicker_film_and_wears_less_than_dry(runs):
     assert thin["lubricant"] == {"viscosity_Pa_s": 0.003, "roughness_um": 0.65,
                                  "bearing": "short"}
     for w in (thin, thick):
+        assert w["min_film_thickness_um"] >= 0.0 and w["max_interference_um"] >= 0.0
         for key in FILM_KEYS:
             for k in (key, key + "_worn"):
                 assert isinstance(w[k], float) and math.isfinite(w[k]), k
@@ -111,15 +112,21 @@ def test_the_film_files_and_the_report(runs):
     assert {"film_crank_rod.csv", "film_crank_rod.png"} <= set(summary["files"])
     with open(folder / "film_crank_rod.csv", newline="") as f:
         rows = list(csv.reader(f))
-    assert rows[0] == ["crank_angle_deg", "h_min_um", "film_ratio", "asperity_share",
-                       "film_load_N", "asperity_load_N", "h_min_um_worn", "film_ratio_worn",
-                       "asperity_share_worn", "film_load_N_worn", "asperity_load_N_worn"]
+    assert rows[0] == ["crank_angle_deg", "h_min_um", "film_ratio", "interference_um",
+                       "asperity_share", "film_load_N", "asperity_load_N", "h_min_um_worn",
+                       "film_ratio_worn", "interference_um_worn", "asperity_share_worn",
+                       "film_load_N_worn", "asperity_load_N_worn"]
     data = np.array(rows[1:], dtype=float)
-    assert data.shape == (180, 11) and np.all(np.isfinite(data))
+    assert data.shape == (180, 13) and np.all(np.isfinite(data))
+    # a film thickness is never negative; where no gap is left the overlap is the
+    # asperities' interference, and one of the two is zero at every sample
+    assert np.all(data[:, [1, 2, 3, 7, 8, 9]] >= 0.0)
+    assert np.all(data[:, 1] * data[:, 3] == 0.0) and np.all(data[:, 7] * data[:, 9] == 0.0)
     assert data[0, 0] == 0.0 and data[-1, 0] == pytest.approx(358.0)
     w = summary["joints"]["crank_rod"]
     assert np.min(data[:, 1]) == pytest.approx(w["min_film_thickness_um"])
-    assert np.mean(data[:, 3]) == pytest.approx(w["asperity_load_share"])
+    assert np.mean(data[:, 4]) == pytest.approx(w["asperity_load_share"])
+    assert np.max(data[:, 3]) == pytest.approx(w["max_interference_um"])
     assert (folder / "film_crank_rod.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     report = (folder / "report.md").read_text()
     assert "## Lubrication" in report and "(film_crank_rod.png)" in report

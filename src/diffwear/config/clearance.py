@@ -19,6 +19,7 @@ from ..contact import (
     STEEL,
     ClearanceJoint,
     CoulombFriction,
+    FiniteBearingFilm,
     KelvinVoigt,
     LankaraniNikravesh,
     LongBearingFilm,
@@ -106,7 +107,7 @@ LAWS = {
     },
 }
 
-BEARINGS = {"short": ShortBearingFilm, "long": LongBearingFilm}
+BEARINGS = {"short": ShortBearingFilm, "long": LongBearingFilm, "finite": FiniteBearingFilm}
 """Film models of ``lubricant.bearing``, by name: the short (Ocvirk) bearing
 (`ShortBearingFilm`, L / D below ~0.5) and the long (Sommerfeld) one
 (`LongBearingFilm`, L / D above ~2)."""

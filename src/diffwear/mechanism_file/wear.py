@@ -201,6 +201,7 @@ def film_cycle(mfile: MechanismFile, y0, depths: dict, model: QuasiStatic | None
 
     def parts(eq):
         return {"min_film_thickness": eq.min_film_thickness, "film_ratio": eq.film_ratio,
+                "interference": eq.interference,
                 "asperity_share": eq.asperity_share, "film_load": eq.film_load,
                 "asperity_load": eq.normal_load, "ok": eq.ok}
 

@@ -70,6 +70,7 @@ class LubricatedEquilibrium(eqx.Module):
     film_load: |film force| [N] (S,)
     min_film_thickness: h_min [m] (S,)
     film_ratio: lambda = h_min / sigma (S,)
+    interference: how far the asperities are pressed past the mean surfaces [m] (S,)
     ok: every Newton solve converged
     """
 
@@ -79,6 +80,7 @@ class LubricatedEquilibrium(eqx.Module):
     film_load: Float[Array, " S"]
     min_film_thickness: Float[Array, " S"]
     film_ratio: Float[Array, " S"]
+    interference: Float[Array, " S"]
     ok: Bool[Array, ""]
 
     @property
@@ -239,11 +241,13 @@ class LubricatedQuasiStaticJoint(eqx.Module):
             ok = ok > 0.5
             parts = self._parts(e, omega, c)
             return (e, parts.asperity.pressure, parts.asperity_load, parts.film_load,
-                    parts.min_film_thickness, parts.film_ratio, ok)
+                    parts.min_film_thickness, parts.film_ratio, parts.interference, ok)
 
-        e, p, load, film_load, h_min, ratio, ok = jax.vmap(one)(loads.force, loads.omega, guess)
+        e, p, load, film_load, h_min, ratio, overlap, ok = jax.vmap(one)(
+            loads.force, loads.omega, guess)
         return LubricatedEquilibrium(offset=e, pressure=p, normal_load=load, film_load=film_load,
                                      min_film_thickness=h_min, film_ratio=ratio,
+                                     interference=overlap,
                                      ok=jnp.all(ok) & jnp.all(jnp.isfinite(e)))
 
     def cycle_wear(self, depth: Float[Array, " n"], loads: JointLoads, guess=None):

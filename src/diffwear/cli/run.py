@@ -349,8 +349,8 @@ def _lubrication_section(joints: dict) -> Section:
         "bushing.  lambda > 3: full film, no wear; 1-3: mixed lubrication, wear where the "
         "asperities touch; < 1: boundary lubrication, the asperities carry most of the load "
         "where the film is thinnest.  interference: how far the pin presses the asperities "
-        "past the mean surfaces where no gap is left (h min is then 0).  These numbers are the pin's "
-        "quasi-static equilibrium of film and asperities under the cycle's loads (the "
+        "past the mean surfaces where no gap is left (h min is then 0).  These numbers are "
+        "the pin's quasi-static equilibrium of film and asperities under the cycle's loads (the "
         "quasi-static wear model's; the dynamic model does not take a lubricated joint).",
         Table(("joint", "viscosity [Pa s]", "roughness [um]", "h min [um]", "lambda min",
                "interference [um]", "asperity share", "meaning (smallest lambda)", "file"), rows)])

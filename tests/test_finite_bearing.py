@@ -251,3 +251,42 @@ def test_grid_too_coarse_for_the_eccentricity_is_an_input_error():
         FiniteBearingFilm(MU, 0.01, C, n_theta=97)
     with pytest.raises(InputError, match="n_z"):
         FiniteBearingFilm(MU, 0.01, C, n_z=1)
+
+
+# ------------------------------------------------------------- the default law
+
+@pytest.mark.parametrize("ld, eps_max", [(0.09, 0.8), (0.3, 0.2), (0.05, 0.95), (0.03, 0.98)])
+def test_the_short_film_is_picked_only_where_it_is_within_4_5_percent(ld, eps_max):
+    """`film_law_for` picks the short film on its boundary (L/D)^2 = 0.05 (1 - eps)
+    and inside it; there its load is within 4.5 % of the finite film's at every
+    eps up to eps_max, and just outside it the finite film is picked."""
+    from diffwear.contact.finite_bearing import film_law_for
+
+    assert film_law_for(ld, eps_max) == ("short" if ld**2 <= 0.05 * (1 - eps_max)
+                                         else "finite")
+    edge = np.sqrt(0.05 * (1 - eps_max))
+    assert film_law_for(edge * 0.999, eps_max) == "short"
+    assert film_law_for(edge * 1.01, eps_max) == "finite"
+    for eps in np.linspace(0.2, eps_max, 3):
+        short, finite = _short_and_finite(jnp.asarray(eps), jnp.zeros(2),
+                                          jnp.asarray(2 * R * edge * 0.999))
+        ratio = float(jnp.linalg.norm(short.force) / jnp.linalg.norm(finite.force))
+        assert 1.0 <= ratio < 1.045, (eps, ratio)
+
+
+def test_a_file_without_a_bearing_key_gets_the_law_of_its_proportions(tmp_path):
+    """The shipped lubricated rig (L/D = 0.69, sigma / c = 0.02) without its
+    ``bearing`` key gets the finite film; with a 0.3 mm long bushing
+    (L/D = 0.016) the short one."""
+    from diffwear.choices import SHIPPED_MECHANISMS
+    from diffwear.config import load
+
+    text = (SHIPPED_MECHANISMS / "rig_lubricated.toml").read_text()
+    assert ', bearing = "short" }' in text
+    laws = []
+    for extra in ("", ', length = "0.3 mm"'):
+        path = tmp_path / f"rig{len(laws)}.toml"
+        path.write_text(text.replace(', bearing = "short" }', extra + " }"))
+        laws.append(load(path).mechanism.element("crank_rod").law.film)
+    assert isinstance(laws[0], FiniteBearingFilm)
+    assert isinstance(laws[1], ShortBearingFilm) and float(laws[1].length) == 0.3e-3

@@ -175,11 +175,17 @@ class MixedLubrication(AbstractContactLaw):
         """The profile of the asperity summits: the bore less lambda_c sigma."""
         return eqx.tree_at(lambda p: p.clearance, profile, profile.clearance - self.onset_gap)
 
+    @staticmethod
+    def saturation(roughness, clearance, boundary_ratio=BOUNDARY_FILM_RATIO):
+        """eps_max = 1 - lambda_b sigma / c, kept in [`MIN_SATURATION`,
+        `MAX_SATURATION`]: the eccentricity ratio where the film is saturated."""
+        return jnp.clip(1.0 - boundary_ratio * roughness / clearance,
+                        MIN_SATURATION, MAX_SATURATION)
+
     def saturated_film(self) -> AbstractFilm:
         """The film law, saturated where lambda reaches lambda_b on the unworn
         bore: eps_max = 1 - lambda_b sigma / c (module notes)."""
-        eps_max = jnp.clip(1.0 - self.boundary_ratio * self.roughness / self.film.clearance,
-                           MIN_SATURATION, MAX_SATURATION)
+        eps_max = self.saturation(self.roughness, self.film.clearance, self.boundary_ratio)
         return eqx.tree_at(lambda f: f.max_eccentricity_ratio, self.film, eps_max)
 
     def min_film_thickness(self, kin: PinKinematics, profile: BushingProfile):

@@ -274,19 +274,50 @@ def test_the_short_film_is_picked_only_where_it_is_within_4_5_percent(ld, eps_ma
         assert 1.0 <= ratio < 1.045, (eps, ratio)
 
 
-def test_a_file_without_a_bearing_key_gets_the_law_of_its_proportions(tmp_path):
-    """The shipped lubricated rig (L/D = 0.69, sigma / c = 0.02) without its
-    ``bearing`` key gets the finite film; with a 0.3 mm long bushing
-    (L/D = 0.016) the short one."""
+def test_a_run_names_a_short_film_out_of_its_range(tmp_path):
+    """The shipped lubricated rig (L/D = 0.69, eps up to 1 - sigma / c = 0.98)
+    runs the short film out of its range, and says so; with a 0.3 mm long
+    bushing (L/D = 0.016) or the finite film it does not."""
     from diffwear.choices import SHIPPED_MECHANISMS
     from diffwear.config import load
+    from diffwear.mechanism_file.wear import film_out_of_range
 
     text = (SHIPPED_MECHANISMS / "rig_lubricated.toml").read_text()
     assert ', bearing = "short" }' in text
-    laws = []
-    for extra in ("", ', length = "0.3 mm"'):
-        path = tmp_path / f"rig{len(laws)}.toml"
+    notes = []
+    for k, extra in enumerate(("", ', length = "0.3 mm"', ', bearing = "finite"')):
+        path = tmp_path / f"rig{k}.toml"
         path.write_text(text.replace(', bearing = "short" }', extra + " }"))
-        laws.append(load(path).mechanism.element("crank_rod").law.film)
-    assert isinstance(laws[0], FiniteBearingFilm)
-    assert isinstance(laws[1], ShortBearingFilm) and float(laws[1].length) == 0.3e-3
+        notes.append(film_out_of_range(load(path).mechanism.element("crank_rod")))
+    assert "L/D = 0.689" in notes[0] and "0.98" in notes[0] and 'bearing = "finite"' in notes[0]
+    assert notes[1] is None and notes[2] is None
+
+
+# ------------------------------------------------------------- the steady table
+
+@pytest.fixture(scope="module")
+def steady_pair():
+    film = FiniteBearingFilm(MU, 0.013, C, max_eccentricity_ratio=0.995)
+    return film, eqx.filter_jit(lambda f: f.steady(R))(film)
+
+
+@eqx.filter_jit
+def _solved_and_tabled(film, table, eps, omega):
+    kin = _kin(eps, omega=omega, angle=1.1)
+    return film.film(kin).force, table.film(kin).force
+
+
+@pytest.mark.extended  # ~30 s on 2 cores: the table's 56 solves
+def test_the_steady_table_is_the_solve_with_the_centre_at_rest(steady_pair):
+    """`SteadyFiniteFilm` (56 solves, cubic in w = sqrt(-ln(1 - eps))) against the
+    finite film's own solve, both senses of rotation, to 1e-3 (of the load at
+    eps = 0.1 near the centre, where the load vanishes)."""
+    film, table = steady_pair
+    floor = float(jnp.linalg.norm(_solved_and_tabled(film, table, jnp.asarray(0.1),
+                                                     jnp.asarray(OMEGA))[0]))
+    for eps in [0.0, 0.03, 0.2, 0.55, 0.85, 0.95, 0.99, 0.995]:
+        for omega in (OMEGA, -0.3 * OMEGA):
+            solved, tabled = _solved_and_tabled(film, table, jnp.asarray(eps),
+                                                jnp.asarray(omega))
+            assert float(jnp.linalg.norm(tabled - solved)) <= 1e-3 * max(
+                float(jnp.linalg.norm(solved)), 1e-3 * floor), (eps, omega)

@@ -456,6 +456,8 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                             f"off the wall (contact margin {w['contact_margin_worn']:.2g})")
         if "film" in w:
             joints[name] |= _write_film(mfile, out, name, w["film"])
+            if w["film"].get("out_of_range"):
+                warnings.append(f"clearance joint {name!r}: {w['film']['out_of_range']}")
             if not (w["film"]["loads_ok"] and w["film"]["unworn"]["ok"]
                     and w["film"]["worn"]["ok"]):
                 warnings.append(f"clearance joint {name!r}: the film's equilibrium did not "

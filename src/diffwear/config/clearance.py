@@ -28,7 +28,6 @@ from ..contact import (
     ShortBearingFilm,
     oils,
 )
-from ..contact.finite_bearing import film_law_for
 from ..contact.friction import DEFAULT_SLIP_WIDTH
 from ..contact.mixed import ONSET_FILM_RATIO
 from ..errors import InputError
@@ -111,8 +110,9 @@ LAWS = {
 BEARINGS = {"short": ShortBearingFilm, "long": LongBearingFilm, "finite": FiniteBearingFilm}
 """Film models of ``lubricant.bearing``, by name: the short (Ocvirk) bearing
 (`ShortBearingFilm`), the long (Sommerfeld) one (`LongBearingFilm`) and the
-finite-length Reynolds film (`FiniteBearingFilm`); without the key,
-`film_law_for` picks the short or the finite one."""
+finite-length Reynolds film (`FiniteBearingFilm`); the short one by default
+(fast enough for a file's dynamic motion); a run warns where `film_law_for`
+finds it out of its range."""
 MAX_VISCOSITY = 10.0
 """Pa s: the most viscous lubricant a joint takes (honey is ~10 Pa s; above
 that the fluid does not flow into the clearance as a lubricating film)."""
@@ -127,9 +127,9 @@ LUBRICANT = Table(fields={
     "roughness": Quantity(dimension="length", low=0.0, low_open=True,
                           doc="combined RMS roughness sigma of pin and bushing; below "
                               "clearance / 3"),
-    "bearing": Text(default=None, choices=tuple(BEARINGS),
-                    doc="film model; default: the short film where (L/D)^2 <= 0.05 "
-                        "(1 - eps_max), else the finite one (film_law_for)"),
+    "bearing": Text(default="short", choices=tuple(BEARINGS),
+                    doc="film model; a run warns where the short film is out of its range "
+                        "(film_law_for): (L/D)^2 > 0.05 (1 - eps_max)"),
     "length": Quantity(dimension="length", default=None, low=0.0, low_open=True,
                        doc="axial length of the film; default: law.depth"),
 }, default=None)
@@ -258,10 +258,7 @@ def _lubricated(lube, law, rp, rb):
                          "at all)", f"> 0 and < clearance / {ONSET_FILM_RATIO:g} = "
                          f"{c / ONSET_FILM_RATIO * 1e6:g} um")
     length = law.depth if lube["length"] is None else lube["length"]
-    bearing = lube["bearing"]
-    if bearing is None:
-        bearing = film_law_for(length / (2.0 * rp), MixedLubrication.saturation(sigma, c))
-    film = BEARINGS[bearing](oil_viscosity(lube), length, c)
+    film = BEARINGS[lube["bearing"]](oil_viscosity(lube), length, c)
     return MixedLubrication(film, law, sigma)
 
 

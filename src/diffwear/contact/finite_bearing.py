@@ -89,12 +89,13 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jax import lax
+from jaxtyping import Array, Float
 
 from .._checks import check_int_option, concrete
 from ..errors import InputError
 from .lubrication import MAX_ECCENTRICITY_RATIO, SATURATION_WIDTH, AbstractFilm
 
-__all__ = ["FiniteBearingFilm", "film_law_for", "reynolds_forces"]
+__all__ = ["FiniteBearingFilm", "SteadyFiniteFilm", "film_law_for", "reynolds_forces"]
 
 # Default grid: 96 nodes round the bushing, 12 along the half length; with the
 # clustering below it reproduces Raimondi & Boyd's S and attitude angle to
@@ -346,6 +347,11 @@ class FiniteBearingFilm(AbstractFilm):
                                    self.n_theta, self.n_z, self.supply_groove)
         return k * f_n + 0.5 * jnp.pi * k * squeeze, k * f_t - 0.5 * jnp.pi * k * wedge
 
+    def steady(self, radius) -> "SteadyFiniteFilm":
+        """This film for a journal centre at rest in the bushing (e_dot = 0),
+        tabulated in eps (`SteadyFiniteFilm`) for the journal radius ``radius``."""
+        return SteadyFiniteFilm(self, radius)
+
 
 # The short (Ocvirk) film's steady load is within 4.5 % of the finite film's
 # (96 x 12 grid) wherever (L/D)^2 <= 0.05 (1 - eps) (on that boundary: 1.9 %
@@ -367,3 +373,73 @@ def film_law_for(length_over_diameter: float, max_eccentricity_ratio: float) -> 
     52 % high)."""
     ld, eps = float(length_over_diameter), float(max_eccentricity_ratio)
     return "short" if ld**2 <= SHORT_BEARING_LIMIT * (1.0 - eps) else "finite"
+
+
+# Nodes of the steady film's table: uniform in w = sqrt(-ln(1 - eps)) from
+# eps = 0 to 1 - 2.5e-3 (w = 2.45, past the largest eps the saturated film is
+# evaluated at, 0.995 + 0.0025); 56 nodes.  The forces vary like (1 - eps)^-k
+# near contact (linear in w^2 in log scale) and like a + b eps near the centre
+# (even in w), so a cubic (Catmull-Rom) through log |F| in w, mirrored at
+# w = 0, is within 1e-3 of the solve between nodes (tests/test_finite_bearing.py).
+TABLE_NODES = 56
+_TABLE_TOP = math.sqrt(-math.log(2.5e-3))
+
+
+class SteadyFiniteFilm(AbstractFilm):
+    """The finite film of a journal whose centre is at rest in the bushing
+    (e_dot = 0: the steadily loaded bearing), tabulated once: with no squeeze
+    the Reynolds problem depends on the pin's state only through eps and the
+    wedge B = eps (omega - 2 gamma_dot), to which the pressure is proportional
+    (the complementarity solution is positively homogeneous in the
+    right-hand side; a reversed wedge mirrors the film, F_t changes sign).  So
+    F_n = K |B| g_n(eps) and F_t = K B g_t(eps), K = 6 mu R^4 / c^2, with g
+    interpolated from `TABLE_NODES` solves (cubic in w = sqrt(-ln(1 - eps))
+    through log g).  The table is computed from the film's leaves (length, and the pin
+    radius given), so it is differentiable in them; it is exact for e_dot = 0
+    only: the quasi-static joint's film (`FiniteBearingFilm.steady`)."""
+
+    radius: Float[Array, ""]
+    log_radial: Float[Array, " k"]  # log(-g_n) (g_n does not vanish at eps = 0: the
+    # Reynolds condition's film reaches past the minimum film, phi(0) < 90 deg)
+    log_tangential: Float[Array, " k"]  # log(g_t)
+
+    def __init__(self, film: "FiniteBearingFilm", radius):
+        super().__init__(film.viscosity, film.length, film.clearance,
+                         film.max_eccentricity_ratio, film.saturation_width)
+        self.radius = jnp.asarray(radius, dtype=float)
+        w = jnp.linspace(0.0, _TABLE_TOP, TABLE_NODES)
+        eps = -jnp.expm1(-(w**2))
+        half = film.length / (2.0 * self.radius)
+        # one solve after the other (lax.map): batched, the small dense
+        # inverses of the elimination run ~10 x slower on a CPU
+        f_n, f_t = lax.map(lambda e: reynolds_forces(
+            e, 0.0, 1.0, half, film.n_theta, film.n_z, film.supply_groove), eps)
+        self.log_radial = jnp.log(-f_n)
+        self.log_tangential = jnp.log(f_t)
+
+    def _interpolate(self, values, eps):
+        """Catmull-Rom cubic through ``values`` at the uniform w nodes, at
+        w = sqrt(-ln(1 - eps)): mirrored at w = 0 (even in w, so smooth in eps
+        there), held at the last node beyond the table."""
+        step = _TABLE_TOP / (TABLE_NODES - 1)
+        top = 1.0 - math.exp(-(_TABLE_TOP**2))
+        u = -jnp.log1p(-jnp.clip(eps, 0.0, top))
+        x = jnp.sqrt(u + 1e-30) / step
+        i = jnp.clip(jnp.floor(x).astype(int), 0, TABLE_NODES - 2)
+        t = x - i
+        p = jnp.concatenate([values[1:2], values, 2 * values[-1:] - values[-2:-1]])
+        p0, p1, p2, p3 = p[i], p[i + 1], p[i + 2], p[i + 3]
+        return 0.5 * (2 * p1 + (p2 - p0) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t**2
+                      + (3 * p1 - p0 - 3 * p2 + p3) * t**3)
+
+    def _film_factor(self, radius):
+        """6 mu R^4 / c^2 [N s], as `FiniteBearingFilm`'s."""
+        return 6.0 * self.viscosity * radius**4 / self.clearance**2
+
+    def _excess_components(self, eps_f, squeeze, wedge, radius):
+        """F_n + K pi/2 A and F_t - K pi/2 B [N] of the tabulated steady film
+        (A, the squeeze, is taken as 0: the table holds e_dot = 0 only)."""
+        k = self._film_factor(radius)
+        f_n = -k * jnp.abs(wedge) * jnp.exp(self._interpolate(self.log_radial, eps_f))
+        f_t = k * wedge * jnp.exp(self._interpolate(self.log_tangential, eps_f))
+        return f_n + 0.5 * jnp.pi * k * squeeze, f_t - 0.5 * jnp.pi * k * wedge

@@ -44,6 +44,7 @@ from jax import lax
 from jaxtyping import Array, Bool, Float
 
 from ..contact.clearance_joint import ClearanceJoint
+from ..contact.finite_bearing import FiniteBearingFilm
 from ..contact.kinematics import PinKinematics
 from ..contact.mixed import MixedLubrication, asperity_share
 from ..contact.profile import BushingProfile
@@ -104,7 +105,12 @@ class LubricatedQuasiStaticJoint(eqx.Module):
             raise InputError(f"clearance joint {joint.name!r} is not lubricated "
                              f"(law {type(joint.law).__name__})")
         dry = eqx.tree_at(lambda j: j.law, joint, joint.law.asperity)
-        return cls(law=joint.law, dry=QuasiStaticJoint.from_joint(dry))
+        law = joint.law
+        if isinstance(law.film, FiniteBearingFilm):
+            # the centre is at rest in the bushing here: the finite film's steady
+            # table (one Reynolds solve per node, not one per Newton step)
+            law = eqx.tree_at(lambda m: m.film, law, law.film.steady(joint.pin_radius))
+        return cls(law=law, dry=QuasiStaticJoint.from_joint(dry))
 
     @property
     def n(self) -> int:

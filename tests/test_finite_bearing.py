@@ -321,3 +321,38 @@ def test_the_steady_table_is_the_solve_with_the_centre_at_rest(steady_pair):
                                                 jnp.asarray(omega))
             assert float(jnp.linalg.norm(tabled - solved)) <= 1e-3 * max(
                 float(jnp.linalg.norm(solved)), 1e-3 * floor), (eps, omega)
+
+
+@pytest.mark.extended  # ~60-90 s on 2 cores: one table and its Newton solves
+def test_the_quasi_static_joint_balances_the_load_on_the_finite_film():
+    """A film-borne pin (roughness 1 nm: no asperity contact) of a
+    `LubricatedQuasiStaticJoint` on the finite film: at its equilibrium the
+    finite film's own solve (not the table the joint uses) carries the load to
+    1e-3, at a light and a heavy load."""
+    from diffwear.contact import (
+        ArchardWear,
+        ClearanceJoint,
+        CoulombFriction,
+        ElasticFoundation,
+        MixedLubrication,
+    )
+    from diffwear.quasistatic import LubricatedQuasiStaticJoint
+
+    film = FiniteBearingFilm(MU, 0.012, C)
+    law = MixedLubrication(film, ElasticFoundation(1e13, 0.012), 1e-9)
+    joint = ClearanceJoint("j", "a", [0.0, 0.0], "b", [0.0, 0.0], R, R + C, law,
+                           friction=CoulombFriction(0.1), wear=ArchardWear(1e-14),
+                           n_theta=90)
+    solve = eqx.filter_jit(lambda w: LubricatedQuasiStaticJoint.from_joint(joint).pin_offset(
+        w, jnp.asarray(OMEGA), jnp.full(90, C)))
+    for load in (20.0, 2000.0):
+        w = jnp.array([0.3, -1.0]) * load / np.hypot(0.3, 1.0)
+        e, ok = solve(w)
+        assert float(ok) == 1.0
+        kin = PinKinematics(offset=e, offset_rate=jnp.zeros(2), omega=jnp.asarray(OMEGA),
+                            pin_radius=jnp.asarray(R), bushing_radius=jnp.asarray(R + C))
+        # the joint's film is saturated at lambda = 1, eps_max = 0.995 (not the
+        # film's own default, 0.95)
+        force = eqx.filter_jit(lambda k: law.saturated_film().film(k).force)(kin)
+        assert float(jnp.linalg.norm(force + w)) < 1e-3 * load
+        assert 0.05 < float(jnp.linalg.norm(e)) / C < 0.995

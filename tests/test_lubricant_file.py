@@ -17,7 +17,9 @@ from diffwear.config import units as U
 from diffwear.contact import MixedLubrication, ShortBearingFilm
 
 LUBRICATED = SHIPPED_MECHANISMS / "rig_lubricated.toml"
-OIL = 'lubricant = { viscosity = "8.5 mPa s", roughness = "0.65 um", bearing = "short" }'
+OIL = ('lubricant = { grade = "ISO VG 10", temperature = "25 degC", roughness = "0.65 um", '
+       'bearing = "short" }')
+GRADE = 'grade = "ISO VG 10", temperature = "25 degC"'
 FILM_KEYS = ("min_film_thickness_um", "film_ratio_min", "asperity_load_share")
 
 
@@ -50,7 +52,10 @@ def test_the_shipped_lubricated_rig_is_the_rig_with_its_oil():
     el = load("rig_lubricated").mechanism.element("crank_rod")
     dry = load("rig").mechanism.element("crank_rod")
     assert isinstance(el.law, MixedLubrication) and isinstance(el.law.film, ShortBearingFilm)
-    assert float(el.law.film.viscosity) == pytest.approx(8.5e-3, rel=1e-12)  # Pa s
+    # ISO VG 10 at 25 degC by ASTM D341 (hand computation: the Walther line through
+    # log log 10.7 at log 313.15 and log log 3.2 at log 373.15 gives nu = 17.35 mm^2/s,
+    # times 870 (1 - 6.5e-4 x 10) kg/m^3)
+    assert float(el.law.film.viscosity) == pytest.approx(17.3488e-6 * 864.345, rel=1e-4)
     assert float(el.law.roughness) == 0.65e-6  # m
     assert float(el.law.film.length) == float(dry.law.depth) == 0.0131
     assert float(el.law.film.clearance) == pytest.approx(33e-6, rel=1e-9)
@@ -64,8 +69,8 @@ def runs(tmp_path_factory):
     """``diffwear run --cycles 2000`` on the lubricated rig at 3 and
     60 mPa s, and on the same file without its oil."""
     tmp = tmp_path_factory.mktemp("lubricant")
-    cases = {"thin": _file(tmp, "thin", (OIL, OIL.replace("8.5 mPa s", "3 mPa s"))),
-             "thick": _file(tmp, "thick", (OIL, OIL.replace("8.5 mPa s", "60 mPa s"))),
+    cases = {"thin": _file(tmp, "thin", (GRADE, 'viscosity = "3 mPa s"')),
+             "thick": _file(tmp, "thick", (GRADE, 'viscosity = "60 mPa s"')),
              "dry": _file(tmp, "dry", (OIL, ""))}
     out = {}
     for name, path in cases.items():
@@ -93,6 +98,7 @@ def test_a_thicker_oil_keeps_a_thicker_film_and_wears_less_than_dry(runs):
     assert thin["lubricant"] == {"viscosity_Pa_s": 0.003, "roughness_um": 0.65,
                                  "bearing": "short"}
     for w in (thin, thick):
+        assert w["min_film_thickness_um"] >= 0.0 and w["max_interference_um"] >= 0.0
         for key in FILM_KEYS:
             for k in (key, key + "_worn"):
                 assert isinstance(w[k], float) and math.isfinite(w[k]), k
@@ -106,15 +112,21 @@ def test_the_film_files_and_the_report(runs):
     assert {"film_crank_rod.csv", "film_crank_rod.png"} <= set(summary["files"])
     with open(folder / "film_crank_rod.csv", newline="") as f:
         rows = list(csv.reader(f))
-    assert rows[0] == ["crank_angle_deg", "h_min_um", "film_ratio", "asperity_share",
-                       "film_load_N", "asperity_load_N", "h_min_um_worn", "film_ratio_worn",
-                       "asperity_share_worn", "film_load_N_worn", "asperity_load_N_worn"]
+    assert rows[0] == ["crank_angle_deg", "h_min_um", "film_ratio", "interference_um",
+                       "asperity_share", "film_load_N", "asperity_load_N", "h_min_um_worn",
+                       "film_ratio_worn", "interference_um_worn", "asperity_share_worn",
+                       "film_load_N_worn", "asperity_load_N_worn"]
     data = np.array(rows[1:], dtype=float)
-    assert data.shape == (180, 11) and np.all(np.isfinite(data))
+    assert data.shape == (180, 13) and np.all(np.isfinite(data))
+    # a film thickness is never negative; where no gap is left the overlap is the
+    # asperities' interference, and one of the two is zero at every sample
+    assert np.all(data[:, [1, 2, 3, 7, 8, 9]] >= 0.0)
+    assert np.all(data[:, 1] * data[:, 3] == 0.0) and np.all(data[:, 7] * data[:, 9] == 0.0)
     assert data[0, 0] == 0.0 and data[-1, 0] == pytest.approx(358.0)
     w = summary["joints"]["crank_rod"]
     assert np.min(data[:, 1]) == pytest.approx(w["min_film_thickness_um"])
-    assert np.mean(data[:, 3]) == pytest.approx(w["asperity_load_share"])
+    assert np.mean(data[:, 4]) == pytest.approx(w["asperity_load_share"])
+    assert np.max(data[:, 3]) == pytest.approx(w["max_interference_um"])
     assert (folder / "film_crank_rod.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     report = (folder / "report.md").read_text()
     assert "## Lubrication" in report and "(film_crank_rod.png)" in report
@@ -122,13 +134,13 @@ def test_the_film_files_and_the_report(runs):
 
 
 @pytest.mark.parametrize("old, new, words", [
-    ('viscosity = "8.5 mPa s"', 'viscosity = "0 Pa s"',
+    (GRADE, 'viscosity = "0 Pa s"',
      ["joints[1].lubricant.viscosity", "'0 Pa s'", "out of range", "(0, 10] Pa s"]),
-    ('viscosity = "8.5 mPa s"', 'viscosity = "-1 Pa s"',
+    (GRADE, 'viscosity = "-1 Pa s"',
      ["joints[1].lubricant.viscosity", "'-1 Pa s'", "(0, 10] Pa s"]),
-    ('viscosity = "8.5 mPa s"', 'viscosity = "20 Pa s"',
+    (GRADE, 'viscosity = "20 Pa s"',
      ["joints[1].lubricant.viscosity", "'20 Pa s'", "(0, 10] Pa s"]),
-    ('viscosity = "8.5 mPa s"', 'viscosity = "0.05 m"',
+    (GRADE, 'viscosity = "0.05 m"',
      ["joints[1].lubricant.viscosity", "'m' is a length unit, not viscosity",
       "Pa s, mPa s, cP, P"]),
     ('roughness = "0.65 um"', 'roughness = "12 um"',
@@ -138,6 +150,23 @@ def test_the_film_files_and_the_report(runs):
      ["joints[1].lubricant.viscocity", "unknown key", "did you mean 'viscosity'"]),
     ('bearing = "short"', 'bearing = "journal"',
      ["joints[1].lubricant.bearing", "'journal' is not allowed", "'short'", "'long'"]),
+    (GRADE, 'grade = "ISO VG 11", temperature = "25 degC"',
+     ["joints[1].lubricant.grade", "'ISO VG 11'", "ISO VG 10, ISO VG 15", "ISO VG 1500"]),
+    (GRADE, 'grade = "ISO VG 10", temperature = "140 degC"',
+     ["joints[1].lubricant.temperature", "140 degC", "ASTM D341",
+      "-20 degC to 114.8 degC"]),
+    (GRADE, 'grade = "ISO VG 10", temperature = "-40 degC"',
+     ["joints[1].lubricant.temperature", "-40 degC", "-20 degC to 114.8 degC"]),
+    (GRADE, 'grade = "ISO VG 10", temperature = "warm"',
+     ["joints[1].lubricant.temperature", "'warm'", "degC, K or degF"]),
+    (GRADE, 'grade = "ISO VG 10"',
+     ["joints[1].lubricant.temperature", "missing key", "25 degC"]),
+    (GRADE, 'grade = "ISO VG 10", viscosity = "1 cP"',
+     ["joints[1].lubricant.grade", "given together with lubricant.viscosity"]),
+    (GRADE, 'viscosity = "1 cP", temperature = "25 degC"',
+     ["joints[1].lubricant.temperature", "already the viscosity"]),
+    (GRADE, 'temperature = "25 degC"',
+     ["joints[1].lubricant.viscosity", "missing key", "lubricant.grade"]),
     ('law = { type = "elastic-foundation", layer_thickness = "6.342 mm", depth = "13.1 mm", '
      'restitution = 0.8 }\nwear = { coefficient = "5.05e-4 mm^3/(N m)" }   # Table 7-2',
      'law = { type = "lankarani-nikravesh" }\npin_material = "steel"',
@@ -189,3 +218,24 @@ def test_the_film_figure_draws_the_onset_line_over_the_crank_angle(tmp_path):
     assert bottom.get_ylim()[1] == pytest.approx(1.08 * 100.0 * share.max())
     for ax in (top, bottom):  # legends right of the data
         assert ax.get_legend().get_window_extent().x0 > ax.get_window_extent().x1
+
+
+@pytest.mark.parametrize("grade, celsius, nu_mm2_s", [
+    # ISO 3448 midpoint at 40 degC and the table's 100 degC value, exactly
+    ("ISO VG 10", 40.0, 10.0), ("ISO VG 10", 100.0, 2.5), ("VG 68", 40.0, 68.0),
+    ("iso vg 68", 100.0, 8.5),
+    # ASTM D341 by hand: log log(nu + 0.7) linear in log T through those two points
+    ("ISO VG 10", 25.0, 17.3488), ("ISO VG 68", 25.0, 158.0),
+])
+def test_grade_viscosity_follows_walther(grade, celsius, nu_mm2_s):
+    from diffwear.contact import oils
+
+    oil = oils.grade(grade)
+    kelvin = oils.parse_temperature(f"{celsius} degC")
+    assert oil.kinematic_viscosity(kelvin) * 1e6 == pytest.approx(nu_mm2_s, rel=1e-3)
+    # mu = rho nu with rho = 870 kg/m^3 at 15 degC, 6.5e-4 /K
+    rho = 870.0 * (1 - 6.5e-4 * (celsius - 15.0))
+    assert oil.viscosity(kelvin) == pytest.approx(rho * oil.kinematic_viscosity(kelvin),
+                                                  rel=1e-12)
+    assert oils.parse_temperature("77 degF") == pytest.approx(298.15)
+    assert oils.parse_temperature("298.15 K") == 298.15

@@ -173,6 +173,24 @@ def test_the_film_is_saturated_where_the_surfaces_meet():
         assert float(law.saturated_film().max_eccentricity_ratio) == pytest.approx(expected)
 
 
+def test_film_thickness_is_never_negative_and_the_overlap_is_the_interference():
+    """A pin pressed 2 um past the round bore: the film thickness is 0, lambda 0,
+    and the 2 um are the asperities' interference; with a gap left, the film is
+    the gap and there is no interference."""
+    from diffwear.contact import BushingProfile, PinKinematics
+
+    law = _joint().law
+    profile = BushingProfile.circular(C, 180)
+    for depth, film, overlap in [(C + 2e-6, 0.0, 2e-6), (C - 3e-6, 3e-6, 0.0)]:
+        kin = PinKinematics(offset=jnp.array([0.0, -depth]), offset_rate=jnp.zeros(2),
+                            omega=jnp.asarray(50.0), pin_radius=jnp.asarray(R),
+                            bushing_radius=jnp.asarray(R + C))
+        parts = law.lubrication(kin, jnp.zeros(0), profile, CoulombFriction(0.1))
+        assert float(parts.min_film_thickness) == pytest.approx(film, abs=1e-12)
+        assert float(parts.film_ratio) == pytest.approx(film / 0.1e-6, abs=1e-6)
+        assert float(parts.interference) == pytest.approx(overlap, abs=1e-12)
+
+
 # ------------------------------------------------------------ dynamics
 def test_lubricated_slider_crank_keeps_its_film_at_high_viscosity_and_touches_at_low():
     """Table 2-1 slider-crank, crank-rod joint lubricated (c = 0.1 mm,

@@ -339,8 +339,8 @@ def regime(ratio: float) -> str:
     if ratio >= 1.0:
         return ("mixed: film and asperities share the load; the bushing wears where the "
                 "asperities touch, less than dry")
-    return ("boundary: the asperities carry the load where the film is thinnest; there the "
-            "bushing wears as if dry")
+    return ("boundary: the film is thinner than the roughness where it is thinnest; there the "
+            "asperities carry most of the load and the bushing wears")
 
 
 def _lubrication_section(joints: dict) -> Section:
@@ -351,6 +351,7 @@ def _lubrication_section(joints: dict) -> Section:
         rows.append((j, f"{lube['viscosity_Pa_s']:.4g}", f"{lube['roughness_um']:.3g}",
                      f"{w['min_film_thickness_um']:.3g} / {w['min_film_thickness_um_worn']:.3g}",
                      f"{w['film_ratio_min']:.3g} / {w['film_ratio_min_worn']:.3g}",
+                     f"{w['max_interference_um']:.3g} / {w['max_interference_um_worn']:.3g}",
                      f"{100 * w['asperity_load_share']:.3g} % / "
                      f"{100 * w['asperity_load_share_worn']:.3g} %",
                      f"{regime(worst).capitalize()}.", f"[film]({w['film_file']})"))
@@ -361,12 +362,13 @@ def _lubrication_section(joints: dict) -> Section:
         "lambda = h min / sigma (sigma: the combined RMS roughness); asperity share: the "
         "asperities' part of the load, averaged over the cycle; each on the unworn / the worn "
         "bushing.  lambda > 3: full film, no wear; 1-3: mixed lubrication, wear where the "
-        "asperities touch; < 1: boundary lubrication, wear as dry (a negative h min: the "
-        "asperities are pressed past the mean surfaces).  These numbers are the pin's "
-        "quasi-static equilibrium of film and asperities under the cycle's loads (the "
+        "asperities touch; < 1: boundary lubrication, the asperities carry most of the load "
+        "where the film is thinnest.  interference: how far the pin presses the asperities "
+        "past the mean surfaces where no gap is left (h min is then 0).  These numbers are "
+        "the pin's quasi-static equilibrium of film and asperities under the cycle's loads (the "
         "quasi-static wear model's; the dynamic model does not take a lubricated joint).",
         Table(("joint", "viscosity [Pa s]", "roughness [um]", "h min [um]", "lambda min",
-               "asperity share", "meaning (smallest lambda)", "file"), rows)])
+               "interference [um]", "asperity share", "meaning (smallest lambda)", "file"), rows)])
 
 
 def _to_limit(w: dict) -> str:
@@ -481,6 +483,8 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                             f"off the wall (contact margin {w['contact_margin_worn']:.2g})")
         if "film" in w:
             joints[name] |= _write_film(mfile, out, name, w["film"])
+            if w["film"].get("out_of_range"):
+                warnings.append(f"clearance joint {name!r}: {w['film']['out_of_range']}")
             if not (w["film"]["loads_ok"] and w["film"]["unworn"]["ok"]
                     and w["film"]["worn"]["ok"]):
                 warnings.append(f"clearance joint {name!r}: the film's equilibrium did not "
@@ -507,6 +511,7 @@ def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> 
         f = film[case]
         cols |= {f"h_min_um{suffix}": f["min_film_thickness"] * 1e6,
                  f"film_ratio{suffix}": f["film_ratio"],
+                 f"interference_um{suffix}": f["interference"] * 1e6,
                  f"asperity_share{suffix}": f["asperity_share"],
                  f"film_load_N{suffix}": f["film_load"],
                  f"asperity_load_N{suffix}": f["asperity_load"]}
@@ -524,6 +529,7 @@ def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> 
         f = film[case]
         keys |= {f"min_film_thickness_um{suffix}": float(np.min(f["min_film_thickness"])) * 1e6,
                  f"film_ratio_min{suffix}": float(np.min(f["film_ratio"])),
+                 f"max_interference_um{suffix}": float(np.max(f["interference"])) * 1e6,
                  f"asperity_load_share{suffix}": float(np.mean(f["asperity_share"]))}
     keys["lubricant"] = {"viscosity_Pa_s": film["viscosity"],
                          "roughness_um": film["roughness"] * 1e6, "bearing": film["bearing"]}

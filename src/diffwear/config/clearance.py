@@ -19,15 +19,18 @@ from ..contact import (
     STEEL,
     ClearanceJoint,
     CoulombFriction,
+    FiniteBearingFilm,
     KelvinVoigt,
     LankaraniNikravesh,
     LongBearingFilm,
     Material,
     MixedLubrication,
     ShortBearingFilm,
+    oils,
 )
 from ..contact.friction import DEFAULT_SLIP_WIDTH
 from ..contact.mixed import ONSET_FILM_RATIO
+from ..errors import InputError
 from ..mechanism import RevoluteJoint
 from ..wear import ArchardWear
 from .elements import NAME, ElementType, FieldError
@@ -104,20 +107,29 @@ LAWS = {
     },
 }
 
-BEARINGS = {"short": ShortBearingFilm, "long": LongBearingFilm}
+BEARINGS = {"short": ShortBearingFilm, "long": LongBearingFilm, "finite": FiniteBearingFilm}
 """Film models of ``lubricant.bearing``, by name: the short (Ocvirk) bearing
-(`ShortBearingFilm`, L / D below ~0.5) and the long (Sommerfeld) one
-(`LongBearingFilm`, L / D above ~2)."""
+(`ShortBearingFilm`), the long (Sommerfeld) one (`LongBearingFilm`) and the
+finite-length Reynolds film (`FiniteBearingFilm`); the short one by default
+(fast enough for a file's dynamic motion); a run warns where `film_law_for`
+finds it out of its range."""
 MAX_VISCOSITY = 10.0
 """Pa s: the most viscous lubricant a joint takes (honey is ~10 Pa s; above
 that the fluid does not flow into the clearance as a lubricating film)."""
 LUBRICANT = Table(fields={
-    "viscosity": Quantity(dimension="viscosity", low=0.0, high=MAX_VISCOSITY, low_open=True,
-                          doc="dynamic viscosity at the running temperature"),
+    "viscosity": Quantity(dimension="viscosity", default=None, low=0.0, high=MAX_VISCOSITY,
+                          low_open=True, doc="dynamic viscosity at the running temperature "
+                          "(or grade and temperature)"),
+    "grade": Text(default=None, doc="ISO 3448 viscosity grade, e.g. \"ISO VG 10\" (a VI ~ 100 "
+                  "mineral oil; its viscosity at temperature by ASTM D341)"),
+    "temperature": Text(default=None, doc="running temperature of the oil of grade, e.g. "
+                        "\"25 degC\""),
     "roughness": Quantity(dimension="length", low=0.0, low_open=True,
                           doc="combined RMS roughness sigma of pin and bushing; below "
                               "clearance / 3"),
-    "bearing": Text(default="short", choices=tuple(BEARINGS), doc="film model"),
+    "bearing": Text(default="short", choices=tuple(BEARINGS),
+                    doc="film model; a run warns where the short film is out of its range "
+                        "(film_law_for): (L/D)^2 > 0.05 (1 - eps_max)"),
     "length": Quantity(dimension="length", default=None, low=0.0, low_open=True,
                        doc="axial length of the film; default: law.depth"),
 }, default=None)
@@ -205,6 +217,34 @@ def _law(v, rp, rb, bodies):
     return efm_law(bushing, rb, law["layer_thickness"], law["depth"], law["restitution"], mass)
 
 
+def oil_viscosity(lube) -> float:
+    """The oil's dynamic viscosity [Pa s]: ``lubricant.viscosity``, or that of
+    ``lubricant.grade`` at ``lubricant.temperature`` (`diffwear.contact.oils`)."""
+    given = [k for k in ("viscosity", "grade") if lube[k] is not None]
+    one = "exactly one of lubricant.viscosity and lubricant.grade (with lubricant.temperature)"
+    if len(given) != 1:
+        key = "lubricant.grade" if given else "lubricant.viscosity"
+        what = "given together with lubricant.viscosity" if given else "missing key"
+        raise FieldError(key, what + " (the oil needs one viscosity)", one)
+    if lube["viscosity"] is not None:
+        if lube["temperature"] is not None:
+            raise FieldError("lubricant.temperature", "given with lubricant.viscosity, which is "
+                             "already the viscosity at the running temperature", one)
+        return lube["viscosity"]
+    if lube["temperature"] is None:
+        raise FieldError("lubricant.temperature", f"missing key: the viscosity of "
+                         f"{lube['grade']!r} depends on the oil's temperature",
+                         "a temperature, e.g. \"25 degC\"")
+    try:
+        oil = oils.grade(lube["grade"], key="lubricant.grade")
+        temperature = oils.parse_temperature(lube["temperature"], key="lubricant.temperature")
+        return oil.viscosity(temperature, key="lubricant.temperature")
+    except InputError as err:
+        key, _, rest = str(err).partition(": ")
+        what, _, allowed = rest.partition("; allowed: ")
+        raise FieldError(key, what, allowed or None) from None
+
+
 def _lubricated(lube, law, rp, rb):
     """The `MixedLubrication` of ``lube`` (the file's ``lubricant`` table) on the
     elastic-foundation ``law``: the film of ``lubricant.bearing`` and the
@@ -218,7 +258,7 @@ def _lubricated(lube, law, rp, rb):
                          "at all)", f"> 0 and < clearance / {ONSET_FILM_RATIO:g} = "
                          f"{c / ONSET_FILM_RATIO * 1e6:g} um")
     length = law.depth if lube["length"] is None else lube["length"]
-    film = BEARINGS[lube["bearing"]](lube["viscosity"], length, c)
+    film = BEARINGS[lube["bearing"]](oil_viscosity(lube), length, c)
     return MixedLubrication(film, law, sigma)
 
 

@@ -9,6 +9,7 @@ from .clearance_joint import (
     contact_history,
     with_clearance,
 )
+from .finite_bearing import FiniteBearingFilm
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
 from .laws import (
@@ -29,6 +30,7 @@ __all__ = [
     "CoulombFriction", "ArchardWear", "ContactResult", "PinKinematics",
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
     "LankaraniNikravesh", "AbstractFilm", "FilmForce", "ShortBearingFilm", "LongBearingFilm",
+    "FiniteBearingFilm",
     "Lubrication", "MixedLubrication",
     "PTFE", "STEEL", "Material",
     "BushingProfile",

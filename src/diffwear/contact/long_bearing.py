@@ -116,7 +116,7 @@ overestimates that of longer ones: the finite bearing carries less than
 either), an incompressible isoviscous Newtonian film, laminar flow, rigid
 surfaces, an aligned journal and c << R.  Its forces grow like
 (1 - eps^2)^(-3/2) (squeeze) and (1 - eps^2)^(-1) (steady radial): the film is
-evaluated at min(eps, eps_max) (C1 blend of ``saturation_width``) with the
+evaluated at the pin's eps up to eps_max and saturates beyond it with the
 same centre velocity, as the short bearing's, and stops growing past eps_max.
 """
 
@@ -177,8 +177,9 @@ class LongBearingFilm(AbstractFilm):
         clearance: radial clearance c of the round bore [m] (> 0); the film
             uses it, not a worn `BushingProfile`
         max_eccentricity_ratio: eps_max in (0, 1), default 0.95; the film is
-            evaluated at min(eps, eps_max) (C1 blend of ``saturation_width``)
-        saturation_width: width of that blend, in (0, eps_max), default 0.01
+            evaluated at the pin's eps up to eps_max and saturates beyond it
+        saturation_width: width w of the saturation past eps_max (the film tends to
+            that at eps_max + w), in (0, eps_max), default 0.01
 
     Journal radius R: the pin radius of the `PinKinematics` (wedge speed
     U = omega R, film area 2 pi R L; the bore radius differs by c << R).

@@ -79,11 +79,13 @@ receives -T - e x F (the oil is in moment balance).
 **Validity.**  Short-bearing theory needs L / D below about 0.5 (it
 overestimates the load of longer bearings), an incompressible isoviscous
 Newtonian film, laminar flow, rigid surfaces, an aligned journal and c << R.
-The forces grow like (1 - eps^2)^(-5/2): the film is evaluated at the
-eccentricity ratio min(eps, eps_max) (a C1 blend of width
-``saturation_width`` below eps_max) with the same centre velocity e_dot, so
-it stays finite and differentiable for every offset; beyond eps_max the film
-force stops growing and a contact law must carry the load (see
+The forces grow like (1 - eps^2)^(-5/2): the film is evaluated at the pin's
+own eccentricity ratio up to eps_max and, beyond it, at
+eps_max + w (1 - exp(-(eps - eps_max) / w)) (w = ``saturation_width``, at
+most half the gap 1 - eps_max left), with the same centre velocity e_dot:
+exact wherever eps <= eps_max, C1 at eps_max, finite and differentiable for
+every offset; beyond eps_max the film force stops growing (it tends to the
+film at eps_max + w) and a contact law must carry the load (see
 docs/notes/lubricated-joint.md).
 """
 
@@ -99,7 +101,6 @@ from jaxtyping import Array, Float
 from .._checks import check_positive, check_range, concrete, float_leaf
 from ..errors import InputError
 from ..mechanism.geometry import perp
-from . import smoothing
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
 from .laws import OFFSET_NORM_WIDTH, AbstractContactLaw
@@ -113,8 +114,9 @@ from .profile import BushingProfile
 # where asperity contact (mixed lubrication) begins and the smooth-film model
 # stops being valid.
 MAX_ECCENTRICITY_RATIO = 0.95
-# Width of the blend into the saturation: the film is exact up to
-# eps_max - 0.01 = 0.94 and C1 across the band.
+# Width of the saturation beyond eps_max: the film is exact up to eps_max and,
+# past it, evaluated at eps_max + w (1 - exp(-(eps - eps_max) / w)), which never
+# exceeds eps_max + w = 0.96 (w at most half of 1 - eps_max).
 SATURATION_WIDTH = 0.01
 
 
@@ -263,16 +265,15 @@ class AbstractFilm(AbstractContactLaw):
         return self.clearance - jnp.sqrt(e @ e + OFFSET_NORM_WIDTH**2)
 
     def _saturated(self, eps):
-        """min(eps, eps_max), smoothed: eps_max - ramp(eps_max - eps) with the
-        ramp of `smoothing` (width ``saturation_width``: exact below
-        eps_max - width, C1 across the band).  Written as eps minus an excess that
-        is exactly 0 below the band, so that eps_f = eps there to the last bit: a
-        rounded eps_max - (eps_max - eps) would differ from a tiny eps by ~1e-16,
-        which the direction's derivative (~ 1 / |e|) would amplify near e = 0."""
-        width = self.saturation_width
-        over = eps - (self.max_eccentricity_ratio - width)
-        excess = jnp.where(over <= 0.0, 0.0, over - width + smoothing.ramp(width - over, width))
-        return eps - excess
+        """The eccentricity ratio the film is evaluated at: the pin's own eps up
+        to eps_max (to the last bit: no blend reaches below eps_max) and
+        eps_max + w (1 - exp(-(eps - eps_max) / w)) beyond it, C1 at eps_max,
+        below eps_max + w < 1 for every eps; w = min(``saturation_width``,
+        (1 - eps_max) / 2)."""
+        eps_max = self.max_eccentricity_ratio
+        width = jnp.minimum(self.saturation_width, 0.5 * (1.0 - eps_max))
+        over = jnp.maximum(eps - eps_max, 0.0)
+        return jnp.where(eps <= eps_max, eps, eps_max - width * jnp.expm1(-over / width))
 
     def _torque(self, eps_f, tangential, omega, radius):
         """Viscous moment on the pin [N m] from the film's tangential force
@@ -363,8 +364,9 @@ class ShortBearingFilm(AbstractFilm):
         clearance: radial clearance c of the round bore [m] (> 0); the film
             uses it, not a worn `BushingProfile`
         max_eccentricity_ratio: eps_max in (0, 1), default 0.95; the film is
-            evaluated at min(eps, eps_max) (C1 blend of ``saturation_width``)
-        saturation_width: width of that blend, in (0, eps_max), default 0.01
+            evaluated at the pin's eps up to eps_max and saturates beyond it
+        saturation_width: width w of the saturation past eps_max (the film tends to
+            that at eps_max + w), in (0, eps_max), default 0.01
 
     Journal radius R: the pin radius of the `PinKinematics` (wedge speed
     U = omega R and film area 2 pi R L; the bore radius differs by c << R).

@@ -27,8 +27,11 @@ The law here (stated, simple, smooth):
   c(theta_e), weakens as the groove deepens, ~ 1 / c^2: that feeds the wear
   back on itself and made the wear's response to the profile indefinite, so
   the implicit wear steps failed; docs/notes/lubricated-joint.md.)
-- **Film thickness**: h_min = c(theta_e) - |e|, the gap along the line of
-  centres on the worn bore; lambda = h_min / sigma.
+- **Film thickness**: h_min = max(c(theta_e) - |e|, 0), the gap along the
+  line of centres on the worn bore, never negative; lambda = h_min / sigma.
+  Where the pin is pressed past the mean surfaces (c(theta_e) - |e| < 0, the
+  asperities and the bushing compressed) the film thickness is 0 and the
+  overlap is reported as the asperity interference |e| - c(theta_e).
 - **Asperities**: the elastic foundation (`ElasticFoundation`) of the bushing
   pressed by the asperity summits, which stand lambda_c sigma above the mean
   surfaces: each spring's penetration is delta_k = e . u_k - (c_k -
@@ -91,8 +94,10 @@ class Lubrication(NamedTuple):
         normal load and pressure on the bushing grid)
     film_load: |film force| [N]
     asperity_load: the asperities' normal load [N]
-    min_film_thickness: h_min = c_e - |e| [m]
+    min_film_thickness: h_min = max(c_e - |e|, 0) [m]
     film_ratio: lambda = h_min / sigma [-]
+    interference: max(|e| - c_e, 0) [m]: how far the pin presses the asperities
+        past the mean surfaces (0 while a gap remains)
     """
 
     film: FilmForce
@@ -101,6 +106,7 @@ class Lubrication(NamedTuple):
     asperity_load: Float[Array, ""]
     min_film_thickness: Float[Array, ""]
     film_ratio: Float[Array, ""]
+    interference: Float[Array, ""]
 
     @property
     def asperity_share(self) -> Float[Array, ""]:
@@ -169,16 +175,24 @@ class MixedLubrication(AbstractContactLaw):
         """The profile of the asperity summits: the bore less lambda_c sigma."""
         return eqx.tree_at(lambda p: p.clearance, profile, profile.clearance - self.onset_gap)
 
+    @staticmethod
+    def saturation(roughness, clearance, boundary_ratio=BOUNDARY_FILM_RATIO):
+        """eps_max = 1 - lambda_b sigma / c, kept in [`MIN_SATURATION`,
+        `MAX_SATURATION`]: the eccentricity ratio where the film is saturated."""
+        return jnp.clip(1.0 - boundary_ratio * roughness / clearance,
+                        MIN_SATURATION, MAX_SATURATION)
+
     def saturated_film(self) -> AbstractFilm:
         """The film law, saturated where lambda reaches lambda_b on the unworn
         bore: eps_max = 1 - lambda_b sigma / c (module notes)."""
-        eps_max = jnp.clip(1.0 - self.boundary_ratio * self.roughness / self.film.clearance,
-                           MIN_SATURATION, MAX_SATURATION)
+        eps_max = self.saturation(self.roughness, self.film.clearance, self.boundary_ratio)
         return eqx.tree_at(lambda f: f.max_eccentricity_ratio, self.film, eps_max)
 
     def min_film_thickness(self, kin: PinKinematics, profile: BushingProfile):
-        """h_min = c(theta_e) - |e| [m]: the gap along the line of centres, on
-        the (worn) bore."""
+        """c(theta_e) - |e| [m]: the gap along the line of centres, on the
+        (worn) bore; negative where the pin presses the asperities past the
+        mean surfaces (`lubrication` reports max(gap, 0) as the film and the
+        rest as the interference)."""
         c_e = _interp_periodic(profile.clearance, safe_angle(kin.offset))
         return c_e - jnp.sqrt(kin.offset @ kin.offset + OFFSET_NORM_WIDTH**2)
 
@@ -188,10 +202,12 @@ class MixedLubrication(AbstractContactLaw):
         film = self.saturated_film().film(kin)
         asperity = self.asperity.evaluate(kin, memory, self.summits(profile), friction)
         _, film_load = _safe_unit(film.force)
-        h_min = self.min_film_thickness(kin, profile)
+        gap = self.min_film_thickness(kin, profile)
+        h_min = jnp.maximum(gap, 0.0)
         return Lubrication(film=film, asperity=asperity, film_load=film_load,
                            asperity_load=asperity.normal_load, min_film_thickness=h_min,
-                           film_ratio=h_min / self.roughness)
+                           film_ratio=h_min / self.roughness,
+                           interference=jnp.maximum(-gap, 0.0))
 
     def evaluate(self, kin, memory, profile, friction):
         """Film plus asperities: their forces and torques add; normal_load and

@@ -204,6 +204,24 @@ def lubricated_joints(mfile: MechanismFile, joints) -> tuple[str, ...]:
                  if isinstance(mfile.mechanism.element(n).law, MixedLubrication))
 
 
+def film_out_of_range(element) -> str | None:
+    """A sentence where a lubricated joint's film law is outside its range
+    (`film_law_for`: the short film beyond (L/D)^2 = 0.05 (1 - eps_max), the
+    long film anywhere), else None."""
+    from ..contact.finite_bearing import film_law_for
+
+    law = element.law
+    name = bearing_name(law)
+    ld = float(law.film.length) / (2.0 * float(element.pin_radius))
+    eps_max = float(law.saturated_film().max_eccentricity_ratio)
+    if name == "finite" or film_law_for(ld, eps_max) == name:
+        return None
+    return (f"the {name} film is outside its range here (L/D = {ld:.3g}, eccentricity ratio "
+            f"up to {eps_max:.3g}: the short film holds to 4.5 % only where (L/D)^2 <= 0.05 "
+            f"(1 - eps); at L/D = 0.7 and eps = 0.9 it carries 3.5 x the finite film's "
+            f"load); bearing = \"finite\" gives the finite-length film's numbers")
+
+
 def bearing_name(law: MixedLubrication) -> str:
     """The ``lubricant.bearing`` name of a lubricated law's film model."""
     from ..config.clearance import BEARINGS
@@ -228,6 +246,7 @@ def film_cycle(mfile: MechanismFile, y0, depths: dict, model: QuasiStatic | None
 
     def parts(eq):
         return {"min_film_thickness": eq.min_film_thickness, "film_ratio": eq.film_ratio,
+                "interference": eq.interference,
                 "asperity_share": eq.asperity_share, "film_load": eq.film_load,
                 "asperity_load": eq.normal_load, "ok": eq.ok}
 
@@ -255,6 +274,7 @@ def film_cycle(mfile: MechanismFile, y0, depths: dict, model: QuasiStatic | None
             "loads_ok": bool(ok),
             "viscosity": float(law.film.viscosity), "roughness": float(law.roughness),
             "bearing": bearing_name(law), "onset_gap": float(law.onset_gap),
+            "out_of_range": film_out_of_range(mech.element(name)),
             "onset_ratio": float(law.onset_ratio),
         }
     return out

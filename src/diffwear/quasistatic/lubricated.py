@@ -44,6 +44,7 @@ from jax import lax
 from jaxtyping import Array, Bool, Float
 
 from ..contact.clearance_joint import ClearanceJoint
+from ..contact.finite_bearing import FiniteBearingFilm
 from ..contact.kinematics import PinKinematics
 from ..contact.mixed import MixedLubrication, asperity_share
 from ..contact.profile import BushingProfile
@@ -70,6 +71,7 @@ class LubricatedEquilibrium(eqx.Module):
     film_load: |film force| [N] (S,)
     min_film_thickness: h_min [m] (S,)
     film_ratio: lambda = h_min / sigma (S,)
+    interference: how far the asperities are pressed past the mean surfaces [m] (S,)
     ok: every Newton solve converged
     """
 
@@ -79,6 +81,7 @@ class LubricatedEquilibrium(eqx.Module):
     film_load: Float[Array, " S"]
     min_film_thickness: Float[Array, " S"]
     film_ratio: Float[Array, " S"]
+    interference: Float[Array, " S"]
     ok: Bool[Array, ""]
 
     @property
@@ -102,7 +105,12 @@ class LubricatedQuasiStaticJoint(eqx.Module):
             raise InputError(f"clearance joint {joint.name!r} is not lubricated "
                              f"(law {type(joint.law).__name__})")
         dry = eqx.tree_at(lambda j: j.law, joint, joint.law.asperity)
-        return cls(law=joint.law, dry=QuasiStaticJoint.from_joint(dry))
+        law = joint.law
+        if isinstance(law.film, FiniteBearingFilm):
+            # the centre is at rest in the bushing here: the finite film's steady
+            # table (one Reynolds solve per node, not one per Newton step)
+            law = eqx.tree_at(lambda m: m.film, law, law.film.steady(joint.pin_radius))
+        return cls(law=law, dry=QuasiStaticJoint.from_joint(dry))
 
     @property
     def n(self) -> int:
@@ -239,11 +247,13 @@ class LubricatedQuasiStaticJoint(eqx.Module):
             ok = ok > 0.5
             parts = self._parts(e, omega, c)
             return (e, parts.asperity.pressure, parts.asperity_load, parts.film_load,
-                    parts.min_film_thickness, parts.film_ratio, ok)
+                    parts.min_film_thickness, parts.film_ratio, parts.interference, ok)
 
-        e, p, load, film_load, h_min, ratio, ok = jax.vmap(one)(loads.force, loads.omega, guess)
+        e, p, load, film_load, h_min, ratio, overlap, ok = jax.vmap(one)(
+            loads.force, loads.omega, guess)
         return LubricatedEquilibrium(offset=e, pressure=p, normal_load=load, film_load=film_load,
                                      min_film_thickness=h_min, film_ratio=ratio,
+                                     interference=overlap,
                                      ok=jnp.all(ok) & jnp.all(jnp.isfinite(e)))
 
     def cycle_wear(self, depth: Float[Array, " n"], loads: JointLoads, guess=None):

@@ -18,7 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import plots
-from ..contact import MixedLubrication, ShortBearingFilm
+from ..contact import MixedLubrication, ShortBearingFilm, oils
 from ..io import OutputDir
 from ..models import QuasiStatic
 from ..presets import RIG_CYCLES, RIG_JOINT
@@ -30,11 +30,12 @@ NAME = "rig-lubricated"
 DESCRIPTION = ("Ch. 7 rig with its crank-rod joint in oil (mixed lubrication): quasi-static "
                "wear over 21,400 cycles, film thickness and load share")
 
-# ISO VG 10 spindle oil at 40 C: 10 mm^2/s (ISO 3448 grade midpoint) x
-# 0.85 g/cm^3; combined RMS roughness of a ground steel pin (Ra 0.2 um) and
-# a fine-bored PTFE bore (Ra 0.5 um), Rq = 1.25 Ra: sqrt(0.25^2 + 0.62^2) um
-# (rig_lubricated.toml gives the sources).
-VISCOSITY = 8.5e-3  # Pa s
+# ISO VG 10 spindle oil at the rig's room temperature, 25 degC (ASTM D341 from
+# the grade, diffwear.contact.oils: 15.0 mPa s); combined RMS roughness of a
+# ground steel pin (Ra 0.2 um) and a fine-bored PTFE bore (Ra 0.5 um),
+# Rq = 1.25 Ra: sqrt(0.25^2 + 0.62^2) um (rig_lubricated.toml gives the sources).
+OIL, TEMPERATURE = "ISO VG 10", "25 degC"
+VISCOSITY = oils.grade(OIL).viscosity(oils.parse_temperature(TEMPERATURE))  # Pa s
 ROUGHNESS = 0.65e-6  # m
 # The dry rig's quasi-static result (rig-21400 --model quasi-static, README).
 DRY = {"max_wear_depth_mm": 0.4449, "wear_volume_mm3": 106.71}
@@ -83,7 +84,7 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
             "asperity_load_share": float(jnp.mean(eq.asperity_share)),
             "film_solves_converged": bool(eq.ok)}
     words = Bullets([
-        f"oil {VISCOSITY * 1e3:g} mPa s (ISO VG 10 at 40 C), combined roughness "
+        f"oil {VISCOSITY * 1e3:.3g} mPa s ({OIL} at {TEMPERATURE}), combined roughness "
         f"{ROUGHNESS * 1e6:g} um: over the unworn bushing's cycle the thinnest film is "
         f"{lube['min_film_thickness_um']:.3g} um, lambda = h_min / sigma "
         f"{lube['film_ratio_min']:.3g} (> 3 full film, 1-3 mixed, < 1 boundary), the "

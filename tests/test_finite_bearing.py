@@ -356,3 +356,31 @@ def test_the_quasi_static_joint_balances_the_load_on_the_finite_film():
         force = eqx.filter_jit(lambda k: law.saturated_film().film(k).force)(kin)
         assert float(jnp.linalg.norm(force + w)) < 1e-3 * load
         assert 0.05 < float(jnp.linalg.norm(e)) / C < 0.995
+
+
+# ------------------------------------------------------------- the soft bore
+
+def test_peak_pressure_of_the_finite_film_tends_to_the_short_film_s():
+    """L/D = 1/40: the finite film's largest grid pressure against the short
+    film's closed-form peak 3 mu L^2 / (4 c^2) eps omega max sin / (1 - eps cos)^3,
+    to 1 %."""
+    length = 2 * R / 40.0
+    for eps in (0.3, 0.8):
+        short = ShortBearingFilm(MU, length, C).steady_peak_pressure(eps, OMEGA, R)
+        film = FiniteBearingFilm(MU, length, C)
+        finite = eqx.filter_jit(lambda e, f=film: f.steady_peak_pressure(e, OMEGA, R))(
+            jnp.asarray(eps))
+        assert float(finite) == pytest.approx(float(short), rel=0.01)
+
+
+def test_the_soft_bore_check_compares_the_deflection_with_the_film():
+    """p / k_f against a quarter of the film thickness, sample by sample."""
+    from diffwear.cli.run import _soft_bore
+
+    f = {"min_film_thickness": np.array([2e-6, 1e-6]),
+         "bore_deflection": np.array([0.4e-6, 0.2e-6]),
+         "film_peak_pressure": np.array([4e6, 2e6])}
+    assert _soft_bore(f) is None  # 0.4 <= 0.5 and 0.2 <= 0.25 um
+    f["bore_deflection"] = np.array([0.4e-6, 0.3e-6])
+    note = _soft_bore(f)
+    assert "2 MPa" in note and "0.3 um" in note and "1 um" in note and "not self-consistent" in note

@@ -485,6 +485,10 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
             joints[name] |= _write_film(mfile, out, name, w["film"])
             if w["film"].get("out_of_range"):
                 warnings.append(f"clearance joint {name!r}: {w['film']['out_of_range']}")
+            soft = _soft_bore(w["film"]["unworn"])
+            joints[name]["rigid_bore_film_holds"] = soft is None
+            if soft:
+                warnings.append(f"clearance joint {name!r}: {soft}")
             if not (w["film"]["loads_ok"] and w["film"]["unworn"]["ok"]
                     and w["film"]["worn"]["ok"]):
                 warnings.append(f"clearance joint {name!r}: the film's equilibrium did not "
@@ -501,6 +505,26 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                       walls={n: w["wall"] for n, w in wear.items()}, limit=limit,
                       lives={n: w["cycles_to_limit"] for n, w in wear.items()})
     return {"joints": joints, "warnings": warnings, "figure": figure.name, "stopped": pierced}
+
+
+# The rigid-bore film holds where the bore's deflection under the film's peak
+# pressure is at most a quarter of the film thickness there (a deflection of
+# that size changes the film's h^3 flow by ~2 x): a stated, conservative bound.
+SOFT_BORE_LIMIT = 0.25
+
+
+def _soft_bore(f: dict) -> str | None:
+    """A sentence where the bore's deflection under the peak film pressure
+    (p / k_f, the foundation's stiffness) is more than `SOFT_BORE_LIMIT` of the
+    film thickness at some sample of the cycle, else None."""
+    h, d, p = f["min_film_thickness"], f["bore_deflection"], f["film_peak_pressure"]
+    worst = int(np.argmax(d - SOFT_BORE_LIMIT * h))
+    if d[worst] <= SOFT_BORE_LIMIT * h[worst]:
+        return None
+    return (f"soft bore: the film's peak pressure {p[worst] / 1e6:.3g} MPa deflects the bore "
+            f"by {d[worst] * 1e6:.3g} um against a film of {h[worst] * 1e6:.3g} um (more "
+            f"than {SOFT_BORE_LIMIT:g} of it): the rigid-bore film is not self-consistent "
+            "there, its numbers are those of a rigid bore")
 
 
 def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> dict:
@@ -530,6 +554,8 @@ def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> 
         keys |= {f"min_film_thickness_um{suffix}": float(np.min(f["min_film_thickness"])) * 1e6,
                  f"film_ratio_min{suffix}": float(np.min(f["film_ratio"])),
                  f"max_interference_um{suffix}": float(np.max(f["interference"])) * 1e6,
+                 f"peak_film_pressure_MPa{suffix}": float(np.max(f["film_peak_pressure"])) / 1e6,
+                 f"max_bore_deflection_um{suffix}": float(np.max(f["bore_deflection"])) * 1e6,
                  f"asperity_load_share{suffix}": float(np.mean(f["asperity_share"]))}
     keys["lubricant"] = {"viscosity_Pa_s": film["viscosity"],
                          "roughness_um": film["roughness"] * 1e6, "bearing": film["bearing"]}

@@ -275,11 +275,11 @@ class FiniteBearingFilm(AbstractFilm):
         length: axial length L of the bearing [m] (> 0; any L / D)
         clearance: radial clearance c of the round bore [m] (> 0)
         max_eccentricity_ratio: eps_max in (0, 1), default 0.95; the film is
-            evaluated at the pin's eps up to eps_max and saturates beyond it
+            evaluated at the pin's eps up to eps_max - w and saturates towards eps_max
             and the grid must resolve the minimum film at eps_max
             (`check_resolution`)
-        saturation_width: width w of the saturation past eps_max (the film tends to
-            that at eps_max + w), in (0, eps_max), default 0.01
+        saturation_width: width w of the saturation below eps_max, in
+            (0, eps_max), default 0.01
         n_theta: grid nodes round the bushing (even, >= 16; default 96)
         n_z: grid nodes along the half length (>= 2; default 12)
         supply_groove: oil at ambient pressure along the maximum film (as in
@@ -347,6 +347,14 @@ class FiniteBearingFilm(AbstractFilm):
                                    self.n_theta, self.n_z, self.supply_groove)
         return k * f_n + 0.5 * jnp.pi * k * squeeze, k * f_t - 0.5 * jnp.pi * k * wedge
 
+    def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
+        """The film's largest pressure [Pa] with the centre at rest (e_dot = 0):
+        6 mu R^2 / c^2 times the grid's largest P, at the saturated eps."""
+        eps = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
+        p, _, _ = reynolds_pressure(eps, 0.0, eps * jnp.abs(omega), self.length / (2.0 * radius),
+                                    self.n_theta, self.n_z, self.supply_groove)
+        return 6.0 * self.viscosity * radius**2 / self.clearance**2 * jnp.max(p)
+
     def steady(self, radius) -> "SteadyFiniteFilm":
         """This film for a journal centre at rest in the bushing (e_dot = 0),
         tabulated in eps (`SteadyFiniteFilm`) for the journal radius ``radius``."""
@@ -402,6 +410,7 @@ class SteadyFiniteFilm(AbstractFilm):
     log_radial: Float[Array, " k"]  # log(-g_n) (g_n does not vanish at eps = 0: the
     # Reynolds condition's film reaches past the minimum film, phi(0) < 90 deg)
     log_tangential: Float[Array, " k"]  # log(g_t)
+    log_peak: Float[Array, " k"]  # log(max P) at B = 1
 
     def __init__(self, film: "FiniteBearingFilm", radius):
         super().__init__(film.viscosity, film.length, film.clearance,
@@ -412,10 +421,17 @@ class SteadyFiniteFilm(AbstractFilm):
         half = film.length / (2.0 * self.radius)
         # one solve after the other (lax.map): batched, the small dense
         # inverses of the elimination run ~10 x slower on a CPU
-        f_n, f_t = lax.map(lambda e: reynolds_forces(
-            e, 0.0, 1.0, half, film.n_theta, film.n_z, film.supply_groove), eps)
+        def solve(e):
+            p, op, _ = reynolds_pressure(e, 0.0, 1.0, half, film.n_theta, film.n_z,
+                                         film.supply_groove)
+            load = 2.0 * op.volume * p
+            return (-jnp.sum(load * jnp.cos(op.psi)[None, :]),
+                    -jnp.sum(load * jnp.sin(op.psi)[None, :]), jnp.max(p))
+
+        f_n, f_t, peak = lax.map(solve, eps)
         self.log_radial = jnp.log(-f_n)
         self.log_tangential = jnp.log(f_t)
+        self.log_peak = jnp.log(peak)
 
     def _interpolate(self, values, eps):
         """Catmull-Rom cubic through ``values`` at the uniform w nodes, at
@@ -431,6 +447,13 @@ class SteadyFiniteFilm(AbstractFilm):
         p0, p1, p2, p3 = p[i], p[i + 1], p[i + 2], p[i + 3]
         return 0.5 * (2 * p1 + (p2 - p0) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t**2
                       + (3 * p1 - p0 - 3 * p2 + p3) * t**3)
+
+    def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
+        """The film's largest pressure [Pa], from the table: 6 mu R^2 / c^2
+        eps |omega| max P(eps) (max P proportional to the wedge B)."""
+        eps = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
+        return (6.0 * self.viscosity * radius**2 / self.clearance**2 * eps * jnp.abs(omega)
+                * jnp.exp(self._interpolate(self.log_peak, eps)))
 
     def _film_factor(self, radius):
         """6 mu R^4 / c^2 [N s], as `FiniteBearingFilm`'s."""

@@ -116,7 +116,7 @@ overestimates that of longer ones: the finite bearing carries less than
 either), an incompressible isoviscous Newtonian film, laminar flow, rigid
 surfaces, an aligned journal and c << R.  Its forces grow like
 (1 - eps^2)^(-3/2) (squeeze) and (1 - eps^2)^(-1) (steady radial): the film is
-evaluated at the pin's eps up to eps_max and saturates beyond it with the
+evaluated at the pin's eps up to eps_max - w and saturates towards eps_max with the
 same centre velocity, as the short bearing's, and stops growing past eps_max.
 """
 
@@ -177,9 +177,9 @@ class LongBearingFilm(AbstractFilm):
         clearance: radial clearance c of the round bore [m] (> 0); the film
             uses it, not a worn `BushingProfile`
         max_eccentricity_ratio: eps_max in (0, 1), default 0.95; the film is
-            evaluated at the pin's eps up to eps_max and saturates beyond it
-        saturation_width: width w of the saturation past eps_max (the film tends to
-            that at eps_max + w), in (0, eps_max), default 0.01
+            evaluated at the pin's eps up to eps_max - w and saturates towards eps_max
+        saturation_width: width w of the saturation below eps_max, in
+            (0, eps_max), default 0.01
 
     Journal radius R: the pin radius of the `PinKinematics` (wedge speed
     U = omega R, film area 2 pi R L; the bore radius differs by c << R).
@@ -192,6 +192,16 @@ class LongBearingFilm(AbstractFilm):
     Hamrock, Schmid & Jacobson, Fundamentals of Fluid Film Lubrication
     (steady half-Sommerfeld load and attitude).
     """
+
+    def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
+        """The film's largest pressure [Pa] with the centre at rest: the maximum
+        over psi of 6 mu R^2 / c^2 (2 - eps cos psi) eps |omega| |sin psi| /
+        ((2 + eps^2) (1 - eps cos psi)^2) (module notes), 2048-point grid."""
+        eps = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
+        psi = jnp.linspace(0.0, jnp.pi, 2048)
+        d = 1.0 - eps * jnp.cos(psi)
+        shape = jnp.max((2.0 - eps * jnp.cos(psi)) * jnp.sin(psi) / d**2) / (2.0 + eps**2)
+        return 6.0 * self.viscosity * radius**2 / self.clearance**2 * eps * jnp.abs(omega) * shape
 
     def _film_factor(self, radius):
         """K_L = 6 mu R^3 L / c^2 [N s]: the pressure factor 6 mu R^2 / c^2 times

@@ -80,12 +80,12 @@ receives -T - e x F (the oil is in moment balance).
 overestimates the load of longer bearings), an incompressible isoviscous
 Newtonian film, laminar flow, rigid surfaces, an aligned journal and c << R.
 The forces grow like (1 - eps^2)^(-5/2): the film is evaluated at the pin's
-own eccentricity ratio up to eps_max and, beyond it, at
-eps_max + w (1 - exp(-(eps - eps_max) / w)) (w = ``saturation_width``, at
-most half the gap 1 - eps_max left), with the same centre velocity e_dot:
-exact wherever eps <= eps_max, C1 at eps_max, finite and differentiable for
-every offset; beyond eps_max the film force stops growing (it tends to the
-film at eps_max + w) and a contact law must carry the load (see
+own eccentricity ratio up to eps_max - w and, beyond, at
+eps_max - w + w (1 - exp(-(eps - eps_max + w) / w)) (w =
+``saturation_width``), with the same centre velocity e_dot: exact up to
+eps_max - w, C1, never at a larger eps than the pin's, finite and
+differentiable for every offset; the film force stops growing as eps_f
+tends to eps_max and a contact law must carry the rest (see
 docs/notes/lubricated-joint.md).
 """
 
@@ -114,9 +114,9 @@ from .profile import BushingProfile
 # where asperity contact (mixed lubrication) begins and the smooth-film model
 # stops being valid.
 MAX_ECCENTRICITY_RATIO = 0.95
-# Width of the saturation beyond eps_max: the film is exact up to eps_max and,
-# past it, evaluated at eps_max + w (1 - exp(-(eps - eps_max) / w)), which never
-# exceeds eps_max + w = 0.96 (w at most half of 1 - eps_max).
+# Width of the saturation below eps_max: the film is exact up to eps_max - w =
+# 0.94 and, past it, evaluated at 0.94 + w (1 - exp(-(eps - 0.94) / w)), below
+# the pin's eps and below eps_max.
 SATURATION_WIDTH = 0.01
 
 
@@ -266,14 +266,14 @@ class AbstractFilm(AbstractContactLaw):
 
     def _saturated(self, eps):
         """The eccentricity ratio the film is evaluated at: the pin's own eps up
-        to eps_max (to the last bit: no blend reaches below eps_max) and
-        eps_max + w (1 - exp(-(eps - eps_max) / w)) beyond it, C1 at eps_max,
-        below eps_max + w < 1 for every eps; w = min(``saturation_width``,
-        (1 - eps_max) / 2)."""
-        eps_max = self.max_eccentricity_ratio
-        width = jnp.minimum(self.saturation_width, 0.5 * (1.0 - eps_max))
-        over = jnp.maximum(eps - eps_max, 0.0)
-        return jnp.where(eps <= eps_max, eps, eps_max - width * jnp.expm1(-over / width))
+        to eps_max - w (to the last bit) and eps_max - w + w (1 - exp(-(eps -
+        eps_max + w) / w)) beyond, C1, never above the pin's eps (1 - exp(-x)
+        <= x: the film is never evaluated thicker-loaded than the pin's) and
+        tending to eps_max; w = ``saturation_width``."""
+        width = self.saturation_width
+        onset = self.max_eccentricity_ratio - width
+        over = jnp.maximum(eps - onset, 0.0)
+        return jnp.where(eps <= onset, eps, onset - width * jnp.expm1(-over / width))
 
     def _torque(self, eps_f, tangential, omega, radius):
         """Viscous moment on the pin [N m] from the film's tangential force
@@ -282,6 +282,11 @@ class AbstractFilm(AbstractContactLaw):
         couette = (2.0 * jnp.pi * self.viscosity * omega * radius**3 * self.length
                    / (self.clearance * jnp.sqrt(1.0 - eps_f**2)))
         return -couette - 0.5 * eps_f * self.clearance * tangential
+
+    @abc.abstractmethod
+    def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
+        """The film's largest pressure [Pa] with the journal centre at rest
+        (the soft-bore check: it deflects the bore by p / k_f)."""
 
     @abc.abstractmethod
     def _film_factor(self, radius):
@@ -364,9 +369,9 @@ class ShortBearingFilm(AbstractFilm):
         clearance: radial clearance c of the round bore [m] (> 0); the film
             uses it, not a worn `BushingProfile`
         max_eccentricity_ratio: eps_max in (0, 1), default 0.95; the film is
-            evaluated at the pin's eps up to eps_max and saturates beyond it
-        saturation_width: width w of the saturation past eps_max (the film tends to
-            that at eps_max + w), in (0, eps_max), default 0.01
+            evaluated at the pin's eps up to eps_max - w and saturates towards eps_max
+        saturation_width: width w of the saturation below eps_max, in
+            (0, eps_max), default 0.01
 
     Journal radius R: the pin radius of the `PinKinematics` (wedge speed
     U = omega R and film area 2 pi R L; the bore radius differs by c << R).
@@ -378,6 +383,17 @@ class ShortBearingFilm(AbstractFilm):
     squeeze); Hamrock, Schmid & Jacobson, Fundamentals of Fluid Film
     Lubrication (steady short-bearing load, attitude and friction).
     """
+
+    def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
+        """The film's largest pressure [Pa] with the centre at rest (e_dot = 0):
+        the maximum over psi of 3 mu L^2 / (4 c^2) eps |omega| |sin psi| /
+        (1 - eps cos psi)^3 (the module's pressure at z = 0), on a 2048-point
+        grid; at the saturated eps, like the force."""
+        eps = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
+        psi = jnp.linspace(0.0, jnp.pi, 2048)
+        shape = jnp.max(jnp.sin(psi) / (1.0 - eps * jnp.cos(psi)) ** 3)
+        return (3.0 * self.viscosity * self.length**2 / (4.0 * self.clearance**2)
+                * eps * jnp.abs(omega) * shape)
 
     def _film_factor(self, radius):
         """K = mu R L^3 / (2 c^2) [N s]: the pressure 3 mu / c^2 (L^2/4 - z^2) times

@@ -28,6 +28,7 @@ from ..contact.clearance_joint import ClearanceJoint
 from ..contact.mixed import MixedLubrication
 from ..errors import InputError
 from ..mechanism.constraints import Driver
+from ..mechanism.geometry import safe_norm
 from ..models import AbstractWearModel, QuasiStatic, WearEvolution
 from ..wear import worn_volume
 from ..wear.chunked import Checkpoints
@@ -244,9 +245,15 @@ def film_cycle(mfile: MechanismFile, y0, depths: dict, model: QuasiStatic | None
     mech, period = mfile.mechanism, drive_period(mfile)
     worn = tuple(jnp.asarray(depths[n], dtype=float) for n in names)
 
-    def parts(eq):
+    def parts(j, lo, eq):
+        # soft bore: the film's peak pressure deflects the bore by p / k_f
+        film = j.law.saturated_film()
+        eps = safe_norm(eq.offset) / film.clearance
+        peak = jax.vmap(lambda e, om: film.steady_peak_pressure(e, om, j.dry.pin_radius))(
+            eps, lo.omega)
         return {"min_film_thickness": eq.min_film_thickness, "film_ratio": eq.film_ratio,
-                "interference": eq.interference,
+                "interference": eq.interference, "film_peak_pressure": peak,
+                "bore_deflection": peak / j.law.asperity.stiffness,
                 "asperity_share": eq.asperity_share, "film_load": eq.film_load,
                 "asperity_load": eq.normal_load, "ok": eq.ok}
 
@@ -256,7 +263,7 @@ def film_cycle(mfile: MechanismFile, y0, depths: dict, model: QuasiStatic | None
         out = []
         for j, lo, h in zip(model.joints(mech, names), loads.joints, worn):
             unworn = j.equilibrium(jnp.zeros(j.n), lo)
-            out.append((parts(unworn), parts(j.equilibrium(h, lo, unworn.offset))))
+            out.append((parts(j, lo, unworn), parts(j, lo, j.equilibrium(h, lo, unworn.offset))))
         return out, loads.ok
 
     per_joint, ok = evaluate(y0, worn)

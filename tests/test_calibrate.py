@@ -254,7 +254,7 @@ def test_refit_recovers_strength_and_shape_from_noise_free_data(small_dataset):
 
 
 # --------------------------------------------------------------- the loop
-@pytest.mark.extended
+@pytest.mark.slow  # minutes: a whole calibration through the CLI (the long campaigns cover it)
 def test_calibrate_cli_identifies_guide_friction_on_a_small_campaign(small_dataset, tmp_path):
     out = tmp_path / "out"
     rc = main(["calibrate", str(small_dataset), "--out", str(out), "--n-theta", "60",

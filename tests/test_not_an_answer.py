@@ -142,7 +142,7 @@ def test_the_zero_load_life_has_nan_derivatives_in_a_batch_beside_loaded_ones():
     assert all(math.isnan(float(v)) for v in by_limit)
 
 
-@pytest.mark.extended
+@pytest.mark.slow  # a minute: two evolutions compiled (the batch life test covers CI)
 def test_the_zero_load_evolution_has_no_final_profile_and_nan_derivatives():
     """The evolution of an unloaded joint (status 2) has a NaN final
     profile, NaN derivatives forward and reverse; a loaded one beside it in

@@ -323,7 +323,7 @@ def test_the_steady_table_is_the_solve_with_the_centre_at_rest(steady_pair):
                 float(jnp.linalg.norm(solved)), 1e-3 * floor), (eps, omega)
 
 
-@pytest.mark.extended  # ~60-90 s on 2 cores: one table and its Newton solves
+@pytest.mark.slow  # ~60-90 s on 2 cores: one table and its Newton solves (--long)
 def test_the_quasi_static_joint_balances_the_load_on_the_finite_film():
     """A film-borne pin (roughness 1 nm: no asperity contact) of a
     `LubricatedQuasiStaticJoint` on the finite film: at its equilibrium the

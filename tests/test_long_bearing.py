@@ -302,37 +302,6 @@ def test_long_bearing_carries_less_than_the_short_one_when_long_and_more_when_sh
         assert (long_load > short_load) == long_is_larger, (l_over_d, long_load, short_load)
 
 
-def test_saturates_beyond_the_maximum_eccentricity_ratio():
-    """Up to eps_max - w the film is the pin's own (the same as a film with a
-    larger eps_max, to the last bit); past it the film is evaluated at
-    eps_max - w + w (1 - exp(-(eps - eps_max + w) / w)): below the pin's eps,
-    C1, and never past the film at eps_max."""
-    law = LongBearingFilm(MU, L, C, max_eccentricity_ratio=0.95)
-    free = LongBearingFilm(MU, L, C, max_eccentricity_ratio=0.99)
-    rate, omega = (1e-3, 2e-3), 50.0
-    for eps in (0.5, 0.9, 0.94):
-        kin = _kin(_polar(eps, 0.2), rate, omega)
-        np.testing.assert_array_equal(np.asarray(law.film(kin).force),
-                                      np.asarray(free.film(kin).force))
-    cap = free.film(_kin(_polar(0.95, 0.2), omega=omega))
-    beyond = law.film(_kin(_polar(1.3, 0.2), rate, omega))
-    assert np.all(np.isfinite(np.asarray(beyond.force)))
-    assert float(beyond.min_film_thickness) == pytest.approx(-0.3 * C, rel=1e-9)
-    loads = [float(jnp.linalg.norm(law.film(_kin(_polar(eps, 0.2), omega=omega)).force))
-             for eps in (0.9, 0.93, 0.945, 0.95, 1.0, 1.5)]
-    assert loads == sorted(loads) and loads[-1] <= float(jnp.linalg.norm(cap.force)) * (1 + 1e-12)
-    assert loads[-1] == pytest.approx(float(jnp.linalg.norm(cap.force)), rel=1e-6)
-    for eps in (0.945, 0.95, 0.97):  # never a heavier film than the pin's own
-        own = float(jnp.linalg.norm(free.film(_kin(_polar(eps, 0.2), omega=omega)).force))
-        assert float(jnp.linalg.norm(law.film(_kin(_polar(eps, 0.2), omega=omega)).force)) < own
-    # C1 at the onset eps_max - w: the slope of the load just below and above agree
-    h = 1e-7
-    slope = [(float(jnp.linalg.norm(law.film(_kin(_polar(e + h, 0.2), omega=omega)).force))
-              - float(jnp.linalg.norm(law.film(_kin(_polar(e - h, 0.2), omega=omega)).force)))
-             / (2 * h) for e in (0.94 - 2e-6, 0.94 + 2e-6)]
-    assert slope[1] == pytest.approx(slope[0], rel=1e-3)
-
-
 def test_film_reads_clearance_and_eps_max_from_its_leaves():
     """A mixed-lubrication law swaps the clearance and eps_max leaves with
     eqx.tree_at: the film must follow them (no cached constants)."""

@@ -10,6 +10,7 @@ import pytest
 from scipy.optimize import brentq
 
 from diffwear.contact import PinKinematics, ShortBearingFilm
+from diffwear.contact.long_bearing import LongBearingFilm
 
 # A connecting-rod-like pin: R = 10 mm, L = 8 mm (L/D = 0.4, short bearing),
 # c = 50 um, an SAE 30 oil near 60 C (mu ~ 0.04 Pa s).
@@ -287,13 +288,16 @@ def test_reversing_the_spin_reverses_the_tangential_force_and_the_torque():
     assert float(back.torque) == pytest.approx(-float(fwd.torque), rel=1e-12)
 
 
-def test_saturates_beyond_the_maximum_eccentricity_ratio():
+# the saturation is the films' shared one (`AbstractFilm`): each film at a
+# length in its own range (the long film at L/D = 4)
+@pytest.mark.parametrize("film, length", [(ShortBearingFilm, L), (LongBearingFilm, 0.080)])
+def test_saturates_beyond_the_maximum_eccentricity_ratio(film, length):
     """Up to eps_max - w the film is the pin's own (the same as a film with a
     larger eps_max, to the last bit); past it the film is evaluated at
     eps_max - w + w (1 - exp(-(eps - eps_max + w) / w)): below the pin's eps,
     C1, and never past the film at eps_max."""
-    law = ShortBearingFilm(MU, L, C, max_eccentricity_ratio=0.95)
-    free = ShortBearingFilm(MU, L, C, max_eccentricity_ratio=0.99)
+    law = film(MU, length, C, max_eccentricity_ratio=0.95)
+    free = film(MU, length, C, max_eccentricity_ratio=0.99)
     rate, omega = (1e-3, 2e-3), 50.0
     for eps in (0.5, 0.9, 0.94):
         kin = _kin(_polar(eps, 0.2), rate, omega)

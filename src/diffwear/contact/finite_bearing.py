@@ -420,7 +420,7 @@ class SteadyFiniteFilm(AbstractFilm):
         eps = -jnp.expm1(-(w**2))
         half = film.length / (2.0 * self.radius)
         # one solve after the other (lax.map): batched, the small dense
-        # inverses of the elimination run ~10 x slower on a CPU
+        # inverses of the elimination are slower on a CPU (docs/notes/cpu-kernels.md)
         def solve(e):
             p, op, _ = reynolds_pressure(e, 0.0, 1.0, half, film.n_theta, film.n_z,
                                          film.supply_groove)

@@ -336,10 +336,10 @@ class Fitter:
     one forward-mode pass giving r and J together (`jax.jvp` over a batch of
     tangents), compiled once for the base fit and every refit: which effects
     (and which discrepancy variable) a fit frees is data (the tangents), not
-    structure.  Unknowns z are in units of each
-    parameter's stated spread (tau), of an effect's scale, of a shape's prior
-    spread and of a discrepancy coefficient's prior spread, so the step
-    tolerance ``xtol`` reads "1 % of a spread".
+    structure.  Unknowns z are in units of each parameter's stated spread
+    (tau), of an effect's scale, of a shape's prior spread and of a
+    discrepancy coefficient's prior spread, so the step tolerance ``xtol``
+    reads "1 % of a spread".
     """
 
     def __init__(self, problem: Problem, *, xtol=1e-2, ftol=1e-4, max_steps=30):

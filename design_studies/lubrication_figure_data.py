@@ -35,12 +35,15 @@ Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
 
     PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py
     PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py --only life rig
+    PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py \
+        --only validity raimondi-boyd
 
 Run time on the 2-core CPU, compiles included (measured part by part):
 steady films 5 s, Sommerfeld 7 s, life against viscosity 2.5-5 min (14
 lives and 4 tangents; the longer with other jobs on the cores),
-slider-crank 1 min, the rig run 72 s, the validity map VALIDITY_MIN,
-Raimondi & Boyd RB_MIN; all ~ALL_MIN.
+slider-crank 1 min, the rig run 72 s; all ~6 min.  The finite film's parts,
+measured with the cores shared with other jobs: the validity map 17 min (240
+Reynolds solves, the larger L/D the slower), Raimondi & Boyd 72 s.
 """
 
 from __future__ import annotations

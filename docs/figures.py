@@ -759,8 +759,7 @@ def lubrication_validity_map(path: Path) -> None:
     analytic criterion of `film_law_for`; the lubricated rig's and four-bar's
     joints."""
     plt = _pyplot()
-    from matplotlib.colors import ListedColormap
-    from matplotlib.patches import Patch
+    from matplotlib.patches import PathPatch
 
     from diffwear.contact.finite_bearing import SHORT_BEARING_LIMIT
 
@@ -772,20 +771,26 @@ def lubrication_validity_map(path: Path) -> None:
     ld_g, eps_g = np.meshgrid(lds, epss)
     short, long = _short_over_finite_units(ld_g, eps_g)
     short_err, long_err = np.abs(short / grid - 1.0), np.abs(long / grid - 1.0)
-    region = np.where(short_err <= MAP_TOLERANCE, 0, np.where(long_err <= MAP_TOLERANCE, 1, 2))
-    colors = ["#9ecae1", "#fdd0a2", "#e5e5e5"]
-    fig, ax = plt.subplots(figsize=(8.2, 5.0))
-    # cell edges halfway between the solved nodes (geometric in L/D)
-    ld_edges = np.concatenate([[lds[0] ** 1.5 / lds[1] ** 0.5], np.sqrt(lds[1:] * lds[:-1]),
-                               [lds[-1] ** 1.5 / lds[-2] ** 0.5]])
-    eps_edges = np.concatenate([[0.0], 0.5 * (epss[1:] + epss[:-1]), [1.0]])
-    ax.pcolormesh(ld_edges, eps_edges, region, cmap=ListedColormap(colors), vmin=-0.5,
-                  vmax=2.5, shading="flat")
-    for err, color, name in ((short_err, "tab:blue", "short"), (long_err, "tab:orange", "long")):
-        ax.contour(ld_g, eps_g, err, levels=[MAP_LOOSE], colors=color, linestyles=":",
-                   linewidths=1.2)
-        ax.plot([], [], color=color, ls=":", lw=1.2,
-                label=f"{name} film's load 10 % off the finite film's")
+    fig, ax = plt.subplots(figsize=(8.0, 6.4))
+    # underneath: where neither closed form is within 5 %
+    ax.axhspan(0.0, 1.0, color="#e5e5e5", zorder=0, label="only the finite film within 5 %")
+    # each region and line traced by matplotlib's contouring, then drawn as a
+    # labelled patch and lines (contour sets have no legend entry of their own)
+    for err, color, fill, name in ((short_err, "tab:blue", "#9ecae1", "short"),
+                                   (long_err, "tab:orange", "#fdd0a2", "long")):
+        area = ax.contourf(ld_g, eps_g, err, levels=[0.0, MAP_TOLERANCE])
+        for k, outline in enumerate(area.get_paths()):
+            if len(outline.vertices):
+                ax.add_patch(PathPatch(
+                    outline, facecolor=fill, lw=0, zorder=1,
+                    label=f"{name} film within 5 % of the finite film" if k == 0 else None))
+        area.remove()
+        edge = ax.contour(ld_g, eps_g, err, levels=[MAP_LOOSE])
+        for k, segment in enumerate(piece for outline in edge.get_paths()
+                                    for piece in outline.to_polygons(closed_only=False)):
+            ax.plot(segment[:, 0], segment[:, 1], color=color, ls=":", lw=1.3, zorder=2,
+                    label=f"{name} film 10 % off the finite film" if k == 0 else None)
+        edge.remove()
     eps_line = np.linspace(0.0, 1.0, 200)
     ax.plot(np.sqrt(SHORT_BEARING_LIMIT * (1.0 - eps_line)), eps_line, color="k", lw=1.6,
             label=f"criterion (L/D)² = {SHORT_BEARING_LIMIT:g} (1 − ε): short film left of it")
@@ -804,17 +809,13 @@ def lubrication_validity_map(path: Path) -> None:
               f"{FOUR_BAR_JOINT['eps'][0]:g}–{FOUR_BAR_JOINT['eps'][1]:g} (estimated)")]
     for ld, (lo, hi), marker, color, label in marks:
         ax.plot([ld, ld], [lo, hi], color=color, lw=3.0, marker=marker, ms=6, label=label)
-    handles, labels = ax.get_legend_handles_labels()
-    areas = [Patch(color=colors[0], label="short film within 5 % of the finite film"),
-             Patch(color=colors[1], label="long film within 5 % of the finite film"),
-             Patch(color=colors[2], label="only the finite film within 5 %")]
-    ax.legend(areas + handles, [a.get_label() for a in areas] + labels, fontsize=7,
-              loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
-    ax.set(xscale="log", xlim=(ld_edges[0], ld_edges[-1]), ylim=(0.0, 1.0),
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.11), ncol=2)
+    # from the smallest eps solved (at eps = 0 the steady load vanishes)
+    ax.set(xscale="log", xlim=(lds[0], lds[-1]), ylim=(epss[0], 1.0),
            xlabel="length-to-diameter ratio L/D [-]", ylabel="eccentricity ratio ε [-]",
-           title="Steady film load: where the short and long films agree with the "
-                 "finite (Reynolds) film")
-    ax.title.set_fontsize(9)
+           title="Where the short and long films carry the finite (Reynolds) film's "
+                 "steady load")
+    ax.title.set_fontsize(10)
     ax.grid(alpha=0.3, which="both")
     fig.tight_layout()
     fig.savefig(path, dpi=DPI)

@@ -373,7 +373,11 @@ def _lubrication_section(joints: dict) -> Section:
         "where the film is thinnest.  interference: how far the pin presses the asperities "
         "past the mean surfaces where no gap is left (h min is then 0).  These numbers are "
         "the pin's quasi-static equilibrium of film and asperities under the cycle's loads (the "
-        "quasi-static wear model's; the dynamic model does not take a lubricated joint).",
+        "quasi-static wear model's), whichever wear model ran.  The dynamic wear model "
+        "integrates the film and the asperities in time instead (on Rodas4, at a tolerance "
+        "scaled by the roughness); the squeeze of the film as the pin moves, which the "
+        "equilibrium leaves out, carries part of the load there, so it wears less than the "
+        "quasi-static model where the film carries much of it.",
         Table(("joint", "viscosity [Pa s]", "roughness [um]", "h min [um]", "lambda min",
                "interference [um]", "asperity share", "meaning (smallest lambda)", "file"), rows)])
 

@@ -26,7 +26,7 @@ from diffwear.mechanism_file import initial_state, integrate_timed, motion_integ
 from diffwear.models import QuasiStatic
 from diffwear.wear.cycle import FILM_TOLERANCE_FRACTION, lubricated_cycle, wear_cycle
 
-OIL = ('lubricant = { grade = "ISO VG 68", temperature = "40 degC", roughness = "0.65 um", '
+OIL = ('lubricant = { grade = "ISO VG 10", temperature = "60 degC", roughness = "0.65 um", '
        'bearing = "short" }')
 WEAR_LINE = 'wear = { coefficient = "5.05e-4 mm^3/(N m)" }\n'
 

@@ -150,10 +150,13 @@ def test_a_lubricated_file_out_of_steps_says_what_helps(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_a_lubricated_copy_of_a_dry_file_wears_on_both_models(tmp_path):
-    """four_bar_wear.toml with an oil added to its worn joint, nothing else
-    edited, runs ``--cycles`` on the quasi-static and on the dynamic model:
-    both in the asperities only, the dynamic one a little less (the squeeze),
-    each well below the dry joint's 1,000 cycles."""
+    """four_bar_wear.toml with an oil added to its worn joint (ISO VG 10 at
+    60 degC, 4.7 mPa s), nothing else edited, runs ``--cycles`` on the
+    quasi-static and on the dynamic model, both on Rodas4's motion.  Both
+    wear, the dynamic model far less: the film's squeeze and the pin's orbit,
+    which the quasi-static equilibrium leaves out, carry most of what the
+    asperities carry there (measured: 1.0e-4 against 2.2e-3 mm^3 in 1,000
+    cycles; docs/notes/lubricated-motion.md)."""
     text = (SHIPPED_MECHANISMS / "four_bar_wear.toml").read_text()
     assert text.count(WEAR_LINE) == 1
     path = tmp_path / "oiled.toml"
@@ -169,5 +172,4 @@ def test_a_lubricated_copy_of_a_dry_file_wears_on_both_models(tmp_path):
         joints[model] = summary["joints"]["coupler_rocker"]
         assert joints[model]["model"] == model and joints[model]["status"] == 0
     qs, dyn = joints["quasi-static"]["wear_volume_mm3"], joints["dynamic"]["wear_volume_mm3"]
-    assert 0.0 < dyn <= qs
-    assert dyn == pytest.approx(qs, rel=0.5)
+    assert 0.0 < dyn < qs

@@ -75,7 +75,7 @@ def motion_integrator(mech: Mechanism) -> str:
 
     An oil film's squeeze term damps the pin's motion in the clearance with a
     time constant (pin mass / film damping) of ~0.1 us, so an explicit
-    integrator is held at steps of that size (~1e6 per simulated second); the
+    integrator is held at steps of that size (1e5-1e6 per simulated second); the
     L-stable, linearly implicit Rodas4 is not, and takes its steps for
     accuracy (docs/notes/lubricated-motion.md has the measurements).  The dry
     mechanisms keep Tsit5, faster on their contacts at the files' tolerance.

@@ -173,3 +173,26 @@ def test_a_lubricated_copy_of_a_dry_file_wears_on_both_models(tmp_path):
         assert joints[model]["model"] == model and joints[model]["status"] == 0
     qs, dyn = joints["quasi-static"]["wear_volume_mm3"], joints["dynamic"]["wear_volume_mm3"]
     assert 0.0 < dyn < qs
+
+
+def test_the_shipped_lubricated_four_bar_is_the_four_bar_with_its_oil():
+    """four_bar_lubricated.toml is four_bar_wear.toml, leaf by leaf, but for
+    its joint's oil: ISO VG 10 at 60 degC (ASTM D341 through the grade's 10
+    and 2.5 mm^2/s at 40 and 100 degC: 5.618 mm^2/s, times 870 (1 - 6.5e-4 x
+    45) kg/m^3), sigma 0.65 um, the short film over the bushing's depth."""
+    oiled, dry = load("four_bar_lubricated"), load("four_bar_wear")
+    law = oiled.mechanism.element("coupler_rocker").law
+    dry_law = dry.mechanism.element("coupler_rocker").law
+    assert isinstance(law, MixedLubrication) and isinstance(law.film, ShortBearingFilm)
+    assert float(law.film.viscosity) == pytest.approx(5.6177e-6 * 844.5525, rel=1e-4)
+    assert float(law.roughness) == 0.65e-6
+    assert float(law.film.length) == float(dry_law.depth) == 0.01
+    assert float(law.film.clearance) == pytest.approx(50e-6, rel=1e-9)
+    for a, b in zip(jax.tree.leaves(law.asperity), jax.tree.leaves(dry_law), strict=True):
+        np.testing.assert_array_equal(a, b)
+    same = eqx.tree_at(lambda m: m.element("coupler_rocker").law, oiled.mechanism, dry_law)
+    for a, b in zip(jax.tree.leaves(same), jax.tree.leaves(dry.mechanism), strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert oiled.simulation == dry.simulation
+    assert motion_integrator(oiled.mechanism) == "Rodas4"
+    assert motion_integrator(dry.mechanism) == "Tsit5"

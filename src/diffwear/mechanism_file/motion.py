@@ -142,7 +142,8 @@ def _advice(mfile: MechanismFile, traj: Trajectory, t0: float) -> str | None:
     """What to change in the file when its motion ran out of steps (None:
     the generic advice of any other failure).  The budget at the pace so far;
     on Rodas4 (a lubricated joint) a looser tolerance also takes fewer steps,
-    on Tsit5 it does not (its steps are held by the contact's stiffness)."""
+    on Tsit5 hardly where a contact's stiffness holds its steps
+    (docs/notes/rosenbrock-rig-cycle.md)."""
     if not traj.out_of_steps:
         return None
     sim = mfile.simulation
@@ -156,7 +157,8 @@ def _advice(mfile: MechanismFile, traj: Trajectory, t0: float) -> str | None:
                 "on Rodas4, whose steps are set by the tolerance (1e-6 takes about a quarter "
                 "of the steps of 1e-8), or shorten [simulation] duration.")
     return (f"The step budget ran out: {budget}, or shorten [simulation] duration (a looser "
-            "tolerance does not help: Tsit5's steps are held by the contact's stiffness).")
+            "tolerance helps little where a clearance joint's contact stiffness holds "
+            "Tsit5's steps).")
 
 
 class Results(NamedTuple):

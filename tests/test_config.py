@@ -399,12 +399,13 @@ def test_shipped_mechanisms_load_by_name_and_a_path_wins_over_a_name(tmp_path, m
     from diffwear.config.loader import resolve, shipped_mechanisms
 
     assert set(shipped_mechanisms()) == {"ideal_slider_crank", "clearance_slider_crank", "rig",
-                                         "rig_lubricated", "four_bar_wear"}
+                                         "rig_lubricated", "four_bar_wear",
+                                         "four_bar_lubricated"}
     assert load("rig").file == str(SHIPPED_MECHANISMS / "rig.toml")
     monkeypatch.chdir(tmp_path)
     (tmp_path / "rig").write_text("not a mechanism")
     assert resolve("rig") == Path("rig")
     with pytest.raises(InputError, match="or a shipped mechanism: clearance_slider_crank, "
-                                         "four_bar_wear, ideal_slider_crank, rig, "
-                                         "rig_lubricated"):
+                                         "four_bar_lubricated, four_bar_wear, "
+                                         "ideal_slider_crank, rig, rig_lubricated"):
         load("rigg")

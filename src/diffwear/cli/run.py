@@ -41,6 +41,7 @@ from ..mechanism_file import (
     contact_warnings,
     initial_state,
     integrate_timed,
+    motion_integrator,
     postprocess,
     settled_part,
     size,
@@ -154,6 +155,7 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
         "start_up_transient": {
             "settled": transient.settled, "length_s": transient.time_s,
             **({"why_not_settled": transient.why} if not transient.settled else {})},
+        "integrator": motion_integrator(mech),
         "integrator_steps": steps,
         "simulate_time_s": simulate_time,
         "wall_time_s": wall,
@@ -251,16 +253,21 @@ def _report(mfile: MechanismFile, s: dict, figures: list[str]) -> Report:
         f"{len(mech.constraints)} joints ({', '.join(c.name for c in mech.constraints) or '-'}), "
         f"{len(mech.forces)} force elements ({', '.join(f.name for f in mech.forces) or '-'}); "
         f"{mech.n_coords} coordinates, {mech.n_constraints} constraint rows.",
-        f"Simulated 0 .. {sim.duration:g} s ({sim.n_save} saved states) with Tsit5, PID step "
+        f"Simulated 0 .. {sim.duration:g} s ({sim.n_save} saved states) with "
+        f"{s['integrator']}, PID step "
         f"control (rtol {sim.rtol:g}, atol {sim.atol:g}), Baumgarte alpha = "
-        f"{sim.baumgarte_alpha:g} 1/s, beta = {sim.baumgarte_beta:g} 1/s.",
+        f"{sim.baumgarte_alpha:g} 1/s, beta = {sim.baumgarte_beta:g} 1/s."
+        + (" Rodas4 (linearly implicit, L-stable) because of the lubricated joint: its oil "
+           "film's squeeze damping would hold an explicit integrator at sub-microsecond "
+           "steps; each saved state is the end of a step." if s["integrator"] == "Rodas4"
+           else ""),
         Table(("quantity", "value", "meaning"), [
             ("max constraint violation",
              f"{s['max_constraint_violation']:.3e} (m; rad for angle rows)",
              "largest residual of the joint equations over the whole run: how far the "
              "integrated bodies drift from where the joints hold them"),
             ("integrator steps", s["integrator_steps"],
-             "accepted steps of the Tsit5 integrator over the run"),
+             f"steps of the {s['integrator']} integrator over the run"),
             ("start-up transient",
              f"{t['length_s']:.4g} s" if t["settled"] else "did not settle",
              "time the reported forces take to settle onto the forced motion (below)"),
@@ -366,7 +373,11 @@ def _lubrication_section(joints: dict) -> Section:
         "where the film is thinnest.  interference: how far the pin presses the asperities "
         "past the mean surfaces where no gap is left (h min is then 0).  These numbers are "
         "the pin's quasi-static equilibrium of film and asperities under the cycle's loads (the "
-        "quasi-static wear model's; the dynamic model does not take a lubricated joint).",
+        "quasi-static wear model's), whichever wear model ran.  The dynamic wear model "
+        "integrates the film and the asperities in time instead (on Rodas4, at a tolerance "
+        "scaled by the roughness); the squeeze of the film as the pin moves, which the "
+        "equilibrium leaves out, carries part of the load there, so it wears less than the "
+        "quasi-static model where the film carries much of it.",
         Table(("joint", "viscosity [Pa s]", "roughness [um]", "h min [um]", "lambda min",
                "interference [um]", "asperity share", "meaning (smallest lambda)", "file"), rows)])
 

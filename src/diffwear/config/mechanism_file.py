@@ -29,7 +29,9 @@ DEFAULT_N_SAVE = 401  # saved points (output resolution only, not accuracy)
 
 class Simulation(eqx.Module):
     """``[simulation]``: integrate from t = 0 to ``duration`` [s], saving
-    ``n_save`` equally spaced states; Tsit5 with a PID controller."""
+    ``n_save`` equally spaced states; Tsit5 with a PID controller, Rodas4 for
+    a mechanism with a lubricated joint
+    (`diffwear.mechanism_file.motion_integrator`)."""
 
     duration: float = eqx.field(static=True)
     n_save: int = eqx.field(static=True, default=DEFAULT_N_SAVE)

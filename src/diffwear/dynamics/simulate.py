@@ -59,13 +59,20 @@ class Trajectory(eqx.Module):
         return eqx.tree_at(lambda t: (t.ts, t.ys), self,
                            (jnp.asarray(ts[:n]), jnp.asarray(ys[:n])))
 
-    def raise_if_failed(self, what: str = "simulation", mech: Mechanism | None = None
-                        ) -> "Trajectory":
+    @property
+    def out_of_steps(self) -> bool:
+        """Whether the integration stopped at its step budget (``max_steps``)."""
+        return bool(self.result == diffrax.RESULTS.max_steps_reached)
+
+    def raise_if_failed(self, what: str = "simulation", mech: Mechanism | None = None,
+                        advice: str | None = None) -> "Trajectory":
         """Raise `SolverError` if the integrator failed or produced non-finite values.
 
         Call outside ``jit``.  With ``mech``, the message also describes each
         force element that can diagnose itself (e.g. a clearance joint's
-        penetration) at the state where the integration ended.  Returns ``self``.
+        penetration) at the state where the integration ended.  ``advice``:
+        the message's closing sentence (what to change), in place of the
+        generic one.  Returns ``self``.
         """
         ts, ys = np.asarray(self.ts), np.asarray(self.ys)
         finite_rows = np.all(np.isfinite(ys), axis=-1)
@@ -96,9 +103,11 @@ class Trajectory(eqx.Module):
             notes = [f.diagnose(frames, aux[mech.aux_slice(f.name)])
                      for f in mech.forces if hasattr(f, "diagnose")]
             details = "".join(f" {n}." for n in notes)
+        if advice is None:
+            advice = ("Raise max_steps." if self.out_of_steps else
+                      "Tighten the tolerances, raise max_steps, or check the contact stiffness.")
         raise SolverError(
-            f"{what}: {reason} After {int(self.num_steps)} steps; {where}.{details} "
-            "Tighten the tolerances, raise max_steps, or check the contact stiffness."
+            f"{what}: {reason} After {int(self.num_steps)} steps; {where}.{details} {advice}"
         )
 
 

@@ -17,6 +17,8 @@ from .motion import (
     initial_state,
     integrate,
     integrate_timed,
+    lubricated,
+    motion_integrator,
     postprocess,
     start_up_transient,
 )
@@ -27,4 +29,5 @@ from .wear import evolve_file
 __all__ = ["Results", "Settling", "Timed", "check_motion", "check_size", "check_step_budget",
            "contact_warnings", "evolve_file",
            "first_driver", "force_signals", "initial_state", "integrate", "integrate_timed",
-           "postprocess", "settled_part", "start_up_transient", "wear"]
+           "lubricated", "motion_integrator", "postprocess", "settled_part",
+           "start_up_transient", "wear"]

@@ -15,6 +15,7 @@ import functools
 import time
 from typing import Any, NamedTuple, cast
 
+import diffrax
 import equinox as eqx
 import jax
 import numpy as np
@@ -23,6 +24,7 @@ from ..config import MechanismFile
 from ..config.mechanism_file import Simulation
 from ..contact import MixedLubrication, centred_state, contact_history
 from ..dynamics import (
+    Rodas4,
     along_trajectory,
     check_assembly,
     consistent_state,
@@ -62,10 +64,37 @@ def initial_state(mfile: MechanismFile):
     return centred_state(mech, y0, mfile.mechanism)
 
 
+def lubricated(mech: Mechanism) -> bool:
+    """Whether ``mech`` has a lubricated clearance joint (`MixedLubrication`)."""
+    return any(isinstance(getattr(f, "law", None), MixedLubrication) for f in mech.forces)
+
+
+def motion_integrator(mech: Mechanism) -> str:
+    """The integrator of a file's motion: ``"Rodas4"`` for a mechanism with a
+    lubricated joint, else ``"Tsit5"``.
+
+    An oil film's squeeze term damps the pin's motion in the clearance with a
+    time constant (pin mass / film damping) of ~0.1 us, so an explicit
+    integrator is held at steps of that size (1e5-1e6 per simulated second); the
+    L-stable, linearly implicit Rodas4 is not, and takes its steps for
+    accuracy (docs/notes/lubricated-motion.md has the measurements).  The dry
+    mechanisms keep Tsit5, faster on their contacts at the files' tolerance.
+    """
+    return "Rodas4" if lubricated(mech) else "Tsit5"
+
+
 @eqx.filter_jit
 def _integrate(mech: Mechanism, y0, sim: Simulation, t0) -> Trajectory:
-    return simulate(mech, y0, t0 + sim.duration, t0=t0, ts=t0 + sim.ts(),
-                    baumgarte=sim.baumgarte(), stepsize_controller=sim.controller(),
+    ts = t0 + sim.ts()
+    if motion_integrator(mech) == "Tsit5":
+        return simulate(mech, y0, t0 + sim.duration, t0=t0, ts=ts,
+                        baumgarte=sim.baumgarte(), stepsize_controller=sim.controller(),
+                        max_steps=sim.max_steps)
+    # every saved state the end of a step: Rodas4's cubic interpolant between
+    # steps would blur the film's fast squeeze transients in the saved forces
+    controller = diffrax.ClipStepSizeController(sim.controller(), step_ts=ts)
+    return simulate(mech, y0, t0 + sim.duration, t0=t0, ts=ts, solver=Rodas4(),
+                    baumgarte=sim.baumgarte(), stepsize_controller=controller,
                     max_steps=sim.max_steps)
 
 
@@ -99,13 +128,37 @@ def integrate_timed(mfile: MechanismFile, y0, t0: float = 0.0, *,
     traj = jax.block_until_ready(compiled(*args))
     done = time.perf_counter()
     try:
-        return Timed(traj.raise_if_failed(mfile.file, mfile.mechanism), compiled_at - start,
-                     done - compiled_at)
+        return Timed(traj.raise_if_failed(mfile.file, mfile.mechanism,
+                                          advice=_advice(mfile, traj, float(t0))),
+                     compiled_at - start, done - compiled_at)
     except SolverError as err:
         reached = traj.reached()
         if not partial or reached.ts.shape[0] < 2:
             raise
         return Timed(reached, compiled_at - start, done - compiled_at, failure=str(err))
+
+
+def _advice(mfile: MechanismFile, traj: Trajectory, t0: float) -> str | None:
+    """What to change in the file when its motion ran out of steps (None:
+    the generic advice of any other failure).  The budget at the pace so far;
+    on Rodas4 (a lubricated joint) a looser tolerance also takes fewer steps,
+    on Tsit5 hardly where a contact's stiffness holds its steps
+    (docs/notes/rosenbrock-rig-cycle.md)."""
+    if not traj.out_of_steps:
+        return None
+    sim = mfile.simulation
+    reached = float(traj.t_final) - t0
+    budget = (f"raise [simulation] max_steps (now {sim.max_steps:,}) to about "
+              f"{1.2 * sim.max_steps * sim.duration / reached:,.0f}, the pace so far over the "
+              f"{sim.duration:g} s" if reached > 0 else "raise [simulation] max_steps")
+    if motion_integrator(mfile.mechanism) == "Rodas4":
+        return (f"The step budget ran out: {budget}, or loosen [simulation] rtol and atol "
+                f"(now {sim.rtol:g}, {sim.atol:g}): the lubricated joint's motion is integrated "
+                "on Rodas4, whose steps are set by the tolerance (1e-6 takes about a quarter "
+                "of the steps of 1e-8), or shorten [simulation] duration.")
+    return (f"The step budget ran out: {budget}, or shorten [simulation] duration (a looser "
+            "tolerance helps little where a clearance joint's contact stiffness holds "
+            "Tsit5's steps).")
 
 
 class Results(NamedTuple):
@@ -260,4 +313,5 @@ def check_motion(mfile: MechanismFile, y0) -> None:
 
 __all__ = ["Results", "Timed", "check_motion", "check_step_budget", "contact_warnings",
            "first_driver", "force_signals", "initial_state", "integrate",
-           "integrate_timed", "postprocess", "start_up_transient"]
+           "integrate_timed", "lubricated", "motion_integrator", "postprocess",
+           "start_up_transient"]

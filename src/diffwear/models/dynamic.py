@@ -16,7 +16,7 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from .._checks import check_int_option
-from ..contact import MixedLubrication, contact_history
+from ..contact import contact_history
 from ..errors import InputError
 from ..wear.chunked import Checkpoints, RunTimes, run_evolution
 from ..wear.cycle import integrator_name, wear_cycle
@@ -118,19 +118,10 @@ class Dynamic(AbstractWearModel):
         return as_evolution(res), times
 
     def check_joints(self, mech, joints, what: str = "mechanism") -> None:
-        """One wearing joint, not lubricated: the dynamic cycles of a wear
-        evolution run at the wear routes' tolerance (1e-4 on Rodas4, 1e-6 on
-        Tsit5, on the whole state in SI units), coarser than an oil film of a
-        micrometre, whose forces then ring (the film needs ~1e-8 m:
-        tests/test_lubricated_joint.py runs it there, at ~10,000 steps a rig
-        cycle)."""
-        (joint,) = self._one(joints, what)
-        if isinstance(mech.element(joint).law, MixedLubrication):
-            raise InputError(f"clearance joint {joint!r} is lubricated: the dynamic wear model "
-                             "integrates its wear cycles at a tolerance coarser than its oil "
-                             "film (micrometres), where the film's forces are not resolved; "
-                             "allowed: --model quasi-static (the pin at the equilibrium of "
-                             "film and asperities)")
+        """One wearing joint.  A lubricated one is taken: its cycles run on
+        Rodas4 at a tolerance scaled by its film's roughness, and its wear is
+        the asperities' (`diffwear.wear.cycle.lubricated_cycle`)."""
+        self._one(joints, what)
 
     def describe(self, cycles) -> dict:
         solver = self.solver(cycles)

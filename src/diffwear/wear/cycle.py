@@ -10,16 +10,21 @@ forces afterwards): thesis Eq. 4-18 with A = 1, h += k p ds summed over steps.
 
 from __future__ import annotations
 
+from typing import Any
+
 import diffrax
 import equinox as eqx
 import jax.numpy as jnp
+from jax import lax
 from jaxtyping import Array, Float, Int
 
 from .._checks import require_float64
 from ..contact.archard import ArchardWear
 from ..contact.clearance_joint import ClearanceJoint
 from ..contact.laws import ElasticFoundation
-from ..dynamics import Rodas4, simulate
+from ..contact.mixed import MixedLubrication
+from ..dynamics import AbstractRosenbrock, Rodas4, simulate
+from ..dynamics.projection import stepping_solver
 from ..errors import InputError
 from ..mechanism import Mechanism
 
@@ -41,6 +46,43 @@ CYCLE_INTEGRATORS: dict[str, tuple[type[diffrax.AbstractSolver], float]] = {
     "tsit5": (diffrax.Tsit5, CYCLE_RTOL),
     "rodas4": (Rodas4, 1e-4),
 }
+
+
+# A lubricated joint's cycle resolves its film: the whole state's tolerance
+# (rtol = atol, SI units: positions of ~0.1-1 m) is at most this fraction of
+# the combined roughness sigma in metres, the film thickness where the film
+# saturates (lambda_b = 1), so that the pin's position is resolved to ~10 %
+# of the thinnest film.  On the lubricated rig's cycle the wear then agrees
+# with 1e-10's to ~6e-5 (measured at 1e-7 and 1e-8, either side of sigma / 10;
+# at sigma itself, 2e-4: docs/notes/lubricated-motion.md).
+FILM_TOLERANCE_FRACTION = 0.1
+
+
+def film_tolerance(mech: Mechanism) -> Float[Array, ""] | None:
+    """The tolerance (rtol = atol) at which ``mech``'s lubricated joints'
+    films are resolved, `FILM_TOLERANCE_FRACTION` x the smallest roughness
+    [m] (a setting of the integrator: no derivative flows through it); None
+    without a lubricated joint."""
+    sigmas = [f.law.roughness for f in mech.forces
+              if isinstance(getattr(f, "law", None), MixedLubrication)]
+    if not sigmas:
+        return None
+    return FILM_TOLERANCE_FRACTION * lax.stop_gradient(jnp.min(jnp.stack(sigmas)))
+
+
+def lubricated_cycle(mech: Mechanism, rtol, atol, solver: diffrax.AbstractSolver | None
+                     ) -> tuple[Any, Any, diffrax.AbstractSolver | None]:
+    """(rtol, atol, solver) of a cycle of ``mech``: unchanged without a
+    lubricated joint; with one, the tolerances at most `film_tolerance` and
+    an explicit (or default) integrator replaced by Rodas4, since the film's
+    squeeze damping (time constant pin mass / film damping, ~0.1 us) holds an
+    explicit method at steps of that size."""
+    tol = film_tolerance(mech)
+    if tol is None:
+        return rtol, atol, solver
+    if solver is None or not isinstance(stepping_solver(solver), AbstractRosenbrock):
+        solver = Rodas4()
+    return jnp.minimum(rtol, tol), jnp.minimum(atol, tol), solver
 
 
 def cycle_integrator(name: str) -> tuple[diffrax.AbstractSolver, float]:
@@ -137,8 +179,10 @@ def wear_cycle_joints(
     """One cycle [t0, t0 + period] from ``y`` with the wear states of every
     joint in ``joints`` reset: the wear of several joints in one integration.
     ``solver``: the integrator (default Tsit5; see `CYCLE_INTEGRATORS`);
-    ``step_to_saves``: as `wear_cycle`."""
+    ``step_to_saves``: as `wear_cycle`.  A mechanism with a lubricated joint
+    runs on Rodas4 at the film's tolerance (`lubricated_cycle`)."""
     require_float64("wear_cycle_joints")
+    rtol, atol, solver = lubricated_cycle(mech, rtol, atol, solver)
     elements = [clearance_element(mech, j)[1] for j in joints]
     y0 = y
     for j in joints:
@@ -186,9 +230,11 @@ def wear_cycle(
     ``n_save``: also return the trajectory at ``n_save`` equally spaced times
     (for contact loci and joint-force plots).  ``solver``: the integrator
     (default Tsit5; `CYCLE_INTEGRATORS` names the choices and their
-    tolerances).  ``step_to_saves``: the integrator steps exactly onto the
-    ``n_save`` times (diffrax's ``step_ts``), so the saved states are ends of
-    steps, not the dense interpolant between them: needed on Rodas4, whose
+    tolerances; a lubricated joint's cycle runs on Rodas4 at its film's
+    tolerance, `lubricated_cycle`: its wear is the asperities').
+    ``step_to_saves``: the integrator steps exactly onto the ``n_save``
+    times (diffrax's ``step_ts``), so the saved states are ends of steps,
+    not the dense interpolant between them: needed on Rodas4, whose
     interpolant between its long steps misses the stiff contact (on a rig
     cycle at rtol 1e-4 the joint force at the saved times was up to 13 % of
     its peak off; stepped onto them, 1.1 %).  Pure and jit-able; failure is

@@ -69,10 +69,13 @@ def wear_operator(mech: Mechanism, joint: str, ys: Float[Array, "T s"], period,
     pin translation U M^-1 U^T D dh (M = U^T D U, U = [cos, sin]) keeps the
     contact resultant, i.e. the joint force, unchanged.  Weighted by the
     sliding increment ds and by k, and summed over the cycle (trapezoid rule).
+    A lubricated joint's wearing contact is its asperities': their summits
+    stand lambda_c sigma inside the bore (`MixedLubrication.summits`).
     """
-    from ..contact import smoothing
+    from ..contact import MixedLubrication, smoothing
 
     _, el = clearance_element(mech, joint)
+    profile = el.law.summits(el.profile) if isinstance(el.law, MixedLubrication) else el.profile
     theta = el.profile.theta
     u = jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)  # (n, 2)
     n = theta.shape[0]
@@ -80,7 +83,7 @@ def wear_operator(mech: Mechanism, joint: str, ys: Float[Array, "T s"], period,
     def sample(y):
         q, qd, _ = mech.split(y)
         kin = el.kinematics(mech.frames(q, qd))
-        d = smoothing.step(u @ kin.offset - el.profile.clearance, width)
+        d = smoothing.step(u @ kin.offset - profile.clearance, width)
         m = u.T @ (d[:, None] * u) + OPERATOR_RIDGE * jnp.eye(2)
         follow = u @ jnp.linalg.solve(m, u.T * d[None, :])  # (n, n) pin translation
         response = d[:, None] * (jnp.eye(n) - follow)

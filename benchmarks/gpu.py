@@ -75,6 +75,7 @@ def rig_sweep(model, n: int, chunk: int) -> dict:
     import numpy as np
 
     from diffwear.sweep import Batched, sweep
+    from diffwear.wear.status import from_code, not_computed
 
     side = int(math.isqrt(n))
     base = model.defaults
@@ -84,7 +85,7 @@ def rig_sweep(model, n: int, chunk: int) -> dict:
     return {"points": len(res), "chunk": res.info["chunk_size"], "chunks": res.info["chunks"],
             "compile_s": res.info["compile_s"], "run_s": res.info["run_s"],
             "points_per_s": len(res) / res.info["run_s"],
-            "failed": int(np.sum(res["status"] == 2))}
+            "failed": int(np.sum(not_computed(from_code(res["status"]))))}
 
 
 def dynamic_rig_one(dynamic_cycles: int, cycles: float, n_theta: int) -> dict:

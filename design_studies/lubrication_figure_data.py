@@ -218,6 +218,7 @@ def life_viscosity() -> None:
     from diffwear.contact import MixedLubrication, ShortBearingFilm
     from diffwear.models import QuasiStatic
     from diffwear.studies import rig_21400
+    from diffwear.wear.status import code, name
 
     _, mech, y0 = rig_21400._setup()
     el = mech.element("crank_rod")
@@ -239,8 +240,8 @@ def life_viscosity() -> None:
     for mu in VISCOSITIES:
         cycles, status = fast(jnp.asarray(mu))
         rows.append({"viscosity_Pa_s": mu, "life_cycles": float(cycles),
-                     "status": int(status)})
-        print(f"  mu {mu:.3g} Pa s: life {float(cycles):.6g} (status {int(status)})",
+                     "status": int(code(status))})
+        print(f"  mu {mu:.3g} Pa s: life {float(cycles):.6g} ({name(status)})",
               flush=True)
     slope = eqx.filter_jit(lambda m: jax.jvp(lambda x: life(x)[0], (m,), (jnp.ones(()),)))
     tangents = []
@@ -253,7 +254,7 @@ def life_viscosity() -> None:
                         "limit_m": RIG_LIMIT, "roughness_m": RIG_ROUGHNESS,
                         "clearance_m": float(c), "length_m": float(el.law.depth),
                         "film": "ShortBearingFilm", "period_s": 2.0},
-           "dry": {"life_cycles": float(dry.cycles[0]), "status": int(dry.status)},
+           "dry": {"life_cycles": float(dry.cycles[0]), "status": int(code(dry.status))},
            "lives": rows, "tangents": tangents,
            "wall_s": round(time.perf_counter() - t0, 1)}
     (STORE / "life_viscosity.json").write_text(json.dumps(out, indent=1) + "\n")

@@ -220,17 +220,17 @@ def test_a_life_not_computed_has_a_nan_derivative_not_zero():
 
 @pytest.mark.extended
 def test_a_quasi_static_life_cut_short_has_a_nan_gradient():
-    """One wear slot cannot reach the limit: status 'incomplete', the life
+    """One wear slot cannot reach the limit: status `RESULTS.run_ended_early`, the life
     NaN, and its gradient by the design NaN, never a silent 0."""
     import jax
 
     from diffwear.design import TwoJointLife
     from diffwear.models import QuasiStatic
-    from diffwear.wear.status import STATUS_INCOMPLETE
+    from diffwear.wear.status import RESULTS
 
     model = TwoJointLife(wear_model=QuasiStatic(samples=36, steps=16, max_steps=1),
                          n_theta=36).prepared()
     x = jnp.array([0.02, 0.02, 0.02, 0.02])
-    assert int(model.evaluate(x).status) == STATUS_INCOMPLETE
+    assert bool(model.evaluate(x).status == RESULTS.run_ended_early)
     value, grad = jax.value_and_grad(lambda v: model(v)[0])(x)
     assert math.isnan(float(value)) and np.all(np.isnan(np.asarray(grad)))

@@ -12,7 +12,10 @@ import pytest
 
 from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
+from diffwear.wear.status import RESULTS, code
 
+# summary.json keeps a status as its `RESULTS` member's code
+OK = int(code(RESULTS.ok))
 STUDY = "ideal-slider-crank"
 
 
@@ -128,7 +131,7 @@ def test_resume_finishes_an_interrupted_wear_study(interrupted_dir, tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["finished"] is True and summary["resumed_from_cycles"] == 1.0
     assert summary["cycles"] == 3.0 and summary["dynamic_cycles_simulated"] == 1 + 3
-    assert summary["status"] == 0 and (out / "checkpoint.npz").is_file()
+    assert summary["status"] == OK and (out / "checkpoint.npz").is_file()
     assert "checkpoint.npz" in summary["files"]
     assert not list(out.glob(".*.partial"))
     rows = (out / "wear_history.csv").read_text().splitlines()
@@ -425,7 +428,7 @@ def test_four_bar_mechanism_file_wears_from_the_cli_and_from_python(tmp_path):
                  "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
     j = s["joints"]["coupler_rocker"]
-    assert j["cycles"] == 50000 and j["status"] == 0 and s["warnings"] == []
+    assert j["cycles"] == 50000 and j["status"] == OK and s["warnings"] == []
     assert 0.0 < j["max_wear_depth_mm"] < 0.05 < j["limit_mm"] + 1e-12
     for f in ("wear_profile_coupler_rocker.csv", "wear_history_coupler_rocker.csv", "wear.png"):
         assert (out / f).is_file()
@@ -553,7 +556,7 @@ def test_mechanism_file_dynamic_wear_resumes_and_agrees_with_the_quasi_static_mo
     assert f"diffwear run {FOUR_BAR} --resume {out}" in capsys.readouterr().err
     assert main(["run", str(FOUR_BAR), "--resume", str(out), "--quiet"]) == 0
     dyn = json.loads((out / "summary.json").read_text())["joints"]["coupler_rocker"]
-    assert dyn["model"] == "dynamic" and dyn["cycles"] == 20000 and dyn["status"] == 0
+    assert dyn["model"] == "dynamic" and dyn["cycles"] == 20000 and dyn["status"] == OK
     assert dyn["resumed_from_cycles"] > 0 and dyn["dynamic_cycles"] == 51
 
     qs_out = tmp_path / "qs"

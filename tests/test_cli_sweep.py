@@ -13,6 +13,7 @@ import pytest
 
 from diffwear.cli import main
 from diffwear.config.sweep import load_sweep
+from diffwear.wear.status import RESULTS, code
 
 TINY = '''
 title = "tiny rig"
@@ -188,6 +189,11 @@ def test_help_lists_sweep(capsys):
     assert "--chunk-size" in out and "--cluster" in out and "Exit codes" in out
 
 
+
+def _code(member: str) -> float:
+    """A sweep table's status: the code of the `RESULTS` member ``member``."""
+    return float(code(getattr(RESULTS, member)))
+
 class _Fragile:
     """A cheap stand-in for the rig model: fails (NaN) for clearance > 0.04 mm."""
 
@@ -207,11 +213,12 @@ class _Fragile:
 
         depth = p["k"] * 1e9 * p["clearance"] * 1e3
         return {"max_depth_mm": jnp.where(p["clearance"] > 0.04e-3, jnp.nan, depth),
-                "status": jnp.where(p["clearance"] > 0.04e-3, 2.0, 0.0)}
+                "status": jnp.where(p["clearance"] > 0.04e-3, _code("cycle_model_failed"),
+                                    _code("ok"))}
 
 
 def test_failed_points_exit_3_and_results_kept(tmp_path, capsys, monkeypatch):
-    """A point whose outputs are NaN / status 2: exit 3 naming it, and the
+    """A point whose outputs are NaN / the cycle model failed: exit 3 naming it, and the
     other points' results are still written."""
     import dataclasses
 
@@ -225,7 +232,7 @@ def test_failed_points_exit_3_and_results_kept(tmp_path, capsys, monkeypatch):
     assert main(["sweep", str(f), "--out", str(out), "--quiet"]) == 3
     err = capsys.readouterr().err
     assert "1 of 2 sweep points failed" in err and "'clearance': 5e-05" in err
-    assert "status 2: the cycle model failed" in err  # why, in words
+    assert "cycle_model_failed: the cycle model failed" in err  # why, in words
     summary = json.loads((out / "summary.json").read_text())
     assert summary["failed_points"] == [1]
     with open(out / "results.csv", newline="") as fh:
@@ -241,7 +248,7 @@ class _Linear(_Fragile):
         import jax.numpy as jnp
 
         return {"max_depth_mm": p["k"] * 1e9 * p["clearance"] * 1e3,
-                "status": jnp.zeros(())}
+                "status": jnp.asarray(_code("ok"))}
 
 
 def test_summary_and_report_give_the_grid_in_the_files_units(tmp_path, monkeypatch):
@@ -274,14 +281,18 @@ def test_summary_and_report_give_the_grid_in_the_files_units(tmp_path, monkeypat
 
 
 def test_a_point_whose_run_ended_early_is_a_failed_point():
-    """Status 3 (the run ended before its target: no answer) fails a point
-    as status 2 does; 1 (the wall reached) and 4 (a contact warning) carry an
-    answer and do not; a NaN output fails it whatever its status."""
+    """A run ended early (before its target: no answer) fails a point as a
+    failed cycle model does; the wall reached and a contact warning carry an
+    answer and do not; a NaN output fails it whatever its status.  The table
+    holds the members' codes."""
     from diffwear.cli.sweep import failed_points, failure_words
 
     class Result:
         outputs = {"max_depth_mm": np.array([0.1, 0.2, 0.3, 0.4, np.nan, 0.6]),
-                   "status": np.array([0.0, 1.0, 2.0, 3.0, 0.0, 4.0])}
+                   "status": np.array([_code(n) for n in ("ok", "wall_reached",
+                                                           "cycle_model_failed",
+                                                           "run_ended_early", "ok",
+                                                           "contact_lost")])}
 
         def __len__(self):
             return 6
@@ -289,4 +300,6 @@ def test_a_point_whose_run_ended_early_is_a_failed_point():
     bad = failed_points(Result())
     assert bad.tolist() == [2, 3, 4]
     words = failure_words(Result(), bad)
-    assert "status 2: the cycle model failed" in words and "status 3: the run ended" in words
+    assert words == ("; cycle_model_failed: the cycle model failed (integrator or equilibrium "
+                     "solve); run_ended_early: the run ended (steps or cycles) before the "
+                     "wear limit or the requested cycles were reached")

@@ -13,14 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from diffwear.wear.status import (
-    STATUS_INCOMPLETE,
-    STATUS_OK,
-    STATUS_PIERCED,
-    STATUS_SOLVER,
-    not_an_answer,
-    not_computed,
-)
+from diffwear.wear.status import RESULTS, code, members, not_an_answer, not_computed, stack
 
 FOUR_BAR = (Path(__file__).resolve().parents[1] / "src" / "diffwear" / "config" / "mechanisms"
             / "four_bar_wear.toml")
@@ -32,7 +25,9 @@ def _life(k):
 
 
 def test_not_computed_names_the_failures_only():
-    status = jnp.array([STATUS_OK, STATUS_PIERCED, STATUS_SOLVER, STATUS_INCOMPLETE, 4])
+    status = stack(list(members()))
+    assert [m for m in RESULTS._name_to_item] == [
+        "ok", "wall_reached", "cycle_model_failed", "run_ended_early", "contact_lost"]
     assert np.asarray(not_computed(status)).tolist() == [False, False, True, True, False]
 
 
@@ -106,13 +101,13 @@ def _zero_load_setup():
 
 
 def test_the_life_of_a_joint_that_carries_no_load_is_not_an_answer():
-    """No load: the pin's equilibrium has no solution (status 2), the life is
+    """No load: the pin's equilibrium has no solution (`RESULTS.cycle_model_failed`), the life is
     NaN; a loaded joint beside it has its life."""
     life = jax.jit(_zero_load_setup())
     cycles, status = life(0.0)
-    assert math.isnan(float(cycles)) and int(status) == STATUS_SOLVER
+    assert math.isnan(float(cycles)) and bool(status == RESULTS.cycle_model_failed)
     cycles, status = life(1.0)
-    assert np.isfinite(float(cycles)) and int(status) == STATUS_OK
+    assert np.isfinite(float(cycles)) and bool(status == RESULTS.ok)
 
 
 @pytest.mark.extended
@@ -156,7 +151,7 @@ def test_the_zero_load_evolution_has_no_final_profile_and_nan_derivatives():
     scales = jnp.array([1.0, 0.0])
     value, grad = jax.jit(jax.vmap(jax.value_and_grad(peak)))(scales)
     forward = jax.jit(jax.vmap(jax.jacfwd(peak)))(scales)
-    assert int(jax.jit(depth)(0.0)[1]) == STATUS_SOLVER
+    assert bool(jax.jit(depth)(0.0)[1] == RESULTS.cycle_model_failed)
     for got in (value, grad, forward):
         assert math.isnan(float(got[1])) and np.isfinite(float(got[0]))
     alone = jax.jit(peak)
@@ -167,13 +162,13 @@ def test_the_zero_load_evolution_has_no_final_profile_and_nan_derivatives():
     assert float(forward[0]) == pytest.approx(float(grad[0]), rel=1e-10)
     # the report of a run keeps what it reached: here the unworn profile
     reached, status = _zero_load_setup().run(0.0)
-    assert int(status) == STATUS_SOLVER and np.all(np.asarray(reached) == 0.0)
+    assert bool(status == RESULTS.cycle_model_failed) and np.all(np.asarray(reached) == 0.0)
 
 
 def test_a_failed_sweep_point_is_nan_with_nan_derivatives_beside_exact_ones():
     """The rig-wear sweep model on a stand-in wear model whose final profile
     is the clearance c everywhere (so max depth = c exactly: the smooth max
-    of a constant) and which fails (status 2) above c = 0.04 mm: in a
+    of a constant) and which fails (`RESULTS.cycle_model_failed`) above c = 0.04 mm: in a
     vmapped batch the failed point's outputs and derivatives are NaN, the
     other's depth is 1e3 c mm with derivative 1e3 mm/m."""
     from diffwear.models import AbstractWearModel, WearEvolution
@@ -190,11 +185,11 @@ def test_a_failed_sweep_point_is_nan_with_nan_derivatives_beside_exact_ones():
             el = mech.element(JOINT)
             c = el.bushing_radius - el.pin_radius
             depth = jnp.full(el.profile.n, c)
-            status = jnp.where(c > 0.04e-3, STATUS_SOLVER, STATUS_OK)
+            status = RESULTS.where(c > 0.04e-3, RESULTS.cycle_model_failed, RESULTS.ok)
             nan = jnp.full(1, jnp.nan)
             return WearEvolution(depth=(depth,), cycles=jnp.asarray(cycles),
                                  joint_cycles=jnp.asarray([cycles]), status=status,
-                                 joint_status=status[None], contact_margin=nan,
+                                 joint_status=stack([status]), contact_margin=nan,
                                  contact_margin_worn=nan, history=())
 
         def joint_force(self, mech, joint, y0, *, period, evolution, samples=180):
@@ -221,7 +216,8 @@ def test_a_failed_sweep_point_is_nan_with_nan_derivatives_beside_exact_ones():
     for got in (value, grad, forward):
         assert math.isnan(float(got[1]))
     outputs = jax.jit(rig)({**base, "clearance": 0.05e-3})
-    assert int(outputs["status"]) == STATUS_SOLVER
+    # the sweep tables hold the member's code (2: declared third)
+    assert float(outputs["status"]) == float(code(RESULTS.cycle_model_failed)) == 2.0
     assert all(math.isnan(float(outputs[k]))
                for k in ("max_depth_mm", "volume_mm3", "mean_joint_force_N"))
 

@@ -18,7 +18,7 @@ from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
 from diffwear.plots import calibration as plots_calibration
 from diffwear.plots import wear as plots_wear
-from diffwear.wear.status import STATUS_OK, STATUS_PIERCED
+from diffwear.wear.status import RESULTS, code
 
 # ----------------------------------------------------------------------------- readers
 
@@ -261,7 +261,7 @@ def test_a_wear_run_stopped_at_the_wall_says_so_and_draws_wall_and_limit(tmp_pat
     cycles = np.linspace(0.0, 122862.0, 30)
     peak = 1e-3 * cycles / cycles[-1]
     title = plots.wear_title("new rig", {"crank_rod": 122862.0},
-                             {"crank_rod": STATUS_PIERCED}, model="quasi-static")
+                             {"crank_rod": RESULTS.wall_reached}, model="quasi-static")
     assert title == ("new rig: wear after 122,862 cycles (stopped: wall reached) "
                      "(quasi-static model)")
     with plots.captured() as figures:
@@ -295,7 +295,7 @@ def test_the_commands_wear_figure_of_a_run_stopped_at_the_wall(tmp_path):
     wear = {"crank_rod": {
         "theta": theta, "depth": 1e-3 * np.clip(np.cos(theta - 3.0), 0.0, None) ** 2,
         "history_cycles": cycles, "history_peak": 1e-3 * cycles / cycles[-1],
-        "volume": 5e-8, "cycles": 122862.0, "wall": 1e-3, "status": STATUS_PIERCED,
+        "volume": 5e-8, "cycles": 122862.0, "wall": 1e-3, "status": RESULTS.wall_reached,
         "contact_margin": 3.0, "contact_margin_worn": 2.0, "cycles_to_limit": 61431.0,
         "model": "quasi-static"}}
     mfile = SimpleNamespace(title="new rig", file="new_rig.toml")
@@ -317,9 +317,9 @@ def test_the_commands_wear_figure_of_a_run_stopped_at_the_wall(tmp_path):
 
 
 def test_a_run_that_reached_its_cycles_is_titled_by_them():
-    assert plots.wear_title("f", {"a": 5e4, "b": 5e4}, {"a": STATUS_OK, "b": STATUS_OK},
+    assert plots.wear_title("f", {"a": 5e4, "b": 5e4}, {"a": RESULTS.ok, "b": RESULTS.ok},
                             model="dynamic") == "f: wear after 50,000 cycles (dynamic model)"
-    two = plots.wear_title("f", {"a": 3e4, "b": 5e4}, {"a": STATUS_PIERCED, "b": STATUS_OK},
+    two = plots.wear_title("f", {"a": 3e4, "b": 5e4}, {"a": RESULTS.wall_reached, "b": RESULTS.ok},
                            model="quasi-static")
     assert two == ("f: wear after 30,000 cycles (a), 50,000 cycles (b) "
                    "(stopped: a: wall reached) (quasi-static model)")
@@ -454,7 +454,7 @@ def test_a_users_file_worn_through_its_wall_has_it_in_its_figures(tmp_path):
         assert main(["run", str(path), "--cycles", "100000", "--limit", "0.5",
                      "--model", "quasi-static", "--out", str(out), "--quiet"]) == 3
     joint = json.loads((out / "summary.json").read_text())["joints"]["crank_rod"]
-    assert joint["status"] == STATUS_PIERCED and 100 < joint["cycles"] < 100000
+    assert joint["status"] == int(code(RESULTS.wall_reached)) and 100 < joint["cycles"] < 100000
     report = (out / "report.md").read_text()
     assert "compiling the motion's integrator and the quasi-static wear model" in report
     assert "dynamic wear model" not in report

@@ -18,6 +18,7 @@ import pytest
 
 from diffwear.errors import InputError
 from diffwear.sweep import Auto, Batched, Looped, Pooled, SweepResult, sweep
+from diffwear.wear.status import RESULTS, code
 
 TOY = '''
 import diffrax, jax.numpy as jnp
@@ -357,7 +358,7 @@ def test_rig_wear_sweep_matches_single_runs():
         for key, rtol in (("max_depth_mm", 1e-5), ("volume_mm3", 1e-5),
                           ("mean_joint_force_N", 1e-3), ("status", 0)):
             np.testing.assert_allclose(row[key], float(ref[key]), rtol=rtol, err_msg=key)
-    assert np.all(r["status"] == 0) and np.all(r["volume_mm3"] > 0)
+    assert np.all(r["status"] == code(RESULTS.ok)) and np.all(r["volume_mm3"] > 0)
     v = r.grid("volume_mm3")
     np.testing.assert_allclose(v[:, 1] / v[:, 0], 2.0, rtol=0.05)  # Archard: V ~ k
     assert np.all(r["max_depth_mm"] <= r["max_depth_mm"].max())

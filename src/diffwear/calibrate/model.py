@@ -55,7 +55,7 @@ from ..wear.cycle import clearance_element
 from ..wear.dynamic_term import CycleSettings, DynamicWear
 from ..wear.engine import CycleWear, Stop, initial_state, integrate
 from ..wear.extrapolation import Constant
-from ..wear.status import STATUS_OK
+from ..wear.status import RESULTS
 from .effects import GUIDE_SLIP_WIDTH, EffectValues, rate_factor, wear_law
 from .parameters import NAMES
 
@@ -252,7 +252,7 @@ class RigHistory(eqx.Module):
             force=forces, force_cycles=a * jnp.arange(self.dynamic_cycles, dtype=float),
             force_angle=angle, theta=el.profile.theta,
             bushing_radius=el.bushing_radius, bushing_depth=el.law.depth,
-            ok=end.status == STATUS_OK)
+            ok=end.status == RESULTS.ok)
 
 
 class _RigDynamicWear(DynamicWear):

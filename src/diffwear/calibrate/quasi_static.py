@@ -40,7 +40,7 @@ from ..quasistatic.loads import JointLoads, cycle_loads
 from ..wear import worn_volume
 from ..wear.engine import AbstractWearTerm, CycleWear, Stop, initial_state, integrate
 from ..wear.implicit import CycleGrid
-from ..wear.status import STATUS_OK
+from ..wear.status import RESULTS
 from .effects import EffectValues, rate_factor
 from .model import (
     JOINT,
@@ -170,7 +170,7 @@ class QuasiStaticRigHistory(eqx.Module):
             cycles=solver.grid, wear=wear, creep=(term.grow - 1.0) * wear, force=force,
             force_cycles=jnp.zeros(1), force_angle=angle, theta=el.profile.theta,
             bushing_radius=el.bushing_radius, bushing_depth=el.law.depth,
-            ok=end.status == STATUS_OK)
+            ok=end.status == RESULTS.ok)
 
 
 class _RigWear(AbstractWearTerm):

@@ -50,7 +50,7 @@ from ..mechanism_file import (
 from ..mechanism_file import wear as mechanism_wear
 from ..report import Block, Bullets, Figure, Report, Section, Table, render
 from ..wear.chunked import Checkpoints
-from ..wear.status import STATUS_CONTACT_LOSS, STATUS_OK, STATUS_PIERCED, STATUS_TEXT
+from ..wear.status import RESULTS, code, message
 from . import objects
 
 # Dynamic cycles simulated by a file's dynamic wear run with constant
@@ -470,24 +470,24 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                                              "max_depth_mm": w["history_peak"] * 1e3})
         joints[name] = {"max_wear_depth_mm": float(np.max(w["depth"])) * 1e3,
                         "wear_volume_mm3": w["volume"] * 1e9, "cycles": w["cycles"],
-                        "model": w["model"], "status": w["status"],
+                        "model": w["model"], "status": int(code(w["status"])),
                         **{k: w[k] for k in _REPORTED if k in w}}
         if limit is not None:
             joints[name]["limit_mm"] = limit * 1e3
             joints[name]["cycles_to_limit"] = w["cycles_to_limit"]
-        if w["status"] == STATUS_CONTACT_LOSS:
+        if w["status"] == RESULTS.contact_lost:
             warnings.append(f"clearance joint {name!r}: the load cannot hold the pin on the "
                             f"bushing wall (contact margin {w['contact_margin']:.2g} < 1): the "
                             "quasi-static wear model does not hold there")
-        elif w["status"] == STATUS_PIERCED:
+        elif w["status"] == RESULTS.wall_reached:
             pierced.append(f"clearance joint {name!r} wore through its {w['wall'] * 1e3:g} mm "
                            f"bushing wall after {w['cycles']:,.0f} cycles (max depth "
                            f"{joints[name]['max_wear_depth_mm']:.4f} mm)")
-        elif w["status"] != STATUS_OK:
+        elif w["status"] != RESULTS.ok:
             causes = mechanism_wear.likely_causes(mfile, name)
             pierced.append(f"the wear of clearance joint {name!r} stopped after "
                            f"{w['cycles']:,.0f} cycles: "
-                           f"{STATUS_TEXT.get(w['status'], 'status ' + str(w['status']))}"
+                           f"{message(w['status'])}"
                            + (f"; likely cause: {'; and '.join(causes)}" if causes else ""))
         elif w.get("contact_margin_worn", math.inf) < 1.0:
             warnings.append(f"clearance joint {name!r}: on the worn profile the pin may lift "

@@ -17,9 +17,11 @@ Outputs in the results folder (`io.OutputDir`: never over earlier results):
     report.md       what was run and what came out, linking the rest
     input.toml      copy of the sweep file
 
-A point failed if an output is not finite or its ``status`` (rig wear) is 2
-(solver failure).  Failed points stay in the tables (NaN / status); the run
-then ends with `SolverError` (CLI exit 3) after writing everything.
+A point failed if an output is not finite or its ``status`` (rig wear: the
+code of a `diffwear.wear.RESULTS` member) says there is no answer
+(`diffwear.wear.not_computed`: the cycle model failed, the run ended
+early).  Failed points stay in the tables (NaN / status); the run then ends
+with `SolverError` (CLI exit 3) after writing everything.
 """
 
 from __future__ import annotations
@@ -42,7 +44,7 @@ from ..report import Block, Figure, Report, Table, render
 from ..sweep.execution import Auto, Batched
 from ..sweep.result import SweepResult
 from ..sweep.runner import sweep
-from ..wear.status import STATUS_INCOMPLETE, STATUS_SOLVER, STATUS_TEXT
+from ..wear.status import from_code, members, message, name, not_computed
 
 SKIP_PLOTS = ("status",)
 
@@ -80,17 +82,25 @@ def failed_points(res: SweepResult) -> np.ndarray:
     for col in res.outputs.values():
         bad |= ~np.isfinite(col)
     if "status" in res.outputs:  # no answer: the model failed or ran out of steps
-        bad |= np.isin(res.outputs["status"], (STATUS_SOLVER, STATUS_INCOMPLETE))
+        bad |= np.asarray(not_computed(_statuses(res)))
     return np.flatnonzero(bad)
 
 
+def _statuses(res: SweepResult):
+    """The points' `RESULTS` from their ``status`` codes (a NaN code, a point
+    that raised, read as ok: its NaN outputs fail it already)."""
+    codes = np.asarray(res.outputs["status"], dtype=float)
+    return from_code(np.where(np.isfinite(codes), codes, 0.0))
+
+
 def failure_words(res: SweepResult, bad: np.ndarray) -> str:
-    """'; status 2: why' for each failure status among the points ``bad``."""
+    """'; cycle_model_failed: why' for each status without an answer among
+    the points ``bad``."""
     if "status" not in res.outputs or not bad.size:
         return ""
-    codes = sorted({int(c) for c in np.asarray(res.outputs["status"])[bad]
-                    if np.isfinite(c) and int(c) in (STATUS_SOLVER, STATUS_INCOMPLETE)})
-    return "".join(f"; status {c}: {STATUS_TEXT[c]}" for c in codes)
+    status = _statuses(res)
+    return "".join(f"; {name(m)}: {message(m)}" for m in members()
+                   if bool(not_computed(m)) and bool(np.any(np.asarray(status == m)[bad])))
 
 
 def device_platform(device: str) -> str:

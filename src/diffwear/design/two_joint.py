@@ -49,7 +49,8 @@ from ..presets import (
     with_wear_joint,
 )
 from ..wear import LifeResult
-from ..wear.status import STATUS_TEXT
+from ..wear.status import RESULTS, message
+from ..wear.status import name as status_name
 
 JOINTS = ("crank_rod", "rod_slider")
 BUSHING_BODY = "rod"
@@ -186,11 +187,10 @@ class TwoJointLife(eqx.Module):
         """[cyc1, cyc2] at a concrete design, as NumPy; `SolverError` on failure."""
         check_design(x)
         res = _evaluate(self, jnp.asarray(x, dtype=float))
-        status = int(res.status)
-        if status != 0:
+        if bool(res.status != RESULTS.ok):
             raise SolverError(f"{self.wear_model.name} life at design "
                               f"{np.round(np.asarray(x) * 1e3, 4).tolist()} mm: "
-                              f"{STATUS_TEXT.get(status, 'failed')} (status {status})")
+                              f"{message(res.status)} (status {status_name(res.status)})")
         return np.asarray(res.cycles)
 
 

@@ -32,6 +32,7 @@ from ..mechanism.geometry import safe_norm
 from ..models import AbstractWearModel, QuasiStatic, WearEvolution
 from ..wear import worn_volume
 from ..wear.chunked import Checkpoints
+from ..wear.status import at
 from .motion import first_driver
 
 FILE_WEAR_SLOTS = 2000
@@ -165,7 +166,7 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
             "history_peak": np.asarray(hist.peak)[valid],
             "volume": float(worn_volume(depth, el.bushing_radius, el.law.depth)),
             "cycles": float(res.joint_cycles[k]), "wall": walls[k],
-            "status": int(res.joint_status[k]),
+            "status": at(res.joint_status, k),
             "cycles_to_limit": (float(life.cycles[k]) if life is not None else None),
             "model": model.name, "wall_time_s": times.wall_time,
             "compile_time_s": times.compile_time, **times.info,

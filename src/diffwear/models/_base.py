@@ -13,6 +13,7 @@ from jaxtyping import Array, Float
 from ..errors import InputError
 from ..mechanism import Mechanism
 from ..wear.chunked import Checkpoints, RunTimes, timed
+from ..wear.status import RESULTS
 
 
 class WearEvolution(eqx.Module):
@@ -22,8 +23,8 @@ class WearEvolution(eqx.Module):
     cycles: real cycles reached: the requested count, or fewer when a joint
         wore through its wall (or its model failed) first
     joint_cycles: per joint, the cycles its profile represents
-    status: `diffwear.wear.status` code (worst over the joints)
-    joint_status: per joint
+    status: a `diffwear.wear.RESULTS` member (the worst over the joints)
+    joint_status: per joint (`RESULTS` of shape (J,))
     contact_margin, contact_margin_worn: per joint, the quasi-static model's
         contact check on the unworn and the final profile (NaN where the
         model needs none)
@@ -36,8 +37,8 @@ class WearEvolution(eqx.Module):
     depth: tuple
     cycles: Float[Array, ""]
     joint_cycles: Float[Array, " J"]
-    status: Array
-    joint_status: Array
+    status: RESULTS
+    joint_status: RESULTS
     contact_margin: Float[Array, " J"]
     contact_margin_worn: Float[Array, " J"]
     history: tuple

@@ -25,7 +25,7 @@ from ..wear.evolution import EvolutionResult, Evolver, worn_mechanism
 from ..wear.extrapolation import AbstractExtrapolation, Constant
 from ..wear.life import LifeResult, dynamic_cycles_to_limit
 from ..wear.profile_ode import ProfileHistory
-from ..wear.status import not_an_answer, not_computed
+from ..wear.status import not_an_answer, not_computed, stack
 from ._base import AbstractWearModel, WearEvolution
 
 
@@ -185,7 +185,7 @@ def as_evolution(res: EvolutionResult) -> WearEvolution:
     nan = jnp.full(1, jnp.nan)
     return WearEvolution(
         depth=(res.depth,), cycles=res.cycles, joint_cycles=res.cycles[None],
-        status=res.status, joint_status=res.status[None], contact_margin=nan,
+        status=res.status, joint_status=stack([res.status]), contact_margin=nan,
         contact_margin_worn=nan,
         history=(ProfileHistory(
             cycles=jnp.concatenate([jnp.zeros(1), h["cycles"]]),

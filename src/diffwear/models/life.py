@@ -22,7 +22,7 @@ def cycles_to_limit(mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, "
 
     ``model``: the wear model (`Dynamic()`, the default, or `QuasiStatic()`,
     with their settings).  Pure and jit-able; failures are reported in the
-    result's ``status`` (`diffwear.wear.status`); a life not computed is NaN,
+    result's ``status`` (`diffwear.wear.RESULTS`); a life not computed is NaN,
     with NaN derivatives.
     """
     require_float64("cycles_to_limit")

@@ -12,7 +12,7 @@ otherwise.
 
 Every result carries a contact check, `QuasiStaticJoint.contact_margin`: a
 margin below 1 anywhere in the cycle of the unworn joint sets status
-`STATUS_CONTACT_LOSS` (the pin flies across the clearance: the reduction does
+`RESULTS.contact_lost` (the pin flies across the clearance: the reduction does
 not hold; use `Dynamic`).  Table 2-1 slider-crank: the 5 mm clearance is
 flagged (margin 0.21; thesis Fig. 3-7: contact briefly lost), 0.5 mm is not
 (2.1).  The margin at the final profile is reported beside it: a groove much
@@ -39,13 +39,7 @@ from ..quasistatic.loads import CycleLoads, JointLoads, clearance_joints, cycle_
 from ..quasistatic.lubricated import joint_model
 from ..wear.life import LifeResult
 from ..wear.profile_ode import ProfileSolution, integrate_profile
-from ..wear.status import (
-    STATUS_CONTACT_LOSS,
-    STATUS_OK,
-    STATUS_SOLVER,
-    not_an_answer,
-    not_computed,
-)
+from ..wear.status import RESULTS, not_an_answer, not_computed, stack, worst
 from ._base import AbstractWearModel, WearEvolution
 
 
@@ -159,7 +153,7 @@ class QuasiStatic(AbstractWearModel):
         # of peak depth; measured steps + 1 on the Ch. 8 designs), at most
         # steps + 1 for a run of fixed length (the first step is the longest).
         # Under vmap every slot runs, so they are counted tight; a life that
-        # needs more is reported (status 3), not cut.
+        # needs more is reported (`RESULTS.run_ended_early`), not cut.
         slots = self.steps + 3 if self.max_steps is None else int(self.max_steps)
 
         walls = (jnp.full(len(models), jnp.inf) if walls is None
@@ -192,12 +186,12 @@ class QuasiStatic(AbstractWearModel):
 
     @staticmethod
     def _status(per_joint, loads_ok):
-        status = jnp.stack([
-            jnp.where(~loads_ok, STATUS_SOLVER,
-                      jnp.where((sol.status == STATUS_OK) & (margins[0] < 1.0),
-                                STATUS_CONTACT_LOSS, sol.status))
+        status = stack([
+            RESULTS.where(~loads_ok, RESULTS.cycle_model_failed,
+                          RESULTS.where((sol.status == RESULTS.ok) & (margins[0] < 1.0),
+                                        RESULTS.contact_lost, sol.status))
             for sol, margins in per_joint])
-        return status, jnp.max(status)
+        return status, worst(status)
 
     # -------------------------------------------------------------- results
     def life(self, mech, joints, y0, *, period, limit) -> LifeResult:

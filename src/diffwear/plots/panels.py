@@ -12,13 +12,7 @@ import numpy as np
 from matplotlib.projections.polar import PolarAxes
 from numpy.typing import ArrayLike
 
-from ..wear.status import (
-    STATUS_CONTACT_LOSS,
-    STATUS_OK,
-    STATUS_PIERCED,
-    STATUS_SOLVER,
-    STATUS_TEXT,
-)
+from ..wear.status import RESULTS, words
 from .files import save
 from .layout import depth_references, legend_outside, nonzero, wrapped
 
@@ -158,18 +152,18 @@ def film_panels(path: Path, crank_deg: np.ndarray,
     return save(fig, path, dpi=120)
 
 
-def wear_title(subject: str, reached: Mapping[str, float], status: Mapping[str, int], *,
+def wear_title(subject: str, reached: Mapping[str, float], status: Mapping[str, RESULTS], *,
                model: str) -> str:
     """"<subject>: wear after N cycles (<model> model)", the cycles those
     actually reached, and for a joint whose run stopped short, why (its
-    wear ``status``, `diffwear.wear.status`): "(stopped: wall reached)"."""
+    wear ``status``, `diffwear.wear.RESULTS`): "(stopped: wall reached)"."""
     counts = sorted(set(reached.values()))
     if len(counts) == 1:
         text = f"{subject}: wear after {counts[0]:,.0f} cycles"
     else:
         text = f"{subject}: wear after " + ", ".join(f"{c:,.0f} cycles ({n})"
                                                     for n, c in reached.items())
-    why = {n: stop_words(s) for n, s in status.items() if s != STATUS_OK}
+    why = {n: stop_words(s) for n, s in status.items() if s != RESULTS.ok}
     if why:
         single = len(set(why.values())) == 1 and len(why) == len(reached)
         text += " (stopped: " + (next(iter(why.values())) if single else "; ".join(
@@ -177,11 +171,10 @@ def wear_title(subject: str, reached: Mapping[str, float], status: Mapping[str, 
     return f"{text} ({model} model)"
 
 
-def stop_words(status: int) -> str:
-    """Why a wear run stopped short, in a few words (a title's)."""
-    return {STATUS_PIERCED: "wall reached", STATUS_SOLVER: "cycle model failed",
-            STATUS_CONTACT_LOSS: "pin leaves the wall"}.get(
-        status, STATUS_TEXT.get(status, f"status {status}"))
+def stop_words(status: RESULTS) -> str:
+    """Why a wear run stopped short, in a few words (a title's): the
+    `RESULTS` member's name ("wall reached", "cycle model failed")."""
+    return words(status)
 
 
 def closed(x, y, period: float) -> tuple[np.ndarray, np.ndarray]:

@@ -9,7 +9,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 
-from ..wear.status import STATUS_OK
+from ..wear.status import RESULTS
 from . import references
 from .files import save
 from .layout import depth_references, legend_outside, wrapped
@@ -23,7 +23,7 @@ LOCUS_MARGIN = 0.08
 class Lines(NamedTuple):
     """What the wear figures draw beside the run: the ``clearance_mm`` circle,
     the bushing ``wall_mm``, the run's ``label`` and what its history's
-    markers are (``markers``), its wear ``status`` (`diffwear.wear.status`),
+    markers are (``markers``), its wear ``status`` (`diffwear.wear.RESULTS`),
     named in the titles when it stopped short, the thesis figures the
     profile compares with (``cf``, e.g. "cf. Figs. 7-4/7-5") and, where the
     run is calibrated to the thesis models' worn volume, what it is
@@ -34,7 +34,7 @@ class Lines(NamedTuple):
     wall_mm: float | None = None
     label: str = "diffwear (EFM)"
     markers: str = "simulated dynamic cycles"
-    status: int = STATUS_OK
+    status: RESULTS = RESULTS.ok
     cf: str = ""
     calibrated: str = ""
 
@@ -52,7 +52,7 @@ def wear_figures(out, *, name, theta, depth_mm, history, crank, first, last, the
     cycles, dmax, vol = (np.asarray(v, dtype=float) for v in history)
     reached = float(cycles[-1]) if len(cycles) else 0.0
     after = f"after {reached:,.0f} cycles" + (
-        f" (stopped: {stop_words(lines.status)})" if lines.status != STATUS_OK else "")
+        f" (stopped: {stop_words(lines.status)})" if bool(lines.status != RESULTS.ok) else "")
     figs = [profile_figure(out.file("wear_profile.png"), name=name, theta=theta,
                            depth_mm=depth_mm, thesis=thesis, lines=lines, after=after).name,
             history_figure(out.file("wear_history.png"), name=name, history=(cycles, dmax, vol),

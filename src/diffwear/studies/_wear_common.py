@@ -29,7 +29,7 @@ from ..report import Block, Bullets, Report, Table
 from ..wear import Constant, CycleSettings, arc_peak_depth, worn_volume
 from ..wear.chunked import Checkpoints, RunTimes
 from ..wear.cycle import cycle_integrator
-from ..wear.status import STATUS_OK, STATUS_TEXT
+from ..wear.status import RESULTS, code, message
 from ._report import COMPARISON_WORDS, comparison_table, peak_line, write_report
 
 JOINT = "crank_rod"
@@ -127,9 +127,8 @@ def run_wear_study(out, study: WearStudy, *, cycles, model: AbstractWearModel, l
     summary = write_outputs(out, study._replace(extra_summary=extra_summary,
                                                 extra_report=tuple(extra_report)),
                             model=model, res=res, cycles=cycles, times=times, log=log)
-    status = int(res.status)
-    if status != STATUS_OK:
-        raise SolverError(f"{study.name}: {STATUS_TEXT.get(status, 'failed')} after "
+    if bool(res.status != RESULTS.ok):
+        raise SolverError(f"{study.name}: {message(res.status)} after "
                           f"{summary['cycles']:.0f} cycles (max depth "
                           f"{summary['max_wear_depth_mm']:.4f} mm; {model.name} model); "
                           f"stopped, results so far written to {out.path}")
@@ -163,7 +162,7 @@ def route_numbers(res: WearEvolution, design: WearJointDesign, times: RunTimes) 
     if res.detail is not None:  # simulated cycles: their normal load x sliding
         out["archard_k_times_load_sliding_mm3"] = float(
             design.k * res.detail.load_sliding) * 1e9
-    out.update(dynamic_cycles_simulated=simulated_cycles(res), status=int(res.status),
+    out.update(dynamic_cycles_simulated=simulated_cycles(res), status=int(code(res.status)),
                wall_time_s=times.wall_time, compile_time_s=times.compile_time)
     return out
 
@@ -223,7 +222,6 @@ def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearE
             "crank_angle_rad": crank, "offset_x_mm": off[:, 0] * 1e3,
             "offset_y_mm": off[:, 1] * 1e3, "contact_angle_rad": np.asarray(h.contact_angle),
             "penetration_um": np.asarray(h.penetration) * 1e6})
-    status = int(res.status)
     figs = plots_wear.wear_figures(out, name=study.name, theta=theta, depth_mm=depth * 1e3,
                                    history=(steps_n[1:], steps_depth.max(axis=1)[1:] * 1e3,
                                             volumes[1:]),
@@ -231,14 +229,14 @@ def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearE
                                    lines=plots_wear.Lines(
                                        clearance_mm=float(design.clearance) * 1e3,
                                        wall_mm=float(design.wall) * 1e3, label=model.label,
-                                       markers=model.step_words, status=status,
+                                       markers=model.step_words, status=res.status,
                                        cf=study.cf, calibrated=study.calibrated))
     settings = model.describe(cycles)
     summary = {
         "study": study.name, "cycles": float(res.cycles), "cycles_requested": float(cycles),
         **{k: v for k, v in numbers.items()
            if k not in ("wall_time_s", "compile_time_s", "arc_peak_depth_mm")},
-        "status_text": STATUS_TEXT.get(status, "failed"),
+        "status_text": message(res.status),
         "wall_time_s": times.wall_time, "compile_time_s": times.compile_time,
         "max_wear_angle_rad": float(theta[np.argmax(depth)]),
         "worn_mass_g": numbers["wear_volume_mm3"] * 1e-9 * PTFE_DENSITY * 1e3,

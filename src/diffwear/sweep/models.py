@@ -38,7 +38,7 @@ from ..presets import (
 )
 from ..wear import Constant, CycleSettings, smooth_max, worn_volume
 from ..wear.cycle import CYCLE_ATOL, CYCLE_RTOL
-from ..wear.status import not_an_answer, not_computed
+from ..wear.status import code, not_an_answer, not_computed
 
 JOINT = "crank_rod"
 
@@ -63,14 +63,16 @@ class RigWear(eqx.Module):
     the final profile; ``volume_mm3`` (`worn_volume`); ``mean_joint_force_N``:
     time mean of |joint force| over one extra dynamic cycle run after the
     evolution on the final profile (``force_samples`` equally spaced states);
-    ``status`` (`EvolutionResult.status`: 0 ok, 1 worn through, 2 solver failure).
+    ``status``: the code of the result's `diffwear.wear.RESULTS` member
+    (`diffwear.wear.status.code`: 0 ok, 1 wall reached, 2 cycle model failed,
+    3 run ended early), a float as every output.
 
     ``wear_model``: None (the dynamic model with the settings above) or any
     wear model, e.g. `QuasiStatic(...)` (milliseconds per point, exact
     gradients; its
     ``mean_joint_force_N`` is the ideal mechanism's, which wear does not change
-    in that model, and ``status`` adds 4 = contact lost: the model does not
-    hold there).
+    in that model, and ``status`` adds 4 = `RESULTS.contact_lost`: the model
+    does not hold there).
     """
 
     cycles: float = eqx.field(static=True, default=float(RIG_CYCLES))
@@ -133,7 +135,7 @@ class RigWear(eqx.Module):
             "volume_mm3": not_an_answer(
                 worn_volume(depth, el.bushing_radius, el.law.depth) * 1e9, failed, params),
             "mean_joint_force_N": not_an_answer(jnp.mean(force), failed, params),
-            "status": res.status.astype(float),
+            "status": code(res.status).astype(float),
         }
 
 

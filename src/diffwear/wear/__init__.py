@@ -35,7 +35,7 @@ from .peak import (
     peak_depth,
 )
 from .status import (
-    STATUS_TEXT,
+    RESULTS,
     not_an_answer,
     not_computed,
 )
@@ -44,7 +44,7 @@ __all__ = [
     "MM3_PER_NM", "SLIP_RATE_WIDTH", "ArchardWear",
     "CycleResult", "wear_cycle", "reset_wear", "JointsCycleResult", "wear_cycle_joints",
     "LifeResult", "peak_depth", "arc_peak_depth",
-    "STATUS_TEXT", "not_an_answer", "not_computed",
+    "RESULTS", "not_an_answer", "not_computed",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "AbstractExtrapolation", "Constant", "Adaptive", "ErrorControlled",
     "Evolver", "WearState", "CycleSettings", "DynamicWear", "ChunkedEvolution", "Checkpoint",

@@ -25,7 +25,7 @@ from ..errors import InputError
 from ..io import CHECKPOINT
 from .engine import WearState
 from .evolution import EvolutionResult
-from .status import STATUS_OK
+from .status import RESULTS
 
 CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
 # checkpoint keys added later, with the value that checkpoints written before meant
@@ -77,7 +77,7 @@ class ChunkedEvolution:
         return time.perf_counter() - t0
 
     def done(self, state) -> bool:
-        return not (int(state.status) == STATUS_OK and float(state.n) < self.cycles - 1e-9)
+        return not (bool(state.status == RESULTS.ok) and float(state.n) < self.cycles - 1e-9)
 
     def run(self, start: Checkpoint | None = None, on_chunk=None) -> EvolutionResult:
         p = self._p

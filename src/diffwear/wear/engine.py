@@ -43,7 +43,7 @@ import jax.numpy as jnp
 from jax import lax
 from jaxtyping import Array, Float
 
-from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_PIERCED, STATUS_SOLVER
+from .status import RESULTS, code, from_code
 
 
 class CycleWear(eqx.Module):
@@ -91,7 +91,7 @@ class WearState(eqx.Module):
     what a checkpoint holds.
 
     ``h``: profiles [m] (one per joint); ``memory``: the term's carried state;
-    ``n``: real cycles; ``status``: `diffwear.wear.status` code; ``evaluations``:
+    ``n``: real cycles; ``status``: a `diffwear.wear.RESULTS` member; ``evaluations``:
     cycles of the model run (dynamic cycles, warm-up included); ``steps``:
     slots that ran; ``load_sliding``: per joint, the extrapolated sum of
     int N ds [N m]; ``life``: per joint, the cycles at the limit (NaN before);
@@ -102,7 +102,7 @@ class WearState(eqx.Module):
     h: tuple
     memory: Any
     n: Float[Array, ""]
-    status: Array
+    status: RESULTS
     evaluations: Array
     steps: Array
     load_sliding: Float[Array, " J"]
@@ -120,8 +120,9 @@ class WearState(eqx.Module):
         return dataclasses.replace(self, **changes)
 
     def as_dict(self) -> dict:
-        """Flat name -> array: a checkpoint's layout."""
-        return _flatten({f: getattr(self, f) for f in _FIELDS})
+        """Flat name -> array: a checkpoint's layout (the status as its code)."""
+        return _flatten({f: code(self.status) if f == "status" else getattr(self, f)
+                         for f in _FIELDS})
 
     @classmethod
     def from_dict(cls, d: dict) -> "WearState":
@@ -131,7 +132,11 @@ class WearState(eqx.Module):
         missing = [f for f in _FIELDS if f not in tree]
         if missing:
             raise InputError(f"wear state without {missing}")
-        return cls(**{f: tree[f] for f in _FIELDS})
+        try:
+            status = from_code(tree["status"])
+        except ValueError as err:
+            raise InputError(f"wear state: {err}") from err
+        return cls(**{f: status if f == "status" else tree[f] for f in _FIELDS})
 
 
 _FIELDS = ("h", "memory", "n", "status", "evaluations", "steps", "load_sliding", "life",
@@ -298,7 +303,8 @@ def initial_state(h0: tuple, memory, *, evaluations=0, ok=True) -> WearState:
     j = len(h0)
     return WearState(
         h=tuple(h0), memory=memory, n=jnp.zeros(()),
-        status=jnp.where(jnp.asarray(ok), STATUS_OK, STATUS_SOLVER),
+        status=RESULTS.where(jnp.asarray(ok, dtype=bool), RESULTS.ok,
+                             RESULTS.cycle_model_failed),
         evaluations=jnp.asarray(evaluations), steps=jnp.zeros((), int),
         load_sliding=jnp.zeros(j), life=jnp.full((j,), jnp.nan), done=jnp.zeros((j,), bool),
         fail_n=jnp.zeros(()), fail_h=jnp.zeros(()), solver={})
@@ -327,7 +333,7 @@ class Engine(eqx.Module):
         return self.solver.init(self.term, state, self.stop)
 
     def active(self, s: WearState):
-        return ((s.status == STATUS_OK) & ~jnp.all(s.done)
+        return ((s.status == RESULTS.ok) & ~jnp.all(s.done)
                 & (s.n < jnp.asarray(self.stop.end, dtype=float) - 1e-9))
 
     def record(self, s: WearState, dn, valid) -> dict:
@@ -372,7 +378,8 @@ class Engine(eqx.Module):
                 n_cross = s.n + tau * p.dn
             life = jnp.where(cross, n_cross, s.life)
             done = s.done | cross
-        status = jnp.where(~ok, STATUS_SOLVER, jnp.where(pierced, STATUS_PIERCED, STATUS_OK))
+        status = RESULTS.where(~ok, RESULTS.cycle_model_failed,
+                               RESULTS.where(pierced, RESULTS.wall_reached, RESULTS.ok))
 
         def kept(new, old):  # a failed step keeps the last good state
             return jax.tree.map(lambda a, b: jnp.where(ok, a, b), new, old)
@@ -402,13 +409,14 @@ class Engine(eqx.Module):
         return lax.scan(lambda s, x: self.slot(s, x), state, None, length=int(length))
 
     def finish(self, final: WearState) -> WearState:
-        """The final state, with status 3 where the slots ran out before the stop."""
+        """The final state, with `RESULTS.run_ended_early` where the slots ran
+        out before the stop."""
         if self.stop.life_mode:
-            short = (final.status == STATUS_OK) & ~jnp.all(final.done)
+            short = (final.status == RESULTS.ok) & ~jnp.all(final.done)
         else:
-            short = ((final.status == STATUS_OK)
+            short = ((final.status == RESULTS.ok)
                      & (final.n < jnp.asarray(self.stop.end, dtype=float) - 1e-6))
-        return final.replace(status=jnp.where(short, STATUS_INCOMPLETE, final.status),
+        return final.replace(status=RESULTS.where(short, RESULTS.run_ended_early, final.status),
                              fail_n=jnp.where(short, final.n, final.fail_n),
                              fail_h=jnp.where(short, jnp.max(peaks(final.h, self.peak)),
                                               final.fail_h))

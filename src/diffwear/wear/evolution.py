@@ -11,8 +11,10 @@ differentiates (reverse or forward mode) w.r.t. the wear coefficient,
 clearance, bushing depth and diameter.
 
 Failure (bushing worn through, integrator failure) never raises inside jit:
-the evolution stops updating, keeps the results so far and reports ``status``;
-`EvolutionResult.check` raises `WearLimitError` naming the cycle and depth.
+the evolution stops updating, keeps the results so far and reports ``status``
+(a `diffwear.wear.RESULTS` member); `EvolutionResult.check` raises
+`WearLimitError` naming the cycle and depth, and ``evolve(..., throw=True)``
+raises inside jit (`eqx.error_if`, as diffrax's ``diffeqsolve(throw=True)``).
 `ChunkedEvolution` runs the same scan in chunks with checkpoints.
 """
 
@@ -32,7 +34,7 @@ from .cycle import clearance_element, wear_parts
 from .dynamic_term import CycleSettings, DynamicWear
 from .engine import Engine, Stop, WearState, initial_state
 from .extrapolation import AbstractExtrapolation, Constant
-from .status import STATUS_INCOMPLETE, STATUS_OK, STATUS_PIERCED
+from .status import RESULTS, message, name
 
 
 class WearLimitError(SolverError):
@@ -69,7 +71,7 @@ class EvolutionResult(eqx.Module):
     cycles: Float[Array, ""]            # real cycles represented
     dynamic_cycles: Array               # dynamic cycles simulated (incl. warm-up)
     load_sliding: Float[Array, ""]      # A-weighted sum of int N ds [N m]
-    status: Array                       # 0 ok, 1 worn through, 2 solver failure, 3 out of slots
+    status: RESULTS                     # how it ended (`diffwear.wear.RESULTS`)
     fail_cycles: Float[Array, ""]       # real cycles done when it stopped
     fail_depth: Float[Array, ""]        # max depth when it stopped [m]
     history: dict
@@ -77,22 +79,22 @@ class EvolutionResult(eqx.Module):
 
     def check(self, what: str = "wear evolution") -> "EvolutionResult":
         """Raise `WearLimitError` (carrying this result) if the run stopped early."""
-        status = int(self.status)
-        if status == STATUS_OK:
+        if bool(self.status == RESULTS.ok):
             return self
         cyc, dep = float(self.fail_cycles), float(self.fail_depth) * 1e3
-        if status == STATUS_PIERCED:
-            msg = (f"{what}: the wear reached the bushing wall after {cyc:.0f} cycles "
-                   f"(max depth {dep:.4f} mm); stopped, results so far kept")
-        elif status == STATUS_INCOMPLETE:
-            msg = (f"{what}: all max_dynamic scan slots were used after {cyc:.0f} cycles "
-                   f"(max depth {dep:.4f} mm) before reaching the requested cycles; raise "
-                   "max_dynamic or loosen the extrapolation tolerances")
-        else:
-            msg = (f"{what}: the dynamic integration failed after {cyc:.0f} cycles "
-                   f"(max depth {dep:.4f} mm); stopped, results so far kept. Tighten "
-                   "the cycle tolerances or reduce the extrapolation factor")
-        raise WearLimitError(msg, self)
+        raise WearLimitError(f"{what}: {message(self.status)} after {cyc:.0f} cycles "
+                             f"(max depth {dep:.4f} mm); {_REMEDY[name(self.status)]}", self)
+
+
+# what to do about an evolution that stopped early, by `RESULTS` member name
+_REMEDY = {
+    "wall_reached": "stopped, results so far kept",
+    "cycle_model_failed": ("stopped, results so far kept. Tighten the cycle tolerances or "
+                           "reduce the extrapolation factor"),
+    "run_ended_early": ("all max_dynamic scan slots were used; raise max_dynamic or loosen "
+                        "the extrapolation tolerances"),
+    "contact_lost": "stopped, results so far kept",
+}
 
 
 def _with_profile(mech: Mechanism, index: int, clearance):
@@ -121,6 +123,7 @@ def evolve(
     cycle: CycleSettings = CycleSettings(),
     start: WearState | None = None,
     slots: int | None = None,
+    throw: bool = False,
 ) -> EvolutionResult:
     """Evolve the wear of clearance joint ``joint`` over ``cycles`` real cycles.
 
@@ -137,11 +140,18 @@ def evolve(
     earlier call, or `Evolver.init`); the warm-up is then skipped and ``y0``
     ignored.  ``slots`` scan slots are run (default: all of the method's).  See
     `ChunkedEvolution` for a checkpointing driver.
+
+    ``throw``: raise (`eqx.error_if`, at run time inside jit; under
+    `jax.vmap` if any point stopped) with the status's message where the
+    evolution stopped early, as diffrax's ``diffeqsolve(throw=True)``; by
+    default the result reports it in ``status`` (`EvolutionResult.check`
+    raises outside jit).
     """
     require_float64("evolve")
     ev = Evolver(mech, joint, cycles, period=period, method=method, max_dynamic=max_dynamic,
                  wall_thickness=wall_thickness, warmup_cycles=warmup_cycles, cycle=cycle)
-    return ev.solve(y0, start, slots)
+    res = ev.solve(y0, start, slots)
+    return res.status.error_if(res, res.status != RESULTS.ok) if throw else res
 
 
 class Evolver:

@@ -48,7 +48,7 @@ from .engine import (
     per_joint,
 )
 from .peak import peak_depth
-from .status import STATUS_SOLVER
+from .status import RESULTS
 
 # A peak wear rate below this [m per cycle] (1 nm per 1e9 cycles) means the
 # joint does not wear: it sets no step, and a life is never reached.
@@ -94,7 +94,7 @@ class LinearlyImplicitEuler(AbstractWearSolver):
             dm = jnp.minimum(peaks(cw.rate, peak_depth) * end, walls) / self.steps
         return state.replace(
             memory=cw.memory, evaluations=state.evaluations + 1,
-            status=jnp.where(cw.ok, state.status, STATUS_SOLVER),
+            status=RESULTS.where(cw.ok, state.status, RESULTS.cycle_model_failed),
             rate=cw.rate, response=cw.response, dm=dm)
 
     def step(self, term, state: WearState, stop: Stop) -> Proposal:

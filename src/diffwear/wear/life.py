@@ -72,14 +72,14 @@ from ..mechanism import Mechanism
 from .dynamic_term import CycleSettings, DynamicWear
 from .engine import Stop, initial_state, integrate
 from .implicit import DepthGain
-from .status import not_an_answer
+from .status import RESULTS, not_an_answer
 
 
 class LifeResult(eqx.Module):
     """Per-joint cycles to the limit and the evolution that found them.
 
     ``cycles[j]``: real cycles until joint j's maximum depth reaches the limit
-    (NaN if it did not within the slots: ``status`` 3).  ``depth``: final
+    (NaN if it did not within the slots: ``status`` `RESULTS.run_ended_early`).  ``depth``: final
     profiles (tuple, one per joint; held at the crossing slot's end once a
     joint is done).  ``history``: per scan slot ``cycles`` (N at its end),
     ``max_depth`` (per joint), ``step`` (dN) and ``valid``.
@@ -87,7 +87,7 @@ class LifeResult(eqx.Module):
 
     cycles: Float[Array, " J"]
     depth: tuple
-    status: Array                # `diffwear.wear.status`: 0 ok, 2 solver failure, 3 incomplete, ...
+    status: RESULTS              # how it ended (`diffwear.wear.RESULTS`; worst over the joints)
     dynamic_cycles: Array        # dynamic cycles simulated (incl. warm-up; 0: quasi-static)
     history: dict
 

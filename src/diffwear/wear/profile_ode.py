@@ -18,6 +18,7 @@ from jaxtyping import Array, Bool, Float
 
 from .engine import AbstractWearTerm, CycleWear, Stop, initial_state, integrate
 from .implicit import NO_WEAR_RATE, LinearlyImplicitEuler
+from .status import RESULTS
 
 __all__ = ["ProfileHistory", "ProfileSolution", "integrate_profile", "NO_WEAR_RATE"]
 
@@ -35,14 +36,14 @@ class ProfileHistory(eqx.Module):
 class ProfileSolution(eqx.Module):
     """Final profile ``depth`` [m] after ``cycles`` real cycles; ``life``: cycles
     at which the peak depth reached the limit (NaN if it did not, or in a run
-    of fixed length); ``status`` 0 ok,
-    1 worn through the wall, 2 the cycle model failed, 3 the limit was not
-    reached within ``max_steps`` steps / ``max_cycles``."""
+    of fixed length); ``status``: a `diffwear.wear.RESULTS` member (the
+    wall reached, the cycle model failed, the limit not reached within
+    ``max_steps`` steps / ``max_cycles``)."""
 
     depth: Float[Array, " n"]
     cycles: Float[Array, ""]
     life: Float[Array, ""]
-    status: Array
+    status: RESULTS
     steps: Array
     history: ProfileHistory
 
@@ -79,7 +80,7 @@ def integrate_profile(
     one evaluation to the next (a solver's warm start: it must not change the
     answer, only its cost).  ``steps``: the accuracy knob
     (`LinearlyImplicitEuler`); ``max_steps`` scan slots (default 4 steps + 8).
-    ``wall`` [m]: stop when the peak depth reaches it (status 1; ``cycles``
+    ``wall`` [m]: stop when the peak depth reaches it (`RESULTS.wall_reached`; ``cycles``
     and ``depth`` are then those at the wall).  Pure, jit-able and
     differentiable (forward and reverse mode).
     """

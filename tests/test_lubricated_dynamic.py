@@ -25,6 +25,7 @@ from diffwear.dynamics import Rodas4, simulate
 from diffwear.mechanism_file import initial_state, integrate_timed, motion_integrator
 from diffwear.models import QuasiStatic
 from diffwear.wear.cycle import FILM_TOLERANCE_FRACTION, lubricated_cycle, wear_cycle
+from diffwear.wear.status import RESULTS, code
 
 OIL = ('lubricant = { grade = "ISO VG 10", temperature = "60 degC", roughness = "0.65 um", '
        'bearing = "short" }')
@@ -170,7 +171,7 @@ def test_a_lubricated_copy_of_a_dry_file_wears_on_both_models(tmp_path):
         assert summary["integrator"] == "Rodas4"
         assert "with Rodas4" in (out / "report.md").read_text()
         joints[model] = summary["joints"]["coupler_rocker"]
-        assert joints[model]["model"] == model and joints[model]["status"] == 0
+        assert joints[model]["model"] == model and joints[model]["status"] == int(code(RESULTS.ok))
     qs, dyn = joints["quasi-static"]["wear_volume_mm3"], joints["dynamic"]["wear_volume_mm3"]
     assert 0.0 < dyn < qs
 

@@ -218,7 +218,6 @@ def test_a_thicker_oil_keeps_a_thicker_film_through_the_reversals(four_bar):
                                                  for mu in (0.5, 0.005))
     h_thick = float(jnp.min(steady_thick.min_film_thickness))
     h_thin = float(jnp.min(steady_thin.min_film_thickness))
-    print(h_thick, h_thin, float(jnp.min(thick.min_film_thickness)), float(jnp.min(thin.min_film_thickness)), float(jnp.sum(dh_thick)), float(jnp.sum(dh_thin)), float(jnp.sum(dh_dry)))
     assert h_thick == pytest.approx(h_thin, rel=1e-6)
     assert h_thick < 3e-6 and float(jnp.max(steady_thick.normal_load)) > 0.0
     assert float(jnp.min(thick.min_film_thickness)) > 3e-6  # lambda > 3 throughout

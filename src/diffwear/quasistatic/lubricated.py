@@ -347,8 +347,9 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         """The periodic backward-Euler orbit by shooting (module notes): (e [m]
         (S, 2), converged); no derivatives (`_orbit` gives them)."""
         c0 = jnp.mean(clearance)
-        steady, _ = self._solve(force[-1], omega[-1], clearance, jnp.full(2, jnp.nan))
-        start = jnp.where(jnp.all(jnp.isfinite(guess[-1])), guess[-1], steady)
+        # no guess: from the centre (the first sweep's steps carry the pin to
+        # its loads; the shooting then closes the orbit)
+        start = jnp.where(jnp.all(jnp.isfinite(guess[-1])), guess[-1], 0.0)
 
         def sweep(start):
             return self._sweep(force, omega, dt, clearance, guess, start)

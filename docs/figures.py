@@ -728,6 +728,44 @@ def lubrication_slider_crank(path: Path) -> None:
     plt.close(fig)
 
 
+def lubrication_four_bar_squeeze(path: Path) -> None:
+    """The lubricated four-bar's minimum film over a crank cycle (stored
+    quasi-static solves): the journal's orbit with the squeeze film against
+    the steady balance at every sample, at two viscosities, over the joint's
+    relative rotation (its reversals)."""
+    plt = _pyplot()
+    d = read_csv(LUBRICATION / "four_bar_squeeze.csv")
+    sigma = 1.0  # um, as design_studies/lubrication_figure_data.py (FB_ROUGHNESS)
+    fig, (a, b) = plt.subplots(2, 1, figsize=(8.0, 6.2), sharex=True,
+                               gridspec_kw={"height_ratios": [2.2, 1]})
+    crank = d["crank_angle_deg"]
+    for mu, color in zip((0.5, 0.005), ("tab:blue", "tab:orange")):
+        tag = f"mu_{1e3 * mu:g}mPas"
+        a.plot(crank, d[f"{tag}_orbit_h_min_um"], color=color, lw=1.4,
+               label=f"η = {mu:g} Pa s: orbit with the squeeze film")
+        a.plot(crank, d[f"{tag}_steady_h_min_um"], color=color, lw=1.0, ls="--",
+               label=f"η = {mu:g} Pa s: steady at every sample")
+    a.axhline(3.0 * sigma, color="tab:red", ls=":", lw=1.0,
+              label=f"3σ = {3 * sigma:g} µm: asperities touch")
+    reversals = crank[np.nonzero(np.diff(np.sign(d["omega_rad_s"])))[0]]
+    for ax in (a, b):
+        for r in reversals:
+            ax.axvline(r, color="0.6", lw=0.8)
+        ax.grid(alpha=0.3)
+    a.set(ylabel="minimum film h_min [µm]", ylim=(0, None),
+          title="Minimum film over the cycle (grey lines: the rotation reverses)")
+    a.legend(fontsize=7, loc="upper right", ncol=2)
+    b.plot(crank, d["omega_rad_s"], color="k", lw=1.0, label="ω pin − bushing")
+    b.set(xlabel="crank angle [deg]", ylabel="ω [rad/s]", xlim=(0, 360))
+    b.legend(fontsize=7, loc="upper right")
+    a.title.set_fontsize(9)
+    fig.suptitle(f"four_bar_wear, coupler-rocker joint in oil (σ = {sigma:g} µm, "
+                 "quasi-static model, unworn bushing)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
 def lubrication_rig_film(path: Path) -> None:
     """``film_crank_rod.png`` of the stored ``diffwear run rig_lubricated
     --cycles 21400``, drawn by `diffwear.plots.film_panels` from its
@@ -779,6 +817,7 @@ FIGURES: dict[str, Callable[[Path], None]] = {
     "figures/lubrication_life_viscosity.png": lubrication_life_viscosity,
     "figures/lubrication_slider_crank.png": lubrication_slider_crank,
     "figures/lubrication_rig_film.png": lubrication_rig_film,
+    "figures/lubrication_four_bar_squeeze.png": lubrication_four_bar_squeeze,
 }
 
 

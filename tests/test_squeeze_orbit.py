@@ -188,12 +188,14 @@ def four_bar():
     return loads, cycle, dry_wear
 
 
+@pytest.mark.extended
 def test_the_four_bar_joint_reverses(four_bar):
     loads, _, _ = four_bar
     omega = np.asarray(loads.omega)
     assert omega.max() > 1.0 and omega.min() < -1.0
 
 
+@pytest.mark.extended  # ~1 min with its fixture: the four-bar's orbits, compiled
 def test_a_thicker_oil_keeps_a_thicker_film_through_the_reversals(four_bar):
     """0.5 and 0.005 Pa s: the squeeze film keeps the thicker oil's pin off
     its asperities through both reversals (the steady bearing puts both on
@@ -223,6 +225,7 @@ def test_a_thicker_oil_keeps_a_thicker_film_through_the_reversals(four_bar):
     assert float(jnp.min(thick.min_film_thickness)) > 3e-6  # lambda > 3 throughout
 
 
+@pytest.mark.extended  # ~1.5 min: forward and reverse mode compiled
 def test_wear_derivative_in_viscosity_matches_central_differences(four_bar):
     """d(wear volume per cycle)/d(mu) at 0.005 Pa s, forward and reverse
     mode through the orbit's implicit derivative, against central

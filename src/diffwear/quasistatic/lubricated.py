@@ -1,8 +1,9 @@
 """The lubricated joint at equilibrium: film plus asperities, wear of one cycle.
 
-Quasi-static reduction of a `MixedLubrication` joint.  At each sample of the
-cycle the pin sits where the film and the asperities together carry the
-joint load W (the force the pin exerts on the bushing, bushing frame):
+Quasi-static reduction of a `MixedLubrication` joint (no inertia of the
+pin).  The steady balance: at each sample of the cycle the pin sits where the
+film and the asperities together carry the joint load W (the force the pin
+exerts on the bushing, bushing frame):
 
     F_film(e; omega) + F_asperity(e) + W = 0,
 
@@ -10,9 +11,9 @@ with the journal's centre at rest relative to the bushing (e_dot = 0): the
 steadily loaded journal bearing at each instant, whose eccentricity follows
 the classic relation between eps and the Sommerfeld number (for the short
 bearing, W = mu U L^3 eps / (4 c^2 (1 - eps^2)^2) sqrt(16 eps^2 + pi^2 (1 -
-eps^2)), U = omega R).  The squeeze film and the whirl of the line of centres
-are neglected (both are in the dynamic model); so is the film's response to
-a load that turns with the journal.  The asperities carry what the film does
+eps^2)), U = omega R).  It is the limit of slow loads of the orbit below,
+which adds the squeeze film and the whirl of the line of centres (the
+default; ``squeeze=False`` keeps the steady balance).  The asperities carry what the film does
 not where h_min falls to lambda_c sigma (`MixedLubrication`), with the
 foundation's springs and the dry joint's friction, so a rough or thin-film
 joint tends to the dry `QuasiStaticJoint`.
@@ -118,11 +119,11 @@ class LubricatedEquilibrium(eqx.Module):
     offset: pin centre minus bushing centre, bushing frame [m] (S, 2)
     pressure: asperity pressure p(theta_k) [Pa] (S, n)
     normal_load: asperity normal load [N] (S,)
-    film_load: |film force| [N] (S,)
+    film_load: |film force| [N] (S,) (on the orbit: wedge and squeeze)
     min_film_thickness: h_min [m] (S,)
     film_ratio: lambda = h_min / sigma (S,)
     interference: how far the asperities are pressed past the mean surfaces [m] (S,)
-    ok: every Newton solve converged
+    ok: every Newton solve converged (and the orbit closed)
     """
 
     offset: Float[Array, "S 2"]

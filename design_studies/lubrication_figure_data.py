@@ -36,7 +36,7 @@ Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
 Run time on the 2-core CPU, compiles included (measured part by part):
 steady films 5 s, Sommerfeld 7 s, life against viscosity 2.5-5 min (14
 lives and 4 tangents; the longer with other jobs on the cores),
-slider-crank 1 min, the rig run 72 s; all ~6 min.
+slider-crank 1 min, the four-bar's films 2 min, the rig run 72 s; all ~8 min.
 """
 
 from __future__ import annotations

@@ -747,12 +747,15 @@ def lubrication_four_bar_squeeze(path: Path) -> None:
                label=f"η = {mu:g} Pa s: steady at every sample")
     a.axhline(3.0 * sigma, color="tab:red", ls=":", lw=1.0,
               label=f"3σ = {3 * sigma:g} µm: asperities touch")
-    reversals = crank[np.nonzero(np.diff(np.sign(d["omega_rad_s"])))[0]]
+    # where omega changes sign from the sample before (the cycle wraps round)
+    sign = np.sign(d["omega_rad_s"])
+    reversals = crank[sign != np.roll(sign, 1)]
     for ax in (a, b):
         for r in reversals:
             ax.axvline(r, color="0.6", lw=0.8)
         ax.grid(alpha=0.3)
-    a.set(ylabel="minimum film h_min [µm]", ylim=(0, None),
+    top = max(np.max(d[k]) for k in d if k.endswith("h_min_um"))
+    a.set(ylabel="minimum film h_min [µm]", ylim=(0, 1.4 * top),
           title="Minimum film over the cycle (grey lines: the rotation reverses)")
     a.legend(fontsize=7, loc="upper right", ncol=2)
     b.plot(crank, d["omega_rad_s"], color="k", lw=1.0, label="ω pin − bushing")

@@ -108,8 +108,10 @@ _LOAD_FLOOR = 1e-9  # N: below it the balance is scaled by this floor
 # within 1e-8 of the clearance (0.5 pm on 50 um: far below the 1e-10-relative
 # balance's effect on the film, and on the wear's 1e-6-level derivatives).
 ORBIT_TOL = 1e-8
-# Shooting sweeps at most: Newton on the start converges in 2 to 4 (the
-# monodromy is exact); plain sweeps would need ~ tau / T per decade.
+# Shooting sweeps at most: Newton on the start, with the exact monodromy,
+# converges quadratically; plain sweeps (the start taken from the end) would
+# contract by ~ exp(-T / tau) a cycle, ~ 2.3 tau / T sweeps a decade where
+# the squeeze time tau is long against the period T.
 ORBIT_PASSES = 20
 
 

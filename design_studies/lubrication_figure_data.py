@@ -28,15 +28,28 @@ Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
   (``squeeze=False``), the minimum film and the relative rotation;
 * ``rig/``: ``diffwear run rig_lubricated --cycles 21400`` (the shipped file):
   its ``summary.json`` (its ``file`` the repository path) and
-  ``film_crank_rod.csv``.
+  ``film_crank_rod.csv``;
+* ``validity_map.csv``: the finite film's steady load (`reynolds_forces`,
+  96 nodes round the bushing, at least 3 rows per radius along it) over
+  L/D = 0.05 .. 20 and eps = 0.05 .. 0.99, in units of 6 mu omega R^4 / c^2,
+  to set the short and long films' closed forms against (the validity map);
+* ``raimondi_boyd.csv``: `FiniteBearingFilm` (default grid) at steady states,
+  L/D = 1/4, 1/2, 1, eps = 0.05 .. 0.97: the Sommerfeld number and the
+  attitude angle, to set against Raimondi & Boyd's table
+  (`diffwear.contact.raimondi_boyd`).
 
     PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py
     PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py --only life rig
+    PYTHONPATH=src .venv/bin/python design_studies/lubrication_figure_data.py \
+        --only validity raimondi-boyd
 
 Run time on the 2-core CPU, compiles included (measured part by part):
 steady films 5 s, Sommerfeld 7 s, life against viscosity 2.5-5 min (14
 lives and 4 tangents; the longer with other jobs on the cores),
 slider-crank 1 min, the four-bar's films 2 min, the rig run 72 s; all ~8 min.
+The finite film's parts, measured with the cores shared with other jobs: the
+validity map 17 min (240 Reynolds solves, the larger L/D the slower),
+Raimondi & Boyd 72 s.
 """
 
 from __future__ import annotations
@@ -79,6 +92,28 @@ FB_VISCOSITIES, FB_ROUGHNESS, FB_SAMPLES = [0.5, 0.005], "1 um", 360
 # the lubricated slider-crank (d)
 SC_CLEARANCE, SC_ROUGHNESS = 0.1e-3, 1e-6
 SC_VISCOSITIES = [0.5, 0.02]
+
+# the validity map (f): L/D from a short to a long bearing, 15 steps evenly in
+# log L/D; eps up to 0.99, denser near 1, where the films part most.  Rows along
+# the half length: at least 3 per radius (dzeta <= 1/3; at L/D = 8 the load is
+# then within 0.2 % (eps = 0.5) and 0.5 % (0.95) of 6 per radius's), in
+# multiples of 12 (few compiles).
+MAP_LENGTH_OVER_DIAMETER = [round(0.05 * 400.0 ** (k / 14), 4) for k in range(15)]
+MAP_ECCENTRICITY = [0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.93, 0.95,
+                    0.97, 0.98, 0.99]
+ROWS_PER_RADIUS = 3
+
+
+def map_rows(length_over_diameter: float) -> int:
+    """Grid rows along the half length for the validity map at this L/D."""
+    return max(12, 12 * math.ceil(ROWS_PER_RADIUS * length_over_diameter / 12))
+
+
+# Raimondi & Boyd (g): the plain journal bearing of tests/test_finite_bearing.py
+# (R = 10 mm, c = 20 um, mu = 0.02 Pa s, 100 rad/s), the film saturated at 0.995
+RB_MU, RB_R, RB_C, RB_OMEGA = 0.02, 0.010, 20e-6, 100.0
+RB_LENGTH_OVER_DIAMETER = [0.25, 0.5, 1.0]
+RB_ECCENTRICITY = [round(0.05 * k, 2) for k in range(1, 19)] + [0.93, 0.95, 0.97]
 
 
 def _jax():
@@ -354,8 +389,64 @@ def rig(runs: Path | None = None) -> None:
         (target / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
 
 
+def validity_map() -> None:
+    """(f) The finite film's steady load and attitude over (L/D, eps), per unit
+    wedge: F / (6 mu omega R^4 / c^2) (`reynolds_forces` at B = eps)."""
+    jax = _jax()
+
+    from diffwear.contact.finite_bearing import N_THETA, reynolds_forces
+
+    solve = jax.jit(reynolds_forces, static_argnames=("n_theta", "n_z"))
+    cols: dict[str, list] = {"length_over_diameter": [], "eps": [], "n_z": [],
+                             "load": [], "attitude_deg": []}
+    for ld in MAP_LENGTH_OVER_DIAMETER:
+        t0 = time.perf_counter()
+        n_z = map_rows(ld)
+        for eps in MAP_ECCENTRICITY:
+            f_n, f_t = (float(v) for v in solve(eps, 0.0, eps, ld, n_theta=N_THETA, n_z=n_z))
+            cols["length_over_diameter"].append(ld)
+            cols["eps"].append(eps)
+            cols["n_z"].append(n_z)
+            cols["load"].append(math.hypot(f_n, f_t))
+            cols["attitude_deg"].append(math.degrees(math.atan2(f_t, -f_n)))
+        print(f"  L/D {ld:g} ({n_z} rows): {time.perf_counter() - t0:.0f} s", flush=True)
+        _write_csv(STORE / "validity_map.csv", cols)  # as it grows: the larger L/D are slow
+
+
+def raimondi_boyd() -> None:
+    """(g) `FiniteBearingFilm` at steady states: S and the attitude angle."""
+    _jax()
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from diffwear.contact import FiniteBearingFilm, PinKinematics
+
+    @eqx.filter_jit
+    def steady(eps, length):
+        kin = PinKinematics(offset=eps * RB_C * jnp.array([1.0, 0.0]), offset_rate=jnp.zeros(2),
+                            omega=jnp.asarray(RB_OMEGA), pin_radius=jnp.asarray(RB_R),
+                            bushing_radius=jnp.asarray(RB_R + RB_C))
+        film = FiniteBearingFilm(RB_MU, length, RB_C, max_eccentricity_ratio=0.995).film(kin)
+        return jnp.linalg.norm(film.force), jnp.arctan2(film.tangential, -film.radial)
+
+    cols: dict[str, list] = {"length_over_diameter": [], "eps": [], "sommerfeld": [],
+                             "attitude_deg": []}
+    for ld in RB_LENGTH_OVER_DIAMETER:
+        length = 2.0 * RB_R * ld
+        for eps in RB_ECCENTRICITY:
+            load, phi = steady(jnp.asarray(eps), jnp.asarray(length))
+            # S = (R / c)^2 mu N / P, N = omega / 2 pi, P = W / (2 R L)
+            s = (RB_R / RB_C) ** 2 * RB_MU * RB_OMEGA / (2 * math.pi) * 2 * RB_R * length
+            cols["length_over_diameter"].append(ld)
+            cols["eps"].append(eps)
+            cols["sommerfeld"].append(s / float(load))
+            cols["attitude_deg"].append(math.degrees(float(phi)))
+    _write_csv(STORE / "raimondi_boyd.csv", cols)
+
+
 PARTS = {"steady": steady_films, "sommerfeld": sommerfeld, "life": life_viscosity,
-         "slider-crank": slider_crank, "four-bar": four_bar, "rig": rig}
+         "slider-crank": slider_crank, "four-bar": four_bar, "rig": rig,
+         "validity": validity_map, "raimondi-boyd": raimondi_boyd}
 
 
 def main(argv=None) -> int:

@@ -776,6 +776,150 @@ def lubrication_four_bar_squeeze(path: Path) -> None:
     plt.close(fig)
 
 
+def _short_over_finite_units(ld, eps):
+    """The short and long films' steady loads in the finite film's stored
+    units, 6 mu omega R^4 / c^2 (`reynolds_forces` per unit wedge): the short
+    bearing's mu omega R L^3 / c^2 w_s is (4/3) (L/D)^3 w_s of them, the long
+    bearing's mu omega R^3 L / c^2 w_l is (L/D) w_l / 3."""
+    return (4.0 / 3.0) * ld**3 * _short_steady(eps)[0], ld * _long_steady(eps)[0] / 3.0
+
+
+# What the validity map calls agreement: a film's steady load within 5 % of the
+# finite film's (`film_law_for` keeps the short film within 4.5 %); 10 % drawn too.
+MAP_TOLERANCE, MAP_LOOSE = 0.05, 0.10
+# The lubricated mechanisms' joints on the map: L/D from their files.  The rig's
+# eps range from its stored run (shipped file, short film, unworn bushing), up
+# to its film's saturation 1 - sigma / c.  The four-bar's
+# coupler-rocker joint (pin R 6 mm, bushing 10 mm deep, c 50 um) turns at most
+# 2.24 rad/s relative to its bushing (the linkage's kinematics at 60 rpm: crank
+# 0.1 m, coupler 0.4 m, rocker 0.3 m, ground 0.4 m), and twice a revolution not
+# at all (the rocker reverses); in an ISO VG 68 oil at 40 degC (58 mPa s) its
+# film at eps = 0.9 carries about 2 N at that spin (W = (R/c)^2 mu N 2RL / S with
+# Raimondi & Boyd's S = 0.0188 at L/D = 1), so under any load above ~2 N the
+# joint runs at eps >= 0.9, up to the saturation 1 - sigma / c = 0.99 of a
+# 0.5 um roughness: a stated range, not a run.
+FOUR_BAR_JOINT = {"length_over_diameter": 10.0 / 12.0, "eps": (0.9, 0.99)}
+
+
+def lubrication_validity_map(path: Path) -> None:
+    """Where the short and the long film carry the finite film's steady load
+    to 5 % (10 %), over L/D and eps, from the stored Reynolds solves; the
+    analytic criterion of `film_law_for`; the lubricated rig's and four-bar's
+    joints."""
+    plt = _pyplot()
+    from matplotlib.patches import PathPatch
+
+    from diffwear.contact.finite_bearing import SHORT_BEARING_LIMIT
+
+    d = read_csv(LUBRICATION / "validity_map.csv")
+    lds, epss = np.unique(d["length_over_diameter"]), np.unique(d["eps"])
+    grid = np.full((len(epss), len(lds)), np.nan)
+    for ld, eps, load in zip(d["length_over_diameter"], d["eps"], d["load"]):
+        grid[np.searchsorted(epss, eps), np.searchsorted(lds, ld)] = load
+    ld_g, eps_g = np.meshgrid(lds, epss)
+    short, long = _short_over_finite_units(ld_g, eps_g)
+    short_err, long_err = np.abs(short / grid - 1.0), np.abs(long / grid - 1.0)
+    fig, ax = plt.subplots(figsize=(8.0, 6.4))
+    # underneath: where neither closed form is within 5 %
+    ax.axhspan(0.0, 1.0, color="#e5e5e5", zorder=0, label="only the finite film within 5 %")
+    # each region and line traced by matplotlib's contouring, then drawn as a
+    # labelled patch and lines (contour sets have no legend entry of their own)
+    for err, color, fill, name in ((short_err, "tab:blue", "#9ecae1", "short"),
+                                   (long_err, "tab:orange", "#fdd0a2", "long")):
+        area = ax.contourf(ld_g, eps_g, err, levels=[0.0, MAP_TOLERANCE])
+        for k, outline in enumerate(area.get_paths()):
+            if len(outline.vertices):
+                ax.add_patch(PathPatch(
+                    outline, facecolor=fill, lw=0, zorder=1,
+                    label=f"{name} film within 5 % of the finite film" if k == 0 else None))
+        area.remove()
+        edge = ax.contour(ld_g, eps_g, err, levels=[MAP_LOOSE])
+        for k, segment in enumerate(piece for outline in edge.get_paths()
+                                    for piece in outline.to_polygons(closed_only=False)):
+            ax.plot(segment[:, 0], segment[:, 1], color=color, ls=":", lw=1.3, zorder=2,
+                    label=f"{name} film 10 % off the finite film" if k == 0 else None)
+        edge.remove()
+    eps_line = np.linspace(0.0, 1.0, 200)
+    ax.plot(np.sqrt(SHORT_BEARING_LIMIT * (1.0 - eps_line)), eps_line, color="k", lw=1.6,
+            label=f"criterion (L/D)² = {SHORT_BEARING_LIMIT:g} (1 − ε): short film left of it")
+    rig = json.loads((LUBRICATION / "rig" / "summary.json").read_text())
+    film = read_csv(LUBRICATION / "rig" / "film_crank_rod.csv")
+    c_um = 33.0  # the rig's radial clearance (thesis Table 7-1; rig_lubricated.toml)
+    sigma = rig["joints"]["crank_rod"]["lubricant"]["roughness_um"]
+    # from the unworn bore's film (the worn groove widens the gap past c) up to
+    # the saturation, where the finite film holds it all cycle (the guide)
+    rig_range = (float(np.min(1.0 - film["h_min_um"] / c_um)), 1.0 - sigma / c_um)
+    marks = [(13.1 / 19.0, rig_range, "s", "tab:red",
+              f"Ch. 7 rig, crank-rod joint: L/D = 13.1/19, ε {rig_range[0]:.2f}–"
+              f"{rig_range[1]:.2f} (its run, its saturation)"),
+             (FOUR_BAR_JOINT["length_over_diameter"], FOUR_BAR_JOINT["eps"], "D", "tab:green",
+              "four-bar, coupler-rocker joint: L/D = 10/12, ε "
+              f"{FOUR_BAR_JOINT['eps'][0]:g}–{FOUR_BAR_JOINT['eps'][1]:g} (estimated)")]
+    for ld, (lo, hi), marker, color, label in marks:
+        ax.plot([ld, ld], [lo, hi], color=color, lw=3.0, marker=marker, ms=6, label=label)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.11), ncol=2)
+    # from the smallest eps solved (at eps = 0 the steady load vanishes)
+    ax.set(xscale="log", xlim=(lds[0], lds[-1]), ylim=(epss[0], 1.0),
+           xlabel="length-to-diameter ratio L/D [-]", ylabel="eccentricity ratio ε [-]",
+           title="Where the short and long films carry the finite (Reynolds) film's "
+                 "steady load")
+    ax.title.set_fontsize(10)
+    ax.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
+def lubrication_raimondi_boyd(path: Path) -> None:
+    """The finite film's Sommerfeld number and attitude angle (stored) at
+    L/D = 1/4, 1/2, 1 against Raimondi & Boyd's table, with the short and the
+    long (half-Sommerfeld) films' closed forms."""
+    plt = _pyplot()
+    from diffwear.contact.raimondi_boyd import RAIMONDI_BOYD
+
+    d = read_csv(LUBRICATION / "raimondi_boyd.csv")
+    line = np.linspace(0.03, 0.97, 300)
+    short_load, short_phi = _short_steady(line)
+    long_load, long_phi = _long_steady(line)
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10.5, 4.2))
+    names = {0.25: "1/4", 0.5: "1/2", 1.0: "1"}
+    for (ld, table), color in zip(sorted(RAIMONDI_BOYD.items()),
+                                  ("tab:blue", "tab:orange", "tab:green")):
+        mine = d["length_over_diameter"] == ld
+        eps_t = np.array(sorted(table))
+        s_t = np.array([table[e][0] for e in eps_t])
+        phi_t = np.array([table[e][1] for e in eps_t])
+        a.plot(d["eps"][mine], d["sommerfeld"][mine], color=color, lw=1.4,
+               label=f"L/D = {names[ld]}: finite film")
+        a.plot(eps_t, s_t, "o", color=color, mfc="none", ms=6,
+               label=f"L/D = {names[ld]}: Raimondi & Boyd")
+        # S = (R / c)^2 mu N / P of the short film: 1 / (4 pi (L/D)^2 w_s)
+        a.plot(line, 1.0 / (4.0 * np.pi * ld**2 * short_load), color=color, lw=1.0, ls="--",
+               label=f"L/D = {names[ld]}: short film")
+        b.plot(d["eps"][mine], d["attitude_deg"][mine], color=color, lw=1.4,
+               label=f"L/D = {names[ld]}: finite film")
+        b.plot(eps_t, phi_t, "o", color=color, mfc="none", ms=6,
+               label=f"L/D = {names[ld]}: Raimondi & Boyd")
+    # the long film's S = 1 / (pi w_l), whatever L/D
+    a.plot(line, 1.0 / (np.pi * long_load), color="k", lw=1.0, ls=":",
+           label="long film (any L/D)")
+    b.plot(line, short_phi, color="0.3", lw=1.0, ls="--", label="short film (any L/D)")
+    b.plot(line, long_phi, color="k", lw=1.0, ls=":", label="long film (any L/D)")
+    a.set(yscale="log", xlim=(0, 1), ylim=(1e-3, 100), xlabel="eccentricity ratio ε [-]",
+          ylabel="Sommerfeld number S = (R/c)² ηN / P [-]", title="Sommerfeld number")
+    b.set(xlim=(0, 1), ylim=(0, 95), xlabel="eccentricity ratio ε [-]",
+          ylabel="attitude angle φ [deg]", title="Attitude angle")
+    a.legend(fontsize=6.5, loc="lower left", ncol=2)
+    b.legend(fontsize=6.5, loc="lower left")
+    for ax in (a, b):
+        ax.grid(alpha=0.3, which="both")
+    fig.suptitle("Finite film against Raimondi & Boyd's full journal bearing (Reynolds "
+                 "cavitation); short and half-Sommerfeld long films", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+
+
 def lubrication_rig_film(path: Path) -> None:
     """``film_crank_rod.png`` of the stored ``diffwear run rig_lubricated
     --cycles 21400``, drawn by `diffwear.plots.film_panels` from its
@@ -827,6 +971,8 @@ FIGURES: dict[str, Callable[[Path], None]] = {
     "figures/lubrication_life_viscosity.png": lubrication_life_viscosity,
     "figures/lubrication_slider_crank.png": lubrication_slider_crank,
     "figures/lubrication_rig_film.png": lubrication_rig_film,
+    "figures/lubrication_raimondi_boyd.png": lubrication_raimondi_boyd,
+    "figures/lubrication_validity_map.png": lubrication_validity_map,
     "figures/lubrication_four_bar_squeeze.png": lubrication_four_bar_squeeze,
 }
 

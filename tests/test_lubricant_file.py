@@ -167,6 +167,32 @@ def test_the_film_files_and_the_report(runs):
      ["joints[1].lubricant.temperature", "already the viscosity"]),
     (GRADE, 'temperature = "25 degC"',
      ["joints[1].lubricant.viscosity", "missing key", "lubricant.grade"]),
+    ('roughness = "0.65 um"', 'roughness = "0 um"',
+     ["joints[1].lubricant.roughness", "0 um is out of range", "> 0 and < clearance / 3 = 11 um"]),
+    ('roughness = "0.65 um"', 'roughness = "-1 um"',
+     ["joints[1].lubricant.roughness", "-1 um is out of range", "< clearance / 3 = 11 um"]),
+    (GRADE, 'grade = "ISO VG 5", temperature = "25 degC"',
+     ["joints[1].lubricant.grade", "'ISO VG 5'", "ISO VG 10, ISO VG 15"]),
+    (GRADE, 'grade = "ISO VG 1500", temperature = "160 degC"',
+     ["joints[1].lubricant.temperature", "160 degC", "ASTM D341", "-20 degC to 150 degC"]),
+    ('bearing = "short"', 'bearing = "Short"',
+     ["joints[1].lubricant.bearing", "'Short' is not allowed", "'finite'"]),
+    # the finite film's grid: the rig saturates at eps_max = 1 - 0.65 / 33 = 0.9803;
+    # 8 nodes across the minimum film's half width sqrt(2 (1 - eps) / eps) = 0.2005
+    # with the finest spacing (1 - 0.9 eps) 2 pi / n need n >= 8 x 0.1177 x 2 pi /
+    # 0.2005 = 29.5, the even 30
+    ('bearing = "short"', 'bearing = "finite", film_n_theta = 28',
+     ["joints[1].lubricant.film_n_theta", "28 nodes", "too coarse", "eps_max",
+      "0.9803", "an even integer >= 30"]),
+    ('bearing = "short"', 'bearing = "finite", film_n_theta = 31',
+     ["joints[1].lubricant.film_n_theta", "31 is odd", "an even integer in [16, 4096]"]),
+    ('bearing = "short"', 'bearing = "finite", film_n_theta = 8',
+     ["joints[1].lubricant.film_n_theta", "out of range", "[16, 4096]"]),
+    ('bearing = "short"', 'bearing = "finite", film_n_z = 1',
+     ["joints[1].lubricant.film_n_z", "out of range", "[2, 1024]"]),
+    ('bearing = "short"', 'bearing = "short", film_n_theta = 96',
+     ["joints[1].lubricant.film_n_theta", "given for bearing = 'short'",
+      'bearing = "finite", or no grid key']),
     ('law = { type = "elastic-foundation", layer_thickness = "6.342 mm", depth = "13.1 mm", '
      'restitution = 0.8 }\nwear = { coefficient = "5.05e-4 mm^3/(N m)" }   # Table 7-2',
      'law = { type = "lankarani-nikravesh" }\npin_material = "steel"',
@@ -184,6 +210,19 @@ def test_a_bad_lubricant_exits_2_naming_the_key_and_the_range(tmp_path, capsys, 
         assert w in err, (w, err)
     assert not out.exists()
     assert path.read_bytes() == before  # the user's file is left as it was
+
+
+def test_a_finite_film_grid_that_resolves_the_saturation_is_taken(tmp_path):
+    """30 nodes round the bushing resolve the rig's film at eps_max = 0.9803
+    (28 do not: above); the grid reaches the film law."""
+    from diffwear.contact import FiniteBearingFilm
+
+    path = _file(tmp_path, "grid", ('bearing = "short"',
+                                    'bearing = "finite", film_n_theta = 30, film_n_z = 6'))
+    film = load(path).mechanism.element("crank_rod").law.film
+    assert isinstance(film, FiniteBearingFilm)
+    assert (film.n_theta, film.n_z) == (30, 6)
+    assert float(film.max_eccentricity_ratio) == pytest.approx(1 - 0.65 / 33, rel=1e-9)
 
 
 def test_the_dynamic_wear_model_refuses_a_lubricated_joint_up_front(tmp_path, capsys):

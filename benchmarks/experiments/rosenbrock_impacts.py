@@ -33,7 +33,7 @@ import numpy as np  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 
 from _record import write_record  # noqa: E402  (puts the harness on sys.path)
-from run import time_jitted  # noqa: E402
+from harness import time_jitted  # noqa: E402
 
 SOLVERS = (("Tsit5", 1e-6), ("Rodas4", 1e-4), ("Rodas4", 1e-5), ("Rodas4", 1e-6))
 

@@ -39,7 +39,7 @@ import numpy as np  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 
 from _record import write_record  # noqa: E402  (puts the harness on sys.path)
-from run import time_jitted  # noqa: E402
+from harness import time_jitted  # noqa: E402
 
 
 def cycle_on(rtol, period, solver=None):

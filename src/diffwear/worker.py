@@ -7,8 +7,8 @@ caller's unguarded script) with the caller's import path, sent
 handler its requests are answered with (and what the parent is told once it
 is ready).  It ignores Ctrl-C (the parent
 decides) and ends when the parent sends ``None``, closes it, or dies (its
-pipe ends).  A process, not a thread: two XLA programs executing at once
-from two threads of one process were seen to hang on the CPU backend.
+pipe ends).  A process, not a thread: the CPU backend does not run two XLA
+programs at once from two threads of one process (docs/notes/cpu-sweeps.md).
 
 `run_pool` shares tasks over several workers, each given the next task as
 it answers.  Where pipes cannot be passed to a child (Windows), `AVAILABLE`

@@ -328,17 +328,18 @@ class Fitter:
     """Compiled pieces shared by all fits of one problem, and the
     Levenberg-Marquardt iteration (Marquardt's diagonal scaling).
 
-    Why not optimistix here: on the dynamic model its trust-region LM took 39+
-    steps (the model's adaptive steps make chi2 slightly rough at the 1e-3
-    scale, and its ratio test keeps shrinking the region); the plain Marquardt
-    loop below accepts a Gauss-Newton-like step in 3-6 iterations on either
-    model.  Each iteration is one forward-mode pass giving r and J together
-    (`jax.jvp` over a batch of tangents), compiled once for the base fit and
-    every refit: which effects (and which discrepancy variable) a fit frees
-    is data (the tangents), not structure.  Unknowns z are in units of each
-    parameter's stated spread (tau), of an effect's scale, of a shape's prior
-    spread and of a discrepancy coefficient's prior spread, so the step
-    tolerance ``xtol`` reads "1 % of a spread".
+    Why not optimistix here: on the dynamic model its trust-region LM needs
+    many more steps (the model's adaptive steps make chi2 slightly rough at
+    the 1e-3 scale, and its ratio test keeps shrinking the region); the plain
+    Marquardt loop below accepts a Gauss-Newton-like step in a few iterations
+    on either model (docs/notes/calibration-selection.md).  Each iteration is
+    one forward-mode pass giving r and J together (`jax.jvp` over a batch of
+    tangents), compiled once for the base fit and every refit: which effects
+    (and which discrepancy variable) a fit frees is data (the tangents), not
+    structure.  Unknowns z are in units of each parameter's stated spread
+    (tau), of an effect's scale, of a shape's prior spread and of a
+    discrepancy coefficient's prior spread, so the step tolerance ``xtol``
+    reads "1 % of a spread".
     """
 
     def __init__(self, problem: Problem, *, xtol=1e-2, ftol=1e-4, max_steps=30):
@@ -356,7 +357,7 @@ class Fitter:
         # directional derivatives per call: the one-effect fit's unknowns (x,
         # strength, shape); more come in batches of this size, so one compiled
         # program serves every fit, the score tests and the suspects
-        # (compiling one per use cost ~4x the whole loop's run time)
+        # (not one per use: docs/notes/calibration-selection.md)
         self.width = nb + 2
         sx, ss, sg, su = self._slices
         sd = self._disc

@@ -118,7 +118,7 @@ def run(out: OutputDir, *, settings: dict | None = None, log=print) -> dict:
     # In a second thread while the problems are solved (2 cores; XLA compiles
     # and runs outside the GIL): the Table 8-4 check on the reference model,
     # which also compiles it for the space-mapping rounds, and the compiled
-    # life maps.  Measured on the default run: 75 s -> see the design page.
+    # life maps (what it saves: docs/notes/design-solver.md).
     def map_setup():
         model = SWEEP_MODEL.prepared() if corrected else fast
         return model, map_batch(model, settings["map_points"])

@@ -28,6 +28,7 @@ from ..contact import (
     ShortBearingFilm,
     oils,
 )
+from ..contact.finite_bearing import N_THETA, N_Z, nodes_for
 from ..contact.friction import DEFAULT_SLIP_WIDTH
 from ..contact.mixed import ONSET_FILM_RATIO
 from ..errors import InputError
@@ -124,12 +125,20 @@ LUBRICANT = Table(fields={
                   "mineral oil; its viscosity at temperature by ASTM D341)"),
     "temperature": Text(default=None, doc="running temperature of the oil of grade, e.g. "
                         "\"25 degC\""),
-    "roughness": Quantity(dimension="length", low=0.0, low_open=True,
-                          doc="combined RMS roughness sigma of pin and bushing; below "
+    # its range, > 0 and < clearance / 3, is checked with the clearance (`_lubricated`)
+    "roughness": Quantity(dimension="length",
+                          doc="combined RMS roughness sigma of pin and bushing; > 0 and below "
                               "clearance / 3"),
     "bearing": Text(default="short", choices=tuple(BEARINGS),
                     doc="film model; a run warns where the short film is out of its range "
                         "(film_law_for): (L/D)^2 > 0.05 (1 - eps_max)"),
+    "film_n_theta": Integer(default=None, low=16, high=4096,
+                            doc="bearing = \"finite\" only: grid nodes round the bushing "
+                                "(even; default 96); they must resolve the minimum film at "
+                                "eps_max = 1 - sigma / c"),
+    "film_n_z": Integer(default=None, low=2, high=1024,
+                        doc="bearing = \"finite\" only: grid nodes along the half length "
+                            "(default 12)"),
     "length": Quantity(dimension="length", default=None, low=0.0, low_open=True,
                        doc="axial length of the film; default: law.depth"),
 }, default=None)
@@ -250,16 +259,45 @@ def _lubricated(lube, law, rp, rb):
     elastic-foundation ``law``: the film of ``lubricant.bearing`` and the
     foundation's asperities (`diffwear.contact.mixed`)."""
     c, sigma = rb - rp, lube["roughness"]
+    allowed = f"> 0 and < clearance / {ONSET_FILM_RATIO:g} = {c / ONSET_FILM_RATIO * 1e6:g} um"
+    if not sigma > 0.0:
+        raise FieldError("lubricant.roughness", f"{sigma * 1e6:g} um is out of range: an RMS "
+                         "roughness is positive", allowed)
     if ONSET_FILM_RATIO * sigma >= c:
         raise FieldError("lubricant.roughness",
                          f"{sigma * 1e6:g} um: the asperities touch at a film of "
                          f"{ONSET_FILM_RATIO:g} sigma = {ONSET_FILM_RATIO * sigma * 1e6:g} um, "
                          f"which does not fit in the radial clearance {c * 1e6:g} um (no film "
-                         "at all)", f"> 0 and < clearance / {ONSET_FILM_RATIO:g} = "
-                         f"{c / ONSET_FILM_RATIO * 1e6:g} um")
+                         "at all)", allowed)
     length = law.depth if lube["length"] is None else lube["length"]
-    film = BEARINGS[lube["bearing"]](oil_viscosity(lube), length, c)
-    return MixedLubrication(film, law, sigma)
+    return MixedLubrication(_film(lube, oil_viscosity(lube), length, c, sigma), law, sigma)
+
+
+def _film(lube, viscosity, length, c, sigma):
+    """The film law of ``lubricant.bearing``; the finite film on the grid of
+    ``lubricant.film_n_theta`` / ``film_n_z``, which must resolve the minimum
+    film where the joint's film saturates (`FiniteBearingFilm.check_resolution`)."""
+    grid = {k: lube[f"film_{k}"] for k in ("n_theta", "n_z") if lube[f"film_{k}"] is not None}
+    if lube["bearing"] != "finite":
+        if grid:
+            key = f"lubricant.film_{next(iter(grid))}"
+            raise FieldError(key, f"given for bearing = {lube['bearing']!r}, which has no "
+                             "grid", "bearing = \"finite\", or no grid key")
+        return BEARINGS[lube["bearing"]](viscosity, length, c)
+    n_theta = grid.get("n_theta", N_THETA)
+    if n_theta % 2:
+        raise FieldError("lubricant.film_n_theta", f"{n_theta} is odd: the grid needs a node "
+                         "on the maximum film", "an even integer in [16, 4096]")
+    eps_max = float(MixedLubrication.saturation(sigma, c))
+    if n_theta < nodes_for(eps_max):
+        raise FieldError("lubricant.film_n_theta",
+                         f"{n_theta} nodes round the bushing are too coarse to resolve the "
+                         f"minimum film where the film saturates, at eps_max = 1 - sigma / c "
+                         f"= {eps_max:.4g}",
+                         f"an even integer >= {nodes_for(eps_max)} (or a larger roughness)")
+    # evaluated up to its saturation (`MixedLubrication.saturated_film`)
+    return FiniteBearingFilm(viscosity, length, c, max_eccentricity_ratio=eps_max,
+                             n_theta=n_theta, n_z=grid.get("n_z", N_Z))
 
 
 def build(v, bodies) -> ClearanceJoint:

@@ -95,7 +95,8 @@ from .._checks import check_int_option, concrete
 from ..errors import InputError
 from .lubrication import MAX_ECCENTRICITY_RATIO, SATURATION_WIDTH, AbstractFilm
 
-__all__ = ["FiniteBearingFilm", "SteadyFiniteFilm", "film_law_for", "reynolds_forces"]
+__all__ = ["FiniteBearingFilm", "SteadyFiniteFilm", "film_law_for", "nodes_for",
+           "reynolds_forces"]
 
 # Default grid: 96 nodes round the bushing, 12 along the half length; with the
 # clustering below it reproduces Raimondi & Boyd's S and attitude angle to
@@ -131,6 +132,16 @@ def _resolved_eccentricity(n_theta: int) -> float:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if excess(mid) > 0.0 else (lo, mid)
     return lo
+
+
+def nodes_for(eccentricity_ratio: float) -> int:
+    """The fewest grid nodes round the bushing (even, at most 4096) that
+    resolve the minimum film at ``eccentricity_ratio`` (`NODES_PER_FILM_WIDTH`
+    nodes across it)."""
+    need = 16
+    while _resolved_eccentricity(need) < eccentricity_ratio and need < 4096:
+        need += 2
+    return need
 
 
 def _grid(eps, n_theta):
@@ -323,9 +334,7 @@ class FiniteBearingFilm(AbstractFilm):
         eps_max = float(eps.max())
         top = self.resolved_eccentricity_ratio
         if eps_max > top:
-            need = self.n_theta
-            while _resolved_eccentricity(need) < eps_max and need < 4096:
-                need += 2
+            need = nodes_for(eps_max)
             raise InputError(
                 f"{what} = {self.n_theta} is too coarse for the film at eccentricity ratio "
                 f"{eps_max:.4g}: it resolves the minimum film up to eps = {top:.4g}; allowed: "
@@ -420,7 +429,7 @@ class SteadyFiniteFilm(AbstractFilm):
         eps = -jnp.expm1(-(w**2))
         half = film.length / (2.0 * self.radius)
         # one solve after the other (lax.map): batched, the small dense
-        # inverses of the elimination run ~10 x slower on a CPU
+        # inverses of the elimination are slower on a CPU (docs/notes/cpu-kernels.md)
         def solve(e):
             p, op, _ = reynolds_pressure(e, 0.0, 1.0, half, film.n_theta, film.n_z,
                                          film.supply_groove)

@@ -301,8 +301,8 @@ class ElasticFoundation(AbstractContactLaw):
         load = p * area
         slip = dot2(t, kin.offset_rate) + kin.pin_radius * kin.omega
         f_t = -friction.factor(slip) * load
-        # the four sums over the grid as one product with [t, u, 1]: XLA's CPU
-        # backend made each row sum a tree reduction of two kernels
+        # the four sums over the grid as one product with [t, u, 1]: one kernel
+        # on XLA's CPU backend, not four reductions (docs/notes/cpu-kernels.md)
         sums = jnp.stack([f_t, load]) @ jnp.concatenate([t, u, jnp.ones_like(t[:, :1])], axis=1)
         return ContactResult(
             force=sums[0, :2] - sums[1, 2:4],

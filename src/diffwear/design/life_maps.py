@@ -32,7 +32,7 @@ def map_batch(model: TwoJointLife, points: int):
     (``points``^2, 2) [cycles]: vmapped for a model with exact gradients (the
     quasi-static model, few scan slots), ``lax.map`` otherwise (the dynamic
     model: under vmap its scan's ``lax.cond`` becomes a select and every point
-    runs all 3 x steps + 4 slots; the full 5 x 5 maps ran > 17 min).
+    runs all 3 x steps + 4 slots; docs/notes/design-solver.md).
     """
     if getattr(model, "exact_gradients", False):
         batch = jax.jit(jax.vmap(lambda x: model(x)))

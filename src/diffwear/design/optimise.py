@@ -108,8 +108,8 @@ def levenberg_marquardt(rtol: float, atol: float) -> optx.LevenbergMarquardt:
     reduction is within 1 % of the predicted one (``high_cutoff=0.99``).  A
     model seen through the sigmoid reparametrisation (and a simulator with
     adaptive steps) rarely predicts that well, so the damping never relaxed
-    and the equal-life gap shrank by a constant ~0.6 per step: 18 iterations
-    on the coarse model (measured, steps = 2).  We widen at a ratio above 3/4
+    and the equal-life gap shrank slowly (docs/notes/design-solver.md).
+    We widen at a ratio above 3/4
     as Nocedal & Wright's Algorithm 4.1 does; a step is still rejected (and
     the region shrunk) only below optimistix's 0.01, since optimistix ties
     rejection and shrinking to one cutoff and a noisy model should keep a
@@ -171,9 +171,7 @@ class CompiledLife:
     lives and their Jacobian (`jax.jacfwd`).  Inside a traced solver it enters
     as a host callback with a custom JVP, so the solver's own compiled loop
     stays small and every solve, space-mapping round and Jacobian of a study
-    reuses one compiled model (one compile of the quasi-static life with its
-    derivative takes ~15 s; optimistix's least-squares loop with the model
-    inlined took ~35 s per problem)."""
+    reuses one compiled model (the compile times: docs/notes/design-solver.md)."""
 
     def __init__(self, model):
         self.model = model
@@ -183,7 +181,8 @@ class CompiledLife:
     def _executable(self):
         # compiled ahead of time: a jitted function called both from a solver's
         # host callback and from the main thread was traced and compiled twice
-        # (jit's cache is keyed on the calling thread's trace context; ~10 s)
+        # (jit's cache is keyed on the calling thread's trace context;
+        # docs/notes/design-solver.md)
         if self._compiled is None:
             spec = jax.ShapeDtypeStruct((len(VARIABLES),), jnp.float64)
             self._compiled = jax.jit(lambda x: _value_and_jacobian(self.model, x)).lower(
@@ -316,8 +315,7 @@ def _solve(model: TwoJointLife | ShiftedLife, problem: str, residual, x_fixed, f
     if sol.result != optx.RESULTS.successful:
         # The step test (rtol/atol on u and on the objective) can wait forever
         # on the model's own noise (~3e-4 relative in the life at cycle_rtol
-        # 1e-6): the full run's least-material solve sat at the answer for
-        # most of its 30 steps.  What the user asked for is the residual, so
+        # 1e-6; docs/notes/design-solver.md).  What the user asked for is the residual, so
         # an answer whose fresh rerun meets ACCEPT_RESIDUAL is kept, flagged.
         r = float(np.max(np.abs(np.asarray(residual(jnp.asarray(x), jnp.asarray(cycles))))))
         if not (sol.result == optx.RESULTS.nonlinear_max_steps_reached

@@ -210,7 +210,6 @@ SWEEP_MODEL = TwoJointLife(wear_model=QuasiStatic(samples=36, steps=16), n_theta
 """Coarser quasi-static settings for sweeps over many designs (36 load
 samples, 16 wear steps, 36 profile nodes): lives within 0.3 % of the
 defaults' over the Table 8-3 box (32 random designs; the ``quasi-static life
-sweep`` benchmark case measures it), ~25x cheaper per design (15 ms against
-0.4 s).  Measured alternatives: 45 / 20 / 45 gave 0.3 % at 41 ms (an odd
-grid), 30 / 12 / 30 0.5 % at 12 ms."""
+sweep`` benchmark case measures it), ~25x cheaper per design (the
+alternatives measured: docs/notes/design-solver.md)."""
 

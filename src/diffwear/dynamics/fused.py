@@ -2,12 +2,9 @@
 
 XLA's CPU backend fuses an elementwise product and its sum with the
 operations around them, where ``a @ x`` of a few-dozen-entry matrix is a
-library call, and a kernel, of its own.  Measured on the rig: as sums, the
-Schur-complement solve's products took the right-hand side from 42 to 37
-kernels and its Jacobian from 110 to 96, and the Rosenbrock stages'
-combinations took a Rodas4 rig cycle to 0.95-1.00 of the time with the same
-values to the last bit (the performance docs;
-`benchmarks/experiments/rosenbrock_step_profile.py`).
+library call, and a kernel, of its own.  As sums, the right-hand side and
+its Jacobian take fewer kernels and a rig cycle no more time, with the same
+values to the last bit (the measurements: docs/notes/cpu-kernels.md).
 """
 
 from __future__ import annotations

@@ -3,10 +3,10 @@
 Baumgarte's terms (thesis Eq. 2-20) hold the drift of Phi and Phi_dot down
 by making it decay at the rates alpha and beta.  Those rates are modes of the
 ODE: integration errors excite them at the tolerance's level, and an error
-controller must then resolve them.  At the thesis's alpha = beta = 250 1/s
-the ideal slider-crank (Table 2-1, 2 s) takes 946 Tsit5 steps at rtol 1e-6,
-and 32 with alpha = beta = 0 (measured; the performance docs).  Without the
-terms, though, the drift grows.
+controller must then resolve them: at the thesis's alpha = beta = 250 1/s
+the ideal slider-crank (Table 2-1) takes ~30x the steps it takes with
+alpha = beta = 0 (docs/notes/post-stabilisation.md).  Without the terms,
+though, the drift grows.
 
 Post-stabilisation (Ascher, Chin, Petzold and Reich, "Stabilization of
 constrained mechanical systems with DAEs and invariant manifolds",
@@ -28,8 +28,8 @@ the wrapped solver's step, error estimate and dense output (so saved times
 between steps are the wrapped interpolant, off the constraints by at most a
 step's local error), then the projection.  An FSAL solver (Tsit5) starts its
 next step from the slope at the unprojected end, a difference of the same
-order as the projection; re-evaluating it cost ~30 % more time per step and
-changed neither the steps nor the error (measured on the slider-crank).
+order as the projection; it is not re-evaluated, which gained nothing
+(docs/notes/post-stabilisation.md).
 """
 
 from __future__ import annotations

@@ -30,8 +30,8 @@ triangular solve, so the cost is ~n_r (3 n_theta)^3 / 3 + ... instead of
 at n_r = 4, growing as n_r^2.
 
 Its cost (the FEM wear route's 180 x 4 ring: tens of milliseconds) is on the
-docs' FEM page.  With OpenBLAS free to start a thread per core on a loaded
-machine the Cholesky factorisations ran up to 100x slower.
+docs' FEM page; on a loaded machine it depends on the threads of the
+linear-algebra library (docs/notes/cpu-kernels.md).
 """
 
 from __future__ import annotations

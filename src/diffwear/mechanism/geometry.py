@@ -22,9 +22,8 @@ def grid_directions(n: int) -> np.ndarray:
 
     A NumPy array on purpose: under ``jit`` it enters the program as a
     constant.  ``jnp.cos`` of the grid would be evaluated at run time, because
-    XLA does not fold constants built from ``iota``: on the EFM contact's
-    grid that was most of a right-hand side's cost (the unit vectors were
-    recomputed in every fused kernel that used them).  Read-only.
+    XLA does not fold constants built from ``iota``, in every fused kernel
+    that used the unit vectors (docs/notes/cpu-kernels.md).  Read-only.
     """
     theta = 2.0 * np.pi * np.arange(n) / n
     out = np.stack([np.cos(theta), np.sin(theta)], axis=-1)

@@ -180,9 +180,8 @@ class QuasiStatic(AbstractWearModel):
 
         parts = (models, loads.joints, masses, tuple(walls))
         if len(models) > 1 and all(_stackable(p) for p in parts):
-            # one vmapped loop: XLA's CPU runtime was seen to hang (idle,
-            # never returning) running two such loops side by side in one
-            # program under forward-mode differentiation
+            # one vmapped loop, not two side by side in one program (XLA's CPU
+            # runtime: docs/notes/quasi-static-model.md, "Joints side by side")
             stacked = [jax.tree.map(lambda *a: jnp.stack(a), *p) for p in parts]
             sols, margins = jax.vmap(one)(*stacked)
             per_joint = [(jax.tree.map(lambda a: a[i], sols), margins[i])

@@ -11,8 +11,9 @@
 * `Pooled`: the points shared over processes, one per CPU core, each looping
   with the program compiled here (sent serialised, loaded in milliseconds;
   a program with Python callbacks cannot be, and is compiled in each
-  process instead; a process, not a thread: two executions at once from
-  threads can hang the XLA CPU runtime).
+  process instead; a process, not a thread: XLA's CPU runtime does not run
+  two executions at once from threads of one process;
+  docs/notes/cpu-sweeps.md).
 * `Auto` (the default): `Batched` on an accelerator (or when a chunk size or
   several devices are asked for); on a CPU it loops, times the first point
   after the compilation, and moves the rest to a pool when the time saved
@@ -167,10 +168,9 @@ def _pool_setup(program, model_fn, names, out_names, core):
     compiled program (`serialized`), loaded here; without it the model is
     compiled at the first block.
 
-    The core: XLA's CPU runtime runs its threads on every core it may use;
-    two such processes on two cores each took 10x longer per point than one
-    alone (1.5 s against 0.14 s, the quasi-static rig), each pinned to a
-    core 0.1 s (measured on a 2-core machine)."""
+    The core: XLA's CPU runtime runs its threads on every core it may use,
+    and two such processes' threads fight; pinned, each runs a point at
+    least as fast as one process alone (docs/notes/cpu-sweeps.md)."""
     jax.config.update("jax_platforms", "cpu")
     if core is not None and hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {core})

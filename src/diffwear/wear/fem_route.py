@@ -72,7 +72,7 @@ an interpolant misses the stiff contact.  The Rosenbrock dense output is then
 never read and is dropped (`sampling_solver`).
 
 FE solves.  The samples are solved in order, each from the previous sample's
-solution (~3 semismooth Newton steps instead of ~13), on the half ring around
+solution (a few semismooth Newton steps each), on the half ring around
 the joint force first (`contact_window`; accepted only if it solves the
 whole ring's problem), with the Newton Jacobian in closed form and without
 the final polishing step (`diffwear.fem.contact`); J's derivative of each
@@ -281,10 +281,11 @@ def fem_increment(contact: RingContact, samples: JointSamples, ts, k,
     the FE total normal load L sum_j f_j) for the loads ``samples`` at ``ts``.
 
     The samples are solved in order, each from the last loaded one's solution
-    (consecutive loads differ little: ~3 Newton steps instead of ~13 from the
-    pin touching the wall along F); ``starts``: (pin offsets [m], pressures
-    [Pa]) of a solution at these loads (`FemIncrement.offset`, ``.pressure``),
-    each sample's start instead (no Newton step where they solve it)."""
+    (consecutive loads differ little: fewer Newton steps than from the pin
+    touching the wall along F; the docs' FEM page); ``starts``: (pin offsets
+    [m], pressures [Pa]) of a solution at these loads (`FemIncrement.offset`,
+    ``.pressure``), each sample's start instead (no Newton step where they
+    solve it)."""
     f = samples.force
     n = contact.theta.shape[0]
     mag = safe_norm(f)
@@ -299,8 +300,8 @@ def fem_increment(contact: RingContact, samples: JointSamples, ts, k,
 
         def retry(_):
             # Semismooth Newton from the default start (pin touching the least worn
-            # point along F) can stall on a deep pocket (seen once on the rig at
-            # M = 5: 100 steps, residual 1e-4); start at the worn wall along F.
+            # point along F) can stall on a deep pocket (the docs' FEM page);
+            # start at the worn wall along F.
             return out(contact.solve_force(x, tol=TOL, offset_guess=contact.wall_offset(x)))
 
         return lax.cond(s.info.residual <= ACCEPT_RESIDUAL, lambda _: out(s), retry, None)

@@ -49,8 +49,12 @@ derivative, the monodromy Phi = prod_i (-J_i^-1 B_i) (J_i, B_i the balance's
 derivatives in e_i and e_{i-1}), gives the Newton update of the start,
 (I - Phi)^-1 (e_{S-1} - e_{-1}) (where the film forgets the start within a
 cycle, Phi ~ 0 and it is a plain second sweep).  Periodic when |e_{S-1} -
-e_{-1}| <= `ORBIT_TOL` c, within `ORBIT_PASSES` sweeps; ``ok`` is False
-otherwise.  The asperities see the centre at rest, as in the dry
+e_{-1}| <= `ORBIT_TOL` c, within `ORBIT_PASSES` sweeps (Newton with
+backtracking on the start).  Where it does not close, the steady balance
+stands in (``orbit_closed`` False): a pin in a groove deeper than the
+clearance, whose saturated film turns without growing, has a nearly
+neutral orbit (an eigenvalue of Phi near 1), with no restoring force
+across the cycle for the shooting to find.  The asperities see the centre at rest, as in the dry
 quasi-static joint (their hysteresis damping and the drift's share of the
 slip are left out); only the film sees e_dot.
 
@@ -125,7 +129,9 @@ class LubricatedEquilibrium(eqx.Module):
     min_film_thickness: h_min [m] (S,)
     film_ratio: lambda = h_min / sigma (S,)
     interference: how far the asperities are pressed past the mean surfaces [m] (S,)
-    ok: every Newton solve converged (and the orbit closed)
+    ok: every Newton solve converged
+    orbit_closed: the orbit with the squeeze film closed (False: the steady
+        balance at every sample stands in, or ``squeeze=False``)
     """
 
     offset: Float[Array, "S 2"]
@@ -136,6 +142,7 @@ class LubricatedEquilibrium(eqx.Module):
     film_ratio: Float[Array, " S"]
     interference: Float[Array, " S"]
     ok: Bool[Array, ""]
+    orbit_closed: Bool[Array, ""]
 
     @property
     def asperity_share(self) -> Float[Array, " S"]:
@@ -358,13 +365,19 @@ class LubricatedQuasiStaticJoint(eqx.Module):
             return self._sweep(force, omega, dt, clearance, guess, start)
 
         def unfinished(state):
-            _, _, _, defect, k = state
-            return (k < ORBIT_PASSES) & ~(defect <= ORBIT_TOL)
+            k, _, best = state[0], state[1], state[2]
+            return (k < ORBIT_PASSES) & ~(best[3] <= ORBIT_TOL)
 
         def one_pass(state):
-            start, _, _, _, k = state
+            # Newton on the start with backtracking: a start whose sweep misses
+            # by more than the best one's is replaced by half the step from the
+            # best (near a neutral orbit, a pin in a worn groove whose film
+            # turns without growing, I - Phi is nearly singular)
+            k, (start, length), best = state
             es, ok = sweep(start)
             miss = es[-1] - start
+            defect = jnp.where(jnp.all(jnp.isfinite(miss)), safe_norm(miss) / c0, jnp.inf)
+            better = defect < best[3]
             previous = jnp.concatenate([start[None], es[:-1]])
             jac, back = self._step_jacobians(es, previous, force, omega, dt, clearance)
             phi = _monodromy(_chain_matrices(jac, back))
@@ -374,11 +387,15 @@ class LubricatedQuasiStaticJoint(eqx.Module):
             size = safe_norm(jump)
             jump = jnp.where(size > 0.5 * c0, 0.5 * c0 / jnp.maximum(size, 1e-300), 1.0) * jump
             jump = jnp.where(jnp.all(jnp.isfinite(jump)), jump, miss)
-            defect = jnp.where(jnp.all(jnp.isfinite(miss)), safe_norm(miss) / c0, jnp.inf)
-            return start + jump, es, ok, defect, k + 1
+            best = jax.tree.map(lambda new, old: jnp.where(better, new, old),
+                                (start, es, ok, defect, jump), best)
+            length = jnp.where(better, 1.0, 0.5 * length)
+            return k + 1, (best[0] + length * best[4], length), best
 
-        state = (start, jnp.zeros_like(force), jnp.asarray(False), jnp.asarray(jnp.inf), 0)
-        _, es, ok, defect, _ = lax.while_loop(unfinished, one_pass, state)
+        best = (start, jnp.zeros_like(force), jnp.asarray(False), jnp.asarray(jnp.inf),
+                jnp.zeros(2))
+        _, _, best = lax.while_loop(unfinished, one_pass, (0, (start, jnp.ones(())), best))
+        _, es, ok, defect, _ = best
         return es, ok & (defect <= ORBIT_TOL)
 
     def orbit(self, loads: JointLoads, clearance: Float[Array, " n"],
@@ -400,15 +417,19 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         balance at every sample with ``squeeze=False`` (module notes);
         ``guess``: starting offsets (e.g. those of a nearby profile)."""
         c = self.dry.clearance + depth
+        start = jnp.full_like(loads.force, jnp.nan) if guess is None else guess
+        steady, ok = jax.vmap(lambda w, om, g: self.pin_offset(w, om, c, g))(
+            loads.force, loads.omega, start)
+        offsets, rates, ok, closed = steady, jnp.zeros_like(steady), ok > 0.5, False
         if self.squeeze:
-            offsets, ok = self.orbit(loads, c, guess)
-            rates = (offsets - jnp.roll(offsets, 1, axis=0)) / loads.dt
-            ok = jnp.full(loads.samples, ok > 0.5)
-        else:
-            guess = jnp.full_like(loads.force, jnp.nan) if guess is None else guess
-            offsets, ok = jax.vmap(lambda w, om, g: self.pin_offset(w, om, c, g))(
-                loads.force, loads.omega, guess)
-            rates, ok = jnp.zeros_like(offsets), ok > 0.5
+            orbit, closed = self.orbit(loads, c, guess)
+            closed = (closed > 0.5) & jnp.all(jnp.isfinite(orbit))
+            # where the orbit does not close (a pin in a groove deeper than the
+            # clearance, its saturated film turning without growing: the orbit
+            # is nearly neutral), the steady balance stands in
+            offsets = jnp.where(closed, orbit, steady)
+            rates = jnp.where(closed, (orbit - jnp.roll(orbit, 1, axis=0)) / loads.dt, 0.0)
+            ok = jnp.where(closed, True, ok)
 
         def one(e, omega, rate):
             parts = self._parts(e, omega, c, rate)
@@ -419,7 +440,8 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         return LubricatedEquilibrium(offset=offsets, pressure=p, normal_load=load,
                                      film_load=film_load, min_film_thickness=h_min,
                                      film_ratio=ratio, interference=overlap,
-                                     ok=jnp.all(ok) & jnp.all(jnp.isfinite(offsets)))
+                                     ok=jnp.all(ok) & jnp.all(jnp.isfinite(offsets)),
+                                     orbit_closed=jnp.asarray(closed))
 
     def cycle_wear(self, depth: Float[Array, " n"], loads: JointLoads, guess=None):
         """(dh per cycle [m] (n,), integral of asperity load x sliding [N m],

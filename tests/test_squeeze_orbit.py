@@ -68,6 +68,7 @@ def test_under_a_constant_load_the_orbit_is_the_steady_bearing():
     loads = _loads(jnp.tile(jnp.array([[120.0, -60.0]]), (S, 1)), 100.0, 0.1)
     orbit, steady = _equilibria(joint, loads)
     assert bool(orbit.ok) and bool(steady.ok)
+    assert bool(orbit.orbit_closed) and not bool(steady.orbit_closed)
     e_ss = np.asarray(steady.offset[0])
     assert 0.3 < np.linalg.norm(e_ss) / C < 0.95  # a film-borne pin, well off-centre
     np.testing.assert_allclose(np.asarray(orbit.offset), np.tile(e_ss, (S, 1)),
@@ -87,7 +88,7 @@ def test_under_a_slow_load_the_orbit_tends_to_the_steady_bearing():
     gaps = []
     for period in (10.0, 100.0):
         orbit, steady = _equilibria(joint, _loads(force, 100.0, period))
-        assert bool(orbit.ok) and bool(steady.ok)
+        assert bool(orbit.ok) and bool(steady.ok) and bool(orbit.orbit_closed)
         gaps.append(float(jnp.max(jnp.linalg.norm(orbit.offset - steady.offset, axis=1))) / C)
     assert gaps[0] < 2e-3, gaps
     assert gaps[1] == pytest.approx(gaps[0] / 10, rel=0.05), gaps
@@ -205,7 +206,7 @@ def test_a_thicker_oil_keeps_a_thicker_film_through_the_reversals(four_bar):
     _, cycle, (dh_dry, sliding_dry, _) = four_bar
     results = {mu: cycle(jnp.asarray(mu)) for mu in (0.5, 0.005)}
     for dh, sliding, eq in results.values():
-        assert bool(eq.ok)
+        assert bool(eq.ok) and bool(eq.orbit_closed)
         assert float(jnp.min(eq.min_film_thickness)) >= 0.0
         assert float(sliding) <= float(sliding_dry)
         assert float(jnp.max(dh)) <= float(jnp.max(dh_dry))

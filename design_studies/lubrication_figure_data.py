@@ -21,6 +21,11 @@ Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
   crank-rod joint lubricated (sigma 1 um) at 0.5 and 0.02 Pa s, and dry, over
   one crank revolution on Rodas4 (rtol = atol = 1e-8): the pin's offset in
   the bushing over the clearance, the film parameter and the asperity load;
+* ``four_bar_squeeze.csv``: the shipped four-bar (``four_bar_wear``) with
+  its coupler-rocker joint in oil (sigma 1 um) at 0.5 and 0.005 Pa s, the
+  quasi-static model's film over one cycle (360 samples): the journal's
+  orbit with the squeeze film and the steady balance at every sample
+  (``squeeze=False``), the minimum film and the relative rotation;
 * ``rig/``: ``diffwear run rig_lubricated --cycles 21400`` (the shipped file):
   its ``summary.json`` (its ``file`` the repository path) and
   ``film_crank_rod.csv``;
@@ -41,9 +46,10 @@ Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
 Run time on the 2-core CPU, compiles included (measured part by part):
 steady films 5 s, Sommerfeld 7 s, life against viscosity 2.5-5 min (14
 lives and 4 tangents; the longer with other jobs on the cores),
-slider-crank 1 min, the rig run 72 s; all ~6 min.  The finite film's parts,
-measured with the cores shared with other jobs: the validity map 17 min (240
-Reynolds solves, the larger L/D the slower), Raimondi & Boyd 72 s.
+slider-crank 1 min, the four-bar's films 2 min, the rig run 72 s; all ~8 min.
+The finite film's parts, measured with the cores shared with other jobs: the
+validity map 17 min (240 Reynolds solves, the larger L/D the slower),
+Raimondi & Boyd 72 s.
 """
 
 from __future__ import annotations
@@ -78,6 +84,10 @@ RIG_STEPS, RIG_SAMPLES = 10, 60
 VISCOSITIES = [1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 2e-4, 4e-4, 7e-4, 1e-3, 1.25e-3, 1.5e-3,
                1.75e-3, 2e-3, 3e-3]
 TANGENTS_AT = [1e-4, 2e-4, 4e-4, 1e-3]
+
+# the four-bar through its reversals (f): the oils of tests/test_squeeze_orbit.py,
+# the shipped runs' 360 samples
+FB_VISCOSITIES, FB_ROUGHNESS, FB_SAMPLES = [0.5, 0.005], "1 um", 360
 
 # the lubricated slider-crank (d)
 SC_CLEARANCE, SC_ROUGHNESS = 0.1e-3, 1e-6
@@ -317,6 +327,51 @@ def slider_crank() -> None:
     (STORE / "slider_crank.json").write_text(json.dumps(meta, indent=1) + "\n")
 
 
+def four_bar() -> None:
+    """(f) The lubricated four-bar's film over a cycle, orbit and steady."""
+    _jax()
+    import equinox as eqx
+    import jax.numpy as jnp
+    import numpy as np
+
+    from diffwear.choices import SHIPPED_MECHANISMS
+    from diffwear.config.loader import loads as load_text
+    from diffwear.mechanism_file.motion import initial_state
+    from diffwear.mechanism_file.wear import drive_period
+    from diffwear.models import QuasiStatic
+    from diffwear.quasistatic import LubricatedQuasiStaticJoint
+
+    key = 'wear = { coefficient = "5.05e-4 mm^3/(N m)" }'
+    text = (SHIPPED_MECHANISMS / "four_bar_wear.toml").read_text()
+    dry = load_text(text, file="four_bar_wear.toml")
+    found = QuasiStatic(samples=FB_SAMPLES).loads(dry.mechanism, ("coupler_rocker",),
+                                                  initial_state(dry), drive_period(dry))
+    if not bool(found.ok):
+        raise RuntimeError("four-bar: the ideal mechanism's loads failed")
+    loads = found.joints[0]
+
+    @eqx.filter_jit
+    def film(joint):
+        return joint.equilibrium(jnp.zeros(joint.n), loads)
+
+    cols: dict[str, list] = {
+        "crank_angle_deg": list(360.0 * np.arange(FB_SAMPLES) / FB_SAMPLES),
+        "omega_rad_s": list(np.asarray(loads.omega))}
+    for mu in FB_VISCOSITIES:
+        oiled = load_text(text.replace(key, key + f'\nlubricant = {{ viscosity = "{mu} Pa s", '
+                                       f'roughness = "{FB_ROUGHNESS}", bearing = "short" }}'),
+                          file="four_bar_wear.toml")
+        joint = LubricatedQuasiStaticJoint.from_joint(oiled.mechanism.element("coupler_rocker"))
+        for tag, model in (("orbit", joint), ("steady", joint.steady())):
+            t0 = time.perf_counter()
+            eq = film(model)
+            if not bool(eq.ok):
+                raise RuntimeError(f"four-bar {mu} Pa s, {tag}: the film solve failed")
+            cols[f"{_tag(mu)}_{tag}_h_min_um"] = list(np.asarray(eq.min_film_thickness) * 1e6)
+            print(f"  {mu} Pa s, {tag}: {time.perf_counter() - t0:.0f} s", flush=True)
+    _write_csv(STORE / "four_bar_squeeze.csv", cols)
+
+
 def rig(runs: Path | None = None) -> None:
     """(e) ``diffwear run rig_lubricated --cycles 21400``: its summary and film."""
     target = STORE / "rig"
@@ -391,8 +446,8 @@ def raimondi_boyd() -> None:
 
 
 PARTS = {"steady": steady_films, "sommerfeld": sommerfeld, "life": life_viscosity,
-         "slider-crank": slider_crank, "rig": rig, "validity": validity_map,
-         "raimondi-boyd": raimondi_boyd}
+         "slider-crank": slider_crank, "four-bar": four_bar, "rig": rig,
+         "validity": validity_map, "raimondi-boyd": raimondi_boyd}
 
 
 def main(argv=None) -> int:

@@ -167,7 +167,8 @@ class DynamicFiniteFilm(AbstractFilm):
             _, (forces, peaks) = lax.scan(step, start.astype(zeros.dtype), phi)
             return forces, peaks[solved // 2]  # phi = 0: the steady film at B = 1
 
-        half_table, peak = lax.map(along_directions, eps_nodes, batch_size=batch_size)  # (k, solved, 2), (k,)
+        # (k, solved, 2) forces and (k,) peaks
+        half_table, peak = lax.map(along_directions, eps_nodes, batch_size=batch_size)
         # the other half, phi_{m - j} = pi - phi_j: g_n even, g_t odd
         mirrored = half_table[:, 1:-1][:, ::-1] * jnp.array([1.0, -1.0])
         table = jnp.concatenate([half_table, mirrored], axis=1)  # (k, n_direction, 2)

@@ -30,15 +30,14 @@ variables: each eps node's values are divided by their root mean square
 over phi, the envelope E(eps).  log E is interpolated like the steady table's
 log |F| (a Catmull-Rom cubic in w, mirrored at w = 0); the scaled values g / E,
 between -1.5 and 1.5, by the same cubic in w and a periodic cubic spline in
-phi (C2, exact for the first harmonic cos phi, sin phi of a film without
-cavitation to O(h^4)).
+phi (C2; it reproduces the first harmonic cos phi, sin phi of a film
+without cavitation to O(h^4)).
 
 **Construction.**  Along each eps node the directions are solved in order,
-each active-set solve starting from its neighbour's pressurised set (a few
-passes instead of about ten from the converging half); the eps nodes one
-after the other (`lax.map`: batched, the small dense inverses of the
-block elimination are not faster on a CPU).  Sizes, times and the accuracy
-against direct solves: docs/notes/finite-film-table.md.
+each active-set solve starting from its neighbour's pressurised set (about
+half the passes it takes from the converging half); the eps nodes one
+after the other (`lax.map`; ``batch_size`` batches them).  Sizes, times
+and the accuracy against direct solves: docs/notes/finite-film-table.md.
 """
 
 from __future__ import annotations
@@ -112,7 +111,7 @@ class DynamicFiniteFilm(AbstractFilm):
             forces are held at the top node's: a film whose eps_max is raised
             later (a mixed law's saturation) needs a table that reaches it.
         batch_size: eps nodes solved together (`lax.map`'s batch_size;
-            default None, one after the other: on a CPU batching is slower)
+            default None, one after the other)
 
     The table costs n_eccentricity (n_direction / 2 + 1) Reynolds solves at
     construction; an evaluation is a few hundred flops.

@@ -10,6 +10,7 @@ from .clearance_joint import (
     with_clearance,
 )
 from .finite_bearing import FiniteBearingFilm
+from .finite_table import DynamicFiniteFilm
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
 from .laws import (
@@ -30,7 +31,7 @@ __all__ = [
     "CoulombFriction", "ArchardWear", "ContactResult", "PinKinematics",
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
     "LankaraniNikravesh", "AbstractFilm", "FilmForce", "ShortBearingFilm", "LongBearingFilm",
-    "FiniteBearingFilm",
+    "FiniteBearingFilm", "DynamicFiniteFilm",
     "Lubrication", "MixedLubrication",
     "PTFE", "STEEL", "Material",
     "BushingProfile",

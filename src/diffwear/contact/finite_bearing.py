@@ -232,11 +232,14 @@ def _solve_on(op: _Operator, free, rhs):
 
 
 def reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
-                      n_theta=N_THETA, n_z=N_Z, supply_groove=True):
+                      n_theta=N_THETA, n_z=N_Z, supply_groove=True, initial_set=None):
     """The dimensionless film pressure P = p c^2 / (6 mu R^2) on the grid
     (n_z, n_theta), its `_Operator` and the number of active-set passes, from
     eps, A = 2 eps_dot and B = eps (omega - 2 gamma_dot) [1/s] and the half
-    length over the radius, L / D (module notes)."""
+    length over the radius, L / D (module notes).  ``initial_set`` (n_z,
+    n_theta; 1 pressurised) starts the active-set passes from a neighbouring
+    solution's set instead of the converging half (the same solution: for an
+    M-matrix the method converges from any start)."""
     eps = jnp.asarray(eccentricity_ratio, dtype=float)
     op = _operator(eps, half_length, n_theta, n_z)
     f = wedge * jnp.sin(op.psi) - squeeze * jnp.cos(op.psi)
@@ -258,7 +261,10 @@ def reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
         new = (p * op_c.diag - residual > 0.0).astype(p.dtype) * groove[None, :]
         return new, free, k + 1
 
-    start = (q_c < 0.0).astype(q_c.dtype) * groove[None, :]
+    if initial_set is None:
+        start = (q_c < 0.0).astype(q_c.dtype) * groove[None, :]
+    else:
+        start = lax.stop_gradient(jnp.asarray(initial_set, dtype=q_c.dtype)) * groove[None, :]
     free, _, passes = lax.while_loop(unsettled, one_pass, (start, jnp.zeros_like(start), 0))
     free = lax.stop_gradient(free)
     return _solve_on(op, free, -q), op, passes
@@ -368,6 +374,14 @@ class FiniteBearingFilm(AbstractFilm):
         """This film for a journal centre at rest in the bushing (e_dot = 0),
         tabulated in eps (`SteadyFiniteFilm`) for the journal radius ``radius``."""
         return SteadyFiniteFilm(self, radius)
+
+    def tabulated(self, radius, **table):
+        """This film for any motion of the journal centre (squeeze and wedge),
+        tabulated in eps and the drive's direction (`DynamicFiniteFilm`, whose
+        keyword arguments ``table`` passes on) for the journal radius ``radius``."""
+        from .finite_table import DynamicFiniteFilm
+
+        return DynamicFiniteFilm(self, radius, **table)
 
 
 # The short (Ocvirk) film's steady load is within 4.5 % of the finite film's

@@ -47,7 +47,7 @@ sigma solves
 one root (the left side rises strictly with x), found by Newton's method
 from below (the left side is concave: the iterates rise monotonically to the
 root) from max(g / sigma, -(-g / (a sigma))^(2/5)), both below the root
-(F_{5/2}(x) >= (-x)^(5/2), Jensen); `FOUNDATION_NEWTON_STEPS` steps, in the
+(F_{5/2}(x) >= (-x)^(5/2), Jensen); at most `FOUNDATION_NEWTON_STEPS` steps, in the
 bulk's compression y = x - g / sigma (p = k_f sigma y keeps its precision
 where the bulk hardly gives).  Its
 derivative is that of the implicit function, written in terms of the root
@@ -96,8 +96,10 @@ SLOPE_RATIO_RANGE = (1e-6, 0.1)
 # Newton steps of the series solve: from the start of the module notes the
 # root's residual is below 1e-11 sigma after 10 steps (2e-5 sigma after 8) over
 # a in [1e-3, 1e3] and g / sigma in [-500, 8] (tests/test_greenwood_tripp.py);
-# 12 for margin.
-FOUNDATION_NEWTON_STEPS = 12
+# at most 16, stopped once every step is below FOUNDATION_TOL of the root
+# (Newton's quadratic convergence: the next step is ~ 1e-26 of it).
+FOUNDATION_NEWTON_STEPS = 16
+FOUNDATION_TOL = 1e-13
 
 
 def composite_modulus(pin: Material, bushing: Material) -> Float[Array, ""]:
@@ -106,10 +108,10 @@ def composite_modulus(pin: Material, bushing: Material) -> Float[Array, ""]:
     return 1.0 / (jnp.pi * (pin.compliance_h + bushing.compliance_h))
 
 
-def gaussian_tail_integral(film_ratio, order: float = 2.5) -> Float[Array, "..."]:
-    """F_n(lambda) = (1 / sqrt(2 pi)) int_lambda^inf (s - lambda)^n
-    exp(-s^2 / 2) ds for n = ``order`` > -1/2, at ``film_ratio`` lambda (any
-    shape); quadrature of the module notes."""
+def _tail_moments(film_ratio, powers):
+    """sqrt(2 pi) F_n(lambda) for n = (k - 1) / 2 for each k in ``powers``
+    (odd integers: the substituted integrand's power of v), sharing the nodes
+    and the exponentials; quadrature of the module notes."""
     lam = jnp.asarray(film_ratio, dtype=float)[..., None]
     # the span of v^2 = s - lambda: s from max(lambda, -GT_TAIL) to
     # max(lambda, 0) + GT_TAIL, its ends smoothed (the weight there is < e^-45)
@@ -119,8 +121,26 @@ def gaussian_tail_integral(film_ratio, order: float = 2.5) -> Float[Array, "..."
     lo = jnp.where(positive, jnp.sqrt(jnp.where(positive, lo2, 1.0)), 0.0)
     half = 0.5 * (hi - lo)
     v = lo + half * (1.0 + _NODES)
-    f = 2.0 * v ** (2.0 * order + 1.0) * jnp.exp(-0.5 * (v * v + lam) ** 2)
-    return half[..., 0] * (f @ _WEIGHTS) / np.sqrt(2.0 * np.pi)
+    v2 = v * v
+    weight = 2.0 * half * jnp.exp(-0.5 * (v2 + lam) ** 2) * _WEIGHTS
+    return tuple(jnp.sum(weight * v ** k, axis=-1) for k in powers)
+
+
+def gaussian_tail_integral(film_ratio, order: float = 2.5) -> Float[Array, "..."]:
+    """F_n(lambda) = (1 / sqrt(2 pi)) int_lambda^inf (s - lambda)^n
+    exp(-s^2 / 2) ds for a half-integer n = ``order`` >= 1/2, at
+    ``film_ratio`` lambda (any shape); quadrature of the module notes."""
+    power = 2.0 * order + 1.0
+    if power != round(power) or power < 2:
+        raise InputError(f"order of the Gaussian tail integral must be a half-integer >= 1/2, "
+                         f"got {order}")
+    return _tail_moments(film_ratio, (int(power),))[0] / np.sqrt(2.0 * np.pi)
+
+
+def _tail_pair(film_ratio):
+    """(F_{5/2}, F_{3/2}) at ``film_ratio``, from one set of exponentials."""
+    f52, f32 = _tail_moments(film_ratio, (6, 4))
+    return f52 / np.sqrt(2.0 * np.pi), f32 / np.sqrt(2.0 * np.pi)
 
 
 @jax.custom_jvp
@@ -132,13 +152,17 @@ def _series_root(gamma, a):
     gamma, a = jax.lax.stop_gradient((gamma, a))
     y = jnp.maximum(0.0, -(smoothing.ramp(-gamma, 1e-12) / a) ** 0.4 - gamma)
 
-    def newton(y, _):
-        x = gamma + y
-        f52 = gaussian_tail_integral(x)
-        f32 = gaussian_tail_integral(x, 1.5)
-        return y - (y - a * f52) / (1.0 + 2.5 * a * f32), None
+    def unfinished(state):
+        y, step, k = state
+        return (k < FOUNDATION_NEWTON_STEPS) & jnp.any(step > FOUNDATION_TOL * y)
 
-    y, _ = jax.lax.scan(newton, y, None, length=FOUNDATION_NEWTON_STEPS)
+    def newton(state):
+        y, _, k = state
+        f52, f32 = _tail_pair(gamma + y)
+        step = (a * f52 - y) / (1.0 + 2.5 * a * f32)
+        return y + step, jnp.abs(step), k + 1
+
+    y, _, _ = jax.lax.while_loop(unfinished, newton, (y, jnp.full_like(y, jnp.inf), 0))
     return y
 
 
@@ -151,8 +175,9 @@ def _series_root_jvp(primals, tangents):
     d_gamma, d_a = tangents
     y = _series_root(gamma, a)
     x = gamma + y
-    push = 2.5 * a * gaussian_tail_integral(x, 1.5)
-    return y, (gaussian_tail_integral(x) * d_a - push * d_gamma) / (1.0 + push)
+    f52, f32 = _tail_pair(x)
+    push = 2.5 * a * f32
+    return y, (f52 * d_a - push * d_gamma) / (1.0 + push)
 
 
 class GreenwoodTripp(eqx.Module):

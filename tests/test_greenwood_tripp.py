@@ -48,7 +48,7 @@ SIGMA = 0.5e-6
 
 def _f_closed(lam, order=2.5):
     """F_n(lambda) = Gamma(n + 1) exp(-lambda^2 / 4) D_{-n-1}(lambda) / sqrt(2 pi)
-    (parabolic cylinder function; Abramowitz & Stegun 19.5.3 / DLMF 12.5.1);
+    (parabolic cylinder function, D_{-n-1} = U(n + 1/2, .), DLMF 12.5.1);
     0 beyond lambda = 37 (below 1e-300)."""
     if lam > 37.0:
         return 0.0

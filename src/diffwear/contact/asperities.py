@@ -12,7 +12,7 @@ press each other with the mean pressure
 
 h the separation of the mean surfaces (the local film).  E' is the composite
 modulus of Hertz contact, 1 / E' = (1 - nu_1^2) / E_1 + (1 - nu_2^2) / E_2
-(Johnson, Contact Mechanics, Eq. 4.22's E*): the constant 16 sqrt(2) pi / 15
+(Johnson, Contact Mechanics, Ch. 4: E*): the constant 16 sqrt(2) pi / 15
 belongs to that convention.  Derivation (GT's, without the summits' tilt): two
 summits of radius beta whose heights overlap by s at lateral offset r touch
 with interference w = s - r^2 / (4 beta) and, Hertz with radius beta / 2,
@@ -28,7 +28,7 @@ F_{5/2} is computed by Gauss-Legendre quadrature (`GT_QUADRATURE_NODES`
 nodes) after the substitution s - lambda = v^2, which makes the integrand
 2 v^6 exp(-(v^2 + lambda)^2 / 2) smooth; the nodes span the Gaussian's mass
 (v^2 + lambda within +-`GT_TAIL`).  Relative error <= 1e-10 for every lambda
->= -60 (tests/test_greenwood_tripp.py: against the closed form by the
+>= -40 (tests/test_greenwood_tripp.py: against the closed form by the
 parabolic cylinder function, F_n(lambda) = Gamma(n + 1) exp(-lambda^2 / 4)
 D_{-n-1}(lambda) / sqrt(2 pi), and against adaptive quadrature).  It is smooth
 to every order, so derivatives are exact too (dF_n / dlambda = -n F_{n-1}).
@@ -70,7 +70,8 @@ from . import smoothing
 from .materials import PTFE, STEEL, Material
 
 # Gauss-Legendre nodes of the F_n quadrature: 48 give a relative error below
-# 1e-10 for lambda >= -60 (40 nodes: 4e-8 at lambda = -10; module notes).
+# 1e-10 for lambda >= -40 (tests/test_greenwood_tripp.py; 3e-15 at -60; 40
+# nodes: 4e-8 at lambda = -10).
 GT_QUADRATURE_NODES = 48
 # Half-width of the quadrature's span in v^2 + lambda = s: the Gaussian
 # weight exp(-s^2 / 2) beyond s = 10 is below e^-50 ~ 2e-22.
@@ -82,7 +83,7 @@ GT_CONSTANT = 16.0 * np.sqrt(2.0) * np.pi / 15.0
 # Summit parameters.  Measured surfaces give eta beta sigma between 0.03 and
 # 0.05 (Greenwood & Williamson, Proc. R. Soc. A 295 (1966) 300) and sigma /
 # beta between 1e-4 and 1e-2 (the usual ranges of the Greenwood-Tripp
-# parameters: Gohar & Rahnejat, Fundamentals of Tribology, Ch. 5).  Defaults:
+# parameters: Gohar & Rahnejat, Fundamentals of Tribology).  Defaults:
 # the middle of each, 0.04 and the geometric mean 1e-3 (for the ground steel
 # pin on a bored polymer bushing of the shipped files, sigma = 0.65 um, that
 # is beta = 0.65 mm and eta = 9.5e7 1/m^2).

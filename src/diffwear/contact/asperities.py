@@ -58,6 +58,8 @@ k_f with the asperity layer's compliance in series.
 
 from __future__ import annotations
 
+from functools import partial
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -127,6 +129,23 @@ def _tail_moments(film_ratio, powers):
     return tuple(jnp.sum(weight * v ** k, axis=-1) for k in powers)
 
 
+@partial(jax.custom_jvp, nondiff_argnums=(1,))
+def _tail_moment(film_ratio, power: int):
+    """sqrt(2 pi) F_n, n = (power - 1) / 2 >= 1/2, with the derivative
+    dF_n/dlambda = -n F_{n-1} as its rule: a tangent then costs one
+    quadrature of the primal, not one per tangent and node (forward mode
+    through a wear response carries hundreds of tangents)."""
+    return _tail_moments(film_ratio, (power,))[0]
+
+
+@_tail_moment.defjvp
+def _tail_moment_jvp(power, primals, tangents):
+    (lam,), (d_lam,) = primals, tangents
+    lower = (_tail_moment(lam, power - 2) if power >= 4
+             else _tail_moments(lam, (power - 2,))[0])
+    return _tail_moment(lam, power), -0.5 * (power - 1) * lower * d_lam
+
+
 def gaussian_tail_integral(film_ratio, order: float = 2.5) -> Float[Array, "..."]:
     """F_n(lambda) = (1 / sqrt(2 pi)) int_lambda^inf (s - lambda)^n
     exp(-s^2 / 2) ds for a half-integer n = ``order`` >= 1/2, at
@@ -135,7 +154,7 @@ def gaussian_tail_integral(film_ratio, order: float = 2.5) -> Float[Array, "..."
     if power != round(power) or power < 2:
         raise InputError(f"order of the Gaussian tail integral must be a half-integer >= 1/2, "
                          f"got {order}")
-    return _tail_moments(film_ratio, (int(power),))[0] / np.sqrt(2.0 * np.pi)
+    return _tail_moment(jnp.asarray(film_ratio, dtype=float), int(power)) / np.sqrt(2.0 * np.pi)
 
 
 def _tail_pair(film_ratio):
@@ -176,9 +195,8 @@ def _series_root_jvp(primals, tangents):
     d_gamma, d_a = tangents
     y = _series_root(gamma, a)
     x = gamma + y
-    f52, f32 = _tail_pair(x)
-    push = 2.5 * a * f32
-    return y, (f52 * d_a - push * d_gamma) / (1.0 + push)
+    push = 2.5 * a * gaussian_tail_integral(x, 1.5)
+    return y, (gaussian_tail_integral(x) * d_a - push * d_gamma) / (1.0 + push)
 
 
 class GreenwoodTripp(eqx.Module):

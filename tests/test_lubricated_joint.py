@@ -76,22 +76,35 @@ def test_film_borne_journal_follows_the_sommerfeld_relation(solve, eps):
     assert turn == pytest.approx(phi, abs=1e-8)
 
 
-def test_without_a_film_the_joint_sits_where_the_dry_joint_does(solve):
-    """Vanishing viscosity: the equilibrium is the dry joint's on the summit
-    profile c - lambda_c sigma (`pin_offset`, a second solver), friction
-    included."""
+def test_without_a_film_the_joint_sits_where_the_asperities_alone_balance_the_load(solve):
+    """Vanishing viscosity: the equilibrium is where the asperities on the
+    foundation alone carry the load, friction included, found by a second
+    solver (SciPy's fsolve on the Greenwood-Tripp pressure in series with
+    the foundation, solved node by node with SciPy: tests/test_greenwood_tripp.py)."""
+    from scipy import optimize
+    from test_greenwood_tripp import _asperity_force_reference
+
     sigma, omega = 0.5e-6, 3.0
-    qs = LubricatedQuasiStaticJoint.from_joint(_joint(mu=1e-15, sigma=sigma))
+    j = _joint(mu=1e-15, sigma=sigma)
+    qs = LubricatedQuasiStaticJoint.from_joint(j)
     load = jnp.array([-800.0, 300.0])
     e, ok = solve(qs, load, jnp.asarray(omega), qs.dry.clearance)
     dry = qs.dry
-    f = dry.friction.factor(dry.pin_radius * omega)
-    w_eff = (load - f * jnp.array([-load[1], load[0]])) / (1.0 + f * f)
-    e_dry, _ = pin_offset(dry.clearance - 3.0 * sigma, w_eff,
+    e_dry, _ = pin_offset(dry.clearance, load,
                           dry.foundation.contact_stiffness(dry.bushing_radius),
                           dry.foundation.penetration_width)
+
+    def balance(x):
+        force, _ = _asperity_force_reference(j.law, x * C, omega, 180, 0.1,
+                                             float(j.friction.slip_width))
+        return (force + np.asarray(load)) / 800.0
+
+    ref = optimize.fsolve(balance, np.asarray(e_dry) / C, xtol=1e-13) * C
     assert float(ok) == 1.0
-    np.testing.assert_allclose(np.asarray(e), np.asarray(e_dry), rtol=1e-8, atol=1e-15)
+    np.testing.assert_allclose(np.asarray(e), ref, rtol=1e-8, atol=1e-15)
+    # the asperity layer's compliance in series: deeper than the dry joint on the
+    # bare bore
+    assert float(jnp.linalg.norm(e)) > float(jnp.linalg.norm(e_dry))
 
 
 def test_mixed_equilibrium_balances_film_and_asperities(solve):
@@ -116,23 +129,27 @@ def test_mixed_equilibrium_balances_film_and_asperities(solve):
 
 
 def test_a_separated_film_puts_no_pressure_on_the_bushing():
-    """lambda > lambda_c: no asperity touches, so nothing wears."""
+    """lambda = 10: the summits' Gaussian tail leaves no pressure that
+    matters (< 1e-12 Pa), so nothing wears."""
     j = _joint(sigma=0.5e-6)
     kin = PinKinematics(jnp.array([0.9 * C, 0.0]), jnp.zeros(2), jnp.asarray(100.0),
                         jnp.asarray(R), jnp.asarray(R + C))
     parts = j.law.lubrication(kin, jnp.zeros(0), j.profile, j.friction)
     assert float(parts.film_ratio) == pytest.approx(0.1 * C / 0.5e-6, rel=1e-9)
-    assert float(jnp.max(parts.asperity.pressure)) == 0.0
-    assert float(parts.asperity_share) == 0.0
+    assert 0.0 <= float(jnp.min(parts.asperity.pressure))
+    assert float(jnp.max(parts.asperity.pressure)) < 1e-12
+    assert float(parts.asperity_share) < 1e-20
     assert float(parts.film_load) > 0.0
 
 
 def test_offset_derivatives_match_central_differences(solve):
     """de/d(viscosity), de/d(load) and de/d(roughness) by the implicit rule
-    against central differences of the solver (relative step 1e-6), in the
-    mixed regime."""
+    against central differences of the solver (relative step 1e-6), where
+    film and asperities share the load (past the film's saturation: the
+    rough surfaces carry little before, and de/d(roughness) is then too small
+    for central differences)."""
     sigma, omega = 0.5e-6, 100.0
-    load = jnp.array([200.0, -1.5 * _short_bearing_load(1.0 - 3.0 * sigma / C)])
+    load = jnp.array([200.0, -1.3 * _short_bearing_load(1.0 - sigma / C)])
 
     def offset(mu, w, s):
         qs = LubricatedQuasiStaticJoint.from_joint(_joint(mu=mu, sigma=s))
@@ -162,7 +179,7 @@ def test_bad_lubrication_inputs_are_refused():
     with pytest.raises(InputError, match="roughness"):
         MixedLubrication(film, efm, -1e-6)
     with pytest.raises(InputError, match="lambda_b"):
-        MixedLubrication(film, efm, 1e-6, onset_ratio=2.0, boundary_ratio=2.5)
+        MixedLubrication(film, efm, 1e-6, boundary_ratio=3.5)
 
 
 def test_the_film_is_saturated_where_the_surfaces_meet():
@@ -222,7 +239,9 @@ def test_lubricated_slider_crank_keeps_its_film_at_high_viscosity_and_touches_at
     thin, load_thin, ok_thin = run(jnp.asarray(0.02))
     assert ok_thick == diffrax.RESULTS.successful and ok_thin == diffrax.RESULTS.successful
     assert float(thick[1:].min()) > 3.0
-    assert float(load_thick.max()) == 0.0
+    # lambda > 3: the summits' Gaussian tail, p_a(3 sigma) = 3e-4 p_a(0), carries
+    # next to nothing
+    assert float(load_thick.max()) < 1e-4 * float(load_thin.max())
     assert float(thin.min()) < 3.0
     assert float(load_thin.max()) > 0.0
 
@@ -285,7 +304,7 @@ def test_life_derivative_in_viscosity_matches_central_differences(rig_life):
 
 def test_dynamic_wear_cycle_comes_from_the_asperities_only():
     """One crank revolution of the lubricated slider-crank on the dynamic
-    model's wear cycle (`wear_cycle`, Rodas4 at 1e-8): no wear while the
+    model's wear cycle (`wear_cycle`, Rodas4 at 1e-8): next to no wear while the
     film carries (0.5 Pa s), wear once the asperities touch (0.02 Pa s), and
     the dry joint wears more than either; the wear's Archard bookkeeping
     (load x sliding) is the asperities'."""
@@ -308,8 +327,8 @@ def test_dynamic_wear_cycle_comes_from_the_asperities_only():
 
     thick, thin, dry = cycle(lubricated(0.5)), cycle(lubricated(0.02)), cycle(mech)
     assert bool(thick.ok) and bool(thin.ok) and bool(dry.ok)
-    assert float(jnp.max(thick.depth_increment)) == 0.0
-    assert float(thick.load_sliding) == 0.0
+    assert float(jnp.max(thick.depth_increment)) < 1e-4 * float(jnp.max(thin.depth_increment))
+    assert float(thick.load_sliding) < 1e-4 * float(thin.load_sliding)
     assert float(jnp.max(thin.depth_increment)) > 0.0
     assert float(jnp.max(dry.depth_increment)) > float(jnp.max(thin.depth_increment))
     assert float(dry.load_sliding) > float(thin.load_sliding) > 0.0

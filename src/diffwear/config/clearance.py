@@ -29,6 +29,13 @@ from ..contact import (
     oils,
 )
 from ..contact.finite_bearing import N_THETA, N_Z, nodes_for
+from ..contact.asperities import (
+    DEFAULT_SLOPE_RATIO,
+    DEFAULT_SUMMIT_PRODUCT,
+    SLOPE_RATIO_RANGE,
+    SUMMIT_PRODUCT_RANGE,
+    GreenwoodTripp,
+)
 from ..contact.friction import DEFAULT_SLIP_WIDTH
 from ..contact.mixed import ONSET_FILM_RATIO
 from ..errors import InputError
@@ -129,6 +136,13 @@ LUBRICANT = Table(fields={
     "roughness": Quantity(dimension="length",
                           doc="combined RMS roughness sigma of pin and bushing; > 0 and below "
                               "clearance / 3"),
+    "summit_density": Quantity(dimension="areal density", default=None, low=0.0,
+                               low_open=True,
+                               doc="areal density eta of the asperity summits (Greenwood-"
+                                   "Tripp); default: eta beta sigma = 0.04"),
+    "summit_radius": Quantity(dimension="length", default=None, low=0.0, low_open=True,
+                              doc="radius beta of the asperity summits; default: sigma / "
+                                  "beta = 1e-3"),
     "bearing": Text(default="short", choices=tuple(BEARINGS),
                     doc="film model; a run warns where the short film is out of its range "
                         "(film_law_for): (L/D)^2 > 0.05 (1 - eps_max)"),
@@ -254,10 +268,11 @@ def oil_viscosity(lube) -> float:
         raise FieldError(key, what, allowed or None) from None
 
 
-def _lubricated(lube, law, rp, rb):
+def _lubricated(lube, law, rp, rb, pin, bushing):
     """The `MixedLubrication` of ``lube`` (the file's ``lubricant`` table) on the
     elastic-foundation ``law``: the film of ``lubricant.bearing`` and the
-    foundation's asperities (`diffwear.contact.mixed`)."""
+    Greenwood-Tripp asperities of the ``pin`` and ``bushing`` materials on the
+    foundation (`diffwear.contact.mixed`)."""
     c, sigma = rb - rp, lube["roughness"]
     allowed = f"> 0 and < clearance / {ONSET_FILM_RATIO:g} = {c / ONSET_FILM_RATIO * 1e6:g} um"
     if not sigma > 0.0:
@@ -265,12 +280,12 @@ def _lubricated(lube, law, rp, rb):
                          "roughness is positive", allowed)
     if ONSET_FILM_RATIO * sigma >= c:
         raise FieldError("lubricant.roughness",
-                         f"{sigma * 1e6:g} um: the asperities touch at a film of "
-                         f"{ONSET_FILM_RATIO:g} sigma = {ONSET_FILM_RATIO * sigma * 1e6:g} um, "
-                         f"which does not fit in the radial clearance {c * 1e6:g} um (no film "
-                         "at all)", allowed)
+                         f"{sigma * 1e6:g} um: a full film (the onset of mixed lubrication, "
+                         f"{ONSET_FILM_RATIO:g} sigma = {ONSET_FILM_RATIO * sigma * 1e6:g} um) "
+                         f"does not fit in the radial clearance {c * 1e6:g} um", allowed)
     length = law.depth if lube["length"] is None else lube["length"]
-    return MixedLubrication(_film(lube, oil_viscosity(lube), length, c, sigma), law, sigma)
+    return MixedLubrication(_film(lube, oil_viscosity(lube), length, c, sigma), law,
+                            _summits(lube, pin, bushing))
 
 
 def _film(lube, viscosity, length, c, sigma):
@@ -300,6 +315,34 @@ def _film(lube, viscosity, length, c, sigma):
                              n_theta=n_theta, n_z=grid.get("n_z", N_Z))
 
 
+def _summits(lube, pin, bushing) -> GreenwoodTripp:
+    """The `GreenwoodTripp` asperities of ``lube`` on the pin's and bushing's
+    materials (the pin steel when not given); the summit parameters'
+    defaults and ranges: `diffwear.contact.asperities`."""
+    sigma, eta, beta = lube["roughness"], lube["summit_density"], lube["summit_radius"]
+    beta_ = sigma / DEFAULT_SLOPE_RATIO if beta is None else beta
+    eta_ = DEFAULT_SUMMIT_PRODUCT / (beta_ * sigma) if eta is None else eta
+    low, high = SLOPE_RATIO_RANGE
+    if not low <= sigma / beta_ <= high:
+        raise FieldError("lubricant.summit_radius",
+                         f"{beta_ * 1e6:g} um: roughness / summit radius sigma / beta = "
+                         f"{sigma / beta_:.3g} with sigma = {sigma * 1e6:g} um",
+                         f"sigma / beta in [{low:g}, {high:g}]: {sigma / high * 1e6:g} um to "
+                         f"{sigma / low * 1e6:g} um")
+    low, high = SUMMIT_PRODUCT_RANGE
+    product = eta_ * beta_ * sigma
+    if not low <= product <= high:
+        # (only a given density can leave the range: the default's product is 0.04)
+        raise FieldError("lubricant.summit_density",
+                         f"{eta_:.4g} 1/m^2 with summit radius {beta_ * 1e6:g} um and "
+                         f"roughness {sigma * 1e6:g} um: eta beta sigma = {product:.3g}",
+                         f"eta beta sigma in [{low:g}, {high:g}] (measured surfaces: "
+                         f"0.03-0.05): eta from {low / (beta_ * sigma):.3g} to "
+                         f"{high / (beta_ * sigma):.3g} 1/m^2")
+    return GreenwoodTripp.from_materials(STEEL if pin is None else pin, bushing, sigma, eta_,
+                                         beta_)
+
+
 def build(v, bodies) -> ClearanceJoint:
     rp, rb = _radii(v)
     if v["wear"] is not None and v["law"]["type"] != EFM:
@@ -312,7 +355,8 @@ def build(v, bodies) -> ClearanceJoint:
                          f"law.type = {EFM!r}, or no lubricant key")
     law = _law(v, rp, rb, bodies)
     if v["lubricant"] is not None:
-        law = _lubricated(v["lubricant"], law, rp, rb)
+        law = _lubricated(v["lubricant"], law, rp, rb, v["pin_material"],
+                          v["bushing_material"])
     friction = CoulombFriction(v["friction"]["coefficient"], v["friction"]["slip_width"])
     wear = None if v["wear"] is None else ArchardWear(v["wear"]["coefficient"])
     return ClearanceJoint(v["name"], v["pin_body"], v["pin_point"], v["bushing_body"],

@@ -95,6 +95,10 @@ DIMENSIONS: dict[str, Dimension] = {
         "Pa s": Unit(_F(1)), "mPa s": Unit(_F(1, 1000)), "cP": Unit(_F(1, 1000)),
         "P": Unit(_F(1, 10)),
     }, "0.05 Pa s"),
+    # areal density of asperity summits (Greenwood-Tripp eta)
+    "areal density": Dimension("1/m^2", {
+        "1/m^2": Unit(_F(1)), "1/mm^2": Unit(_F(10**6)), "1/um^2": Unit(_F(10**12)),
+    }, "1e10 1/m^2"),
     # Hertz contact stiffness K of F = K delta^1.5 (Lankarani-Nikravesh law)
     "contact stiffness": Dimension("N/m^1.5", {"N/m^1.5": Unit(_F(1))}, "7e10 N/m^1.5"),
     # Archard k: worn volume per (normal load x sliding distance); 1/Pa = m^3/(N m)

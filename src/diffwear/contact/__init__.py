@@ -2,6 +2,7 @@
 wear law, bushing profiles."""
 
 from .archard import ArchardWear
+from .asperities import GreenwoodTripp
 from .clearance_joint import (
     ClearanceJoint,
     ContactHistory,
@@ -32,7 +33,7 @@ __all__ = [
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
     "LankaraniNikravesh", "AbstractFilm", "FilmForce", "ShortBearingFilm", "LongBearingFilm",
     "FiniteBearingFilm", "DynamicFiniteFilm",
-    "Lubrication", "MixedLubrication",
+    "GreenwoodTripp", "Lubrication", "MixedLubrication",
     "PTFE", "STEEL", "Material",
     "BushingProfile",
 ]

@@ -295,8 +295,13 @@ class ElasticFoundation(AbstractContactLaw):
         return smoothing.ramp(p, self.stiffness * w)
 
     def evaluate(self, kin, memory, profile, friction):
+        return self.resultant(kin, profile, self.pressure(kin, profile), friction)
+
+    def resultant(self, kin: PinKinematics, profile: BushingProfile,
+                  p: Float[Array, " n"], friction: CoulombFriction) -> ContactResult:
+        """Force, friction torque and normal load of the pressure ``p`` [Pa] on
+        the bushing grid, each node's friction opposing its own slip."""
         u, t = profile.normals, profile.tangents
-        p = self.pressure(kin, profile)
         area = kin.bushing_radius * self.depth * profile.dtheta  # per grid point [m^2]
         load = p * area
         slip = dot2(t, kin.offset_rate) + kin.pin_radius * kin.omega

@@ -32,20 +32,32 @@ The law here (stated, simple, smooth):
   Where the pin is pressed past the mean surfaces (c(theta_e) - |e| < 0, the
   asperities and the bushing compressed) the film thickness is 0 and the
   overlap is reported as the asperity interference |e| - c(theta_e).
-- **Asperities**: the elastic foundation (`ElasticFoundation`) of the bushing
-  pressed by the asperity summits, which stand lambda_c sigma above the mean
-  surfaces: each spring's penetration is delta_k = e . u_k - (c_k -
-  lambda_c sigma) = lambda_c sigma - h_k, with h_k the local film.  So the
-  asperities start to carry load where the film's validity ends, and with the
-  same Coulomb friction as the dry joint (boundary friction).
+- **Asperities**: the Greenwood-Tripp asperity pressure of the two rough
+  surfaces (`GreenwoodTripp`, contact/asperities.py), in series with the
+  bushing's elastic foundation (`ElasticFoundation`, the bulk layer the
+  bushing's asperities stand on).  At each node of the bushing grid the
+  rigid-body gap g_k = c(theta_k) - e . u_k (the local film) sets the common
+  pressure p_k = p_a(h_k) = k_f (h_k - g_k): the bulk, compressed by p_k /
+  k_f, opens the mean surfaces' separation h_k.  So the asperities start to
+  carry load smoothly as the film thins (p_a(3 sigma) / p_a(0) = 3e-4, p_a(4
+  sigma) / p_a(0) = 4e-6), stiffen as they are pressed past the mean
+  surfaces, and there the foundation's stiffness with the asperity layer's
+  compliance in series stops the pin (`GreenwoodTripp.on_foundation`).  The
+  foundation's Kelvin-Voigt damping acts on the pair: p_k + tau k_s,k
+  delta_dot_k, k_s,k the pair's stiffness (0 out of contact, k_f deep in it);
+  where the rebound's damping would pull, the pressure tends to zero without
+  a sign change (p^2 / (p - d) for a damping term d < 0).  Friction: the dry
+  joint's Coulomb friction on each node's asperity load (boundary friction).
 - **Wear** (Archard) comes from the asperity pressure only: a separated film
   does not wear the bushing.
 
-lambda_c = 3 by default (`ONSET_FILM_RATIO`): the onset of mixed lubrication in
-the regimes above.  The asperities' stiffness is the foundation's, not a
-statistical asperity model (Greenwood-Williamson): the summits are taken as a
-rigid layer on the elastic bushing, so a rough surface's softer first contact
-is not modelled (docs/notes/lubricated-joint.md).
+lambda_c = 3 (`ONSET_FILM_RATIO`, the onset of mixed lubrication in the
+regimes above) is kept as the film thickness reported as the asperities'
+onset and where the quasi-static solver's dry start places the pin; the
+contact law itself has no onset.  The asperities are elastic (Greenwood-Tripp
+assumes no plastic flow of the summits) and their parameters (summit density
+and radius) are stated, not measured (`diffwear.contact.asperities`: their
+defaults and sources).
 """
 
 from __future__ import annotations
@@ -58,15 +70,17 @@ from jaxtyping import Array, Float
 
 from .._checks import check_positive, concrete, float_leaf
 from ..errors import InputError
-from ..mechanism.geometry import safe_angle
+from ..mechanism.geometry import dot2, safe_angle
+from . import smoothing
+from .asperities import GreenwoodTripp
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
 from .laws import OFFSET_NORM_WIDTH, AbstractContactLaw, ElasticFoundation, _interp_periodic
 from .lubrication import AbstractFilm, FilmForce, _safe_unit
 from .profile import BushingProfile
 
-# Film parameter lambda = h_min / sigma at which the asperities start to carry
-# load: 3, the boundary between full-film and mixed lubrication (Hamrock,
+# Film parameter lambda = h_min / sigma reported as the onset of asperity
+# contact: 3, the boundary between full-film and mixed lubrication (Hamrock,
 # Schmid & Jacobson, Fundamentals of Fluid Film Lubrication).
 ONSET_FILM_RATIO = 3.0
 # Film parameter below which the film no longer separates the surfaces
@@ -77,6 +91,11 @@ BOUNDARY_FILM_RATIO = 1.0
 # carry beside it), and a smooth one's film is cut at 0.995, where the short
 # bearing's steady load has grown ~ 10,000-fold from its value at eps = 0.5.
 MIN_SATURATION, MAX_SATURATION = 0.5, 0.995
+# Added to the denominator of the damping's saturation p d / (p - d): 1e-9 Pa,
+# far below any pressure that matters (the damping of a node is cut by
+# 1e-9 Pa / p), and it keeps the derivative finite where the asperity
+# pressure's Gaussian tail underflows (p = 0 beyond lambda ~ 38).
+PRESSURE_FLOOR = 1e-9  # Pa
 
 
 def asperity_share(asperity_load, film_load):
@@ -120,40 +139,38 @@ class MixedLubrication(AbstractContactLaw):
 
     Arguments:
         film: the film law (`ShortBearingFilm` or `LongBearingFilm`) of the
-            unworn bore; its saturation is replaced by lambda_c's
-        asperity: the `ElasticFoundation` of the bushing (the dry law)
-        roughness: combined RMS roughness sigma of pin and bushing [m] (> 0)
-        onset_ratio: lambda_c, the film parameter where the asperities touch
-            (> 0, default 3)
+            unworn bore; its saturation is replaced by lambda_b's
+        asperity: the `ElasticFoundation` of the bushing (the dry law): the
+            bulk layer under the asperities
+        roughness: the `GreenwoodTripp` asperity law of the two surfaces, or
+            the combined RMS roughness sigma [m] (> 0) alone (then
+            `GreenwoodTripp(sigma)`: default summits, steel on PTFE)
         boundary_ratio: lambda_b, the film parameter where the film is
-            saturated (> 0, at most lambda_c; default 1)
+            saturated (> 0, at most lambda_c = 3; default 1)
     """
 
     film: AbstractFilm
     asperity: ElasticFoundation
-    roughness: Float[Array, ""]
-    onset_ratio: Float[Array, ""]
+    summits: GreenwoodTripp
     boundary_ratio: Float[Array, ""]
 
-    def __init__(self, film, asperity, roughness, onset_ratio=ONSET_FILM_RATIO,
-                 boundary_ratio=BOUNDARY_FILM_RATIO):
+    def __init__(self, film, asperity, roughness, boundary_ratio=BOUNDARY_FILM_RATIO):
         if not isinstance(film, AbstractFilm):
             raise InputError(f"the film of a lubricated joint must be a film law "
                              f"(ShortBearingFilm, LongBearingFilm), got {film!r}")
         if not isinstance(asperity, ElasticFoundation):
             raise InputError("the asperity contact of a lubricated joint must be an "
                              f"ElasticFoundation, got {type(asperity).__name__}")
-        check_positive("combined RMS roughness sigma [m]", roughness)
-        check_positive("film ratio at the asperity onset lambda_c", onset_ratio)
+        summits = roughness if isinstance(roughness, GreenwoodTripp) else GreenwoodTripp(roughness)
         check_positive("film ratio at the film's saturation lambda_b", boundary_ratio)
-        lc, lb = concrete(onset_ratio), concrete(boundary_ratio)
-        if lc is not None and lb is not None and lb > lc:
+        lb = concrete(boundary_ratio)
+        if lb is not None and lb > ONSET_FILM_RATIO:
             raise InputError(f"film ratio at the film's saturation lambda_b = {float(lb)} must "
-                             f"not exceed the asperity onset lambda_c = {float(lc)}")
+                             f"lie in (0, {ONSET_FILM_RATIO:g}] (the onset of mixed lubrication "
+                             "lambda_c)")
         self.film = film
         self.asperity = asperity
-        self.roughness = float_leaf(roughness)
-        self.onset_ratio = float_leaf(onset_ratio)
+        self.summits = summits
         self.boundary_ratio = float_leaf(boundary_ratio)
 
     # the bushing's axial depth and its foundation, as the dry law's (the wear
@@ -167,13 +184,21 @@ class MixedLubrication(AbstractContactLaw):
         return self.asperity
 
     @property
-    def onset_gap(self) -> Float[Array, ""]:
-        """lambda_c sigma [m]: the film thickness where the asperities touch."""
-        return self.onset_ratio * self.roughness
+    def roughness(self) -> Float[Array, ""]:
+        """Combined RMS roughness sigma [m] (the asperity law's)."""
+        return self.summits.roughness
 
-    def summits(self, profile: BushingProfile) -> BushingProfile:
-        """The profile of the asperity summits: the bore less lambda_c sigma."""
-        return eqx.tree_at(lambda p: p.clearance, profile, profile.clearance - self.onset_gap)
+    @property
+    def onset_ratio(self) -> Float[Array, ""]:
+        """lambda_c = 3: the film parameter reported as the onset of mixed
+        lubrication (module notes)."""
+        return jnp.asarray(ONSET_FILM_RATIO)
+
+    @property
+    def onset_gap(self) -> Float[Array, ""]:
+        """lambda_c sigma [m]: the film thickness reported as the asperities'
+        onset."""
+        return self.onset_ratio * self.roughness
 
     @staticmethod
     def saturation(roughness, clearance, boundary_ratio=BOUNDARY_FILM_RATIO):
@@ -196,11 +221,26 @@ class MixedLubrication(AbstractContactLaw):
         c_e = _interp_periodic(profile.clearance, safe_angle(kin.offset))
         return c_e - jnp.sqrt(kin.offset @ kin.offset + OFFSET_NORM_WIDTH**2)
 
+    def asperity_pressure(self, kin: PinKinematics, profile: BushingProfile):
+        """The asperity pressure p_k [Pa] on the bushing grid: Greenwood-Tripp
+        in series with the foundation at the local gap, with the pair's
+        damping (module notes)."""
+        bulk = self.asperity
+        u = profile.normals
+        gap = profile.clearance - dot2(u, kin.offset)
+        p, k_s = self.summits.on_foundation(gap, bulk.stiffness)
+        d = bulk.damping_time * k_s * dot2(u, kin.offset_rate)
+        # p + d, tending to 0 without a sign change where d < 0 (module notes);
+        # the floor keeps the ratio's derivative finite where p underflows
+        den = p + smoothing.ramp(-d, bulk.stiffness * bulk.penetration_width) + PRESSURE_FLOOR
+        return p + d * p / den
+
     def lubrication(self, kin: PinKinematics, memory: Float[Array, " m"],
                     profile: BushingProfile, friction: CoulombFriction) -> Lubrication:
         """The film's and the asperities' parts (see `Lubrication`)."""
         film = self.saturated_film().film(kin)
-        asperity = self.asperity.evaluate(kin, memory, self.summits(profile), friction)
+        asperity = self.asperity.resultant(kin, profile, self.asperity_pressure(kin, profile),
+                                           friction)
         _, film_load = _safe_unit(film.force)
         gap = self.min_film_thickness(kin, profile)
         h_min = jnp.maximum(gap, 0.0)

@@ -127,8 +127,8 @@ def film_panels(path: Path, crank_deg: np.ndarray,
                 cases: Mapping[str, tuple[np.ndarray, np.ndarray]], *, onset: float,
                 onset_ratio: float, roughness: float, title: str) -> Path:
     """A lubricated joint over the crank angle [deg]: the minimum film
-    thickness (inputs in m, drawn in um) with the asperities' onset lambda_c
-    sigma (``onset`` [m]) as a labelled line, and the asperities' share of
+    thickness (inputs in m, drawn in um) with the onset of mixed lubrication
+    lambda_c sigma (``onset`` [m]) as a labelled line, and the asperities' share of
     the load (drawn in percent); one curve per case of ``cases`` ({label: (h_min, share)}, e.g.
     the unworn and the worn bushing).  Legends off the data."""
     fig, (a, b) = plt.subplots(2, 1, figsize=(8.6, 5.4), sharex=True)
@@ -136,7 +136,7 @@ def film_panels(path: Path, crank_deg: np.ndarray,
         a.plot(crank_deg, np.asarray(h_min) * 1e6, lw=1.2, label=label)
         b.plot(crank_deg, 100.0 * np.asarray(share), lw=1.2, label=label)
     a.axhline(onset * 1e6, color="tab:red", ls="--", lw=1.0,
-              label=f"asperity onset λc σ = {onset_ratio:g} × {roughness * 1e6:.3g} µm")
+              label=f"mixed-lubrication onset λ σ = {onset_ratio:g} × {roughness * 1e6:.3g} µm")
     a.set_ylabel("min film thickness [µm]")
     # in percent, scaled to the largest share (a mixed film's few percent are
     # invisible on a 0..100 % axis)

@@ -14,8 +14,8 @@ bearing, W = mu U L^3 eps / (4 c^2 (1 - eps^2)^2) sqrt(16 eps^2 + pi^2 (1 -
 eps^2)), U = omega R).  It is the limit of slow loads of the orbit below,
 which adds the squeeze film and the whirl of the line of centres (the
 default; ``squeeze=False`` keeps the steady balance).  The asperities carry what the film does
-not where h_min falls to lambda_c sigma (`MixedLubrication`), with the
-foundation's springs and the dry joint's friction, so a rough or thin-film
+not as the film thins (Greenwood-Tripp summits in series with the
+foundation, `MixedLubrication`), with the dry joint's friction, so a rough or thin-film
 joint tends to the dry `QuasiStaticJoint`.
 
 The offset is found by a damped Newton method on the 2 x 2 balance (the film's
@@ -23,7 +23,7 @@ cross-coupled force makes it non-symmetric: no energy to minimise, unlike the
 dry joint), followed from each of these starts, the best root kept: the
 film-only solution of the round bore (exact there: the film's load grows
 monotonically with eps, and its direction turns rigidly with e), the dry
-equilibrium on the asperity summits, and a warm start when given.
+equilibrium on the bore less 3 sigma, and a warm start when given.
 Derivatives by the implicit-function theorem, de = -J^-1 dr/dtheta, as a
 custom JVP rule written in terms of the solution itself, so that it can be
 differentiated again (the wear response A is a derivative of the wear, and a
@@ -221,9 +221,9 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         """F_film + F_asperity + W [N]: zero at equilibrium; the film with the
         centre's velocity ``rate`` [m/s] (default at rest)."""
         film = self.law.saturated_film().film(self._kinematics(offset, omega, rate))
-        asperity = self.law.asperity.evaluate(
-            self._kinematics(offset, omega), jnp.zeros(0),
-            self.law.summits(self._profile(clearance)), self.dry.friction)
+        at_rest, profile = self._kinematics(offset, omega), self._profile(clearance)
+        asperity = self.law.asperity.resultant(
+            at_rest, profile, self.law.asperity_pressure(at_rest, profile), self.dry.friction)
         return film.force + asperity.force + load
 
     def _film_start(self, load, omega):

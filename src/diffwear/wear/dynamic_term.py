@@ -69,13 +69,16 @@ def wear_operator(mech: Mechanism, joint: str, ys: Float[Array, "T s"], period,
     pin translation U M^-1 U^T D dh (M = U^T D U, U = [cos, sin]) keeps the
     contact resultant, i.e. the joint force, unchanged.  Weighted by the
     sliding increment ds and by k, and summed over the cycle (trapezoid rule).
-    A lubricated joint's wearing contact is its asperities': their summits
-    stand lambda_c sigma inside the bore (`MixedLubrication.summits`).
+    A lubricated joint's wearing contact is its asperities' (Greenwood-Tripp
+    in series with the foundation): their contact band is taken as the nodes
+    past the mean surfaces, and their stiffness as the foundation's (the
+    series pair is softer: the response is an upper bound there, which only
+    makes the implicit wear step more cautious).
     """
-    from ..contact import MixedLubrication, smoothing
+    from ..contact import smoothing
 
     _, el = clearance_element(mech, joint)
-    profile = el.law.summits(el.profile) if isinstance(el.law, MixedLubrication) else el.profile
+    profile = el.profile
     theta = el.profile.theta
     u = jnp.stack([jnp.cos(theta), jnp.sin(theta)], axis=-1)  # (n, 2)
     n = theta.shape[0]

@@ -28,7 +28,6 @@ from ..contact import (
     ShortBearingFilm,
     oils,
 )
-from ..contact.finite_bearing import N_THETA, N_Z, nodes_for
 from ..contact.asperities import (
     DEFAULT_SLOPE_RATIO,
     DEFAULT_SUMMIT_PRODUCT,
@@ -36,6 +35,7 @@ from ..contact.asperities import (
     SUMMIT_PRODUCT_RANGE,
     GreenwoodTripp,
 )
+from ..contact.finite_bearing import N_THETA, N_Z, nodes_for
 from ..contact.friction import DEFAULT_SLIP_WIDTH
 from ..contact.mixed import ONSET_FILM_RATIO
 from ..errors import InputError

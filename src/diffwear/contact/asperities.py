@@ -108,7 +108,7 @@ FOUNDATION_TOL = 1e-13
 def composite_modulus(pin: Material, bushing: Material) -> Float[Array, ""]:
     """E' = 1 / ((1 - nu_pin^2) / E_pin + (1 - nu_bushing^2) / E_bushing) [Pa]
     (module notes; `Material.compliance_h` is (1 - nu^2) / (pi E))."""
-    return 1.0 / (jnp.pi * (pin.compliance_h + bushing.compliance_h))
+    return jnp.asarray(1.0 / (jnp.pi * (pin.compliance_h + bushing.compliance_h)))
 
 
 def _tail_moments(film_ratio, powers):

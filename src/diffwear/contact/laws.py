@@ -304,7 +304,7 @@ class ElasticFoundation(AbstractContactLaw):
         u, t = profile.normals, profile.tangents
         area = kin.bushing_radius * self.depth * profile.dtheta  # per grid point [m^2]
         load = p * area
-        slip = dot2(t, kin.offset_rate) + kin.pin_radius * kin.omega
+        slip = jnp.asarray(dot2(t, kin.offset_rate) + kin.pin_radius * kin.omega)
         f_t = -friction.factor(slip) * load
         # the four sums over the grid as one product with [t, u, 1]: one kernel
         # on XLA's CPU backend, not four reductions (docs/notes/cpu-kernels.md)

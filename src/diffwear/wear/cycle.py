@@ -63,8 +63,8 @@ def film_tolerance(mech: Mechanism) -> Float[Array, ""] | None:
     films are resolved, `FILM_TOLERANCE_FRACTION` x the smallest roughness
     [m] (a setting of the integrator: no derivative flows through it); None
     without a lubricated joint."""
-    sigmas = [f.law.roughness for f in mech.forces
-              if isinstance(getattr(f, "law", None), MixedLubrication)]
+    laws = [getattr(f, "law", None) for f in mech.forces]
+    sigmas = [law.roughness for law in laws if isinstance(law, MixedLubrication)]
     if not sigmas:
         return None
     return FILM_TOLERANCE_FRACTION * lax.stop_gradient(jnp.min(jnp.stack(sigmas)))

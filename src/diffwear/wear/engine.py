@@ -136,7 +136,8 @@ class WearState(eqx.Module):
             status = from_code(tree["status"])
         except ValueError as err:
             raise InputError(f"wear state: {err}") from err
-        return cls(**{f: status if f == "status" else tree[f] for f in _FIELDS})
+        fields: dict[str, Any] = {f: tree[f] for f in _FIELDS}
+        return cls(**{**fields, "status": status})
 
 
 _FIELDS = ("h", "memory", "n", "status", "evaluations", "steps", "load_sliding", "life",

@@ -14,6 +14,7 @@ stored before the enumeration read the same."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, ClassVar, cast
 
 import equinox as eqx
 import jax
@@ -27,13 +28,20 @@ class RESULTS(eqx.Enumeration):
     ``run_ended_early`` 3, ``contact_lost`` 4; `worst` over joints takes the
     highest."""
 
-    ok = "ok"
-    wall_reached = "the wear reached the bushing wall"
-    cycle_model_failed = "the cycle model failed (integrator or equilibrium solve)"
-    run_ended_early = ("the run ended (steps or cycles) before the wear limit or the "
-                       "requested cycles were reached")
-    contact_lost = ("the pin leaves the bushing wall during the cycle, where the "
-                    "quasi-static model does not hold (use the dynamic model)")
+    if TYPE_CHECKING:  # what the metaclass makes of the messages below
+        ok: ClassVar["RESULTS"]
+        wall_reached: ClassVar["RESULTS"]
+        cycle_model_failed: ClassVar["RESULTS"]
+        run_ended_early: ClassVar["RESULTS"]
+        contact_lost: ClassVar["RESULTS"]
+    else:
+        ok = "ok"
+        wall_reached = "the wear reached the bushing wall"
+        cycle_model_failed = "the cycle model failed (integrator or equilibrium solve)"
+        run_ended_early = ("the run ended (steps or cycles) before the wear limit or the "
+                           "requested cycles were reached")
+        contact_lost = ("the pin leaves the bushing wall during the cycle, where the "
+                        "quasi-static model does not hold (use the dynamic model)")
 
 
 def code(status) -> jax.Array | np.ndarray:
@@ -52,14 +60,14 @@ def from_code(codes) -> RESULTS:
         return _with_code(jnp.asarray(codes).astype(jnp.int32))
     values = np.asarray(codes)
     if values.size and (not np.all(np.isfinite(values)) or np.any(values != np.round(values))
-                        or values.min() < 0 or values.max() >= len(RESULTS)):
-        raise ValueError(f"status code {codes} is not one of 0 .. {len(RESULTS) - 1}")
+                        or values.min() < 0 or values.max() >= len(members())):
+        raise ValueError(f"status code {codes} is not one of 0 .. {len(members()) - 1}")
     return _with_code(values.astype(np.int32))
 
 
 def members() -> tuple[RESULTS, ...]:
     """Every member, in the order of their codes."""
-    return tuple(RESULTS._name_to_item.values())  # the enumeration's own table
+    return tuple(cast(RESULTS, v) for v in RESULTS._name_to_item.values())  # its own table
 
 
 def name(status) -> str:
@@ -70,7 +78,7 @@ def name(status) -> str:
 
 def message(status) -> str:
     """The member's message of a concrete scalar ``status``."""
-    return RESULTS[status]
+    return RESULTS[status]  # type: ignore[misc]  # (the metaclass's item lookup)
 
 
 def words(status) -> str:

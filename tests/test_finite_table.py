@@ -30,7 +30,7 @@ def _film(length=2 * R * LD):
 
 @pytest.fixture(scope="module")
 def table():
-    return eqx.filter_jit(lambda f: f.tabulated(R, **TABLE))(_film())
+    return eqx.filter_jit(lambda f: DynamicFiniteFilm(f, R, **TABLE))(_film())
 
 
 @jax.jit

@@ -375,14 +375,6 @@ class FiniteBearingFilm(AbstractFilm):
         tabulated in eps (`SteadyFiniteFilm`) for the journal radius ``radius``."""
         return SteadyFiniteFilm(self, radius)
 
-    def tabulated(self, radius, **table):
-        """This film for any motion of the journal centre (squeeze and wedge),
-        tabulated in eps and the drive's direction (`DynamicFiniteFilm`, whose
-        keyword arguments ``table`` passes on) for the journal radius ``radius``."""
-        from .finite_table import DynamicFiniteFilm
-
-        return DynamicFiniteFilm(self, radius, **table)
-
 
 # The short (Ocvirk) film's steady load is within 4.5 % of the finite film's
 # (96 x 12 grid) wherever (L/D)^2 <= 0.05 (1 - eps) (on that boundary: 1.9 %

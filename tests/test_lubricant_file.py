@@ -85,7 +85,7 @@ def _joint(folder):
     return json.loads((folder / "summary.json").read_text())["joints"]["crank_rod"]
 
 
-@pytest.mark.extended
+@pytest.mark.slow  # four 21,400-cycle orbit runs of the rig: ~10 min
 def test_a_thicker_oil_keeps_a_thicker_film_and_wears_less_than_dry(runs):
     thin, thick, dry = (_joint(runs[k]) for k in ("thin", "thick", "dry"))
     assert thick["min_film_thickness_um"] > thin["min_film_thickness_um"]
@@ -105,7 +105,7 @@ def test_a_thicker_oil_keeps_a_thicker_film_and_wears_less_than_dry(runs):
         assert 0.0 <= w["asperity_load_share"] <= 1.0
 
 
-@pytest.mark.extended
+@pytest.mark.slow  # the runs above
 def test_the_film_files_and_the_report(runs):
     folder = runs["thin"]
     summary = json.loads((folder / "summary.json").read_text())

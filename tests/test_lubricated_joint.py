@@ -283,7 +283,7 @@ def test_life_rises_with_viscosity_and_tends_to_the_dry_life(rig_life):
     assert lives[-1] > 2.0 * lives[0]
 
 
-@pytest.mark.extended
+@pytest.mark.slow  # a life's tangent and two more lives on the orbit: ~6 min
 def test_life_derivative_in_viscosity_matches_central_differences(rig_life):
     """d(life)/d(mu) by forward-mode autodiff against central differences,
     within 1e-4.  The step is 1e-6 relative: the discrete life has kinks
@@ -378,7 +378,7 @@ def test_oil_film_damps_the_dry_joints_impacts_at_speed():
     assert f_oil.max() < 2.5 * np.median(f_oil)
 
 
-@pytest.mark.extended
+@pytest.mark.slow  # the whole study on the orbit: ~6 min
 def test_the_lubricated_rig_study_wears_far_less_than_the_dry_rig(tmp_path):
     """``diffwear study rig-lubricated``: the shipped file's oil on the rig,
     21,400 cycles: mixed lubrication (1 < lambda < 3), the bushing runs in by

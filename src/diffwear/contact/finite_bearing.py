@@ -277,8 +277,28 @@ def reynolds_forces(eccentricity_ratio, squeeze, wedge, half_length,
     units of 6 mu R^4 / c^2 (`reynolds_pressure`'s arguments)."""
     p, op, _ = reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
                                  n_theta, n_z, supply_groove)
+    return _film_forces(op, p)
+
+
+def _film_forces(op: _Operator, p):
+    """(F_n, F_t) / (6 mu R^4 / c^2) of the grid pressure ``p`` on ``op``'s
+    cells, both halves of the length (`reynolds_forces`)."""
     load = 2.0 * op.volume * p
     return -jnp.sum(load * jnp.cos(op.psi)[None, :]), -jnp.sum(load * jnp.sin(op.psi)[None, :])
+
+
+def _catmull_rom(values, x):
+    """Catmull-Rom cubic through ``values`` (nodes along axis 0 at x = 0, 1,
+    ...), at x >= 0: mirrored at x = 0 (even, so smooth in eps there), held
+    at the last node beyond the table."""
+    n = values.shape[0]
+    x = jnp.clip(x, 0.0, n - 1.0)
+    i = jnp.clip(jnp.floor(x).astype(int), 0, n - 2)
+    t = x - i
+    p = jnp.concatenate([values[1:2], values, 2 * values[-1:] - values[-2:-1]])
+    p0, p1, p2, p3 = p[i], p[i + 1], p[i + 2], p[i + 3]
+    return 0.5 * (2 * p1 + (p2 - p0) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t**2
+                  + (3 * p1 - p0 - 3 * p2 + p3) * t**3)
 
 
 class FiniteBearingFilm(AbstractFilm):
@@ -439,9 +459,7 @@ class SteadyFiniteFilm(AbstractFilm):
         def solve(e):
             p, op, _ = reynolds_pressure(e, 0.0, 1.0, half, film.n_theta, film.n_z,
                                          film.supply_groove)
-            load = 2.0 * op.volume * p
-            return (-jnp.sum(load * jnp.cos(op.psi)[None, :]),
-                    -jnp.sum(load * jnp.sin(op.psi)[None, :]), jnp.max(p))
+            return (*_film_forces(op, p), jnp.max(p))
 
         f_n, f_t, peak = lax.map(solve, eps)
         self.log_radial = jnp.log(-f_n)
@@ -455,13 +473,7 @@ class SteadyFiniteFilm(AbstractFilm):
         step = _TABLE_TOP / (TABLE_NODES - 1)
         top = 1.0 - math.exp(-(_TABLE_TOP**2))
         u = -jnp.log1p(-jnp.clip(eps, 0.0, top))
-        x = jnp.sqrt(u + 1e-30) / step
-        i = jnp.clip(jnp.floor(x).astype(int), 0, TABLE_NODES - 2)
-        t = x - i
-        p = jnp.concatenate([values[1:2], values, 2 * values[-1:] - values[-2:-1]])
-        p0, p1, p2, p3 = p[i], p[i + 1], p[i + 2], p[i + 3]
-        return 0.5 * (2 * p1 + (p2 - p0) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t**2
-                      + (3 * p1 - p0 - 3 * p2 + p3) * t**3)
+        return _catmull_rom(values, jnp.sqrt(u + 1e-30) / step)
 
     def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
         """The film's largest pressure [Pa], from the table: 6 mu R^2 / c^2

@@ -52,7 +52,13 @@ from jaxtyping import Array, Float
 
 from .._checks import check_int_option, check_range, concrete
 from ..errors import InputError
-from .finite_bearing import FiniteBearingFilm, _grid, reynolds_pressure
+from .finite_bearing import (
+    FiniteBearingFilm,
+    _catmull_rom,
+    _film_forces,
+    _grid,
+    reynolds_pressure,
+)
 from .lubrication import MAX_ECCENTRICITY_RATIO, AbstractFilm, _safe_unit
 
 __all__ = ["DynamicFiniteFilm"]
@@ -75,20 +81,6 @@ def _periodic_spline_matrix(n: int) -> np.ndarray:
     eye = np.eye(n)
     shift = np.roll(eye, 1, axis=1) + np.roll(eye, -1, axis=1)
     return np.linalg.solve(4.0 * eye + shift, 6.0 / h**2 * (shift - 2.0 * eye))
-
-
-def _catmull_rom(values, x):
-    """Catmull-Rom cubic through ``values`` (nodes along axis 0 at x = 0, 1,
-    ...), at x >= 0: mirrored at x = 0 (even, so smooth in eps there), held
-    at the last node beyond the table."""
-    n = values.shape[0]
-    x = jnp.clip(x, 0.0, n - 1.0)
-    i = jnp.clip(jnp.floor(x).astype(int), 0, n - 2)
-    t = x - i
-    p = jnp.concatenate([values[1:2], values, 2 * values[-1:] - values[-2:-1]])
-    p0, p1, p2, p3 = p[i], p[i + 1], p[i + 2], p[i + 3]
-    return 0.5 * (2 * p1 + (p2 - p0) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t**2
-                  + (3 * p1 - p0 - 3 * p2 + p3) * t**3)
 
 
 class DynamicFiniteFilm(AbstractFilm):
@@ -157,9 +149,7 @@ class DynamicFiniteFilm(AbstractFilm):
                 p, op, _ = reynolds_pressure(eps, jnp.sin(angle), jnp.cos(angle), half,
                                              film.n_theta, film.n_z, film.supply_groove,
                                              initial_set=free)
-                load = 2.0 * op.volume * p
-                forces = jnp.stack([-jnp.sum(load * jnp.cos(op.psi)[None, :]),
-                                    -jnp.sum(load * jnp.sin(op.psi)[None, :])])
+                forces = jnp.stack(_film_forces(op, p))
                 return (p > 0.0).astype(p.dtype), (forces, jnp.max(p))
 
             # phi = -pi/2 (A = -1, B = 0, f = cos psi) starts from its converging

@@ -15,10 +15,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from lubricated_pin import KF, MU, C, L, R, pin_joint
 
 from diffwear.contact import (
     ArchardWear,
-    ClearanceJoint,
     CoulombFriction,
     ElasticFoundation,
     MixedLubrication,
@@ -29,19 +29,6 @@ from diffwear.contact import (
 from diffwear.errors import InputError
 from diffwear.quasistatic import LubricatedQuasiStaticJoint
 from diffwear.quasistatic.joint import pin_offset
-
-# A connecting-rod-like pin (as tests/test_lubrication.py): R = 10 mm,
-# L = 8 mm, c = 50 um, mu = 0.04 Pa s; a PTFE-like foundation (k_f = E_W / wall
-# ~ 1e13 Pa/m for a 0.5 GPa layer 50 um thick: stiff enough to matter).
-MU, R, L, C = 0.04, 0.010, 0.008, 50e-6
-KF = 1e13
-
-
-def _joint(mu=MU, sigma=0.1e-6, n=180, friction=0.1):
-    law = MixedLubrication(ShortBearingFilm(mu, L, C), ElasticFoundation(KF, L), sigma)
-    return ClearanceJoint("j", "a", [0.0, 0.0], "b", [0.0, 0.0], R, R + C, law,
-                          friction=CoulombFriction(friction), wear=ArchardWear(1e-14),
-                          n_theta=n)
 
 
 def _short_bearing_load(eps, mu=MU, omega=100.0):
@@ -66,7 +53,7 @@ def test_film_borne_journal_follows_the_sommerfeld_relation(solve, eps):
     omega, angle = 100.0, 0.4
     w = _short_bearing_load(eps, omega=omega)
     load = w * jnp.array([math.cos(angle), math.sin(angle)])  # pin on the bushing
-    qs = LubricatedQuasiStaticJoint.from_joint(_joint(sigma=1e-9))
+    qs = LubricatedQuasiStaticJoint.from_joint(pin_joint(sigma=1e-9))
     e, ok = solve(qs, load, jnp.asarray(omega), qs.dry.clearance)
     assert float(ok) == 1.0
     assert float(jnp.linalg.norm(e)) / C == pytest.approx(eps, rel=1e-8)
@@ -85,7 +72,7 @@ def test_without_a_film_the_joint_sits_where_the_asperities_alone_balance_the_lo
     from test_greenwood_tripp import _asperity_force_reference
 
     sigma, omega = 0.5e-6, 3.0
-    j = _joint(mu=1e-15, sigma=sigma)
+    j = pin_joint(mu=1e-15, sigma=sigma)
     qs = LubricatedQuasiStaticJoint.from_joint(j)
     load = jnp.array([-800.0, 300.0])
     e, ok = solve(qs, load, jnp.asarray(omega), qs.dry.clearance)
@@ -112,7 +99,7 @@ def test_mixed_equilibrium_balances_film_and_asperities(solve):
     both carry, their forces sum to minus the load, lambda < 3, and the wear
     pressure is the asperities' alone."""
     sigma, omega = 0.5e-6, 100.0
-    j = _joint(sigma=sigma)
+    j = pin_joint(sigma=sigma)
     qs = LubricatedQuasiStaticJoint.from_joint(j)
     load = jnp.array([0.0, -1.5 * _short_bearing_load(1.0 - 3.0 * sigma / C)])
     e, ok = solve(qs, load, jnp.asarray(omega), qs.dry.clearance)
@@ -131,7 +118,7 @@ def test_mixed_equilibrium_balances_film_and_asperities(solve):
 def test_a_separated_film_puts_no_pressure_on_the_bushing():
     """lambda = 10: the summits' Gaussian tail leaves no pressure that
     matters (< 1e-12 Pa), so nothing wears."""
-    j = _joint(sigma=0.5e-6)
+    j = pin_joint(sigma=0.5e-6)
     kin = PinKinematics(jnp.array([0.9 * C, 0.0]), jnp.zeros(2), jnp.asarray(100.0),
                         jnp.asarray(R), jnp.asarray(R + C))
     parts = j.law.lubrication(kin, jnp.zeros(0), j.profile, j.friction)
@@ -152,7 +139,7 @@ def test_offset_derivatives_match_central_differences(solve):
     load = jnp.array([200.0, -1.3 * _short_bearing_load(1.0 - sigma / C)])
 
     def offset(mu, w, s):
-        qs = LubricatedQuasiStaticJoint.from_joint(_joint(mu=mu, sigma=s))
+        qs = LubricatedQuasiStaticJoint.from_joint(pin_joint(mu=mu, sigma=s))
         return qs.pin_offset(w, jnp.asarray(omega), qs.dry.clearance)[0]
 
     x = (jnp.asarray(MU), load, jnp.asarray(sigma))
@@ -196,7 +183,7 @@ def test_film_thickness_is_never_negative_and_the_overlap_is_the_interference():
     the gap and there is no interference."""
     from diffwear.contact import BushingProfile, PinKinematics
 
-    law = _joint().law
+    law = pin_joint().law
     profile = BushingProfile.circular(C, 180)
     for depth, film, overlap in [(C + 2e-6, 0.0, 2e-6), (C - 3e-6, 3e-6, 0.0)]:
         kin = PinKinematics(offset=jnp.array([0.0, -depth]), offset_rate=jnp.zeros(2),

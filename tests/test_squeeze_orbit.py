@@ -14,33 +14,18 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from lubricated_pin import MU, C, L, R, pin_joint
 
 from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.config.loader import loads as load_text
-from diffwear.contact import (
-    ArchardWear,
-    ClearanceJoint,
-    CoulombFriction,
-    ElasticFoundation,
-    MixedLubrication,
-    ShortBearingFilm,
-)
 from diffwear.mechanism_file.motion import initial_state
 from diffwear.mechanism_file.wear import drive_period
 from diffwear.models import QuasiStatic
 from diffwear.quasistatic import JointLoads, LubricatedQuasiStaticJoint, QuasiStaticJoint
 
-# The connecting-rod-like pin of tests/test_lubricated_joint.py: R = 10 mm,
-# L = 8 mm, c = 50 um, mu = 0.04 Pa s, a PTFE-like foundation k_f = 1e13 Pa/m.
-MU, R, L, C = 0.04, 0.010, 0.008, 50e-6
-KF = 1e13
-
 
 def _joint(mu=MU, sigma=0.1e-6, n=90, squeeze=True):
-    law = MixedLubrication(ShortBearingFilm(mu, L, C), ElasticFoundation(KF, L), sigma)
-    joint = ClearanceJoint("j", "a", [0.0, 0.0], "b", [0.0, 0.0], R, R + C, law,
-                           friction=CoulombFriction(0.1), wear=ArchardWear(1e-14), n_theta=n)
-    return LubricatedQuasiStaticJoint.from_joint(joint, squeeze=squeeze)
+    return LubricatedQuasiStaticJoint.from_joint(pin_joint(mu, sigma, n), squeeze=squeeze)
 
 
 def _loads(force, omega, period):

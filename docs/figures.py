@@ -689,7 +689,7 @@ def lubrication_slider_crank(path: Path) -> None:
         a.plot(d["t_s"], d[f"{tag}_film_ratio"], color=color, lw=1.2, label=f"η = {mu:g} Pa s")
         b.plot(d[f"{tag}_x_over_c"], d[f"{tag}_y_over_c"], color=color, lw=1.1,
                label=f"η = {mu:g} Pa s")
-    a.axhline(3.0, color="tab:red", ls="--", lw=1.0, label="λ = 3: asperities touch")
+    a.axhline(3.0, color="tab:red", ls="--", lw=1.0, label="λ = 3: onset of mixed lubrication")
     a.axhline(1.0, color="k", ls=":", lw=1.0, label="λ = 1: boundary")
     # a logarithmic axis down to lambda = 0.1; below it (and where lambda < 0:
     # the pin pressed past the mean surfaces into the asperities) the time is
@@ -753,7 +753,7 @@ def lubrication_four_bar_squeeze(path: Path) -> None:
         a.plot(crank, d[f"{tag}_steady_h_min_um"], color=color, lw=1.0, ls="--",
                label=f"η = {mu:g} Pa s: steady at every sample")
     a.axhline(3.0 * sigma, color="tab:red", ls=":", lw=1.0,
-              label=f"3σ = {3 * sigma:g} µm: asperities touch")
+              label=f"3σ = {3 * sigma:g} µm: onset of mixed lubrication")
     # where omega changes sign from the sample before (the cycle wraps round)
     sign = np.sign(d["omega_rad_s"])
     reversals = crank[sign != np.roll(sign, 1)]
@@ -939,8 +939,8 @@ def lubrication_rig_film(path: Path) -> None:
                                                  f["asperity_share_worn"])},
                 onset=ONSET_FILM_RATIO * sigma, onset_ratio=ONSET_FILM_RATIO, roughness=sigma,
                 title=f"rig_lubricated, crank-rod joint (η = "
-                      f"{joint['lubricant']['viscosity_Pa_s'] * 1e3:g} mPa s, σ = "
-                      f"{joint['lubricant']['roughness_um']:g} µm): quasi-static equilibrium "
+                      f"{joint['lubricant']['viscosity_Pa_s'] * 1e3:.3g} mPa s, σ = "
+                      f"{joint['lubricant']['roughness_um']:g} µm): quasi-static orbit "
                       "over the cycle, unworn and worn bushing")
 
 

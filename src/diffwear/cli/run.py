@@ -558,7 +558,7 @@ def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> 
         onset=film["onset_gap"], onset_ratio=film["onset_ratio"], roughness=film["roughness"],
         title=f"{mfile.title or mfile.file}: lubricated joint {name} "
               f"(η = {film['viscosity']:g} Pa s, σ = {film['roughness'] * 1e6:.3g} µm), "
-              "quasi-static equilibrium over the cycle, unworn and worn bushing")
+              "quasi-static orbit over the cycle, unworn and worn bushing")
     keys: dict[str, Any] = {}
     for case, suffix in (("unworn", ""), ("worn", "_worn")):
         f = film[case]

@@ -363,8 +363,8 @@ def _lubrication_section(joints: dict) -> Section:
                      f"{100 * w['asperity_load_share_worn']:.3g} %",
                      f"{regime(worst).capitalize()}.", f"[film]({w['film_file']})"))
     return Section("Lubrication", [
-        "Lubricated clearance joints: the oil film (the short- or long-bearing Reynolds film "
-        "of the file's lubricant.bearing) and the "
+        "Lubricated clearance joints: the oil film (the Reynolds film of the joint's "
+        "lubricant.bearing: short, long or finite-length) and the "
         "surfaces' asperities share the load.  h min: the thinnest film over the cycle; "
         "lambda = h min / sigma (sigma: the combined RMS roughness); asperity share: the "
         "asperities' part of the load, averaged over the cycle; each on the unworn / the worn "
@@ -372,12 +372,12 @@ def _lubrication_section(joints: dict) -> Section:
         "asperities touch; < 1: boundary lubrication, the asperities carry most of the load "
         "where the film is thinnest.  interference: how far the pin presses the asperities "
         "past the mean surfaces where no gap is left (h min is then 0).  These numbers are "
-        "the pin's quasi-static equilibrium of film and asperities under the cycle's loads (the "
+        "the journal's quasi-static orbit under the cycle's loads (the film with its wedge "
+        "and its squeeze as the pin moves, and the asperities, without the pin's inertia: the "
         "quasi-static wear model's), whichever wear model ran.  The dynamic wear model "
-        "integrates the film and the asperities in time instead (on Rodas4, at a tolerance "
-        "scaled by the roughness); the squeeze of the film as the pin moves, which the "
-        "equilibrium leaves out, carries part of the load there, so it wears less than the "
-        "quasi-static model where the film carries much of it.",
+        "integrates the pin's motion with its inertia instead (on Rodas4, at a tolerance "
+        "scaled by the roughness), so its film and its wear differ from these where the "
+        "pin's inertia matters.",
         Table(("joint", "viscosity [Pa s]", "roughness [um]", "h min [um]", "lambda min",
                "interference [um]", "asperity share", "meaning (smallest lambda)", "file"), rows)])
 

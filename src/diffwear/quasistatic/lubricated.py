@@ -418,18 +418,29 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         ``guess``: starting offsets (e.g. those of a nearby profile)."""
         c = self.dry.clearance + depth
         start = jnp.full_like(loads.force, jnp.nan) if guess is None else guess
-        steady, ok = jax.vmap(lambda w, om, g: self.pin_offset(w, om, c, g))(
-            loads.force, loads.omega, start)
-        offsets, rates, ok, closed = steady, jnp.zeros_like(steady), ok > 0.5, False
+
+        def steady():
+            e, ok = jax.vmap(lambda w, om, g: self.pin_offset(w, om, c, g))(
+                loads.force, loads.omega, start)
+            return e, jnp.zeros_like(e), jnp.all(ok > 0.5)
+
         if self.squeeze:
             orbit, closed = self.orbit(loads, c, guess)
             closed = (closed > 0.5) & jnp.all(jnp.isfinite(orbit))
+
+            def periodic():
+                rates = (orbit - jnp.roll(orbit, 1, axis=0)) / loads.dt
+                return orbit, rates, jnp.asarray(True)
+
             # where the orbit does not close (a pin in a groove deeper than the
             # clearance, its saturated film turning without growing: the orbit
-            # is nearly neutral), the steady balance stands in
-            offsets = jnp.where(closed, orbit, steady)
-            rates = jnp.where(closed, (orbit - jnp.roll(orbit, 1, axis=0)) / loads.dt, 0.0)
-            ok = jnp.where(closed, True, ok)
+            # is nearly neutral), the steady balance stands in; a branch, so
+            # that a closed orbit does not pay for the steady solves (their
+            # Newton loops, batched over the samples, run as long as the
+            # slowest sample's)
+            offsets, rates, ok = lax.cond(closed, periodic, steady)
+        else:
+            (offsets, rates, ok), closed = steady(), jnp.asarray(False)
 
         def one(e, omega, rate):
             parts = self._parts(e, omega, c, rate)
@@ -440,8 +451,8 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         return LubricatedEquilibrium(offset=offsets, pressure=p, normal_load=load,
                                      film_load=film_load, min_film_thickness=h_min,
                                      film_ratio=ratio, interference=overlap,
-                                     ok=jnp.all(ok) & jnp.all(jnp.isfinite(offsets)),
-                                     orbit_closed=jnp.asarray(closed))
+                                     ok=ok & jnp.all(jnp.isfinite(offsets)),
+                                     orbit_closed=closed)
 
     def cycle_wear(self, depth: Float[Array, " n"], loads: JointLoads, guess=None):
         """(dh per cycle [m] (n,), integral of asperity load x sliding [N m],

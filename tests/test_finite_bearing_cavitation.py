@@ -14,7 +14,11 @@ from scipy.optimize import brentq
 
 from diffwear.contact import FiniteBearingFilm, PinKinematics
 from diffwear.contact.finite_bearing import CLUSTERING, _film_forces, reynolds_pressure
-from diffwear.contact.mass_conserving import convected_content, mass_conserving_pressure
+from diffwear.contact.mass_conserving import (
+    convected_content,
+    flux_balance,
+    mass_conserving_pressure,
+)
 from diffwear.errors import InputError
 
 # A plain journal bearing: R = 10 mm, c = 20 um, mu = 0.02 Pa s, 100 rad/s.
@@ -121,6 +125,9 @@ def test_the_reynolds_condition_creates_oil_where_the_film_reforms():
     face = half_length / p.shape[0] * wedge / eps * (1 + eps)  # dzeta B / eps H_max
     assert float(np.max(out)) > 0.5 * face
     assert float(np.min(out)) > -1e-11 * scale  # created, never lost
+    # the module's own balance (from its operators) is this one
+    np.testing.assert_allclose(np.asarray(flux_balance(*STATE, p, theta)), out,
+                               atol=1e-11 * scale)
     # the oil is created where the convected void meets the full film
     created = out > 1e-6 * scale
     assert np.all(np.roll(cavitated, 1, axis=1)[created] | np.roll(cavitated, -1, axis=1)[created])

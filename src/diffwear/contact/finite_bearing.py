@@ -40,6 +40,12 @@ bearing: P = 0 on that line.  (Without it, the complementarity problem
 also pressurises a little of the diverging film upstream of the maximum film;
 at eps = 0.2, L/D = 1 that turns the attitude angle by 5 %.)
 
+**Mass-conserving cavitation** (``cavitation = "mass-conserving"``): the
+Jakobsson-Floberg-Olsson conditions in Elrod & Adams' p-theta form on the
+same grid, where the film reforms only with the oil its cavitated region
+carries (`mass_conserving`); with the groove at the maximum film and the
+centre at rest it gives this film.
+
 **Discretisation.**  Finite volumes on a grid uniform in s, psi = s - a sin s
 (a = 0.9 eps: nodes crowd at the minimum film, spacing (1 - a) 2 pi / n_theta
 there, where the pressure peak narrows as sqrt(2 (1 - eps) / eps)), and

@@ -252,7 +252,8 @@ def reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
     n_theta; 1 pressurised) starts the active-set passes from a neighbouring
     solution's set instead of the converging half (the same solution: for an
     M-matrix the method converges from any start).  ``supply_pressure``: the
-    groove's P (>= 0; default 0, the ambient pressure)."""
+    groove's P (>= 0; default 0, the ambient pressure; unused without the
+    groove)."""
     eps = jnp.asarray(eccentricity_ratio, dtype=float)
     op = _operator(eps, half_length, n_theta, n_z)
     f = wedge * jnp.sin(op.psi) - squeeze * jnp.cos(op.psi)
@@ -296,6 +297,9 @@ def film_pressure(eccentricity_ratio, squeeze, wedge, half_length, n_theta=N_THE
         p, op, _ = reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
                                      n_theta, n_z, supply_groove)
         return p, op
+    if cavitation != MASS_CONSERVING:
+        raise InputError(f"finite-bearing cavitation {cavitation!r} is unknown; allowed: "
+                         + " | ".join(repr(c) for c in CAVITATION))
     # the mass-conserving solve builds on this module's grid, so it is imported here
     from .mass_conserving import mass_conserving_pressure
 

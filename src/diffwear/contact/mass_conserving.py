@@ -39,8 +39,10 @@ gamma_dot), not over a cycle:
   squeeze term is theta dH/dt);
 - the supply groove (the line psi = pi, the maximum film of the steady
   bearing) is a source at the supply pressure that refills the film to full
-  (theta = 1) whatever arrives at it; without the groove the oil comes in
-  through the bearing's ends only, at the ambient pressure;
+  (theta = 1) whatever arrives at it; without it no oil comes in (the
+  bearing's ends, at the ambient pressure, only let it out), the steady
+  film starves and the passes do not settle, so `FiniteBearingFilm` refuses
+  the mass-conserving condition without the groove;
 - theta >= 0 is not imposed: with a gap opening faster than the Couette flux
   fills it the problem can return an empty cavitated film (theta = 0) or,
   out of the model's range, theta < 0 (`mass_conserving_pressure` returns
@@ -189,7 +191,9 @@ def mass_conserving_pressure(eccentricity_ratio, squeeze, wedge, half_length, n_
     `_Operator` and the number of active-set passes (module notes);
     arguments as `finite_bearing.reynolds_pressure`'s, and ``supply_pressure``
     the groove's P (>= 0; ambient 0).  ``initial_set`` (1 pressurised) starts
-    the passes from a neighbouring solution's set."""
+    the passes from a neighbouring solution's set.  It needs the groove
+    (``supply_groove``; without it the film starves, module notes); the
+    passes stop at `finite_bearing.MAX_PASSES`, which ``passes`` shows."""
     eps, op, q, groove, supply = _problem(eccentricity_ratio, squeeze, wedge, half_length,
                                           n_theta, n_z, supply_groove, supply_pressure)
     void = _void_stencil(eps, squeeze, wedge, op, n_theta)

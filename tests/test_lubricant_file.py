@@ -193,6 +193,12 @@ def test_the_film_files_and_the_report(runs):
     ('bearing = "short"', 'bearing = "short", film_n_theta = 96',
      ["joints[1].lubricant.film_n_theta", "given for bearing = 'short'",
       'bearing = "finite", or no grid key']),
+    ('bearing = "short"', 'bearing = "short", cavitation = "mass-conserving"',
+     ["joints[1].lubricant.cavitation", "'mass-conserving' given for bearing = 'short'",
+      'bearing = "finite", or no cavitation key']),
+    ('bearing = "short"', 'bearing = "finite", cavitation = "jfo"',
+     ["joints[1].lubricant.cavitation", "'jfo' is not allowed", "'reynolds'",
+      "'mass-conserving'"]),
     ('law = { type = "elastic-foundation", layer_thickness = "6.342 mm", depth = "13.1 mm", '
      'restitution = 0.8 }\nwear = { coefficient = "5.05e-4 mm^3/(N m)" }   # Table 7-2',
      'law = { type = "lankarani-nikravesh" }\npin_material = "steel"',
@@ -223,6 +229,13 @@ def test_a_finite_film_grid_that_resolves_the_saturation_is_taken(tmp_path):
     assert isinstance(film, FiniteBearingFilm)
     assert (film.n_theta, film.n_z) == (30, 6)
     assert float(film.max_eccentricity_ratio) == pytest.approx(1 - 0.65 / 33, rel=1e-9)
+    assert film.cavitation == "reynolds"
+
+
+def test_the_cavitation_condition_reaches_the_finite_film(tmp_path):
+    path = _file(tmp_path, "jfo", ('bearing = "short"',
+                                   'bearing = "finite", cavitation = "mass-conserving"'))
+    assert load(path).mechanism.element("crank_rod").law.film.cavitation == "mass-conserving"
 
 
 def test_the_film_figure_draws_the_onset_line_over_the_crank_angle(tmp_path):

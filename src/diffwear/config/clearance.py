@@ -35,7 +35,7 @@ from ..contact.asperities import (
     SUMMIT_PRODUCT_RANGE,
     GreenwoodTripp,
 )
-from ..contact.finite_bearing import N_THETA, N_Z, nodes_for
+from ..contact.finite_bearing import CAVITATION, N_THETA, N_Z, REYNOLDS, nodes_for
 from ..contact.friction import DEFAULT_SLIP_WIDTH
 from ..contact.mixed import ONSET_FILM_RATIO
 from ..errors import InputError
@@ -153,6 +153,11 @@ LUBRICANT = Table(fields={
     "film_n_z": Integer(default=None, low=2, high=1024,
                         doc="bearing = \"finite\" only: grid nodes along the half length "
                             "(default 12)"),
+    "cavitation": Text(default=None, choices=CAVITATION,
+                       doc="bearing = \"finite\" only: the cavitation condition, "
+                           "\"reynolds\" (Swift-Stieber, default) or \"mass-conserving\" "
+                           "(Jakobsson-Floberg-Olsson: the film reforms only with the oil its "
+                           "cavitated region carries)"),
     "length": Quantity(dimension="length", default=None, low=0.0, low_open=True,
                        doc="axial length of the film; default: law.depth"),
 }, default=None)
@@ -291,13 +296,20 @@ def _lubricated(lube, law, rp, rb, pin, bushing):
 def _film(lube, viscosity, length, c, sigma):
     """The film law of ``lubricant.bearing``; the finite film on the grid of
     ``lubricant.film_n_theta`` / ``film_n_z``, which must resolve the minimum
-    film where the joint's film saturates (`FiniteBearingFilm.check_resolution`)."""
+    film where the joint's film saturates (`FiniteBearingFilm.check_resolution`),
+    with the cavitation condition ``lubricant.cavitation``."""
     grid = {k: lube[f"film_{k}"] for k in ("n_theta", "n_z") if lube[f"film_{k}"] is not None}
     if lube["bearing"] != "finite":
         if grid:
             key = f"lubricant.film_{next(iter(grid))}"
             raise FieldError(key, f"given for bearing = {lube['bearing']!r}, which has no "
                              "grid", "bearing = \"finite\", or no grid key")
+        if lube["cavitation"] is not None:
+            raise FieldError("lubricant.cavitation",
+                             f"{lube['cavitation']!r} given for bearing = "
+                             f"{lube['bearing']!r}, whose film has a fixed cavitation "
+                             "condition (Gumbel's, half-Sommerfeld)",
+                             "bearing = \"finite\", or no cavitation key")
         return BEARINGS[lube["bearing"]](viscosity, length, c)
     n_theta = grid.get("n_theta", N_THETA)
     if n_theta % 2:
@@ -312,7 +324,8 @@ def _film(lube, viscosity, length, c, sigma):
                          f"an even integer >= {nodes_for(eps_max)} (or a larger roughness)")
     # evaluated up to its saturation (`MixedLubrication.saturated_film`)
     return FiniteBearingFilm(viscosity, length, c, max_eccentricity_ratio=eps_max,
-                             n_theta=n_theta, n_z=grid.get("n_z", N_Z))
+                             n_theta=n_theta, n_z=grid.get("n_z", N_Z),
+                             cavitation=lube["cavitation"] or REYNOLDS)
 
 
 def _summits(lube, pin, bushing) -> GreenwoodTripp:

@@ -40,6 +40,12 @@ bearing: P = 0 on that line.  (Without it, the complementarity problem
 also pressurises a little of the diverging film upstream of the maximum film;
 at eps = 0.2, L/D = 1 that turns the attitude angle by 5 %.)
 
+**Mass-conserving cavitation** (``cavitation = "mass-conserving"``): the
+Jakobsson-Floberg-Olsson conditions in Elrod & Adams' p-theta form on the
+same grid, where the film reforms only with the oil its cavitated region
+carries (`mass_conserving`); with the groove at the maximum film and the
+centre at rest it gives this film.
+
 **Discretisation.**  Finite volumes on a grid uniform in s, psi = s - a sin s
 (a = 0.9 eps: nodes crowd at the minimum film, spacing (1 - a) 2 pi / n_theta
 there, where the pressure peak narrows as sqrt(2 (1 - eps) / eps)), and
@@ -95,8 +101,8 @@ from .._checks import check_int_option, concrete
 from ..errors import InputError
 from .lubrication import MAX_ECCENTRICITY_RATIO, SATURATION_WIDTH, AbstractFilm
 
-__all__ = ["FiniteBearingFilm", "SteadyFiniteFilm", "film_law_for", "nodes_for",
-           "reynolds_forces"]
+__all__ = ["CAVITATION", "FiniteBearingFilm", "SteadyFiniteFilm", "film_law_for",
+           "film_pressure", "nodes_for", "reynolds_forces"]
 
 # Default grid: 96 nodes round the bushing, 12 along the half length; with the
 # clustering below it reproduces Raimondi & Boyd's S and attitude angle to
@@ -114,6 +120,11 @@ NODES_PER_FILM_WIDTH = 8.0
 # Most active-set passes (each a linear solve); the default grid needs <= 16,
 # a 192-node one <= 28.
 MAX_PASSES = 64
+# Cavitation conditions (`FiniteBearingFilm`'s ``cavitation``): Reynolds
+# (Swift-Stieber), this module's complementarity problem; mass-conserving
+# (Jakobsson-Floberg-Olsson in Elrod & Adams' p-theta form), `mass_conserving`.
+REYNOLDS, MASS_CONSERVING = "reynolds", "mass-conserving"
+CAVITATION = (REYNOLDS, MASS_CONSERVING)
 
 
 def _resolved_eccentricity(n_theta: int) -> float:
@@ -232,14 +243,17 @@ def _solve_on(op: _Operator, free, rhs):
 
 
 def reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
-                      n_theta=N_THETA, n_z=N_Z, supply_groove=True, initial_set=None):
+                      n_theta=N_THETA, n_z=N_Z, supply_groove=True, initial_set=None,
+                      supply_pressure=0.0):
     """The dimensionless film pressure P = p c^2 / (6 mu R^2) on the grid
     (n_z, n_theta), its `_Operator` and the number of active-set passes, from
     eps, A = 2 eps_dot and B = eps (omega - 2 gamma_dot) [1/s] and the half
     length over the radius, L / D (module notes).  ``initial_set`` (n_z,
     n_theta; 1 pressurised) starts the active-set passes from a neighbouring
     solution's set instead of the converging half (the same solution: for an
-    M-matrix the method converges from any start)."""
+    M-matrix the method converges from any start).  ``supply_pressure``: the
+    groove's P (>= 0; default 0, the ambient pressure; unused without the
+    groove)."""
     eps = jnp.asarray(eccentricity_ratio, dtype=float)
     op = _operator(eps, half_length, n_theta, n_z)
     f = wedge * jnp.sin(op.psi) - squeeze * jnp.cos(op.psi)
@@ -249,6 +263,10 @@ def reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
     groove = jnp.ones(n_theta)
     if supply_groove:
         groove = groove.at[n_theta // 2].set(0.0)  # psi = pi: s = pi is a node (even n)
+    # the groove's pressure, carried to the right-hand side (0 at the ambient supply)
+    supply = supply_pressure * (1.0 - groove[None, :]) * jnp.ones((n_z, 1))
+    load = -q - _apply(op, supply)
+    load_c = lax.stop_gradient(load)
 
     def unsettled(state):
         free, previous, k = state
@@ -256,7 +274,7 @@ def reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
 
     def one_pass(state):
         free, _, k = state
-        p = _solve_on(op_c, free, -q_c)
+        p = _solve_on(op_c, free, load_c) + supply
         residual = _apply(op_c, p) + q_c
         new = (p * op_c.diag - residual > 0.0).astype(p.dtype) * groove[None, :]
         return new, free, k + 1
@@ -267,17 +285,36 @@ def reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
         start = lax.stop_gradient(jnp.asarray(initial_set, dtype=q_c.dtype)) * groove[None, :]
     free, _, passes = lax.while_loop(unsettled, one_pass, (start, jnp.zeros_like(start), 0))
     free = lax.stop_gradient(free)
-    return _solve_on(op, free, -q), op, passes
+    return _solve_on(op, free, load) + supply, op, passes
+
+
+def film_pressure(eccentricity_ratio, squeeze, wedge, half_length, n_theta=N_THETA,
+                  n_z=N_Z, supply_groove=True, cavitation=REYNOLDS):
+    """(P, op): the grid pressure and its `_Operator` under the cavitation
+    condition ``cavitation`` (`CAVITATION`): `reynolds_pressure`'s, or
+    `mass_conserving.mass_conserving_pressure`'s."""
+    if cavitation == REYNOLDS:
+        p, op, _ = reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
+                                     n_theta, n_z, supply_groove)
+        return p, op
+    if cavitation != MASS_CONSERVING:
+        raise InputError(f"finite-bearing cavitation {cavitation!r} is unknown; allowed: "
+                         + " | ".join(repr(c) for c in CAVITATION))
+    # the mass-conserving solve builds on this module's grid, so it is imported here
+    from .mass_conserving import mass_conserving_pressure
+
+    p, _, op, _ = mass_conserving_pressure(eccentricity_ratio, squeeze, wedge, half_length,
+                                           n_theta, n_z, supply_groove)
+    return p, op
 
 
 def reynolds_forces(eccentricity_ratio, squeeze, wedge, half_length,
-                    n_theta=N_THETA, n_z=N_Z, supply_groove=True):
+                    n_theta=N_THETA, n_z=N_Z, supply_groove=True, cavitation=REYNOLDS):
     """(F_n, F_t) / (6 mu R^4 / c^2) [-]: the film force on the pin along the
     line of centres and along k x n, for the whole length (both halves), in
-    units of 6 mu R^4 / c^2 (`reynolds_pressure`'s arguments)."""
-    p, op, _ = reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,
-                                 n_theta, n_z, supply_groove)
-    return _film_forces(op, p)
+    units of 6 mu R^4 / c^2 (`film_pressure`'s arguments)."""
+    return _film_forces(*film_pressure(eccentricity_ratio, squeeze, wedge, half_length,
+                                       n_theta, n_z, supply_groove, cavitation)[::-1])
 
 
 def _film_forces(op: _Operator, p):
@@ -321,6 +358,10 @@ class FiniteBearingFilm(AbstractFilm):
         n_z: grid nodes along the half length (>= 2; default 12)
         supply_groove: oil at ambient pressure along the maximum film (as in
             Raimondi & Boyd's full bearing; default True) or only at the ends
+        cavitation: ``"reynolds"`` (Swift-Stieber, default) or
+            ``"mass-conserving"`` (Jakobsson-Floberg-Olsson in Elrod & Adams'
+            p-theta form: the film reforms only with the oil that the
+            cavitated region carries; `mass_conserving`)
 
     Journal radius R: the pin radius of the `PinKinematics`, as for the other
     films; L / D = length / (2 R).
@@ -329,11 +370,12 @@ class FiniteBearingFilm(AbstractFilm):
     n_theta: int = eqx.field(static=True)
     n_z: int = eqx.field(static=True)
     supply_groove: bool = eqx.field(static=True)
+    cavitation: str = eqx.field(static=True)
 
     def __init__(self, viscosity, length, clearance,
                  max_eccentricity_ratio=MAX_ECCENTRICITY_RATIO,
                  saturation_width=SATURATION_WIDTH, n_theta=N_THETA, n_z=N_Z,
-                 supply_groove=True):
+                 supply_groove=True, cavitation=REYNOLDS):
         super().__init__(viscosity, length, clearance, max_eccentricity_ratio, saturation_width)
         check_int_option("finite-bearing grid n_theta", n_theta, 16, 4096)
         if n_theta % 2:
@@ -343,6 +385,15 @@ class FiniteBearingFilm(AbstractFilm):
         self.n_theta = int(n_theta)
         self.n_z = int(n_z)
         self.supply_groove = bool(supply_groove)
+        if cavitation not in CAVITATION:
+            raise InputError(f"finite-bearing cavitation {cavitation!r} is unknown; allowed: "
+                             + " | ".join(repr(c) for c in CAVITATION))
+        self.cavitation = str(cavitation)
+        if self.cavitation == MASS_CONSERVING and not self.supply_groove:
+            raise InputError("finite-bearing cavitation 'mass-conserving' needs the supply "
+                             "groove (supply_groove = True): without it the oil only leaves "
+                             "through the ends and the film starves; allowed: supply_groove "
+                             "= True, or cavitation = 'reynolds'")
         self.check_resolution(self.max_eccentricity_ratio)
 
     @property
@@ -379,15 +430,16 @@ class FiniteBearingFilm(AbstractFilm):
         forces less the part `AbstractFilm.film` adds back."""
         k = self._film_factor(radius)
         f_n, f_t = reynolds_forces(eps_f, squeeze, wedge, self.length / (2.0 * radius),
-                                   self.n_theta, self.n_z, self.supply_groove)
+                                   self.n_theta, self.n_z, self.supply_groove,
+                                   self.cavitation)
         return k * f_n + 0.5 * jnp.pi * k * squeeze, k * f_t - 0.5 * jnp.pi * k * wedge
 
     def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
         """The film's largest pressure [Pa] with the centre at rest (e_dot = 0):
         6 mu R^2 / c^2 times the grid's largest P, at the saturated eps."""
         eps = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
-        p, _, _ = reynolds_pressure(eps, 0.0, eps * jnp.abs(omega), self.length / (2.0 * radius),
-                                    self.n_theta, self.n_z, self.supply_groove)
+        p, _ = film_pressure(eps, 0.0, eps * jnp.abs(omega), self.length / (2.0 * radius),
+                             self.n_theta, self.n_z, self.supply_groove, self.cavitation)
         return 6.0 * self.viscosity * radius**2 / self.clearance**2 * jnp.max(p)
 
     def steady(self, radius) -> "SteadyFiniteFilm":
@@ -457,8 +509,8 @@ class SteadyFiniteFilm(AbstractFilm):
         # one solve after the other (lax.map): batched, the small dense
         # inverses of the elimination are slower on a CPU (docs/notes/cpu-kernels.md)
         def solve(e):
-            p, op, _ = reynolds_pressure(e, 0.0, 1.0, half, film.n_theta, film.n_z,
-                                         film.supply_groove)
+            p, op = film_pressure(e, 0.0, 1.0, half, film.n_theta, film.n_z,
+                                  film.supply_groove, film.cavitation)
             return (*_film_forces(op, p), jnp.max(p))
 
         f_n, f_t, peak = lax.map(solve, eps)

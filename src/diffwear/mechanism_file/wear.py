@@ -15,12 +15,14 @@ over the cycle (`film_cycle`) on the unworn and the worn bushing
 from __future__ import annotations
 
 import math
+import time
 import zlib
 from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax import lax
 
 from .._checks import require_float64
 from ..config import MechanismFile
@@ -29,9 +31,9 @@ from ..contact.mixed import MixedLubrication
 from ..errors import InputError
 from ..mechanism.constraints import Driver
 from ..mechanism.geometry import safe_norm
-from ..models import AbstractWearModel, QuasiStatic, WearEvolution
+from ..models import MAX_CYCLES, AbstractWearModel, QuasiStatic, WearEvolution
 from ..wear import worn_volume
-from ..wear.chunked import Checkpoints
+from ..wear.chunked import Checkpoints, RunTimes
 from ..wear.status import at
 from .motion import first_driver
 
@@ -149,11 +151,15 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
                 "cycles": float(cycles),
                 "n_theta": int(mech.element(joints[0]).profile.n)}
         checkpoints = checkpoints._replace(meta={**checkpoints.meta, **meta})
-    res, times = model.run(lambda _: mech, jnp.zeros(()), joints, y0, period=period,
-                           cycles=cycles, wall_thickness=walls, checkpoints=checkpoints)
     life = None
-    if limit is not None:
-        life = jax.jit(lambda y: model.life(mech, joints, y, period=period, limit=limit))(y0)
+    if limit is not None and isinstance(model, QuasiStatic):
+        res, life, times = _run_and_life(model, mech, joints, y0, period, cycles, limit, walls)
+    else:
+        res, times = model.run(lambda _: mech, jnp.zeros(()), joints, y0, period=period,
+                               cycles=cycles, wall_thickness=walls, checkpoints=checkpoints)
+        if limit is not None:
+            life = jax.jit(lambda y: model.life(mech, joints, y, period=period,
+                                                limit=limit))(y0)
     out = {}
     for k, name in enumerate(joints):
         el = mech.element(name)
@@ -175,6 +181,31 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     for name, film in film_cycle(mfile, y0, {n: out[n]["depth"] for n in joints}).items():
         out[name]["film"] = film
     return out
+
+
+def _run_and_life(model: QuasiStatic, mech, joints, y0, period, cycles, limit, walls):
+    """The run over ``cycles`` [with ``walls``] and the life to ``limit`` [m]
+    of the quasi-static ``model``: one program (`QuasiStatic.solve` with
+    traced cycles, limit and walls) compiled once, run twice with the numbers
+    of `QuasiStatic.evolve` and `QuasiStatic.life`.  (WearEvolution of the
+    run, LifeResult, RunTimes: the compile, and the two runs together.)"""
+    never = jnp.asarray(jnp.inf)
+    walls = jnp.asarray([jnp.inf if w is None else w for w in walls], dtype=float)
+
+    def solve(y, n, lim, w):
+        return model.solve(mech, joints, y, period=period, cycles=n, limit=lim, wall_thickness=w)
+
+    run = (y0, jnp.asarray(float(cycles)), never, walls)
+    # a life has no end but the limit (`Stop`: max_cycles) and no wall
+    to_limit = (y0, jnp.asarray(MAX_CYCLES), jnp.asarray(float(limit)),
+                jnp.full_like(walls, jnp.inf))
+    started = time.perf_counter()
+    compiled = jax.jit(solve).lower(*run).compile()
+    compile_time = time.perf_counter() - started
+    started = time.perf_counter()
+    res, _ = jax.block_until_ready(compiled(*run))
+    _, life = jax.block_until_ready(compiled(*to_limit))
+    return res.reached(), life, RunTimes(compile_time, time.perf_counter() - started, {})
 
 
 def model_numbers(model: AbstractWearModel, res: WearEvolution, k: int, cycles) -> dict:
@@ -263,8 +294,16 @@ def film_cycle(mfile: MechanismFile, y0, depths: dict, model: QuasiStatic | None
         loads = model.loads(mech, names, y, period)
         out = []
         for j, lo, h in zip(model.joints(mech, names), loads.joints, worn):
-            unworn = j.equilibrium(jnp.zeros(j.n), lo)
-            out.append((parts(j, lo, unworn), parts(j, lo, j.equilibrium(h, lo, unworn.offset))))
+            # the unworn bushing, then the worn one from the unworn offsets:
+            # one scan, so that the equilibrium (the orbit's solves) is
+            # compiled once
+            def one(guess, depth, j=j, lo=lo):
+                eq = j.equilibrium(depth, lo, guess)
+                return eq.offset, parts(j, lo, eq)
+
+            _, both = lax.scan(one, jnp.full_like(lo.force, jnp.nan),
+                               jnp.stack([jnp.zeros(j.n), h]))
+            out.append(tuple(jax.tree.map(lambda a, k=k: a[k], both) for k in (0, 1)))
         return out, loads.ok
 
     per_joint, ok = evaluate(y0, worn)

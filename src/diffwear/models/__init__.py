@@ -15,6 +15,7 @@ Each computes lives (`cycles_to_limit`), evolutions over a number of cycles
 and the joint force at the end, on the wear engine (`diffwear.wear.engine`).
 """
 
+from ..wear.engine import MAX_CYCLES
 from ._base import AbstractWearModel, WearEvolution
 from .dynamic import Dynamic
 from .fem import FemRoute
@@ -22,4 +23,4 @@ from .life import cycles_to_limit
 from .quasi_static import QuasiStatic, joint_mass
 
 __all__ = ["AbstractWearModel", "WearEvolution", "Dynamic", "QuasiStatic", "FemRoute",
-           "cycles_to_limit", "joint_mass"]
+           "cycles_to_limit", "joint_mass", "MAX_CYCLES"]

@@ -194,24 +194,48 @@ class QuasiStatic(AbstractWearModel):
         return status, worst(status)
 
     # -------------------------------------------------------------- results
-    def life(self, mech, joints, y0, *, period, limit) -> LifeResult:
-        per_joint, ok = self._each(mech, joints, y0, period, limit=limit)
+    def solve(self, mech, joints, y0, *, period, cycles=None, limit=None,
+              wall_thickness=None) -> tuple[WearEvolution, LifeResult]:
+        """One integration of the wear of ``joints`` from unworn bushings, to
+        ``cycles`` real cycles, to ``limit`` [m] of peak depth, or to whichever
+        comes first (the engine's `Stop`), stopping a joint at its
+        ``wall_thickness`` [m]: the evolution (`evolve`'s) and the life
+        (`life`'s) of it.  Given as traced values (``limit`` +inf: none;
+        ``cycles`` `MAX_CYCLES`: none), a run and a life are one program: jitted once,
+        it serves both (a lubricated joint's orbit takes tens of seconds to
+        compile)."""
+        per_joint, ok = self._each(mech, joints, y0, period, walls=wall_thickness,
+                                   cycles=cycles, limit=limit)
         joint_status, status = self._status(per_joint, ok)
         sols: list[ProfileSolution] = [s for s, _ in per_joint]
+        margins = (jnp.stack([m[0] for _, m in per_joint]),
+                   jnp.stack([m[1] for _, m in per_joint]))
+        inputs = (self, mech, y0, period, cycles, limit, wall_thickness)
+        failed = not_computed(joint_status)
         history = {"cycles": jnp.stack([s.history.cycles for s in sols]),
                    "max_depth": jnp.stack([s.history.peak for s in sols]),
                    "valid": jnp.stack([s.history.valid for s in sols]),
                    "joint_status": joint_status,
-                   "contact_margin": jnp.stack([m[0] for _, m in per_joint]),
-                   "contact_margin_worn": jnp.stack([m[1] for _, m in per_joint])}
+                   "contact_margin": margins[0], "contact_margin_worn": margins[1]}
         # a joint whose cycle model failed (a joint that carries no load: its
-        # equilibrium has no solution) or whose slots ran out has no life: NaN,
-        # with NaN derivatives by every input (never a silent 0)
-        lives = not_an_answer(jnp.stack([s.life for s in sols]), not_computed(joint_status),
-                              (self, mech, y0, period, limit))
-        return LifeResult(cycles=lives,
+        # equilibrium has no solution) or whose slots ran out has no life and,
+        # short of ``cycles``, no final profile: NaN, with NaN derivatives by
+        # every input (never a silent 0; the profiles it reached stay in the
+        # history)
+        life = LifeResult(cycles=not_an_answer(jnp.stack([s.life for s in sols]), failed, inputs),
                           depth=tuple(s.depth for s in sols), status=status,
                           dynamic_cycles=jnp.zeros((), int), history=history)
+        joint_cycles = jnp.stack([s.cycles for s in sols])
+        evolution = WearEvolution(
+            depth=tuple(not_an_answer(s.depth, failed[k], inputs) for k, s in enumerate(sols)),
+            cycles=jnp.min(joint_cycles),
+            joint_cycles=joint_cycles, status=status, joint_status=joint_status,
+            contact_margin=margins[0], contact_margin_worn=margins[1],
+            history=tuple(s.history for s in sols))
+        return evolution, life
+
+    def life(self, mech, joints, y0, *, period, limit) -> LifeResult:
+        return self.solve(mech, joints, y0, period=period, limit=limit)[1]
 
     def joint_force(self, mech, joint, y0, *, period, evolution: WearEvolution,
                     samples: int = 180):
@@ -245,22 +269,8 @@ class QuasiStatic(AbstractWearModel):
         """Wear of ``joints`` after ``cycles`` real cycles from unworn bushings;
         ``wall_thickness`` [m] (one for all, or one per joint): stop a joint
         whose peak depth reaches it."""
-        per_joint, ok = self._each(mech, joints, y0, period, walls=wall_thickness, cycles=cycles)
-        joint_status, status = self._status(per_joint, ok)
-        sols = [s for s, _ in per_joint]
-        joint_cycles = jnp.stack([s.cycles for s in sols])
-        # a joint whose cycle model failed, or whose slots ran out before
-        # ``cycles``, has no final profile: NaN with NaN derivatives (the
-        # profiles it reached stay in ``history``)
-        inputs = (self, mech, y0, period, cycles, wall_thickness)
-        failed = not_computed(joint_status)
-        return WearEvolution(
-            depth=tuple(not_an_answer(s.depth, failed[k], inputs) for k, s in enumerate(sols)),
-            cycles=jnp.min(joint_cycles),
-            joint_cycles=joint_cycles, status=status, joint_status=joint_status,
-            contact_margin=jnp.stack([m[0] for _, m in per_joint]),
-            contact_margin_worn=jnp.stack([m[1] for _, m in per_joint]),
-            history=tuple(s.history for s in sols))
+        return self.solve(mech, joints, y0, period=period, cycles=cycles,
+                          wall_thickness=wall_thickness)[0]
 
 
 __all__ = ["QuasiStatic", "joint_mass"]

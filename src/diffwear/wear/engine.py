@@ -186,29 +186,50 @@ def _unflatten(flat: dict):
     return build(root)
 
 
+MAX_CYCLES = 1e12
+"""A life's last cycle count when none is given (`Stop`)."""
+
+
 class Stop(eqx.Module):
-    """Where an integration ends: after ``cycles`` real cycles, or when the
-    peak depth of every joint has reached ``limit`` [m] (a life), whichever
-    is given; and early when a joint's peak depth reaches its ``wall`` [m]
-    (one per joint or one for all; none: no wall)."""
+    """Where an integration ends: after ``cycles`` real cycles; when the peak
+    depth of every joint has reached ``limit`` [m] (a life: each joint's
+    crossing is recorded); at whichever comes first when both are given; and
+    early when a joint's peak depth reaches its ``wall`` [m] (one per joint or
+    one for all; none: no wall).  Without ``cycles`` a life ends at
+    ``max_cycles`` at the latest, and one that ends there unreached ran out
+    (`RESULTS.run_ended_early`), as one that reaches ``cycles`` >= ``max_cycles``.
+
+    A ``limit`` of +inf is no limit and ``cycles = max_cycles`` none: a run
+    and a life of the same model are then one program (traced values, one
+    compile), ``Stop(cycles=N, limit=jnp.inf)`` and ``Stop(cycles=max_cycles,
+    limit=L)``, with the numbers of ``Stop(cycles=N)`` and ``Stop(limit=L)``."""
 
     cycles: Any = None
     limit: Any = None
     wall: Any = None
-    max_cycles: Any = 1e12
+    max_cycles: Any = MAX_CYCLES
 
     def __check_init__(self):
-        if (self.cycles is None) == (self.limit is None):
-            raise ValueError("give exactly one of cycles= and limit=")
+        if self.cycles is None and self.limit is None:
+            raise ValueError("give cycles=, limit= or both")
 
     @property
-    def life_mode(self) -> bool:
-        return self.limit is not None
+    def has_limit(self):
+        """Whether a limit ends the integration (a traced bool: +inf is none)."""
+        if self.limit is None:
+            return jnp.asarray(False)
+        return jnp.isfinite(jnp.asarray(self.limit, dtype=float))
 
     @property
     def end(self):
-        """The last cycle count: ``cycles``, or ``max_cycles`` for a life."""
+        """The last cycle count: ``cycles``, or ``max_cycles`` without them."""
         return self.max_cycles if self.cycles is None else self.cycles
+
+    @property
+    def capped(self):
+        """Whether the end is ``max_cycles`` (a traced bool)."""
+        return (jnp.asarray(self.end, dtype=float)
+                >= jnp.asarray(self.max_cycles, dtype=float))
 
 
 class Proposal(NamedTuple):
@@ -366,9 +387,12 @@ class Engine(eqx.Module):
         h = tuple(jnp.where(ok, hc, h0) for hc, h0 in zip(h_cut, s.h))
         n = jnp.where(ok, s.n + f * p.dn, s.n)
         life, done = s.life, s.done
-        if self.stop.life_mode:
-            limit = jnp.asarray(self.stop.limit, dtype=float)
-            cross = ok & ~s.done & (m_new >= limit)
+        if self.stop.limit is not None:
+            # a limit of +inf (none: `Stop`) never crosses; double where, so
+            # that the crossing's derivatives stay finite there
+            given = self.stop.has_limit
+            limit = jnp.where(given, jnp.asarray(self.stop.limit, dtype=float), 0.0)
+            cross = given & ok & ~s.done & (m_new >= limit)
             if p.peak_rates is None:  # the peak depth linear over the step
                 gain = jnp.where(cross, m_new - m_old, 1.0)
                 n_cross = s.n + p.dn * (limit - m_old) / gain
@@ -412,11 +436,11 @@ class Engine(eqx.Module):
     def finish(self, final: WearState) -> WearState:
         """The final state, with `RESULTS.run_ended_early` where the slots ran
         out before the stop."""
-        if self.stop.life_mode:
-            short = (final.status == RESULTS.ok) & ~jnp.all(final.done)
-        else:
-            short = ((final.status == RESULTS.ok)
-                     & (final.n < jnp.asarray(self.stop.end, dtype=float) - 1e-6))
+        # ended short: neither every joint's limit nor the end reached, or
+        # the end reached unlimited at max_cycles, a life's cap
+        ended = final.n >= jnp.asarray(self.stop.end, dtype=float) - 1e-6
+        short = ((final.status == RESULTS.ok) & ~jnp.all(final.done)
+                 & (~ended | (self.stop.has_limit & self.stop.capped)))
         return final.replace(status=RESULTS.where(short, RESULTS.run_ended_early, final.status),
                              fail_n=jnp.where(short, final.n, final.fail_n),
                              fail_h=jnp.where(short, jnp.max(peaks(final.h, self.peak)),

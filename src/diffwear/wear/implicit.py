@@ -85,13 +85,13 @@ class LinearlyImplicitEuler(AbstractWearSolver):
     def init(self, term, state: WearState, stop: Stop) -> WearState:
         cw = term.cycle(state.h, state.memory)
         j = len(state.h)
-        if stop.life_mode:
-            dm = jnp.full(j, jnp.asarray(stop.limit, dtype=float) / self.steps)
-        else:
-            end = jnp.asarray(stop.cycles, dtype=float)
-            walls = jnp.stack(per_joint(stop.wall, j))
-            # a run that would wear through its wall is stepped as a life to it
-            dm = jnp.minimum(peaks(cw.rate, peak_depth) * end, walls) / self.steps
+        end = jnp.asarray(stop.end, dtype=float)
+        walls = jnp.stack(per_joint(stop.wall, j))
+        # a run that would wear through its wall is stepped as a life to it
+        dm = jnp.minimum(peaks(cw.rate, peak_depth) * end, walls) / self.steps
+        if stop.limit is not None:  # a life's steps: limit / steps of depth
+            limit = jnp.where(stop.has_limit, jnp.asarray(stop.limit, dtype=float), 0.0)
+            dm = jnp.where(stop.has_limit, limit / self.steps, dm)
         return state.replace(
             memory=cw.memory, evaluations=state.evaluations + 1,
             status=RESULTS.where(cw.ok, state.status, RESULTS.cycle_model_failed),

@@ -16,7 +16,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-from .engine import AbstractWearTerm, CycleWear, Stop, initial_state, integrate
+from .engine import MAX_CYCLES, AbstractWearTerm, CycleWear, Stop, initial_state, integrate
 from .implicit import NO_WEAR_RATE, LinearlyImplicitEuler
 from .status import RESULTS
 
@@ -66,13 +66,13 @@ def integrate_profile(
     cycles=None,
     limit=None,
     max_steps: int | None = None,
-    max_cycles=1e12,
+    max_cycles=MAX_CYCLES,
     wall=jnp.inf,
     extrapolate: bool = False,
     memory: Any = None,
 ) -> ProfileSolution:
     """Integrate dh/dN = w(h) from ``h0`` over ``cycles`` real cycles, or until
-    the peak depth reaches ``limit`` [m] (exactly one of the two).
+    the peak depth reaches ``limit`` [m], or to whichever comes first (`Stop`).
 
     ``evaluate(h) -> (w, ok, A)``: the cycle model (wear per cycle), a
     success flag and the response matrix A = -dw/dh; with ``memory`` given,

@@ -280,7 +280,7 @@ def pin_pivot_history(path: Path) -> None:
     extrapolation to 408,000 test cycles and the thesis's values (cf. Fig. 4-9)."""
     from diffwear.plots.pin_pivot import history_figure
     from diffwear.studies.pin_pivot import TARGET_SWEEPS, THESIS
-    from diffwear.wear.pin_pivot import steady_line
+    from diffwear.studies.pin_pivot_integrator import steady_line
 
     h = read_csv(STUDIES / "pin-pivot" / "history.csv")
     history_figure(path, sweeps=h["sweeps"], max_pin_mm=h["max_pin_mm"],

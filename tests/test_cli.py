@@ -90,7 +90,7 @@ def _run_interrupted(out, args=("study", WEAR, "--cycles", "3")) -> int:
     """``diffwear ARGS --out OUT --quiet`` (default: a 3-cycle wear-5000 run)
     with Ctrl-C pressed right after its first checkpoint was saved; its exit
     code."""
-    from diffwear.wear import chunked as common
+    from diffwear.models import execution as common
 
     real = common.save_checkpoint
 
@@ -233,7 +233,7 @@ def test_a_checkpoint_without_an_integrator_resumes_on_tsit5(interrupted_dir, tm
     import argparse
 
     from diffwear.cli.command import _options_from_checkpoint
-    from diffwear.wear.chunked import load_checkpoint, save_checkpoint
+    from diffwear.models.execution import load_checkpoint, save_checkpoint
 
     out = _copy(interrupted_dir, tmp_path / "run")
     ckpt, meta = load_checkpoint(out / "checkpoint.npz")
@@ -636,7 +636,7 @@ def test_a_ctrl_c_lost_in_a_callback_still_ends_the_run_with_130(tmp_path, capsy
     """A wear run whose Ctrl-C was swallowed stops at the next chunk, after
     its checkpoint (resumable, the resume line printed), never finishing
     with exit 0."""
-    from diffwear.wear import chunked as common
+    from diffwear.models import execution as common
 
     real = common.save_checkpoint
     calls = []

@@ -89,8 +89,10 @@ def _zero_load_setup():
 
     def run(scale, cycles=200.0):
         """The run of a report: (the evolution as far as it got, its status)."""
-        res, _ = model(scale).run(lambda _: mfile.mechanism, jnp.zeros(()), ("coupler_rocker",),
-                                  jnp.zeros(1), period=1.0, cycles=cycles)
+        from diffwear.models import run_model
+
+        res, _ = run_model(model(scale), lambda _: mfile.mechanism, jnp.zeros(()),
+                           ("coupler_rocker",), jnp.zeros(1), period=1.0, cycles=cycles)
         return res.depth[0], res.status
 
     life.evolve = evolve

@@ -156,7 +156,7 @@ def _snapshot(folder):
 
 def _checkpoint_of(folder, meta):
     """A checkpoint as a wear run leaves it, recording ``meta``."""
-    from diffwear.wear import Checkpoint, save_checkpoint
+    from diffwear.models import Checkpoint, save_checkpoint
     from diffwear.wear.engine import initial_state
 
     folder.mkdir()

@@ -16,7 +16,7 @@ from diffwear.errors import InputError  # noqa: E402
 from diffwear.fem.condense import pressure_load_matrix  # noqa: E402
 from diffwear.fem.element import min_jacobian  # noqa: E402
 from diffwear.fem.pin import pin_compliance, pin_mesh, solid_disc_compliance  # noqa: E402
-from diffwear.wear.pin_pivot import (  # noqa: E402
+from diffwear.studies.pin_pivot_integrator import (  # noqa: E402
     STEEL_E,
     STEEL_NU,
     PinPivot,

@@ -193,7 +193,7 @@ def test_a_checkpoint_write_cut_short_keeps_the_previous_one_and_leaves_no_file(
     """Ctrl-C while the checkpoint is written: the previous checkpoint stays
     whole and readable, and no temporary file is left in the folder (which
     the next run would otherwise find there)."""
-    from diffwear.wear import Checkpoint, load_checkpoint, save_checkpoint
+    from diffwear.models import Checkpoint, load_checkpoint, save_checkpoint
     from diffwear.wear.engine import initial_state
 
     path = tmp_path / "checkpoint.npz"
@@ -215,7 +215,8 @@ def test_a_checkpoint_write_cut_short_keeps_the_previous_one_and_leaves_no_file(
 
 
 def _chunked(problem, cycles=6, a=2.0, chunk_slots=2, **kw):
-    from diffwear.wear import ChunkedEvolution, Evolver
+    from diffwear.models import ChunkedEvolution
+    from diffwear.wear import Evolver
 
     mech_of, p, y0 = problem
     return ChunkedEvolution(
@@ -228,7 +229,7 @@ def test_interrupted_chunked_run_resumes_to_the_same_result(problem, short_run, 
     """6 cycles at A = 2 (3 scan slots) in chunks of 2 slots: interrupted after
     the first chunk (checkpoint saved), resumed from the file: profile, volume,
     cycles, state and history equal those of the single scan (1e-12)."""
-    from diffwear.wear import load_checkpoint, save_checkpoint
+    from diffwear.models import load_checkpoint, save_checkpoint
 
     mech_of, p, y0 = problem
     ref = short_run(p, y0, jnp.inf).check()

@@ -19,6 +19,7 @@ def rig_21400_fem_route(repeats: int) -> dict:
 
     from diffwear.models import FemRoute
     from diffwear.models.dynamic import as_evolution
+    from diffwear.models.execution import RunTimes
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
     from diffwear.studies.rig_21400 import (
@@ -29,7 +30,6 @@ def rig_21400_fem_route(repeats: int) -> dict:
         TARGET_DYNAMIC,
         _setup,
     )
-    from diffwear.wear.chunked import RunTimes
     from diffwear.wear.fem_route import default_model
 
     mech0, _, y0 = _setup()

@@ -136,14 +136,14 @@ def _options_from_checkpoint(args: argparse.Namespace, origin: str = "") -> None
     record (an option given explicitly is kept: the study then checks it
     matches)."""
     from ..io import CHECKPOINT
-    from ..wear.chunked import load_checkpoint
+    from ..models.execution import load_checkpoint
 
     if args.resume is None:
         return
     path = Path(args.resume) / CHECKPOINT
     if not path.is_file():
         raise InputError(f"--resume {args.resume}: no {CHECKPOINT} there to resume from{origin}")
-    from ..wear.chunked import META_DEFAULTS
+    from ..models.execution import META_DEFAULTS
 
     _, meta = load_checkpoint(path)
     # a key added later: what the checkpoints written without it meant

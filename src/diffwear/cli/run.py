@@ -48,8 +48,8 @@ from ..mechanism_file import (
     start_up_transient,
 )
 from ..mechanism_file import wear as mechanism_wear
+from ..models.execution import Checkpoints
 from ..report import Block, Bullets, Figure, Report, Section, Table, render
-from ..wear.chunked import Checkpoints
 from ..wear.status import RESULTS, code, message
 from . import objects
 

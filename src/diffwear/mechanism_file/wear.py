@@ -32,8 +32,9 @@ from ..errors import InputError
 from ..mechanism.constraints import Driver
 from ..mechanism.geometry import safe_norm
 from ..models import MAX_CYCLES, AbstractWearModel, QuasiStatic, WearEvolution
+from ..models.execution import Checkpoints, RunTimes, run_model
+from ..studies.model_words import describe
 from ..wear import worn_volume
-from ..wear.chunked import Checkpoints, RunTimes
 from ..wear.status import at
 from .motion import first_driver
 
@@ -110,7 +111,7 @@ def check_resumed_file(mfile: MechanismFile, folder) -> None:
     """--resume ``folder``: `InputError` unless its checkpoint belongs to a
     run of this file (checked before the folder is touched)."""
     from ..io import CHECKPOINT
-    from ..wear.chunked import load_checkpoint
+    from ..models.execution import load_checkpoint
 
     _, saved = load_checkpoint(Path(folder) / CHECKPOINT)
     mine = file_meta(mfile)
@@ -146,7 +147,7 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     walls = bushing_walls(mfile, joints, limit)
     mech = mfile.mechanism
     if checkpoints is not None:
-        meta = {**file_meta(mfile), **model.describe(cycles),
+        meta = {**file_meta(mfile), **describe(model, cycles),
                 "limit_mm": None if limit is None else round(limit * 1e3, 12),
                 "cycles": float(cycles),
                 "n_theta": int(mech.element(joints[0]).profile.n)}
@@ -155,7 +156,7 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     if limit is not None and isinstance(model, QuasiStatic):
         res, life, times = _run_and_life(model, mech, joints, y0, period, cycles, limit, walls)
     else:
-        res, times = model.run(lambda _: mech, jnp.zeros(()), joints, y0, period=period,
+        res, times = run_model(model, lambda _: mech, jnp.zeros(()), joints, y0, period=period,
                                cycles=cycles, wall_thickness=walls, checkpoints=checkpoints)
         if limit is not None:
             life = jax.jit(lambda y: model.life(mech, joints, y, period=period,
@@ -218,7 +219,7 @@ def model_numbers(model: AbstractWearModel, res: WearEvolution, k: int, cycles) 
         out.update(contact_margin=margin,
                    contact_margin_worn=float(res.contact_margin_worn[k]))
     if res.detail is not None:
-        out.update(method=model.describe(cycles).get("method"),
+        out.update(method=describe(model, cycles).get("method"),
                    dynamic_cycles=int(res.detail.dynamic_cycles))
     return out
 

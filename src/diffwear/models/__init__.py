@@ -13,14 +13,27 @@ objects that every consumer of wear takes (as diffrax takes a solver).
 
 Each computes lives (`cycles_to_limit`), evolutions over a number of cycles
 and the joint force at the end, on the wear engine (`diffwear.wear.engine`).
+The models are the physics: a run of one (compiled once, timed, in chunks
+with checkpoints) is `execution.run_model`, and what the reports say of a
+model is `diffwear.studies.model_words`.
 """
 
 from ..wear.engine import MAX_CYCLES
 from ._base import AbstractWearModel, WearEvolution
 from .dynamic import Dynamic
+from .execution import (
+    Checkpoint,
+    Checkpoints,
+    ChunkedEvolution,
+    RunTimes,
+    load_checkpoint,
+    run_model,
+    save_checkpoint,
+)
 from .fem import FemRoute
 from .life import cycles_to_limit
 from .quasi_static import QuasiStatic, joint_mass
 
 __all__ = ["AbstractWearModel", "WearEvolution", "Dynamic", "QuasiStatic", "FemRoute",
-           "cycles_to_limit", "joint_mass", "MAX_CYCLES"]
+           "cycles_to_limit", "joint_mass", "run_model", "Checkpoints", "RunTimes",
+           "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint", "MAX_CYCLES"]

@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 import abc
-from typing import Any, Callable, ClassVar
+from typing import Any, ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..errors import InputError
 from ..mechanism import Mechanism
-from ..wear.chunked import Checkpoints, RunTimes, timed
 from ..wear.status import RESULTS
 
 
@@ -76,9 +74,6 @@ class AbstractWearModel(eqx.Module):
     name: eqx.AbstractClassVar[str]
     exact_gradients: eqx.AbstractClassVar[bool]
     precomputes: ClassVar[bool] = False
-    # how its results are labelled, and what its history's steps are
-    label: ClassVar[str] = "diffwear"
-    step_words: ClassVar[str] = "steps"
 
     @abc.abstractmethod
     def life(self, mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,
@@ -112,38 +107,10 @@ class AbstractWearModel(eqx.Module):
         """`InputError` for wearing joints this model does not evolve (none
         here); ``what`` names the mechanism's source in the message."""
 
-    def describe(self, cycles) -> dict:
-        """The settings of an evolution over ``cycles`` that a summary reports
-        and a checkpoint records (a checkpoint resumes only a run with the
-        same)."""
-        return {"model": self.name}
-
     def reference(self) -> "AbstractWearModel | None":
         """The model a run of this one is compared with (the FEM route: the same
         dynamics with the EFM pressure), or None."""
         return None
-
-    def route_summary(self, evolution: WearEvolution) -> dict:
-        """What a comparison of routes reports of this one beyond the wear."""
-        return {}
-
-    def run(self, mech_of: Callable, p, joints: tuple[str, ...], y0, *, period, cycles,
-            wall_thickness=None, checkpoints: Checkpoints | None = None
-            ) -> tuple[WearEvolution, RunTimes]:
-        """`evolve` of the mechanism ``mech_of(p)`` compiled once and run, both
-        timed.  ``checkpoints``: the output folder and settings of a run kept
-        in checkpoints; this model runs whole (a resume is an `InputError`).
-        A joint that stopped early has the profile it reached (`WearEvolution.reached`)."""
-        if checkpoints is not None and checkpoints.resume:
-            raise InputError(f"--resume: the {self.name} model runs whole, without "
-                             "checkpoints (seconds); run it again instead")
-
-        def evolution(p, y0):
-            return self.evolve(mech_of(p), joints, y0, period=period, cycles=cycles,
-                               wall_thickness=wall_thickness)
-
-        res, times = timed(evolution, p, y0)
-        return res.reached(), times  # a run that stopped early: its results so far
 
     def prepared(self, mech: Mechanism, joints: tuple[str, ...], y0, period
                  ) -> "AbstractWearModel":

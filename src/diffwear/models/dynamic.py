@@ -18,8 +18,7 @@ import jax.numpy as jnp
 from .._checks import check_int_option
 from ..contact import contact_history
 from ..errors import InputError
-from ..wear.chunked import Checkpoints, RunTimes, run_evolution
-from ..wear.cycle import integrator_name, wear_cycle
+from ..wear.cycle import wear_cycle
 from ..wear.dynamic_term import CycleSettings
 from ..wear.evolution import EvolutionResult, Evolver, worn_mechanism
 from ..wear.extrapolation import AbstractExtrapolation, Constant
@@ -52,8 +51,6 @@ class Dynamic(AbstractWearModel):
 
     name: ClassVar[str] = "dynamic"
     exact_gradients: ClassVar[bool] = False
-    label: ClassVar[str] = "diffwear (EFM)"
-    step_words: ClassVar[str] = "simulated dynamic cycles"
     steps: int = eqx.field(static=True, default=10)
     implicit: bool = eqx.field(static=True, default=True)
     cycle: CycleSettings = CycleSettings()
@@ -92,7 +89,7 @@ class Dynamic(AbstractWearModel):
 
     def evolve(self, mech, joints, y0, *, period, cycles, wall_thickness=None
                ) -> WearEvolution:
-        joints = self._one(joints)
+        joints = one_joint(joints)
         wall = None
         if wall_thickness is not None:
             wall = jnp.reshape(jnp.asarray(wall_thickness, dtype=float), (-1,))[0]
@@ -104,40 +101,11 @@ class Dynamic(AbstractWearModel):
                               (self, mech, y0, period, cycles, wall_thickness))
         return eqx.tree_at(lambda e: e.depth, evolution, (depth,))
 
-    def run(self, mech_of, p, joints, y0, *, period, cycles, wall_thickness=None,
-            checkpoints: Checkpoints | None = None) -> tuple[WearEvolution, RunTimes]:
-        """`AbstractWearModel.run`; with ``checkpoints`` in chunks, a checkpoint
-        after each (`diffwear.wear.chunked.run_evolution`), resumable."""
-        (joint,) = self._one(joints)
-
-        def make(p):
-            return self.evolver(mech_of(p), joint, cycles, period=period,
-                                wall_thickness=wall_thickness)
-
-        res, times = run_evolution(make, p, y0, checkpoints)
-        return as_evolution(res), times
-
     def check_joints(self, mech, joints, what: str = "mechanism") -> None:
         """One wearing joint.  A lubricated one is taken: its cycles run on
         Rodas4 at a tolerance scaled by its film's roughness, and its wear is
         the asperities' (`diffwear.wear.cycle.lubricated_cycle`)."""
-        self._one(joints, what)
-
-    def describe(self, cycles) -> dict:
-        solver = self.solver(cycles)
-        return {"model": self.name, "method": solver.name,
-                "extrapolation": float(solver.first_step(cycles)), "contact": "efm",
-                "integrator": integrator_name(self.cycle.solver)}
-
-    @staticmethod
-    def _one(joints, what: str = "mechanism") -> tuple[str]:
-        joints = tuple(joints)
-        if len(joints) != 1:
-            raise InputError(f"the dynamic wear model evolves one clearance joint over a fixed "
-                             f"number of cycles; this {what} wears {len(joints)} "
-                             f"({', '.join(joints)}); allowed: --model quasi-static, or one "
-                             "joint with a wear law")
-        return joints  # type: ignore[return-value]
+        one_joint(joints, what)
 
     def cycle_histories(self, mech, joint, y0, *, period, evolution: WearEvolution) -> tuple:
         """The first dynamic cycle after a warm-up one, and the last: on the
@@ -169,6 +137,18 @@ class Dynamic(AbstractWearModel):
         return contact_history(worn, joint, cyc.ys).force_magnitude[:-1]
 
 
+def one_joint(joints, what: str = "mechanism") -> tuple[str]:
+    """``joints`` when it is one joint (the dynamic models evolve one), else
+    an `InputError`; ``what`` names the mechanism's source in the message."""
+    joints = tuple(joints)
+    if len(joints) != 1:
+        raise InputError(f"the dynamic wear model evolves one clearance joint over a fixed "
+                         f"number of cycles; this {what} wears {len(joints)} "
+                         f"({', '.join(joints)}); allowed: --model quasi-static, or one "
+                         "joint with a wear law")
+    return joints  # type: ignore[return-value]
+
+
 # States saved over the first and the last cycle of `Dynamic.cycle_histories`
 # (400 intervals: 0.9 deg of crank).
 CYCLE_SAMPLES = 401
@@ -195,4 +175,4 @@ def as_evolution(res: EvolutionResult) -> WearEvolution:
         detail=res)
 
 
-__all__ = ["Dynamic", "as_evolution"]
+__all__ = ["Dynamic", "as_evolution", "one_joint"]

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-import numpy as np
-
 from ..errors import InputError
 from ..wear.fem_route import FemEvolver, FemWearModel
 from .dynamic import Dynamic
@@ -21,7 +19,6 @@ class FemRoute(Dynamic):
     `QuasiStatic`)."""
 
     name: ClassVar[str] = "fem"
-    label: ClassVar[str] = "diffwear (FEM route)"
     fem: FemWearModel | None = None
 
     def __check_init__(self):
@@ -34,30 +31,11 @@ class FemRoute(Dynamic):
                           method=self.solver(cycles), wall_thickness=wall_thickness,
                           warmup_cycles=self.warmup_cycles, cycle=self.cycle)
 
-    def describe(self, cycles) -> dict:
-        assert self.fem is not None
-        fem = self.fem
-        return {**super().describe(cycles), "model": "dynamic", "contact": "fem",
-                "fem_refresh_interval": float(fem.refresh_interval),
-                "fem_samples": fem.n_samples, "fem_layers": fem.n_layers,
-                "fem_force": fem.force}
-
     def reference(self) -> Dynamic:
         """The same dynamic model with the EFM pressure."""
         return Dynamic(steps=self.steps, implicit=self.implicit, cycle=self.cycle,
                        warmup_cycles=self.warmup_cycles, extrapolation=self.extrapolation,
                        dynamic_cycles=self.dynamic_cycles, max_dynamic=self.max_dynamic)
-
-    def route_summary(self, evolution) -> dict:
-        assert self.fem is not None
-        fem = self.fem
-        fallback = evolution.detail.state.memory["fem_explicit"]
-        return {"explicit_fallback_cycles": int(np.asarray(fallback)),
-                "refresh_interval": float(fem.refresh_interval),
-                "samples_per_cycle": fem.n_samples + 1, "layers": fem.n_layers,
-                "force": fem.force, "youngs_modulus_Pa": float(fem.youngs_modulus),
-                "poisson_ratio": float(fem.poisson_ratio),
-                "outer_radius_m": float(fem.outer_radius)}
 
     def life(self, mech, joints, y0, *, period, limit):
         raise InputError("the FEM route evolves the wear over a number of cycles; lives to "

@@ -78,8 +78,6 @@ class QuasiStatic(AbstractWearModel):
 
     name: ClassVar[str] = "quasi-static"
     exact_gradients: ClassVar[bool] = True
-    label: ClassVar[str] = "diffwear (quasi-static)"
-    step_words: ClassVar[str] = "wear ODE steps"
     samples: int = eqx.field(static=True, default=180)
     steps: int = eqx.field(static=True, default=40)
     warmup_cycles: int = eqx.field(static=True, default=0)
@@ -99,9 +97,6 @@ class QuasiStatic(AbstractWearModel):
             check_int_option("QuasiStatic: max_steps", self.max_steps, 1)
         check_range("QuasiStatic: load_rtol", self.load_rtol, 0.0, 1.0, low_open=True,
                     high_open=True)
-
-    def describe(self, cycles) -> dict:
-        return {"model": self.name, "load_samples_per_cycle": self.samples}
 
     @property
     def precomputes(self) -> bool:  # type: ignore[override]

@@ -1,8 +1,9 @@
 """Shared driver of the wear studies (``wear-5000``, ``rig-21400``,
 ``rig-lubricated``): a `WearStudy` run on any wear model, and its one writer.
 
-The run is the model's (`AbstractWearModel.run`: compiled once, timed, in
-chunks with checkpoints where the model keeps them); the outputs are the same
+The run is `diffwear.models.execution.run_model`'s (compiled once, timed, in
+chunks with checkpoints where the model keeps them; the report's words for
+the model from `model_words`); the outputs are the same
 for every model where they have a meaning: the profile, the history, the
 joint force and the pin's locus over the first and the last cycle
 (`AbstractWearModel.cycle_histories`), figures, summary and report.  What a
@@ -24,12 +25,13 @@ from ..contact import MixedLubrication, centred_state
 from ..dynamics import consistent_state
 from ..errors import SolverError
 from ..models import AbstractWearModel, Dynamic, WearEvolution
+from ..models.execution import Checkpoints, RunTimes, run_model
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..report import Block, Bullets, Report, Table
 from ..wear import Constant, CycleSettings, arc_peak_depth, worn_volume
-from ..wear.chunked import Checkpoints, RunTimes
 from ..wear.cycle import cycle_integrator
 from ..wear.status import RESULTS, code, message
+from . import model_words
 from ._report import COMPARISON_WORDS, comparison_table, peak_line, write_report
 
 JOINT = "crank_rod"
@@ -106,9 +108,9 @@ def run_wear_study(out, study: WearStudy, *, cycles, model: AbstractWearModel, l
     extra_summary, extra_report = dict(study.extra_summary), list(study.extra_report)
     reference = model.reference()
     if reference is not None:
-        log(f"[{study.name}] {reference.label} for the comparison ...")
+        log(f"[{study.name}] {model_words.label(reference)} for the comparison ...")
         ref, ref_times = _evolve(study, reference, cycles, None)
-    settings = model.describe(cycles)
+    settings = model_words.describe(model, cycles)
     log(f"[{study.name}] {cycles} cycles, " + ", ".join(f"{k} {v}" for k, v in settings.items())
         + " ...")
     meta = {"study": study.name, "cycles": float(cycles), **settings,
@@ -119,8 +121,8 @@ def run_wear_study(out, study: WearStudy, *, cycles, model: AbstractWearModel, l
         mine = route_numbers(res, study.design, times)
         theirs = route_numbers(ref, study.design, ref_times)
         ratio = times.wall_time / ref_times.wall_time
-        tag, ref_tag = settings["contact"], reference.describe(cycles)["contact"]
-        extra_summary.update({f"{tag}_route": {**model.route_summary(res), **mine},
+        tag, ref_tag = settings["contact"], model_words.describe(reference, cycles)["contact"]
+        extra_summary.update({f"{tag}_route": {**model_words.route_summary(model, res), **mine},
                               f"{ref_tag}_route": theirs,
                               f"wall_time_ratio_{tag}_to_{ref_tag}": ratio})
         extra_report += route_table(mine, theirs, ratio)
@@ -146,7 +148,7 @@ def dynamic_model(cycles, target_dynamic: int, integrator: str) -> Dynamic:
 
 
 def _evolve(study: WearStudy, model: AbstractWearModel, cycles, checkpoints):
-    return model.run(study.mech_of, study.p, (JOINT,), study.y0, period=study.period,
+    return run_model(model, study.mech_of, study.p, (JOINT,), study.y0, period=study.period,
                      cycles=cycles, wall_thickness=study.design.wall, checkpoints=checkpoints)
 
 
@@ -228,10 +230,11 @@ def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearE
                                    crank=crank, first=first, last=last, thesis=study.thesis,
                                    lines=plots_wear.Lines(
                                        clearance_mm=float(design.clearance) * 1e3,
-                                       wall_mm=float(design.wall) * 1e3, label=model.label,
-                                       markers=model.step_words, status=res.status,
+                                       wall_mm=float(design.wall) * 1e3,
+                                       label=model_words.label(model),
+                                       markers=model_words.step_words(model), status=res.status,
                                        cf=study.cf, calibrated=study.calibrated))
-    settings = model.describe(cycles)
+    settings = model_words.describe(model, cycles)
     summary = {
         "study": study.name, "cycles": float(res.cycles), "cycles_requested": float(cycles),
         **{k: v for k, v in numbers.items()
@@ -262,8 +265,8 @@ def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearE
     summary["files"] = sorted(set(out.files)) + ["report.md", "summary.json"]
     report = Report(study.name, [
         study.description,
-        *_model_words(res, el),
-        comparison_table(model.label, summary, study.thesis),
+        *_result_words(res, el),
+        comparison_table(model_words.label(model), summary, study.thesis),
         COMPARISON_WORDS,
         Bullets([*_run_words(summary, res, times), peak_line(summary),
                  *_contact_words(summary, res, checked)]),
@@ -290,7 +293,7 @@ def _simulated_columns(res: WearEvolution) -> dict:
             "dynamic_cycles": np.concatenate([[1], h["dynamic_cycles"][valid]])}
 
 
-def _model_words(res: WearEvolution, el) -> list[str]:
+def _result_words(res: WearEvolution, el) -> list[str]:
     if res.detail is not None:
         return []
     return ["Model: quasi-static joint (the pin at the equilibrium of "

@@ -3,7 +3,7 @@ Tables 4-1..4-3, Fig. 4-9).
 
 A steel pin oscillating +-30 deg in a steel pivot under 60 MPa projected
 pressure; both bodies wear (Archard, k = 1.0e-5 mm^3/(N m)); FEM contact with
-both bodies elastic (`diffwear.wear.pin_pivot`).  Like the thesis: 100,000
+both bodies elastic (`diffwear.studies.pin_pivot_integrator`).  Like the thesis: 100,000
 simulated sweeps at 10 steps per sweep, then a linear extrapolation of the
 max pin wear to the test's 408,000 test cycles = 816,000 sweeps.  Also: a
 direct run of twice the sweeps (checks the linear extrapolation), k = 1.2e-5,
@@ -26,7 +26,7 @@ from .._checks import check_int_option
 from ..io import OutputDir
 from ..plots import pin_pivot as plots
 from ..report import Bullets, Figure, Report, Section, Table, render
-from ..wear.pin_pivot import (
+from .pin_pivot_integrator import (
     SWEEPS_PER_TEST_CYCLE,
     THESIS_K,
     THESIS_K_HIGH,

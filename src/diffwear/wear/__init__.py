@@ -1,8 +1,8 @@
 """Wear: Archard's law (`diffwear.contact.archard`, re-exported), one-cycle wear
-increments, evolution over many cycles, the wear models and the life."""
+increments, evolution over many cycles and the life.  The wear models and
+their runs (in chunks, with checkpoints) are `diffwear.models`."""
 
 from ..contact.archard import MM3_PER_NM, SLIP_RATE_WIDTH, ArchardWear
-from .chunked import Checkpoint, ChunkedEvolution, load_checkpoint, save_checkpoint
 from .cycle import (
     CycleResult,
     JointsCycleResult,
@@ -47,6 +47,5 @@ __all__ = [
     "RESULTS", "not_an_answer", "not_computed",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "AbstractExtrapolation", "Constant", "Adaptive", "ErrorControlled",
-    "Evolver", "WearState", "CycleSettings", "DynamicWear", "ChunkedEvolution", "Checkpoint",
-    "save_checkpoint", "load_checkpoint",
+    "Evolver", "WearState", "CycleSettings", "DynamicWear",
 ]

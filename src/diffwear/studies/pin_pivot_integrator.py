@@ -1,4 +1,18 @@
-"""Quasi-static wear of an oscillating steel pin in a steel pivot (thesis Ch. 4).
+"""The pin-pivot study's own wear integrator: quasi-static wear of an
+oscillating steel pin in a steel pivot (thesis Ch. 4).
+
+Why it is not on the wear engine (`diffwear.wear.engine`).  The engine
+integrates bushing profiles of a mechanism's clearance joints in the crank-cycle
+count: a term gives the wear of one cycle at A = 1 and a solver multiplies it
+by the extrapolation factor.  The thesis's Ch. 4 procedure, which this study
+reproduces, is another integrator: each step of a sweep adds k A p ds to both
+bodies *before* the next step's contact solve (Fig. 4-3, Eq. 4-18 applied per
+step), so a computed sweep is not A x (the wear of one sweep); the sweeps
+alternate in direction; the two worn bodies live in frames that turn against
+each other; and the count of computed sweeps is rounded to whole test cycles.
+Put on the engine's term/solver split, its numbers would change.  It has no
+mechanism and no dynamics, and no other part of the package uses it: it is
+the study's (`diffwear.studies.pin_pivot`).
 
 The thesis's wear test (Tables 4-1..4-3): a steel pin in a steel pivot, dry,
 oscillating +-30 deg under a constant load of 60 MPa projected pressure

@@ -1,10 +1,15 @@
-"""Running a wear evolution in pieces: checkpoints, resume, progress, timing.
+"""Running a wear model: compiled once and timed, in pieces with checkpoints,
+resume and a progress bar.  The one place where a run is executed; the models
+(`diffwear.models`) say only what is computed.
 
-`ChunkedEvolution` runs an `Evolver`'s scan as a Python loop over chunks of
-slots (the same result as one scan), `save_checkpoint` / `load_checkpoint`
-keep where it stands, and `run_evolution` drives a whole run: compiled once
-and timed, in about `CHUNKS` chunks with a checkpoint after each when an
-output folder is given (`Checkpoints`), resumable, with a progress bar.
+`run_model` runs a model's evolution: a model whose evolution is a scan over
+dynamic cycles (`Dynamic`, `FemRoute`: an `Evolver`) through `run_evolution`,
+every other model whole (`timed`).  `ChunkedEvolution` runs an `Evolver`'s
+scan as a Python loop over chunks of slots (the same result as one scan),
+`save_checkpoint` / `load_checkpoint` keep where it stands, and
+`run_evolution` drives a whole run: compiled once and timed, in about
+`CHUNKS` chunks with a checkpoint after each when an output folder is given
+(`Checkpoints`), resumable, with a progress bar.
 """
 
 from __future__ import annotations
@@ -23,9 +28,11 @@ import numpy as np
 from .. import interrupt
 from ..errors import InputError
 from ..io import CHECKPOINT
-from .engine import WearState
-from .evolution import EvolutionResult
-from .status import RESULTS
+from ..wear.engine import WearState
+from ..wear.evolution import EvolutionResult
+from ..wear.status import RESULTS
+from ._base import AbstractWearModel, WearEvolution
+from .dynamic import Dynamic, as_evolution, one_joint
 
 CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
 # checkpoint keys added later, with the value that checkpoints written before meant
@@ -234,5 +241,40 @@ def run_evolution(make: Callable, p, y0, checkpoints: Checkpoints | None = None,
     return res, RunTimes(compile_time, time.perf_counter() - t0, info)
 
 
+def run_model(model: AbstractWearModel, mech_of: Callable, p, joints: tuple[str, ...], y0, *,
+              period, cycles, wall_thickness=None, checkpoints: Checkpoints | None = None
+              ) -> tuple[WearEvolution, RunTimes]:
+    """``model.evolve`` of the mechanism ``mech_of(p)`` (``p``: its traced
+    inputs) compiled once and run, both timed.  ``checkpoints``: the output
+    folder and settings of a run kept in checkpoints.
+
+    A dynamic model (`Dynamic`, `FemRoute`) runs its `Evolver` through
+    `run_evolution`: with ``checkpoints`` in chunks, a checkpoint after each,
+    resumable.  Every other model runs whole (seconds; a resume is an
+    `InputError`), and a joint that stopped early has the profile it reached
+    (`WearEvolution.reached`)."""
+    if isinstance(model, Dynamic):
+        (joint,) = one_joint(joints)
+
+        def make(p):
+            return model.evolver(mech_of(p), joint, cycles, period=period,
+                                 wall_thickness=wall_thickness)
+
+        res, times = run_evolution(make, p, y0, checkpoints)
+        return as_evolution(res), times
+
+    if checkpoints is not None and checkpoints.resume:
+        raise InputError(f"--resume: the {model.name} model runs whole, without "
+                         "checkpoints (seconds); run it again instead")
+
+    def evolution(p, y0):
+        return model.evolve(mech_of(p), joints, y0, period=period, cycles=cycles,
+                            wall_thickness=wall_thickness)
+
+    res, times = timed(evolution, p, y0)
+    return res.reached(), times  # a run that stopped early: its results so far
+
+
 __all__ = ["Checkpoint", "ChunkedEvolution", "save_checkpoint", "load_checkpoint",
-           "Checkpoints", "RunTimes", "timed", "run_evolution", "CHUNKS"]
+           "Checkpoints", "RunTimes", "timed", "run_evolution", "run_model", "CHUNKS",
+           "META_DEFAULTS"]

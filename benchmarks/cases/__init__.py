@@ -13,7 +13,7 @@ from .dynamic import clearance_cycle, ideal_slider_crank, rig_21400, rig_cycle_i
 from .fem import rig_21400_fem_route
 from .gradients import rig_cycle_gradient, rig_gradient
 from .peers import exudyn_peer, scipy_peer
-from .quasi_static import rig_21400_quasi_static, rig_lubricated_quasi_static
+from .quasi_static import file_runs, rig_21400_quasi_static, rig_lubricated_quasi_static
 from .sweeps import cpu_sweep, vmap_sweep
 
 CASES: dict[str, Callable[[int], dict]] = {
@@ -34,6 +34,7 @@ CASES: dict[str, Callable[[int], dict]] = {
     "ch8-optimisation": ch8_optimisation,
     "rig-21400 quasi-static": rig_21400_quasi_static,
     "rig-lubricated quasi-static (beside the dry rig)": rig_lubricated_quasi_static,
+    "four-bar files, diffwear run end to end (lubricated beside dry)": file_runs,
     "quasi-static life gradient (4 parameters)": quasi_static_life_gradient,
     "quasi-static life sweep, 1000 designs": quasi_static_life_sweep,
     "CPU sweep, quasi-static rig, 64 points (batched, looped, pooled, default vs loop)":

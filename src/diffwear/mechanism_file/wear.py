@@ -147,7 +147,7 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     walls = bushing_walls(mfile, joints, limit)
     mech = mfile.mechanism
     if checkpoints is not None:
-        meta = {**file_meta(mfile), **describe(model, cycles),
+        meta = {**file_meta(mfile), **describe(model, cycles, mech),
                 "limit_mm": None if limit is None else round(limit * 1e3, 12),
                 "cycles": float(cycles),
                 "n_theta": int(mech.element(joints[0]).profile.n)}

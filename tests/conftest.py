@@ -1,5 +1,7 @@
 import importlib.util
+import os
 import signal
+import tempfile
 from pathlib import Path
 
 import jax
@@ -12,6 +14,11 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
 import diffwear  # noqa: E402,F401
+
+# The commands keep their compiled programs on disk (diffwear.cli.command):
+# for the suite, in a folder of its own, not the user's cache.
+os.environ.setdefault("DIFFWEAR_COMPILATION_CACHE",
+                      tempfile.mkdtemp(prefix="diffwear-test-compilation-cache-"))
 
 
 def pytest_addoption(parser):

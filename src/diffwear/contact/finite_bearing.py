@@ -395,6 +395,24 @@ class FiniteBearingFilm(AbstractFilm):
         tabulated in eps (`SteadyFiniteFilm`) for the journal radius ``radius``."""
         return SteadyFiniteFilm(self, radius)
 
+    def moving(self, radius) -> AbstractFilm:
+        """This film for any motion of the journal centre (squeeze and wedge),
+        tabulated, for the journal radius ``radius``: on the default grid the
+        tables shipped with the package (`ShippedFiniteFilm`: nothing solved,
+        L/D in [0.05, 4], eps_max <= 0.998); on any other grid a
+        `DynamicFiniteFilm` built up to this film's eps_max (17 x 17 Reynolds
+        solves: seconds to minutes)."""
+        from .finite_table import DynamicFiniteFilm, ShippedFiniteFilm
+
+        if (self.n_theta, self.n_z, self.supply_groove) == (N_THETA, N_Z, True):
+            return ShippedFiniteFilm(self, radius)
+        eps_max = concrete(self.max_eccentricity_ratio)
+        if eps_max is None:
+            raise InputError("FiniteBearingFilm.moving on a grid other than the default needs "
+                             "a concrete max_eccentricity_ratio (the table's top); allowed: a "
+                             "number in (0, 1), outside jax.jit")
+        return DynamicFiniteFilm(self, radius, top_eccentricity_ratio=float(eps_max))
+
 
 # The short (Ocvirk) film's steady load is within 4.5 % of the finite film's
 # (96 x 12 grid) wherever (L/D)^2 <= 0.05 (1 - eps) (on that boundary: 1.9 %

@@ -20,6 +20,7 @@ from diffwear.cli import main
 from diffwear.config import load
 from diffwear.config.loader import loads as load_text
 from diffwear.contact import (
+    ArchardWear,
     ClearanceJoint,
     CoulombFriction,
     ElasticFoundation,
@@ -69,16 +70,25 @@ CASES = [(0.69, 0.35, 0.0), (0.69, 0.93, 0.5 * np.pi), (0.69, 0.993, 0.0),
          (2.2, 0.5, 1.2), (2.2, 0.97, -2.8), (0.078, 0.9, 0.0)]
 
 
+def _envelope(film, eps):
+    """rms of |F| over the drive direction at eps (unit |(A, B)|), from the
+    tables: the scale of the force where the film separates and |F| -> 0."""
+    phi = jnp.linspace(0.0, 2 * jnp.pi, 64, endpoint=False)
+    f = jax.vmap(lambda p: _tabled(film, eps, jnp.sin(p), jnp.cos(p)))(phi)
+    return float(jnp.sqrt(jnp.mean(jnp.sum(f**2, axis=-1))))
+
+
 def test_the_tables_read_the_direct_solves_between_their_nodes():
-    """To 1.5 % of |F| (docs/notes/finite-film-table.md: the shipped tables'
-    largest error at L/D midpoints is 1.1 % of |F|, where the film separates)."""
+    """To 1 % of |F|, or of E / 4 where the film separates (|F| < E / 4;
+    docs/notes/finite-film-table.md: the shipped tables' error at the L/D
+    midpoints, of |F| and of E)."""
     for ratio, eps, phi in CASES:
         a, b = np.sin(phi), np.cos(phi)
+        film = _shipped(ratio)
         solved = np.asarray(_direct(eps, a, b, ratio))
-        tabled = np.asarray(_tabled(_shipped(ratio), jnp.asarray(eps), jnp.asarray(a),
-                                    jnp.asarray(b)))
-        assert np.linalg.norm(tabled - solved) <= 0.015 * np.linalg.norm(solved), (
-            ratio, eps, phi, tabled, solved)
+        tabled = np.asarray(_tabled(film, jnp.asarray(eps), jnp.asarray(a), jnp.asarray(b)))
+        scale = max(np.linalg.norm(solved), 0.25 * _envelope(film, jnp.asarray(eps)))
+        assert np.linalg.norm(tabled - solved) <= 0.01 * scale, (ratio, eps, phi, tabled, solved)
 
 
 def _kin(eps, rate, omega, angle=0.4):
@@ -166,32 +176,34 @@ def test_a_default_finite_film_outside_the_tables_says_so():
 def _finite_joint(film):
     law = MixedLubrication(film, ElasticFoundation(1e13, 0.014), 0.1e-6)
     return ClearanceJoint("j", "a", [0.0, 0.0], "b", [0.0, 0.0], R, R + C, law,
-                          friction=CoulombFriction(0.1), n_theta=90)
+                          friction=CoulombFriction(0.1), wear=ArchardWear(1e-14), n_theta=90)
 
 
 def test_the_orbit_under_a_constant_load_is_the_steady_finite_film():
     """A constant load: the orbit on the shipped film (with its squeeze) has
-    e_dot = 0, so it sits where the steady finite film (`SteadyFiniteFilm`,
-    an independent table of direct solves at this L/D) carries the load, to
-    the tables' accuracy (a 1 % force error moves eps by ~1e-3 here)."""
+    e_dot = 0, so it is the steady balance (to the Newton tolerance), and
+    there the direct Reynolds solve of the centre at rest carries the load
+    to the tables' accuracy (1.5 %; the asperities carry nothing at
+    lambda > 20)."""
     film = FiniteBearingFilm(MU, 0.014, C)  # L/D 0.7
-    orbit_joint = LubricatedQuasiStaticJoint.from_joint(_finite_joint(film))
-    assert isinstance(orbit_joint.law.film, ShippedFiniteFilm) and orbit_joint.squeeze
-    steady_law = eqx.tree_at(lambda m: m.film, orbit_joint.law, film.steady(R))
-    steady_joint = LubricatedQuasiStaticJoint(law=steady_law, dry=orbit_joint.dry,
-                                              squeeze=False)
-    s = 12
-    loads = JointLoads(force=jnp.tile(jnp.array([[300.0, -150.0]]), (s, 1)),
-                       omega=jnp.full(s, 100.0), period=jnp.asarray(0.1))
-    depth = jnp.zeros(orbit_joint.n)
-    orbit = eqx.filter_jit(lambda j: j.equilibrium(depth, loads))(orbit_joint)
-    steady = eqx.filter_jit(lambda j: j.equilibrium(depth, loads))(steady_joint)
+    joint = LubricatedQuasiStaticJoint.from_joint(_finite_joint(film))
+    assert isinstance(joint.law.film, ShippedFiniteFilm) and joint.squeeze
+    s, load = 12, jnp.array([300.0, -150.0])
+    loads = JointLoads(force=jnp.tile(load[None, :], (s, 1)), omega=jnp.full(s, 100.0),
+                       period=jnp.asarray(0.1))
+    depth = jnp.zeros(joint.n)
+    orbit, steady = eqx.filter_jit(lambda j: (j.equilibrium(depth, loads),
+                                              j.steady().equilibrium(depth, loads)))(joint)
     assert bool(orbit.ok) and bool(orbit.orbit_closed) and bool(steady.ok)
-    e_orbit = np.asarray(orbit.offset)
-    np.testing.assert_allclose(e_orbit, np.tile(e_orbit[:1], (s, 1)), atol=1e-9 * C)
-    eps = np.linalg.norm(e_orbit[0]) / C
-    assert 0.5 < eps < 0.95
-    np.testing.assert_allclose(e_orbit[0], np.asarray(steady.offset[0]), atol=2e-3 * C)
+    e = np.asarray(orbit.offset)
+    np.testing.assert_allclose(e, np.asarray(steady.offset), rtol=0, atol=1e-10 * C)
+    eps = np.linalg.norm(e[0]) / C
+    assert 0.5 < eps < 0.95 and float(np.min(orbit.film_ratio)) > 20.0
+    direct = FiniteBearingFilm(MU, 0.014, C, max_eccentricity_ratio=0.995).film(
+        PinKinematics(offset=jnp.asarray(e[0]), offset_rate=jnp.zeros(2),
+                      omega=jnp.asarray(100.0), pin_radius=jnp.asarray(R),
+                      bushing_radius=jnp.asarray(R + C)))
+    assert float(jnp.linalg.norm(direct.force + load)) <= 0.015 * float(jnp.linalg.norm(load))
 
 
 # ------------------------------------------------------------ a file without bearing

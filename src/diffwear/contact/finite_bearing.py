@@ -401,17 +401,19 @@ class FiniteBearingFilm(AbstractFilm):
         tables shipped with the package (`ShippedFiniteFilm`: nothing solved,
         L/D in [0.05, 4], eps_max <= 0.998); on any other grid a
         `DynamicFiniteFilm` built up to this film's eps_max (17 x 17 Reynolds
-        solves: seconds to minutes)."""
+        solves: seconds to minutes; traced, up to 0.995 or the grid's
+        resolution)."""
         from .finite_table import DynamicFiniteFilm, ShippedFiniteFilm
 
         if (self.n_theta, self.n_z, self.supply_groove) == (N_THETA, N_Z, True):
             return ShippedFiniteFilm(self, radius)
         eps_max = concrete(self.max_eccentricity_ratio)
-        if eps_max is None:
-            raise InputError("FiniteBearingFilm.moving on a grid other than the default needs "
-                             "a concrete max_eccentricity_ratio (the table's top); allowed: a "
-                             "number in (0, 1), outside jax.jit")
-        return DynamicFiniteFilm(self, radius, top_eccentricity_ratio=float(eps_max))
+        # traced (a derivative in the roughness or clearance): up to the mixed
+        # law's largest saturation, 0.995 (mixed.MAX_SATURATION), or what the
+        # grid resolves
+        top = (min(0.995, self.resolved_eccentricity_ratio) if eps_max is None
+               else float(eps_max))
+        return DynamicFiniteFilm(self, radius, top_eccentricity_ratio=top)
 
 
 # The short (Ocvirk) film's steady load is within 4.5 % of the finite film's

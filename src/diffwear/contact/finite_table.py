@@ -305,7 +305,7 @@ def _bicubic(padded, il, wl, ie, we):
     size = (4, 4) + padded.shape[2:]
     start = (il, ie) + (0,) * (padded.ndim - 2)
     block = lax.dynamic_slice(jnp.asarray(padded), start, size)
-    return jnp.tensordot(wl, jnp.tensordot(we, block, axes=(0, 1)), axes=(0, 1))
+    return jnp.tensordot(wl, jnp.tensordot(we, block, axes=(0, 1)), axes=(0, 0))
 
 
 class ShippedFiniteFilm(AbstractFilm):

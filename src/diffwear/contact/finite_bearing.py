@@ -459,7 +459,8 @@ class SteadyFiniteFilm(AbstractFilm):
     interpolated from `TABLE_NODES` solves (cubic in w = sqrt(-ln(1 - eps))
     through log g).  The table is computed from the film's leaves (length, and the pin
     radius given), so it is differentiable in them; it is exact for e_dot = 0
-    only: the quasi-static joint's film (`FiniteBearingFilm.steady`)."""
+    only (`FiniteBearingFilm.steady`; the quasi-static orbit, which has
+    squeeze, takes `FiniteBearingFilm.moving`)."""
 
     radius: Float[Array, ""]
     log_radial: Float[Array, " k"]  # log(-g_n) (g_n does not vanish at eps = 0: the

@@ -205,7 +205,7 @@ def test_the_orbit_under_a_constant_load_is_the_steady_finite_film():
 
 
 # ------------------------------------------------------------ a file without bearing
-@pytest.mark.slow  # a whole run (motion, 2000 cycles of wear, the film): ~9 min under load
+@pytest.mark.slow  # a whole run (motion, 2000 cycles of wear, the film): 3-9 min on 2 cores
 def test_a_file_without_bearing_runs_on_the_finite_film(tmp_path):
     """The lubricated rig without ``bearing`` (the finite film, by default),
     a short motion and 2000 cycles: the run reports the finite film, on which

@@ -12,13 +12,9 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 from diffwear.contact import FiniteBearingFilm, PinKinematics, ShortBearingFilm
-from diffwear.contact.finite_bearing import (
-    _apply,
-    _resolved_eccentricity,
-    reynolds_forces,
-    reynolds_pressure,
-)
+from diffwear.contact.finite_bearing import reynolds_forces, reynolds_pressure
 from diffwear.contact.raimondi_boyd import RAIMONDI_BOYD
+from diffwear.contact.reynolds_grid import _apply, _resolved_eccentricity
 from diffwear.errors import InputError
 
 # A plain journal bearing: R = 10 mm, c = 20 um, mu = 0.02 Pa s, 100 rad/s.
@@ -266,8 +262,9 @@ def test_the_short_film_is_picked_only_where_it_is_within_4_5_percent(ld, eps_ma
 
 def test_a_run_names_a_short_film_out_of_its_range(tmp_path):
     """The shipped lubricated rig (L/D = 0.69, eps up to 1 - sigma / c = 0.98)
-    runs the short film out of its range, and says so; with a 0.3 mm long
-    bushing (L/D = 0.016) or the finite film it does not."""
+    names the short film out of its range, and the run says so; with a
+    0.3 mm long bushing (L/D = 0.016, the short film by default), the finite
+    film, or no ``bearing`` (the finite film by default) it does not."""
     from diffwear.choices import SHIPPED_MECHANISMS
     from diffwear.config import load
     from diffwear.mechanism_file.wear import film_out_of_range
@@ -275,12 +272,13 @@ def test_a_run_names_a_short_film_out_of_its_range(tmp_path):
     text = (SHIPPED_MECHANISMS / "rig_lubricated.toml").read_text()
     assert ', bearing = "short" }' in text
     notes = []
-    for k, extra in enumerate(("", ', length = "0.3 mm"', ', bearing = "finite"')):
+    for k, extra in enumerate((', bearing = "short"', ', length = "0.3 mm"',
+                               ', bearing = "finite"', "")):
         path = tmp_path / f"rig{k}.toml"
         path.write_text(text.replace(', bearing = "short" }', extra + " }"))
         notes.append(film_out_of_range(load(path).mechanism.element("crank_rod")))
     assert "L/D = 0.689" in notes[0] and "0.98" in notes[0] and 'bearing = "finite"' in notes[0]
-    assert notes[1] is None and notes[2] is None
+    assert notes[1] is None and notes[2] is None and notes[3] is None
 
 
 # ------------------------------------------------------------- the steady table

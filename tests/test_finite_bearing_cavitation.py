@@ -13,12 +13,13 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 from diffwear.contact import FiniteBearingFilm, PinKinematics
-from diffwear.contact.finite_bearing import CLUSTERING, _film_forces, reynolds_pressure
+from diffwear.contact.finite_bearing import _film_forces, reynolds_pressure
 from diffwear.contact.mass_conserving import (
     convected_content,
     flux_balance,
     mass_conserving_pressure,
 )
+from diffwear.contact.reynolds_grid import CLUSTERING
 from diffwear.errors import InputError
 
 # A plain journal bearing: R = 10 mm, c = 20 um, mu = 0.02 Pa s, 100 rad/s.

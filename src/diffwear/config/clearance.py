@@ -35,7 +35,16 @@ from ..contact.asperities import (
     SUMMIT_PRODUCT_RANGE,
     GreenwoodTripp,
 )
-from ..contact.finite_bearing import CAVITATION, N_THETA, N_Z, REYNOLDS, nodes_for
+from ..contact.finite_bearing import (
+    CAVITATION,
+    MASS_CONSERVING,
+    N_THETA,
+    N_Z,
+    REYNOLDS,
+    film_law_for,
+    nodes_for,
+)
+from ..contact.finite_table import SHIPPED_RATIOS, ShippedFiniteFilm
 from ..contact.friction import DEFAULT_SLIP_WIDTH
 from ..contact.mixed import ONSET_FILM_RATIO
 from ..errors import InputError
@@ -118,9 +127,10 @@ LAWS = {
 BEARINGS = {"short": ShortBearingFilm, "long": LongBearingFilm, "finite": FiniteBearingFilm}
 """Film models of ``lubricant.bearing``, by name: the short (Ocvirk) bearing
 (`ShortBearingFilm`), the long (Sommerfeld) one (`LongBearingFilm`) and the
-finite-length Reynolds film (`FiniteBearingFilm`); the short one by default
-(fast enough for a file's dynamic motion); a run warns where `film_law_for`
-finds it out of its range."""
+finite-length Reynolds film (`FiniteBearingFilm`, on the default grid read
+from its shipped moving-journal tables, `ShippedFiniteFilm`).  By default the
+one `film_law_for` finds for the joint (short where it holds, else finite); a
+run warns where an explicit short film is out of its range."""
 MAX_VISCOSITY = 10.0
 """Pa s: the most viscous lubricant a joint takes (honey is ~10 Pa s; above
 that the fluid does not flow into the clearance as a lubricating film)."""
@@ -143,9 +153,12 @@ LUBRICANT = Table(fields={
     "summit_radius": Quantity(dimension="length", default=None, low=0.0, low_open=True,
                               doc="radius beta of the asperity summits; default: sigma / "
                                   "beta = 1e-3"),
-    "bearing": Text(default="short", choices=tuple(BEARINGS),
-                    doc="film model; a run warns where the short film is out of its range "
-                        "(film_law_for): (L/D)^2 > 0.05 (1 - eps_max)"),
+    "bearing": Text(default=None, choices=tuple(BEARINGS),
+                    doc="film model; default: the one that holds for the joint "
+                        "(film_law_for): short where (L/D)^2 <= 0.05 (1 - eps_max), "
+                        "eps_max = 1 - sigma / c, else finite (the shipped moving-journal "
+                        "tables, L/D 0.05 to 4); a run warns where an explicit short film "
+                        "is out of its range"),
     "film_n_theta": Integer(default=None, low=16, high=4096,
                             doc="bearing = \"finite\" only: grid nodes round the bushing "
                                 "(even; default 96); they must resolve the minimum film at "
@@ -289,33 +302,43 @@ def _lubricated(lube, law, rp, rb, pin, bushing):
                          f"{ONSET_FILM_RATIO:g} sigma = {ONSET_FILM_RATIO * sigma * 1e6:g} um) "
                          f"does not fit in the radial clearance {c * 1e6:g} um", allowed)
     length = law.depth if lube["length"] is None else lube["length"]
-    return MixedLubrication(_film(lube, oil_viscosity(lube), length, c, sigma), law,
+    return MixedLubrication(_film(lube, oil_viscosity(lube), length, c, sigma, rp), law,
                             _summits(lube, pin, bushing))
 
 
-def _film(lube, viscosity, length, c, sigma):
-    """The film law of ``lubricant.bearing``; the finite film on the grid of
-    ``lubricant.film_n_theta`` / ``film_n_z``, which must resolve the minimum
-    film where the joint's film saturates (`FiniteBearingFilm.check_resolution`),
-    with the cavitation condition ``lubricant.cavitation``."""
+def _film(lube, viscosity, length, c, sigma, radius):
+    """The film law of ``lubricant.bearing``, by default the one `film_law_for`
+    finds for the joint's L/D and eps_max = 1 - sigma / c (short where the
+    short film holds, else finite; finite where a grid or a cavitation
+    condition is given).  The finite film: on the default grid with the
+    Reynolds condition the shipped moving-journal tables (`ShippedFiniteFilm`,
+    squeeze and wedge); on the grid of ``lubricant.film_n_theta`` /
+    ``film_n_z``, or with ``lubricant.cavitation = "mass-conserving"``, the
+    Reynolds solve itself, whose grid must resolve the minimum film where the
+    joint's film saturates (`FiniteBearingFilm.check_resolution`)."""
     grid = {k: lube[f"film_{k}"] for k in ("n_theta", "n_z") if lube[f"film_{k}"] is not None}
-    if lube["bearing"] != "finite":
+    eps_max = float(MixedLubrication.saturation(sigma, c))
+    ratio = float(length) / (2.0 * float(radius))
+    bearing = lube["bearing"]
+    if bearing is None:
+        chosen = grid or lube["cavitation"] is not None
+        bearing = "finite" if chosen else film_law_for(ratio, eps_max)
+    if bearing != "finite":
         if grid:
             key = f"lubricant.film_{next(iter(grid))}"
-            raise FieldError(key, f"given for bearing = {lube['bearing']!r}, which has no "
+            raise FieldError(key, f"given for bearing = {bearing!r}, which has no "
                              "grid", "bearing = \"finite\", or no grid key")
         if lube["cavitation"] is not None:
             raise FieldError("lubricant.cavitation",
                              f"{lube['cavitation']!r} given for bearing = "
-                             f"{lube['bearing']!r}, whose film has a fixed cavitation "
+                             f"{bearing!r}, whose film has a fixed cavitation "
                              "condition (Gumbel's, half-Sommerfeld)",
                              "bearing = \"finite\", or no cavitation key")
-        return BEARINGS[lube["bearing"]](viscosity, length, c)
+        return BEARINGS[bearing](viscosity, length, c)
     n_theta = grid.get("n_theta", N_THETA)
     if n_theta % 2:
         raise FieldError("lubricant.film_n_theta", f"{n_theta} is odd: the grid needs a node "
                          "on the maximum film", "an even integer in [16, 4096]")
-    eps_max = float(MixedLubrication.saturation(sigma, c))
     if n_theta < nodes_for(eps_max):
         raise FieldError("lubricant.film_n_theta",
                          f"{n_theta} nodes round the bushing are too coarse to resolve the "
@@ -323,9 +346,22 @@ def _film(lube, viscosity, length, c, sigma):
                          f"= {eps_max:.4g}",
                          f"an even integer >= {nodes_for(eps_max)} (or a larger roughness)")
     # evaluated up to its saturation (`MixedLubrication.saturated_film`)
-    return FiniteBearingFilm(viscosity, length, c, max_eccentricity_ratio=eps_max,
-                             n_theta=n_theta, n_z=grid.get("n_z", N_Z),
-                             cavitation=lube["cavitation"] or REYNOLDS)
+    cavitation = lube["cavitation"] or REYNOLDS
+    film = FiniteBearingFilm(viscosity, length, c, max_eccentricity_ratio=eps_max,
+                             n_theta=n_theta, n_z=grid.get("n_z", N_Z), cavitation=cavitation)
+    if grid or cavitation == MASS_CONSERVING:  # the shipped tables: Reynolds, default grid
+        return film
+    low, high = SHIPPED_RATIOS[0], SHIPPED_RATIOS[-1]
+    if not low <= ratio <= high:
+        chosen = ("" if lube["bearing"] else
+                  " (the default film: the short film is out of its range, (L/D)^2 > "
+                  "0.05 (1 - eps_max))")
+        raise FieldError("lubricant.length",
+                         f"{length * 1e3:g} mm: the finite film's L/D = length / (2 pin "
+                         f"radius) = {ratio:.4g} is outside its shipped tables{chosen}",
+                         f"L/D in [{low:g}, {high:g}], or bearing = \"short\" | \"long\", "
+                         f"or a finite film grid (film_n_theta) solved directly")
+    return ShippedFiniteFilm(film, radius)
 
 
 def _summits(lube, pin, bushing) -> GreenwoodTripp:

@@ -100,108 +100,26 @@ from jaxtyping import Array, Float
 from .._checks import check_int_option, concrete
 from ..errors import InputError
 from .lubrication import MAX_ECCENTRICITY_RATIO, SATURATION_WIDTH, AbstractFilm
+from .mass_conserving import mass_conserving_pressure
+from .reynolds_grid import (
+    MAX_PASSES,
+    N_THETA,
+    N_Z,
+    _apply,
+    _Operator,
+    _operator,
+    _resolved_eccentricity,
+    nodes_for,
+)
 
 __all__ = ["CAVITATION", "FiniteBearingFilm", "SteadyFiniteFilm", "film_law_for",
            "film_pressure", "nodes_for", "reynolds_forces"]
 
-# Default grid: 96 nodes round the bushing, 12 along the half length; with the
-# clustering below it reproduces Raimondi & Boyd's S and attitude angle to
-# 1.5 % over L/D = 1/4 .. 1, eps = 0.2 .. 0.9 (tests/test_finite_bearing.py;
-# 192 x 24 moves them by < 0.3 %).
-N_THETA, N_Z = 96, 12
-# Node crowding at the minimum film: psi = s - a sin s with a = CLUSTERING eps
-# (the finest spacing (1 - a) 2 pi / n_theta).  0.9: the finest spacing stays a
-# tenth of the uniform one, so J = dpsi/ds >= 0.1 and the cells stay regular.
-CLUSTERING = 0.9
-# Nodes the grid must have across the minimum film's half width
-# sqrt(2 (1 - eps) / eps) (where the film is twice its minimum): 8.  At 8 the
-# default grid's load is within 1 % of a twice-as-fine grid's at eps = 0.995.
-NODES_PER_FILM_WIDTH = 8.0
-# Most active-set passes (each a linear solve); the default grid needs <= 16,
-# a 192-node one <= 28.
-MAX_PASSES = 64
 # Cavitation conditions (`FiniteBearingFilm`'s ``cavitation``): Reynolds
 # (Swift-Stieber), this module's complementarity problem; mass-conserving
 # (Jakobsson-Floberg-Olsson in Elrod & Adams' p-theta form), `mass_conserving`.
 REYNOLDS, MASS_CONSERVING = "reynolds", "mass-conserving"
 CAVITATION = (REYNOLDS, MASS_CONSERVING)
-
-
-def _resolved_eccentricity(n_theta: int) -> float:
-    """The largest eps whose minimum film the grid resolves with
-    `NODES_PER_FILM_WIDTH` nodes: sqrt(2 (1 - eps) / eps) = k (1 - 0.9 eps)
-    2 pi / n_theta, solved for eps (bisection; the left side falls, the right
-    side rises with eps)."""
-    def excess(eps):
-        return (math.sqrt(2.0 * (1.0 - eps) / eps)
-                - NODES_PER_FILM_WIDTH * (1.0 - CLUSTERING * eps) * 2.0 * math.pi / n_theta)
-
-    lo, hi = 1e-6, 1.0 - 1e-15
-    if excess(hi) > 0.0:
-        return hi
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if excess(mid) > 0.0 else (lo, mid)
-    return lo
-
-
-def nodes_for(eccentricity_ratio: float) -> int:
-    """The fewest grid nodes round the bushing (even, at most 4096) that
-    resolve the minimum film at ``eccentricity_ratio`` (`NODES_PER_FILM_WIDTH`
-    nodes across it)."""
-    need = 16
-    while _resolved_eccentricity(need) < eccentricity_ratio and need < 4096:
-        need += 2
-    return need
-
-
-def _grid(eps, n_theta):
-    """Nodes psi_i, J_i = dpsi/ds and the faces' psi and J (at s + ds/2)."""
-    a = CLUSTERING * eps
-    ds = 2.0 * jnp.pi / n_theta
-    s = ds * jnp.arange(n_theta)
-    face = s + 0.5 * ds
-    return (s - a * jnp.sin(s), 1.0 - a * jnp.cos(s),
-            face - a * jnp.sin(face), 1.0 - a * jnp.cos(face), ds)
-
-
-class _Operator(eqx.Module):
-    """The finite-volume Reynolds operator K (module notes), by its stencil:
-    ``diag`` (n_z, n_theta), ``east`` (n_z, n_theta) the coupling of node i to
-    i + 1 (periodic), ``north`` (n_theta,) the coupling of row j to j + 1
-    (the same for every row), and the nodes' psi, J and volumes."""
-
-    diag: jax.Array
-    east: jax.Array
-    north: jax.Array
-    psi: jax.Array
-    volume: jax.Array  # ds dzeta_j J_i: the cell's area in (psi, zeta)
-    weight: jax.Array  # ds dzeta_j: the cell's area in (s, zeta)
-
-
-def _operator(eps, half_length, n_theta, n_z) -> _Operator:
-    psi, jac, psi_f, jac_f, ds = _grid(eps, n_theta)
-    h3 = (1.0 - eps * jnp.cos(psi)) ** 3
-    east_flux = (1.0 - eps * jnp.cos(psi_f)) ** 3 / jac_f  # H^3 / J at face i + 1/2
-    dz = half_length / n_z
-    # row 0 lies on the symmetry plane: half a cell, one neighbour row
-    dzeta = jnp.full(n_z, dz).at[0].set(0.5 * dz)
-    rows = jnp.full(n_z, 2.0).at[0].set(1.0)
-    axial = ds * jac * h3 / dz
-    diag = (dzeta[:, None] / ds * (east_flux + jnp.roll(east_flux, 1))[None, :]
-            + rows[:, None] * axial[None, :])
-    weight = ds * dzeta[:, None] * jnp.ones(n_theta)[None, :]
-    return _Operator(diag=diag, east=-dzeta[:, None] / ds * east_flux[None, :], north=-axial,
-                     psi=psi, volume=weight * jac[None, :], weight=weight)
-
-
-def _apply(op: _Operator, p):
-    """K p for p of shape (n_z, n_theta) (P = 0 beyond the last row)."""
-    out = (op.diag * p + op.east * jnp.roll(p, -1, axis=1)
-           + jnp.roll(op.east, 1, axis=1) * jnp.roll(p, 1, axis=1))
-    above = jnp.concatenate([p[1:], jnp.zeros_like(p[:1])], axis=0)
-    below = jnp.concatenate([jnp.zeros_like(p[:1]), p[:-1]], axis=0)
-    return out + op.north[None, :] * (above + below)
 
 
 def _solve_on(op: _Operator, free, rhs):
@@ -300,9 +218,6 @@ def film_pressure(eccentricity_ratio, squeeze, wedge, half_length, n_theta=N_THE
     if cavitation != MASS_CONSERVING:
         raise InputError(f"finite-bearing cavitation {cavitation!r} is unknown; allowed: "
                          + " | ".join(repr(c) for c in CAVITATION))
-    # the mass-conserving solve builds on this module's grid, so it is imported here
-    from .mass_conserving import mass_conserving_pressure
-
     p, _, op, _ = mass_conserving_pressure(eccentricity_ratio, squeeze, wedge, half_length,
                                            n_theta, n_z, supply_groove)
     return p, op
@@ -491,7 +406,8 @@ class SteadyFiniteFilm(AbstractFilm):
     interpolated from `TABLE_NODES` solves (cubic in w = sqrt(-ln(1 - eps))
     through log g).  The table is computed from the film's leaves (length, and the pin
     radius given), so it is differentiable in them; it is exact for e_dot = 0
-    only: the quasi-static joint's film (`FiniteBearingFilm.steady`)."""
+    only (`FiniteBearingFilm.steady`; the quasi-static orbit, which has
+    squeeze, takes `finite_table.moving_film`)."""
 
     radius: Float[Array, ""]
     log_radial: Float[Array, " k"]  # log(-g_n) (g_n does not vanish at eps = 0: the

@@ -42,7 +42,10 @@ and the accuracy against direct solves: docs/notes/finite-film-table.md.
 
 from __future__ import annotations
 
+import functools
 import math
+from importlib import resources
+from typing import NamedTuple
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -53,15 +56,19 @@ from jaxtyping import Array, Float
 from .._checks import check_int_option, check_range, concrete
 from ..errors import InputError
 from .finite_bearing import (
+    N_THETA,
+    N_Z,
+    REYNOLDS,
     FiniteBearingFilm,
     _catmull_rom,
     _film_forces,
-    _grid,
+    film_pressure,
     reynolds_pressure,
 )
 from .lubrication import MAX_ECCENTRICITY_RATIO, AbstractFilm, _safe_unit
+from .reynolds_grid import _grid
 
-__all__ = ["DynamicFiniteFilm"]
+__all__ = ["DynamicFiniteFilm", "ShippedFiniteFilm", "moving_film", "shipped_tables"]
 
 # Default table: 17 eccentricity nodes (uniform in w up to eps = 0.95, step
 # 0.108) by 32 drive directions (17 solved, 15 mirrored): 289 solves, within
@@ -70,6 +77,19 @@ __all__ = ["DynamicFiniteFilm"]
 # separates (|F| ~ E / 30), 9 eps nodes up to 2.4 % (docs/notes/finite-film-table.md).
 ECCENTRICITY_NODES = 17
 DIRECTION_NODES = 32
+
+# The shipped tables (finite_film_tables.npz, design_studies/finite_film_tables.py):
+# the default grid's dimensionless table at 21 L/D nodes, log-spaced from 0.05
+# to 4 (ratio 80^(1/20) = 1.245 between nodes), each 25 eps nodes (uniform in
+# w = sqrt(-ln(1 - eps)) up to eps = 0.998: w step 0.104, the default table's
+# 0.108 or finer) by 32 directions.  0.998 lies past the mixed law's largest
+# saturation, 0.995 (mixed.MAX_SATURATION), and within what the 96-node grid
+# resolves (0.9986, `nodes_for`).
+SHIPPED_RATIOS = tuple(float(x) for x in np.geomspace(0.05, 4.0, 21))
+SHIPPED_ECCENTRICITY_NODES = 25
+SHIPPED_DIRECTION_NODES = 32
+SHIPPED_TOP = 0.998
+SHIPPED_FILE = "finite_film_tables.npz"
 
 
 def _periodic_spline_matrix(n: int) -> np.ndarray:
@@ -81,6 +101,32 @@ def _periodic_spline_matrix(n: int) -> np.ndarray:
     eye = np.eye(n)
     shift = np.roll(eye, 1, axis=1) + np.roll(eye, -1, axis=1)
     return np.linalg.solve(4.0 * eye + shift, 6.0 / h**2 * (shift - 2.0 * eye))
+
+
+def _node_coordinate(eps, top, k):
+    """x = w / dw of eps on k nodes uniform in w = sqrt(-ln(1 - eps)) from 0
+    to the ``top`` eps (eps clipped to the table)."""
+    w_top = math.sqrt(-math.log1p(-top))
+    u = -jnp.log1p(-jnp.clip(eps, 0.0, top))
+    return jnp.sqrt(u + 1e-30) / (w_top / (k - 1))
+
+
+def _along_directions(column, squeeze, wedge):
+    """r (g_n, g_t) / E at phi = atan2(A, B), r = |(A, B)|, from a table's
+    scaled values at one eps, ``column`` (m, 2) at m uniform phi nodes from
+    -pi/2: the periodic cubic spline in phi (module docstring)."""
+    m = column.shape[0]
+    curvature = jnp.asarray(_periodic_spline_matrix(m)) @ column
+    direction, r = _safe_unit(jnp.stack([wedge, squeeze]))
+    h = 2.0 * math.pi / m
+    s = jnp.mod(jnp.arctan2(direction[1], direction[0]) + 0.5 * jnp.pi, 2.0 * jnp.pi) / h
+    i = jnp.clip(jnp.floor(s).astype(int), 0, m - 1)
+    t = s - i
+    j = jnp.mod(i + 1, m)
+    g = ((1.0 - t) * column[i] + t * column[j]
+         + h**2 / 6.0 * (((1.0 - t) ** 3 - (1.0 - t)) * curvature[i]
+                         + (t**3 - t) * curvature[j]))
+    return r * g[0], r * g[1]
 
 
 class DynamicFiniteFilm(AbstractFilm):
@@ -146,9 +192,14 @@ class DynamicFiniteFilm(AbstractFilm):
 
         def along_directions(eps):
             def step(free, angle):
-                p, op, _ = reynolds_pressure(eps, jnp.sin(angle), jnp.cos(angle), half,
-                                             film.n_theta, film.n_z, film.supply_groove,
-                                             initial_set=free)
+                if film.cavitation == REYNOLDS:
+                    p, op, _ = reynolds_pressure(eps, jnp.sin(angle), jnp.cos(angle), half,
+                                                 film.n_theta, film.n_z, film.supply_groove,
+                                                 initial_set=free)
+                else:  # its pressure is homogeneous in (A, B) too (mass_conserving)
+                    p, op = film_pressure(eps, jnp.sin(angle), jnp.cos(angle), half,
+                                          film.n_theta, film.n_z, film.supply_groove,
+                                          film.cavitation)
                 forces = jnp.stack(_film_forces(op, p))
                 return (p > 0.0).astype(p.dtype), (forces, jnp.max(p))
 
@@ -170,10 +221,7 @@ class DynamicFiniteFilm(AbstractFilm):
 
     def _node_coordinate(self, eps):
         """x = w / dw at the saturated eps (clipped to the table)."""
-        k = self.log_envelope.shape[0]
-        w_top = math.sqrt(-math.log1p(-self.top))
-        u = -jnp.log1p(-jnp.clip(eps, 0.0, self.top))
-        return jnp.sqrt(u + 1e-30) / (w_top / (k - 1))
+        return _node_coordinate(eps, self.top, self.log_envelope.shape[0])
 
     def dimensionless_forces(self, eps, squeeze, wedge):
         """(F_n, F_t) / (6 mu R^4 / c^2) [-] (`reynolds_forces`' units) at
@@ -181,19 +229,8 @@ class DynamicFiniteFilm(AbstractFilm):
         table."""
         x = self._node_coordinate(eps)
         envelope = jnp.exp(_catmull_rom(self.log_envelope, x))
-        column = _catmull_rom(self.scaled, x)  # (n_direction, 2) at this eps
-        m = column.shape[0]
-        curvature = jnp.asarray(_periodic_spline_matrix(m)) @ column
-        direction, r = _safe_unit(jnp.stack([wedge, squeeze]))
-        h = 2.0 * math.pi / m
-        s = jnp.mod(jnp.arctan2(direction[1], direction[0]) + 0.5 * jnp.pi, 2.0 * jnp.pi) / h
-        i = jnp.clip(jnp.floor(s).astype(int), 0, m - 1)
-        t = s - i
-        j = jnp.mod(i + 1, m)
-        g = ((1.0 - t) * column[i] + t * column[j]
-             + h**2 / 6.0 * (((1.0 - t) ** 3 - (1.0 - t)) * curvature[i]
-                             + (t**3 - t) * curvature[j]))
-        return r * envelope * g[0], r * envelope * g[1]
+        g_n, g_t = _along_directions(_catmull_rom(self.scaled, x), squeeze, wedge)
+        return envelope * g_n, envelope * g_t
 
     def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
         """The film's largest pressure [Pa] with the centre at rest, from the
@@ -212,3 +249,184 @@ class DynamicFiniteFilm(AbstractFilm):
         k = self._film_factor(radius)
         f_n, f_t = self.dimensionless_forces(eps_f, squeeze, wedge)
         return k * f_n + 0.5 * jnp.pi * k * squeeze, k * f_t - 0.5 * jnp.pi * k * wedge
+
+
+class ShippedTables(NamedTuple):
+    """The shipped dimensionless tables (`SHIPPED_RATIOS` x ... nodes):
+    ``log_envelope`` (l, k), ``scaled`` (l, k, m, 2) and ``log_peak`` (l, k),
+    as `DynamicFiniteFilm`'s fields at each L/D node."""
+
+    length_over_diameter: np.ndarray
+    log_envelope: np.ndarray
+    scaled: np.ndarray
+    log_peak: np.ndarray
+
+
+@functools.cache
+def shipped_tables() -> ShippedTables:
+    """The moving-journal tables shipped with the package
+    (finite_film_tables.npz, written by design_studies/finite_film_tables.py),
+    read once; checked against the grid and nodes they were built for."""
+    with resources.files(__package__).joinpath(SHIPPED_FILE).open("rb") as fh:
+        data = np.load(fh)
+        tables = ShippedTables(*(np.asarray(data[k], dtype=np.float64)
+                                 for k in ShippedTables._fields))
+        grid, top = tuple(int(n) for n in data["grid"]), float(data["top_eccentricity_ratio"])
+    shape = (len(SHIPPED_RATIOS), SHIPPED_ECCENTRICITY_NODES, SHIPPED_DIRECTION_NODES, 2)
+    if (grid != (N_THETA, N_Z) or top != SHIPPED_TOP or tables.scaled.shape != shape
+            or not np.allclose(tables.length_over_diameter, SHIPPED_RATIOS, rtol=1e-12)):
+        raise RuntimeError(f"{SHIPPED_FILE} does not match finite_table's SHIPPED_* nodes; "
+                           "regenerate it with design_studies/finite_film_tables.py")
+    return tables
+
+
+def _padded(values):
+    """``values`` (l, k, ...) with a ghost node at each end of both axes, for
+    the Catmull-Rom cubics: along L/D (axis 0) extrapolated linearly, along
+    w (axis 1) mirrored at w = 0 (even in w) and extrapolated at the top (as
+    `_catmull_rom`)."""
+    v = np.concatenate([2 * values[:1] - values[1:2], values, 2 * values[-1:] - values[-2:-1]])
+    return np.concatenate([v[:, 1:2], v, 2 * v[:, -1:] - v[:, -2:-1]], axis=1)
+
+
+@functools.cache
+def _padded_tables() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`shipped_tables`' log envelope, scaled values and log peak, `_padded`."""
+    t = shipped_tables()
+    return _padded(t.log_envelope), _padded(t.scaled), _padded(t.log_peak)
+
+
+def _cubic_weights(x, n):
+    """The node index i and the four Catmull-Rom weights of nodes i - 1 .. i + 2
+    at x in [0, n - 1] (clipped), n nodes."""
+    x = jnp.clip(x, 0.0, n - 1.0)
+    i = jnp.clip(jnp.floor(x).astype(int), 0, n - 2)
+    t = x - i
+    return i, 0.5 * jnp.stack([-t + 2 * t**2 - t**3, 2 - 5 * t**2 + 3 * t**3,
+                               t + 4 * t**2 - 3 * t**3, -t**2 + t**3])
+
+
+def _bicubic(padded, il, wl, ie, we):
+    """The Catmull-Rom cubic in L/D and w of a `_padded` table at the nodes
+    and weights of `_cubic_weights` (the 4 x 4 neighbouring nodes only)."""
+    size = (4, 4) + padded.shape[2:]
+    start = (il, ie) + (0,) * (padded.ndim - 2)
+    block = lax.dynamic_slice(jnp.asarray(padded), start, size)
+    return jnp.tensordot(wl, jnp.tensordot(we, block, axes=(0, 1)), axes=(0, 0))
+
+
+class ShippedFiniteFilm(AbstractFilm):
+    """`FiniteBearingFilm` on its default grid (`N_THETA` x `N_Z`, supply
+    groove) for any motion of the journal centre, read from the tables
+    shipped with the package: `DynamicFiniteFilm`'s dimensionless table
+    g(eps, phi) built once at `SHIPPED_RATIOS` (21 L/D nodes, 0.05 to 4,
+    log-spaced) up to eps = `SHIPPED_TOP` (0.998), interpolated in L/D by a
+    Catmull-Rom cubic in log(L/D) (docs/notes/finite-film-table.md: its
+    accuracy).  Nothing is solved at construction; the forces are
+    differentiable in viscosity, clearance, length and radius (through
+    K = 6 mu R^4 / c^2 and L/D).
+
+    Arguments:
+        film: the `FiniteBearingFilm` (its oil, length, bore, eps_max and
+            saturation width; default grid and groove only: `DynamicFiniteFilm`
+            tabulates others)
+        radius: the journal radius R [m] (L / D = length / 2 R, in
+            [0.05, 4])
+
+    `InputError` for L/D outside the tables or an eps_max above their top
+    (checked where the values are concrete).
+    """
+
+    radius: Float[Array, ""]
+
+    def __init__(self, film: FiniteBearingFilm, radius):
+        super().__init__(film.viscosity, film.length, film.clearance,
+                         film.max_eccentricity_ratio, film.saturation_width)
+        shipped = (N_THETA, N_Z, True, REYNOLDS)
+        if (film.n_theta, film.n_z, film.supply_groove, film.cavitation) != shipped:
+            raise InputError(
+                f"the shipped finite-film tables hold the default grid and the Reynolds "
+                f"condition only: n_theta = {film.n_theta}, n_z = {film.n_z}, supply_groove "
+                f"= {film.supply_groove}, cavitation = {film.cavitation!r}; allowed: n_theta "
+                f"= {N_THETA}, n_z = {N_Z}, supply_groove = True, cavitation = {REYNOLDS!r} "
+                f"(DynamicFiniteFilm tabulates any grid and condition)")
+        self.radius = jnp.asarray(radius, dtype=float)
+        check_range("journal radius", self.radius, 0.0, low_open=True)
+        ratio = concrete(film.length / (2.0 * self.radius))
+        low, high = SHIPPED_RATIOS[0], SHIPPED_RATIOS[-1]
+        if ratio is not None and not (low * (1 - 1e-9) <= float(ratio) <= high * (1 + 1e-9)):
+            raise InputError(
+                f"finite film length over diameter L/D = {float(ratio):.4g} is outside the "
+                f"shipped tables; allowed: {low:g} <= L/D <= {high:g} (or DynamicFiniteFilm, "
+                f"built for this L/D)")
+        eps_max = concrete(film.max_eccentricity_ratio)
+        if eps_max is not None and float(eps_max) > SHIPPED_TOP:
+            raise InputError(
+                f"finite film maximum eccentricity ratio = {float(eps_max):.6g} is above the "
+                f"shipped tables' top; allowed: <= {SHIPPED_TOP} (or DynamicFiniteFilm with "
+                f"a finer grid)")
+
+    @property
+    def length_over_diameter(self):
+        """L / D = length / (2 R) [-]."""
+        return self.length / (2.0 * self.radius)
+
+    def _weights(self, eps):
+        """The L/D and eps nodes and Catmull-Rom weights at this film's L/D and
+        ``eps`` (`_cubic_weights`)."""
+        nodes = np.log(SHIPPED_RATIOS)
+        x = (jnp.log(self.length_over_diameter) - nodes[0]) / (nodes[1] - nodes[0])
+        return (*_cubic_weights(x, len(SHIPPED_RATIOS)),
+                *_cubic_weights(_node_coordinate(eps, SHIPPED_TOP, SHIPPED_ECCENTRICITY_NODES),
+                                SHIPPED_ECCENTRICITY_NODES))
+
+    def dimensionless_forces(self, eps, squeeze, wedge):
+        """(F_n, F_t) / (6 mu R^4 / c^2) [-] (`reynolds_forces`' units) at
+        eps, A = 2 eps_dot and B = eps (omega - 2 gamma_dot) [1/s]: log E and
+        the scaled values g / E cubic in log(L/D) and w, then (as
+        `DynamicFiniteFilm`) periodic cubic in phi."""
+        log_envelope, scaled, _ = _padded_tables()
+        weights = self._weights(eps)
+        envelope = jnp.exp(_bicubic(log_envelope, *weights))
+        column = _bicubic(scaled, *weights)  # (n_direction, 2)
+        g_n, g_t = _along_directions(column, squeeze, wedge)
+        return envelope * g_n, envelope * g_t
+
+    def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
+        """The film's largest pressure [Pa] with the centre at rest:
+        6 mu R^2 / c^2 eps |omega| max P(eps), max P from the tables."""
+        eps = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
+        log_peak = _bicubic(_padded_tables()[2], *self._weights(eps))
+        return (6.0 * self.viscosity * radius**2 / self.clearance**2 * eps * jnp.abs(omega)
+                * jnp.exp(log_peak))
+
+    def _film_factor(self, radius):
+        """6 mu R^4 / c^2 [N s], as `FiniteBearingFilm`'s."""
+        return 6.0 * self.viscosity * radius**4 / self.clearance**2
+
+    def _excess_components(self, eps_f, squeeze, wedge, radius):
+        """F_n + K pi/2 A and F_t - K pi/2 B [N] (`_film_factor`) of the
+        tabulated film."""
+        k = self._film_factor(radius)
+        f_n, f_t = self.dimensionless_forces(eps_f, squeeze, wedge)
+        return k * f_n + 0.5 * jnp.pi * k * squeeze, k * f_t - 0.5 * jnp.pi * k * wedge
+
+
+def moving_film(film: FiniteBearingFilm, radius) -> AbstractFilm:
+    """``film`` for any motion of the journal centre (squeeze and wedge),
+    tabulated, for the journal radius ``radius``: on the default grid with
+    the Reynolds condition the tables shipped with the package
+    (`ShippedFiniteFilm`: nothing solved, L/D in [0.05, 4], eps_max <=
+    0.998); on any other grid, or mass-conserving, a `DynamicFiniteFilm`
+    built up to the film's eps_max (17 x 17 solves: seconds to minutes;
+    traced, up to 0.995 or the grid's resolution)."""
+    shipped = (N_THETA, N_Z, True, REYNOLDS)
+    if (film.n_theta, film.n_z, film.supply_groove, film.cavitation) == shipped:
+        return ShippedFiniteFilm(film, radius)
+    eps_max = concrete(film.max_eccentricity_ratio)
+    # traced (a derivative in the roughness or clearance): up to the mixed
+    # law's largest saturation, 0.995 (mixed.MAX_SATURATION), or what the
+    # grid resolves
+    top = (min(0.995, film.resolved_eccentricity_ratio) if eps_max is None
+           else float(eps_max))
+    return DynamicFiniteFilm(film, radius, top_eccentricity_ratio=top)

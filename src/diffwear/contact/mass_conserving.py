@@ -90,7 +90,7 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from .finite_bearing import MAX_PASSES, _apply, _grid, _Operator, _operator
+from .reynolds_grid import MAX_PASSES, _apply, _grid, _Operator, _operator
 
 __all__ = ["convected_content", "flux_balance", "mass_conserving_pressure"]
 

@@ -259,7 +259,10 @@ def film_out_of_range(element) -> str | None:
 def bearing_name(law: MixedLubrication) -> str:
     """The ``lubricant.bearing`` name of a lubricated law's film model."""
     from ..config.clearance import BEARINGS
+    from ..contact.finite_table import DynamicFiniteFilm, ShippedFiniteFilm
 
+    if isinstance(law.film, (ShippedFiniteFilm, DynamicFiniteFilm)):
+        return "finite"  # the finite film, tabulated for a moving journal
     return next((k for k, cls in BEARINGS.items() if type(law.film) is cls),
                 type(law.film).__name__)
 

@@ -67,9 +67,10 @@ load: the orbit is the steady solution, with a lag of order tau).  The
 reversal of a sample spacing dt is resolved to its first order: the film's
 thickness through it is right to O(dt / tau) (tests/test_squeeze_orbit.py
 compares the approach with a tight ODE solution).  ``squeeze=False`` keeps
-the steady balance of every sample (the limit of slow loads).  The finite
-film's quasi-static table holds e_dot = 0 only, so a finite-film joint is
-solved steady.
+the steady balance of every sample (the limit of slow loads).  A finite
+film (`FiniteBearingFilm`) enters as its moving-journal table
+(`finite_table.moving_film`: the shipped tables on the default grid), with
+its squeeze and wedge, like the short and long films.
 
 Derivatives of the orbit: the implicit-function theorem on the periodic
 system, J_i de_i + B_i de_{i-1} = -dr_i, solved as the chain de_i = M_i
@@ -93,6 +94,7 @@ from jaxtyping import Array, Bool, Float
 
 from ..contact.clearance_joint import ClearanceJoint
 from ..contact.finite_bearing import FiniteBearingFilm
+from ..contact.finite_table import moving_film
 from ..contact.kinematics import PinKinematics
 from ..contact.mixed import MixedLubrication, asperity_share
 from ..contact.profile import BushingProfile
@@ -171,11 +173,11 @@ class LubricatedQuasiStaticJoint(eqx.Module):
         dry = eqx.tree_at(lambda j: j.law, joint, joint.law.asperity)
         law = joint.law
         if isinstance(law.film, FiniteBearingFilm):
-            # the centre at rest in the bushing: the finite film's steady table
-            # (one Reynolds solve per node, not one per Newton step); it holds
-            # no squeeze, so the joint is solved steady
-            law = eqx.tree_at(lambda m: m.film, law, law.film.steady(joint.pin_radius))
-            squeeze = False
+            # the finite film tabulated for a moving journal (squeeze and
+            # wedge; not one Reynolds solve per Newton step), up to the
+            # saturation of the mixed law: the shipped tables on the default grid
+            law = eqx.tree_at(lambda m: m.film, law,
+                              moving_film(law.saturated_film(), joint.pin_radius))
         return cls(law=law, dry=QuasiStaticJoint.from_joint(dry), squeeze=bool(squeeze))
 
     def steady(self) -> "LubricatedQuasiStaticJoint":

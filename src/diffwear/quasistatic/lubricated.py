@@ -176,8 +176,9 @@ class LubricatedQuasiStaticJoint(eqx.Module):
             # the finite film tabulated for a moving journal (squeeze and
             # wedge; not one Reynolds solve per Newton step), up to the
             # saturation of the mixed law: the shipped tables on the default grid
-            law = eqx.tree_at(lambda m: m.film, law,
-                              moving_film(law.saturated_film(), joint.pin_radius))
+            saturated = law.saturated_film()
+            assert isinstance(saturated, FiniteBearingFilm)  # the same film, its eps_max set
+            law = eqx.tree_at(lambda m: m.film, law, moving_film(saturated, joint.pin_radius))
         return cls(law=law, dry=QuasiStaticJoint.from_joint(dry), squeeze=bool(squeeze))
 
     def steady(self) -> "LubricatedQuasiStaticJoint":

@@ -126,7 +126,7 @@ def test_out_of_the_tables_is_an_input_error():
     with pytest.raises(InputError, match=r"eccentricity ratio = 0.9984 is above the shipped "
                                          rf"tables' top; allowed: <= {SHIPPED_TOP}"):
         _shipped(0.7, eps_max=0.9984)
-    with pytest.raises(InputError, match="default grid only: n_theta = 48"):
+    with pytest.raises(InputError, match="the Reynolds condition only: n_theta = 48"):
         ShippedFiniteFilm(FiniteBearingFilm(MU, 0.014, C, n_theta=48), R)
     assert SHIPPED_RATIOS[0] == pytest.approx(0.05) and SHIPPED_RATIOS[-1] == pytest.approx(4.0)
 

@@ -2,7 +2,7 @@
 and `life` are calls of it.  The quasi-static model under a given constant
 load (no ideal-mechanism solve: seconds) checks that a run and a life of one
 traced program give the numbers of the separate calls, and that the fields
-agree with each other (the final profile's peak is the history's last peak,
+agree with each other (the final profile's peak, `peak_depth`, is the history's last,
 ``cycles`` the least of ``joint_cycles``); the dynamic models' argument
 checks need no integration."""
 
@@ -16,6 +16,7 @@ import pytest
 
 from diffwear.errors import InputError
 from diffwear.models import MAX_CYCLES, Dynamic, QuasiStatic, WearSolution
+from diffwear.wear import peak_depth
 from diffwear.wear.status import RESULTS, code
 
 FOUR_BAR = (Path(__file__).resolve().parents[1] / "src" / "diffwear" / "config" / "mechanisms"
@@ -63,15 +64,19 @@ def test_a_run_and_a_life_of_one_program_are_evolve_and_life(setup):
     assert float(run.cycles) == pytest.approx(cycles, rel=1e-14)
     assert float(run.cycles) == float(jnp.min(run.joint_cycles))
     assert math.isnan(float(run.life[0]))
-    # a life: a finite cycle count, at which the peak depth is the limit
-    assert bool(life.result == RESULTS.ok) and 0.0 < float(life.life[0]) < MAX_CYCLES
-    assert float(jnp.max(life.depth[0])) == pytest.approx(limit, rel=1e-6)
+    # a life: a finite cycle count, inside the last step, whose peak depth
+    # crosses the limit there
+    assert bool(life.result == RESULTS.ok)
+    h = life.history[0]
+    n, peak = (np.asarray(v)[np.asarray(h.valid)] for v in (h.cycles, h.peak))
+    assert peak[-2] < limit <= peak[-1]
+    assert n[-2] < float(life.life[0]) <= n[-1]
     # the history ends where the solution does
     for sol in (run, life):
         h = sol.history[0]
         valid = np.asarray(h.valid)
         assert float(np.asarray(h.peak)[valid][-1]) == pytest.approx(
-            float(jnp.max(sol.depth[0])), rel=1e-12)
+            float(peak_depth(sol.depth[0])), rel=1e-12)
         assert float(np.asarray(h.cycles)[valid][-1]) == pytest.approx(
             float(sol.joint_cycles[0]), rel=1e-12)
         np.testing.assert_array_equal(np.asarray(h.depth)[valid][-1], np.asarray(sol.depth[0]))
@@ -90,3 +95,13 @@ def test_the_dynamic_models_take_cycles_or_a_limit():
     with pytest.raises(InputError, match="wall_thickness"):
         Dynamic().solve(mech, JOINT, jnp.zeros(1), period=1.0, limit=1e-4,
                         wall_thickness=1e-3)
+
+
+def test_the_fem_route_takes_cycles_only():
+    from diffwear.models import FemRoute
+    from diffwear.presets import RIG_JOINT
+    from diffwear.wear.fem_route import default_model
+
+    with pytest.raises(InputError, match="lives to a depth limit come from Dynamic"):
+        FemRoute(fem=default_model(RIG_JOINT)).solve(None, JOINT, jnp.zeros(1), period=1.0,
+                                                     limit=1e-4)

@@ -24,7 +24,7 @@ from ..wear.evolution import EvolutionResult, Evolver, worn_mechanism
 from ..wear.extrapolation import AbstractExtrapolation, Constant
 from ..wear.life import dynamic_cycles_to_limit
 from ..wear.profile_ode import ProfileHistory
-from ..wear.status import not_an_answer, not_computed, stack
+from ..wear.status import RESULTS, not_an_answer, not_computed, stack
 from ._base import AbstractWearModel
 from .solution import WearSolution
 
@@ -113,18 +113,22 @@ class Dynamic(AbstractWearModel):
         return eqx.tree_at(lambda e: e.depth, solution, (depth,))
 
     def _life(self, mech, joints, y0, *, period, limit) -> WearSolution:
+        """The lives of ``joints`` (`dynamic_cycles_to_limit`): the history
+        holds cycles, peak depths and valid slots, not the profiles."""
         final, hist = dynamic_cycles_to_limit(
             mech, joints, y0, period=period, limit=limit, steps=self.steps,
             implicit=self.implicit, warmup_cycles=self.warmup_cycles, cycle=self.cycle)
         n = len(joints)
         start = jnp.zeros(1)
         nan = jnp.full(n, jnp.nan)
-        # the joints run together: the run's result is each joint's
-        joint_result = stack([final.status] * n)
-        failed = not_computed(final.status)
+        # the joints run together: a joint at its limit is done (its life
+        # and profile are answers), the others share the run's result
+        joint_result = stack([RESULTS.where(final.done[k], RESULTS.ok, final.status)
+                              for k in range(n)])
+        failed = not_computed(joint_result)
         inputs = (self, mech, y0, period, limit)
         return WearSolution(
-            depth=tuple(not_an_answer(h, failed, inputs) for h in final.h),
+            depth=tuple(not_an_answer(h, failed[k], inputs) for k, h in enumerate(final.h)),
             joint_cycles=jnp.full(n, final.n), cycles=final.n, life=final.life,
             result=final.status, joint_result=joint_result,
             contact_margin=nan, contact_margin_worn=nan,

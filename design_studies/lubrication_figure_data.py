@@ -241,7 +241,7 @@ def life_viscosity() -> None:
 
     def life(mu):
         r = model.life(lubricated(mu), ("crank_rod",), y0, period=2.0, limit=RIG_LIMIT)
-        return r.cycles[0], r.status
+        return r.life[0], r.result
 
     t0 = time.perf_counter()
     dry = model.life(mech, ("crank_rod",), y0, period=2.0, limit=RIG_LIMIT)
@@ -264,7 +264,7 @@ def life_viscosity() -> None:
                         "limit_m": RIG_LIMIT, "roughness_m": RIG_ROUGHNESS,
                         "clearance_m": float(c), "length_m": float(el.law.depth),
                         "film": "ShortBearingFilm", "period_s": 2.0},
-           "dry": {"life_cycles": float(dry.cycles[0]), "status": int(code(dry.status))},
+           "dry": {"life_cycles": float(dry.life[0]), "status": int(code(dry.result))},
            "lives": rows, "tangents": tangents,
            "wall_s": round(time.perf_counter() - t0, 1)}
     (STORE / "life_viscosity.json").write_text(json.dumps(out, indent=1) + "\n")

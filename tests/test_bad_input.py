@@ -231,6 +231,6 @@ def test_a_quasi_static_life_cut_short_has_a_nan_gradient():
     model = TwoJointLife(wear_model=QuasiStatic(samples=36, steps=16, max_steps=1),
                          n_theta=36).prepared()
     x = jnp.array([0.02, 0.02, 0.02, 0.02])
-    assert bool(model.evaluate(x).status == RESULTS.run_ended_early)
+    assert bool(model.evaluate(x).result == RESULTS.run_ended_early)
     value, grad = jax.value_and_grad(lambda v: model(v)[0])(x)
     assert math.isnan(float(value)) and np.all(np.isnan(np.asarray(grad)))

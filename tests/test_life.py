@@ -42,7 +42,7 @@ def test_crossing_matches_a_hand_calculation():
     period = model.period
     res = eqx.filter_jit(lambda: cycles_to_limit(mech, JOINTS, y0, period=period, limit=limit,
                                                  model=Dynamic(steps=1, implicit=False)))()
-    assert bool(res.status == RESULTS.ok)
+    assert bool(res.result == RESULTS.ok)
 
     found = [clearance_element(mech, j) for j in JOINTS]
 
@@ -60,14 +60,14 @@ def test_crossing_matches_a_hand_calculation():
     rates = np.array([float(jnp.max(d)) for d in dh1])
     f, s = int(np.argmax(rates)), int(np.argmin(rates))
     n_fast = limit / rates[f]
-    np.testing.assert_allclose(res.cycles[f], n_fast, rtol=1e-9)
+    np.testing.assert_allclose(res.life[f], n_fast, rtol=1e-9)
 
     hs = tuple(n_fast * d for d in dh1)                 # fast joint held at the limit
     _, dh2 = cycle(hs, y2, 2 * period)                  # slot 2
     h, d = np.asarray(hs[s]), np.asarray(dh2[s])
     wearing = d > 0
     n_slow = n_fast + np.min((limit - h[wearing]) / d[wearing])
-    np.testing.assert_allclose(res.cycles[s], n_slow, rtol=1e-3)
+    np.testing.assert_allclose(res.life[s], n_slow, rtol=1e-3)
     assert n_slow > 2 * n_fast
 
 

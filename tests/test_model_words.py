@@ -76,10 +76,8 @@ class _Other(AbstractWearModel):
     name: ClassVar[str] = "other"
     exact_gradients: ClassVar[bool] = True
 
-    def life(self, mech, joints, y0, *, period, limit):
-        raise NotImplementedError
-
-    def evolve(self, mech, joints, y0, *, period, cycles, wall_thickness=None):
+    def solve(self, mech, joints, y0, *, period, cycles=None, limit=None,
+              wall_thickness=None):
         raise NotImplementedError
 
     def joint_force(self, mech, joint, y0, *, period, evolution, samples=180):

@@ -79,13 +79,13 @@ def _zero_load_setup():
         """The coupler-rocker joint's cycles to ``limit`` [m] of wear."""
         res = model(scale).life(mfile.mechanism, ("coupler_rocker",), jnp.zeros(1), period=1.0,
                                 limit=limit)
-        return res.cycles[0], res.status
+        return res.life[0], res.result
 
     def evolve(scale, cycles=200.0):
         """Its peak wear depth [m] after ``cycles``."""
         res = model(scale).evolve(mfile.mechanism, ("coupler_rocker",), jnp.zeros(1),
                                   period=1.0, cycles=cycles)
-        return jnp.max(res.depth[0]), res.status
+        return jnp.max(res.depth[0]), res.result
 
     def run(scale, cycles=200.0):
         """The run of a report: (the evolution as far as it got, its status)."""
@@ -93,7 +93,7 @@ def _zero_load_setup():
 
         res, _ = run_model(model(scale), lambda _: mfile.mechanism, jnp.zeros(()),
                            ("coupler_rocker",), jnp.zeros(1), period=1.0, cycles=cycles)
-        return res.depth[0], res.status
+        return res.depth[0], res.result
 
     life.evolve = evolve
     life.run = run
@@ -171,26 +171,24 @@ def test_a_failed_sweep_point_is_nan_with_nan_derivatives_beside_exact_ones():
     of a constant) and which fails (`RESULTS.cycle_model_failed`) above c = 0.04 mm: in a
     vmapped batch the failed point's outputs and derivatives are NaN, the
     other's depth is 1e3 c mm with derivative 1e3 mm/m."""
-    from diffwear.models import AbstractWearModel, WearEvolution
+    from diffwear.models import AbstractWearModel, WearSolution
     from diffwear.sweep.models import JOINT, RigWear
 
     class Uniform(AbstractWearModel):
         name: ClassVar[str] = "uniform"
         exact_gradients: ClassVar[bool] = True
 
-        def life(self, mech, joints, y0, *, period, limit):
-            raise NotImplementedError
-
-        def evolve(self, mech, joints, y0, *, period, cycles, wall_thickness=None):
+        def solve(self, mech, joints, y0, *, period, cycles=None, limit=None,
+                  wall_thickness=None):
             el = mech.element(JOINT)
             c = el.bushing_radius - el.pin_radius
             depth = jnp.full(el.profile.n, c)
             status = RESULTS.where(c > 0.04e-3, RESULTS.cycle_model_failed, RESULTS.ok)
             nan = jnp.full(1, jnp.nan)
-            return WearEvolution(depth=(depth,), cycles=jnp.asarray(cycles),
-                                 joint_cycles=jnp.asarray([cycles]), status=status,
-                                 joint_status=stack([status]), contact_margin=nan,
-                                 contact_margin_worn=nan, history=())
+            return WearSolution(depth=(depth,), joint_cycles=jnp.asarray([cycles]),
+                                cycles=jnp.asarray(cycles), life=nan, result=status,
+                                joint_result=stack([status]), contact_margin=nan,
+                                contact_margin_worn=nan, stats={}, history=())
 
         def joint_force(self, mech, joint, y0, *, period, evolution, samples=180):
             return jnp.full(samples, 100.0)

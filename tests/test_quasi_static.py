@@ -219,7 +219,7 @@ def test_rig_21400_agrees_with_the_dynamic_route():
     mech, y0, el = _rig_joint()
     run = eqx.filter_jit(lambda m: QuasiStatic().evolve(m, ("crank_rod",), y0, period=2.0,
                                                         cycles=21_400.0))(mech)
-    assert bool(run.status == RESULTS.ok)
+    assert bool(run.result == RESULTS.ok)
     h = np.asarray(run.depth[0])
     depth = h.max() * 1e3
     volume = float(worn_volume(h, el.bushing_radius, el.law.depth)) * 1e9
@@ -240,7 +240,7 @@ def test_life_scales_as_one_over_the_wear_coefficient():
     so the life is exactly proportional to 1 / k (the robust design relies on it)."""
     model = TwoJointLife(wear_model=QuasiStatic(steps=10, samples=60), n_theta=36).prepared()
     x = jnp.asarray(TABLE_8_4)
-    f = eqx.filter_jit(lambda s: model.evaluate(x, s).cycles)
+    f = eqx.filter_jit(lambda s: model.evaluate(x, s).life)
     base = np.asarray(f(jnp.ones(2)))
     scaled = np.asarray(f(jnp.array([0.6, 1.7])))
     np.testing.assert_allclose(scaled * np.array([0.6, 1.7]), base, rtol=1e-9)
@@ -254,7 +254,7 @@ def test_contact_loss_is_detected(clearance, lost):
     mech, y0 = clearance_slider_crank("efm", clearance, wear=ArchardWear(5.05e-13), n_theta=72)
     run = eqx.filter_jit(lambda m: QuasiStatic(samples=90, steps=5).evolve(
         m, ("crank_rod",), y0, period=2.0, cycles=100.0))(mech)
-    assert bool(run.status == RESULTS.contact_lost) == lost
+    assert bool(run.result == RESULTS.contact_lost) == lost
     assert (float(run.contact_margin[0]) < 1.0) == lost
 
 

@@ -37,7 +37,7 @@ from .._checks import check_finite, check_int_option, check_positive, concrete
 from ..contact import centred_state
 from ..dynamics import consistent_state
 from ..errors import InputError, SolverError
-from ..models import AbstractWearModel, QuasiStatic, cycles_to_limit
+from ..models import AbstractWearModel, QuasiStatic, WearSolution, cycles_to_limit
 from ..presets import (
     FRICTION_CH3,
     K_PTFE_MM3_PER_NM,
@@ -48,7 +48,6 @@ from ..presets import (
     slider_crank,
     with_wear_joint,
 )
-from ..wear import LifeResult
 from ..wear.status import RESULTS, message
 from ..wear.status import name as status_name
 
@@ -97,8 +96,8 @@ class TwoJointLife(eqx.Module):
     """cycles-to-limit of both joints as a function of x = (d1, d2, h1, h2) [m].
 
     ``model(x)`` -> [cyc1, cyc2] (jit-able, vmap-able, differentiable);
-    ``model.evaluate(x)`` -> the `LifeResult`; ``model.life(x)`` checks the
-    status (`SolverError` on failure) and returns NumPy cycles.
+    ``model.evaluate(x)`` -> the `WearSolution` (lives: ``.life``);
+    ``model.life(x)`` checks its result (`SolverError` on failure) and returns NumPy cycles.
 
     ``wear_model``: `QuasiStatic()` (default: smooth, exact gradients by
     `jax.jacfwd` / `jax.grad`, checked against central differences) or
@@ -159,7 +158,7 @@ class TwoJointLife(eqx.Module):
         model = _prepared(self, jnp.asarray(0.5 * (LOWER + UPPER)))
         return eqx.tree_at(lambda m: m.wear_model, self, model)
 
-    def evaluate(self, x: Float[Array, "4"], wear_scale=None) -> LifeResult:
+    def evaluate(self, x: Float[Array, "4"], wear_scale=None) -> WearSolution:
         check_design(x)
         x = jnp.asarray(x, dtype=float)
         ideal, q_guess, mech = self.mechanism(x, wear_scale)
@@ -181,17 +180,17 @@ class TwoJointLife(eqx.Module):
                              f"{jnp.shape(x)}")
         x = eqx.error_if(jnp.asarray(x, dtype=float), ~jnp.all(jnp.isfinite(x)),
                          "design: every value of (d1, d2, h1, h2) must be finite")
-        return _evaluate(self, x).cycles
+        return _evaluate(self, x).life
 
     def life(self, x) -> np.ndarray:
         """[cyc1, cyc2] at a concrete design, as NumPy; `SolverError` on failure."""
         check_design(x)
         res = _evaluate(self, jnp.asarray(x, dtype=float))
-        if bool(res.status != RESULTS.ok):
+        if bool(res.result != RESULTS.ok):
             raise SolverError(f"{self.wear_model.name} life at design "
                               f"{np.round(np.asarray(x) * 1e3, 4).tolist()} mm: "
-                              f"{message(res.status)} (status {status_name(res.status)})")
-        return np.asarray(res.cycles)
+                              f"{message(res.result)} (status {status_name(res.result)})")
+        return np.asarray(res.life)
 
 
 @eqx.filter_jit
@@ -202,7 +201,7 @@ def _prepared(model: TwoJointLife, x):
 
 
 @eqx.filter_jit
-def _evaluate(model: TwoJointLife, x) -> LifeResult:
+def _evaluate(model: TwoJointLife, x) -> WearSolution:
     return model.evaluate(x)
 
 

@@ -31,7 +31,7 @@ from ..contact.mixed import MixedLubrication
 from ..errors import InputError
 from ..mechanism.constraints import Driver
 from ..mechanism.geometry import safe_norm
-from ..models import MAX_CYCLES, AbstractWearModel, QuasiStatic, WearEvolution
+from ..models import MAX_CYCLES, AbstractWearModel, QuasiStatic, WearSolution
 from ..models.execution import Checkpoints, RunTimes, run_model
 from ..studies.model_words import describe
 from ..wear import worn_volume
@@ -166,15 +166,15 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
         el = mech.element(name)
         hist = res.history[k]
         valid = np.asarray(hist.valid)
-        depth = np.asarray(res.depth[k])  # as far as it got (`WearEvolution.reached`)
+        depth = np.asarray(res.depth[k])  # as far as it got (`WearSolution.reached`)
         out[name] = {
             "theta": np.asarray(el.profile.theta), "depth": depth,
             "history_cycles": np.asarray(hist.cycles)[valid],
             "history_peak": np.asarray(hist.peak)[valid],
             "volume": float(worn_volume(depth, el.bushing_radius, el.law.depth)),
             "cycles": float(res.joint_cycles[k]), "wall": walls[k],
-            "status": at(res.joint_status, k),
-            "cycles_to_limit": (float(life.cycles[k]) if life is not None else None),
+            "status": at(res.joint_result, k),
+            "cycles_to_limit": (float(life.life[k]) if life is not None else None),
             "model": model.name, "wall_time_s": times.wall_time,
             "compile_time_s": times.compile_time, **times.info,
             **model_numbers(model, res, k, cycles),
@@ -188,8 +188,9 @@ def _run_and_life(model: QuasiStatic, mech, joints, y0, period, cycles, limit, w
     """The run over ``cycles`` [with ``walls``] and the life to ``limit`` [m]
     of the quasi-static ``model``: one program (`QuasiStatic.solve` with
     traced cycles, limit and walls) compiled once, run twice with the numbers
-    of `QuasiStatic.evolve` and `QuasiStatic.life`.  (WearEvolution of the
-    run, LifeResult, RunTimes: the compile, and the two runs together.)"""
+    of `QuasiStatic.evolve` and `QuasiStatic.life`.  (The `WearSolution` of
+    the run, that of the life, RunTimes: the compile, and the two runs
+    together.)"""
     never = jnp.asarray(jnp.inf)
     walls = jnp.asarray([jnp.inf if w is None else w for w in walls], dtype=float)
 
@@ -204,12 +205,12 @@ def _run_and_life(model: QuasiStatic, mech, joints, y0, period, cycles, limit, w
     compiled = jax.jit(solve).lower(*run).compile()
     compile_time = time.perf_counter() - started
     started = time.perf_counter()
-    res, _ = jax.block_until_ready(compiled(*run))
-    _, life = jax.block_until_ready(compiled(*to_limit))
+    res = jax.block_until_ready(compiled(*run))
+    life = jax.block_until_ready(compiled(*to_limit))
     return res.reached(), life, RunTimes(compile_time, time.perf_counter() - started, {})
 
 
-def model_numbers(model: AbstractWearModel, res: WearEvolution, k: int, cycles) -> dict:
+def model_numbers(model: AbstractWearModel, res: WearSolution, k: int, cycles) -> dict:
     """What a joint's summary says of the model beyond the wear: the contact
     check where the model has one, the extrapolation and the dynamic cycles
     where it simulates them."""
@@ -218,9 +219,9 @@ def model_numbers(model: AbstractWearModel, res: WearEvolution, k: int, cycles) 
     if np.isfinite(margin):
         out.update(contact_margin=margin,
                    contact_margin_worn=float(res.contact_margin_worn[k]))
-    if res.detail is not None:
+    if "dynamic_cycles" in res.stats:
         out.update(method=describe(model, cycles).get("method"),
-                   dynamic_cycles=int(res.detail.dynamic_cycles))
+                   dynamic_cycles=int(res.stats["dynamic_cycles"]))
     return out
 
 

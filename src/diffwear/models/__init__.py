@@ -11,15 +11,17 @@ objects that every consumer of wear takes (as diffrax takes a solver).
 * `FemRoute`: the dynamic model with the wear pressure of a finite-element
   bushing ring (thesis Ch. 5).
 
-Each computes lives (`cycles_to_limit`), evolutions over a number of cycles
-and the joint force at the end, on the wear engine (`diffwear.wear.engine`).
+Each solves the wear of its joints to a number of cycles or to a depth limit
+(`solve`, one `WearSolution`; `evolve` and `life`, `cycles_to_limit`, are
+calls of it) and gives the joint force at the end, on the wear engine
+(`diffwear.wear.engine`).
 The models are the physics: a run of one (compiled once, timed, in chunks
 with checkpoints) is `execution.run_model`, and what the reports say of a
 model is `diffwear.studies.model_words`.
 """
 
 from ..wear.engine import MAX_CYCLES
-from ._base import AbstractWearModel, WearEvolution
+from ._base import AbstractWearModel
 from .dynamic import Dynamic
 from .execution import (
     Checkpoint,
@@ -33,7 +35,8 @@ from .execution import (
 from .fem import FemRoute
 from .life import cycles_to_limit
 from .quasi_static import QuasiStatic, joint_mass
+from .solution import WearSolution
 
-__all__ = ["AbstractWearModel", "WearEvolution", "Dynamic", "QuasiStatic", "FemRoute",
+__all__ = ["AbstractWearModel", "WearSolution", "Dynamic", "QuasiStatic", "FemRoute",
            "cycles_to_limit", "joint_mass", "run_model", "Checkpoints", "RunTimes",
            "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint", "MAX_CYCLES"]

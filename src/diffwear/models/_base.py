@@ -1,61 +1,16 @@
-"""What every wear model provides: `AbstractWearModel` and its evolution result."""
+"""What every wear model provides: `AbstractWearModel`, whose `solve` returns
+one `WearSolution`."""
 
 from __future__ import annotations
 
 import abc
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import equinox as eqx
-import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, Float
 
 from ..mechanism import Mechanism
-from ..wear.status import RESULTS
-
-
-class WearEvolution(eqx.Module):
-    """Wear of each joint after ``cycles`` real cycles.
-
-    depth: final wear profiles [m], one per joint (tuple)
-    cycles: real cycles reached: the requested count, or fewer when a joint
-        wore through its wall (or its model failed) first
-    joint_cycles: per joint, the cycles its profile represents
-    status: a `diffwear.wear.RESULTS` member (the worst over the joints)
-    joint_status: per joint (`RESULTS` of shape (J,))
-    contact_margin, contact_margin_worn: per joint, the quasi-static model's
-        contact check on the unworn and the final profile (NaN where the
-        model needs none)
-    history: per joint a `diffwear.wear.profile_ode.ProfileHistory` (index 0
-        the start)
-    detail: the model's own result (the dynamic model's `EvolutionResult`:
-        end state, load x sliding, dynamic cycles), or None
-    """
-
-    depth: tuple
-    cycles: Float[Array, ""]
-    joint_cycles: Float[Array, " J"]
-    status: RESULTS
-    joint_status: RESULTS
-    contact_margin: Float[Array, " J"]
-    contact_margin_worn: Float[Array, " J"]
-    history: tuple
-    detail: Any = None
-
-    def reached(self) -> "WearEvolution":
-        """This (concrete) evolution with each joint's profile as far as it
-        got: where the final profile is not an answer (NaN: the joint's model
-        failed or its steps ran out, `diffwear.wear.status.not_computed`), the
-        last profile of its history.  What the report of a run that stopped
-        early shows beside its status; never differentiated."""
-        depth = []
-        for d, h in zip(self.depth, self.history):
-            if h is None or bool(np.all(np.isfinite(np.asarray(d)))):
-                depth.append(d)
-                continue
-            valid = np.asarray(h.valid)
-            depth.append(jnp.asarray(np.asarray(h.depth)[valid][-1]))
-        return eqx.tree_at(lambda e: e.depth, self, tuple(depth))
+from .solution import WearSolution
 
 
 class AbstractWearModel(eqx.Module):
@@ -76,28 +31,37 @@ class AbstractWearModel(eqx.Module):
     precomputes: ClassVar[bool] = False
 
     @abc.abstractmethod
-    def life(self, mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,
-             period, limit):
-        """Cycles until the peak wear depth of each joint reaches ``limit`` [m]:
-        a `diffwear.wear.LifeResult`."""
-
-    @abc.abstractmethod
-    def evolve(self, mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,
-               period, cycles, wall_thickness=None) -> WearEvolution:
-        """Wear of ``joints`` after ``cycles`` real cycles from unworn bushings;
+    def solve(self, mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,
+              period, cycles=None, limit=None, wall_thickness=None) -> WearSolution:
+        """One integration of the wear of ``joints`` from unworn bushings: to
+        ``cycles`` real cycles, to ``limit`` [m] of peak depth (each joint's
+        life), or to whichever comes first where the model takes both;
         ``wall_thickness`` [m] (one for all, or one per joint): stop a joint
         whose peak depth reaches it."""
 
+    def evolve(self, mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,
+               period, cycles, wall_thickness=None) -> WearSolution:
+        """Wear of ``joints`` after ``cycles`` real cycles from unworn bushings
+        (`solve` to ``cycles``)."""
+        return self.solve(mech, joints, y0, period=period, cycles=cycles,
+                          wall_thickness=wall_thickness)
+
+    def life(self, mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,
+             period, limit) -> WearSolution:
+        """Cycles until the peak wear depth of each joint reaches ``limit`` [m]
+        (`solve` to ``limit``; the lives are ``.life``)."""
+        return self.solve(mech, joints, y0, period=period, limit=limit)
+
     @abc.abstractmethod
     def joint_force(self, mech: Mechanism, joint: str, y0: Float[Array, " s"], *, period,
-                    evolution: WearEvolution, samples: int = 180) -> Float[Array, " T"]:
+                    evolution: WearSolution, samples: int = 180) -> Float[Array, " T"]:
         """|joint force| [N] of ``joint`` over one cycle at the end of
         ``evolution``, equally spaced over the period (``samples`` of them
         where the model samples the cycle anew)."""
 
     @abc.abstractmethod
     def cycle_histories(self, mech: Mechanism, joint: str, y0, *, period,
-                        evolution: WearEvolution) -> tuple:
+                        evolution: WearSolution) -> tuple:
         """``joint`` over its first cycle (unworn) and its last (at the end of
         ``evolution``): (first, last `diffwear.contact.ContactHistory`, the
         crank angle [rad] of their samples from the cycle's start)."""

@@ -22,10 +22,11 @@ from ..wear.cycle import wear_cycle
 from ..wear.dynamic_term import CycleSettings
 from ..wear.evolution import EvolutionResult, Evolver, worn_mechanism
 from ..wear.extrapolation import AbstractExtrapolation, Constant
-from ..wear.life import LifeResult, dynamic_cycles_to_limit
+from ..wear.life import dynamic_cycles_to_limit
 from ..wear.profile_ode import ProfileHistory
-from ..wear.status import not_an_answer, not_computed, stack
-from ._base import AbstractWearModel, WearEvolution
+from ..wear.status import RESULTS, not_an_answer, not_computed, stack
+from ._base import AbstractWearModel
+from .solution import WearSolution
 
 
 class Dynamic(AbstractWearModel):
@@ -68,11 +69,6 @@ class Dynamic(AbstractWearModel):
         if self.max_dynamic is not None:
             check_int_option("Dynamic: max_dynamic", self.max_dynamic, 1)
 
-    def life(self, mech, joints, y0, *, period, limit) -> LifeResult:
-        return dynamic_cycles_to_limit(
-            mech, joints, y0, period=period, limit=limit, steps=self.steps,
-            implicit=self.implicit, warmup_cycles=self.warmup_cycles, cycle=self.cycle)
-
     def solver(self, cycles) -> AbstractExtrapolation:
         """The extrapolation of an evolution over ``cycles`` real cycles."""
         if self.extrapolation is not None:
@@ -87,19 +83,62 @@ class Dynamic(AbstractWearModel):
                        wall_thickness=wall_thickness, warmup_cycles=self.warmup_cycles,
                        cycle=self.cycle)
 
-    def evolve(self, mech, joints, y0, *, period, cycles, wall_thickness=None
-               ) -> WearEvolution:
+    def solve(self, mech, joints, y0, *, period, cycles=None, limit=None,
+              wall_thickness=None) -> WearSolution:
+        """The wear of ``joints`` to ``cycles`` real cycles (one joint: its
+        evolution, `evolver`; ``wall_thickness`` [m] stops it) or the lives of
+        ``joints`` to ``limit`` [m] of peak depth (several joints together:
+        `diffwear.wear.life.dynamic_cycles_to_limit`, no wall): two
+        integrations, so one of ``cycles`` and ``limit``, not both."""
+        if (cycles is None) == (limit is None):
+            raise InputError(f"{type(self).__name__}.solve: give cycles= (an evolution) or "
+                             f"limit= (a life), not {'both' if cycles is not None else 'neither'}"
+                             "; allowed: one of them (QuasiStatic takes both)")
+        if limit is not None:
+            if wall_thickness is not None:
+                raise InputError(f"{type(self).__name__}.solve: a life to limit= runs "
+                                 f"without a wall, got wall_thickness={wall_thickness!r}; "
+                                 "allowed: None")
+            return self._life(mech, tuple(joints), y0, period=period, limit=limit)
         joints = one_joint(joints)
         wall = None
         if wall_thickness is not None:
             wall = jnp.reshape(jnp.asarray(wall_thickness, dtype=float), (-1,))[0]
         ev = self.evolver(mech, joints[0], cycles, period=period, wall_thickness=wall)
-        evolution = as_evolution(ev.solve(y0))
+        solution = as_solution(ev.solve(y0))
         # a failed or cut-short evolution has no final profile: NaN with NaN
         # derivatives (the profiles reached stay in ``history`` and ``detail``)
-        depth = not_an_answer(evolution.depth[0], not_computed(evolution.status),
+        depth = not_an_answer(solution.depth[0], not_computed(solution.result),
                               (self, mech, y0, period, cycles, wall_thickness))
-        return eqx.tree_at(lambda e: e.depth, evolution, (depth,))
+        return eqx.tree_at(lambda e: e.depth, solution, (depth,))
+
+    def _life(self, mech, joints, y0, *, period, limit) -> WearSolution:
+        """The lives of ``joints`` (`dynamic_cycles_to_limit`): the history
+        holds cycles, peak depths and valid slots, not the profiles."""
+        final, hist = dynamic_cycles_to_limit(
+            mech, joints, y0, period=period, limit=limit, steps=self.steps,
+            implicit=self.implicit, warmup_cycles=self.warmup_cycles, cycle=self.cycle)
+        n = len(joints)
+        start = jnp.zeros(1)
+        nan = jnp.full(n, jnp.nan)
+        # the joints run together: a joint at its limit is done (its life
+        # and profile are answers), the others share the run's result
+        joint_result = stack([RESULTS.where(final.done[k], RESULTS.ok, final.status)
+                              for k in range(n)])
+        failed = not_computed(joint_result)
+        inputs = (self, mech, y0, period, limit)
+        return WearSolution(
+            depth=tuple(not_an_answer(h, failed[k], inputs) for k, h in enumerate(final.h)),
+            joint_cycles=jnp.full(n, final.n), cycles=final.n, life=final.life,
+            result=final.status, joint_result=joint_result,
+            contact_margin=nan, contact_margin_worn=nan,
+            stats={"steps": jnp.full(n, final.steps), "evaluations": final.evaluations,
+                   "dynamic_cycles": final.evaluations},
+            history=tuple(ProfileHistory(
+                cycles=jnp.concatenate([start, hist["cycles"]]),
+                peak=jnp.concatenate([start, hist["max_depth"][:, k]]),
+                depth=None,
+                valid=jnp.concatenate([jnp.ones(1, bool), hist["valid"]])) for k in range(n)))
 
     def check_joints(self, mech, joints, what: str = "mechanism") -> None:
         """One wearing joint.  A lubricated one is taken: its cycles run on
@@ -107,7 +146,7 @@ class Dynamic(AbstractWearModel):
         the asperities' (`diffwear.wear.cycle.lubricated_cycle`)."""
         one_joint(joints, what)
 
-    def cycle_histories(self, mech, joint, y0, *, period, evolution: WearEvolution) -> tuple:
+    def cycle_histories(self, mech, joint, y0, *, period, evolution: WearSolution) -> tuple:
         """The first dynamic cycle after a warm-up one, and the last: on the
         final profile after one settling cycle from the evolution's end state
         (that state belongs to the profile before the last wear step; on the
@@ -124,7 +163,7 @@ class Dynamic(AbstractWearModel):
         return (contact_history(mech, joint, first.ys), contact_history(worn, joint, last.ys),
                 crank)
 
-    def joint_force(self, mech, joint, y0, *, period, evolution: WearEvolution,
+    def joint_force(self, mech, joint, y0, *, period, evolution: WearSolution,
                     samples: int = 180):
         """One more dynamic cycle on the final profile, from the evolution's
         end state (``evolution.detail``), at ``samples`` equally spaced
@@ -159,14 +198,17 @@ def _cycle(mech, joint, y, t, period):
     return wear_cycle(mech, joint, y, t, period, n_save=CYCLE_SAMPLES)
 
 
-def as_evolution(res: EvolutionResult) -> WearEvolution:
-    """One joint's `EvolutionResult` as a `WearEvolution` (``detail`` keeps it)."""
+def as_solution(res: EvolutionResult) -> WearSolution:
+    """One joint's `EvolutionResult` as a `WearSolution` (``detail`` keeps it)."""
     h = res.history
     nan = jnp.full(1, jnp.nan)
-    return WearEvolution(
-        depth=(res.depth,), cycles=res.cycles, joint_cycles=res.cycles[None],
-        status=res.status, joint_status=stack([res.status]), contact_margin=nan,
+    steps = jnp.sum(h["valid"]).astype(int)
+    return WearSolution(
+        depth=(res.depth,), joint_cycles=res.cycles[None], cycles=res.cycles, life=nan,
+        result=res.status, joint_result=stack([res.status]), contact_margin=nan,
         contact_margin_worn=nan,
+        stats={"steps": steps[None], "evaluations": res.dynamic_cycles,
+               "dynamic_cycles": res.dynamic_cycles},
         history=(ProfileHistory(
             cycles=jnp.concatenate([jnp.zeros(1), h["cycles"]]),
             peak=jnp.concatenate([jnp.zeros(1), h["max_depth"]]),
@@ -175,4 +217,4 @@ def as_evolution(res: EvolutionResult) -> WearEvolution:
         detail=res)
 
 
-__all__ = ["Dynamic", "as_evolution", "one_joint"]
+__all__ = ["Dynamic", "as_solution", "one_joint"]

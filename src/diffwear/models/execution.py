@@ -31,8 +31,9 @@ from ..io import CHECKPOINT
 from ..wear.engine import WearState
 from ..wear.evolution import EvolutionResult
 from ..wear.status import RESULTS
-from ._base import AbstractWearModel, WearEvolution
-from .dynamic import Dynamic, as_evolution, one_joint
+from ._base import AbstractWearModel
+from .dynamic import Dynamic, as_solution, one_joint
+from .solution import WearSolution
 
 CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
 # checkpoint keys added later, with the value that checkpoints written before meant
@@ -243,7 +244,7 @@ def run_evolution(make: Callable, p, y0, checkpoints: Checkpoints | None = None,
 
 def run_model(model: AbstractWearModel, mech_of: Callable, p, joints: tuple[str, ...], y0, *,
               period, cycles, wall_thickness=None, checkpoints: Checkpoints | None = None
-              ) -> tuple[WearEvolution, RunTimes]:
+              ) -> tuple[WearSolution, RunTimes]:
     """``model.evolve`` of the mechanism ``mech_of(p)`` (``p``: its traced
     inputs) compiled once and run, both timed.  ``checkpoints``: the output
     folder and settings of a run kept in checkpoints.
@@ -252,7 +253,7 @@ def run_model(model: AbstractWearModel, mech_of: Callable, p, joints: tuple[str,
     `run_evolution`: with ``checkpoints`` in chunks, a checkpoint after each,
     resumable.  Every other model runs whole (seconds; a resume is an
     `InputError`), and a joint that stopped early has the profile it reached
-    (`WearEvolution.reached`)."""
+    (`WearSolution.reached`)."""
     if isinstance(model, Dynamic):
         (joint,) = one_joint(joints)
 
@@ -261,7 +262,7 @@ def run_model(model: AbstractWearModel, mech_of: Callable, p, joints: tuple[str,
                                  wall_thickness=wall_thickness)
 
         res, times = run_evolution(make, p, y0, checkpoints)
-        return as_evolution(res), times
+        return as_solution(res), times
 
     if checkpoints is not None and checkpoints.resume:
         raise InputError(f"--resume: the {model.name} model runs whole, without "

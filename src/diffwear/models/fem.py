@@ -8,6 +8,7 @@ from typing import ClassVar
 from ..errors import InputError
 from ..wear.fem_route import FemEvolver, FemWearModel
 from .dynamic import Dynamic
+from .solution import WearSolution
 
 
 class FemRoute(Dynamic):
@@ -37,9 +38,15 @@ class FemRoute(Dynamic):
                        warmup_cycles=self.warmup_cycles, extrapolation=self.extrapolation,
                        dynamic_cycles=self.dynamic_cycles, max_dynamic=self.max_dynamic)
 
-    def life(self, mech, joints, y0, *, period, limit):
-        raise InputError("the FEM route evolves the wear over a number of cycles; lives to "
-                         "a depth limit come from Dynamic() or QuasiStatic()")
+    def solve(self, mech, joints, y0, *, period, cycles=None, limit=None,
+              wall_thickness=None) -> WearSolution:
+        """The wear of one joint to ``cycles`` real cycles (`Dynamic.solve`);
+        a life to ``limit`` is an `InputError` on this route."""
+        if limit is not None:
+            raise InputError("the FEM route evolves the wear over a number of cycles; lives "
+                             "to a depth limit come from Dynamic() or QuasiStatic()")
+        return super().solve(mech, joints, y0, period=period, cycles=cycles,
+                             wall_thickness=wall_thickness)
 
 
 __all__ = ["FemRoute"]

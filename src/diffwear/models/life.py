@@ -9,21 +9,23 @@ from .._checks import check_positive, require_float64
 from ..contact.clearance_joint import ClearanceJoint
 from ..errors import InputError
 from ..mechanism import Mechanism
-from ..wear.life import LifeResult, not_computed_is_nan
+from ..wear.life import not_computed_is_nan
 from ._base import AbstractWearModel
 from .dynamic import Dynamic
+from .solution import WearSolution
 
 
 def cycles_to_limit(mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,
-                    period, limit, model: AbstractWearModel | None = None) -> LifeResult:
+                    period, limit, model: AbstractWearModel | None = None) -> WearSolution:
     """Crank cycles until the peak wear depth of each of ``joints`` (clearance
     joints of ``mech`` with wear) reaches ``limit`` [m], starting from state
     ``y0`` (pins centred) with unworn bushings.
 
     ``model``: the wear model (`Dynamic()`, the default, or `QuasiStatic()`,
-    with their settings).  Pure and jit-able; failures are reported in the
-    result's ``status`` (`diffwear.wear.RESULTS`); a life not computed is NaN,
-    with NaN derivatives.
+    with their settings): its `WearSolution`, the lives in ``.life``.  Pure
+    and jit-able; failures are reported in the solution's ``result``
+    (`diffwear.wear.RESULTS`); a life not computed is NaN, with NaN
+    derivatives.
     """
     require_float64("cycles_to_limit")
     model = Dynamic() if model is None else model
@@ -36,8 +38,8 @@ def cycles_to_limit(mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, "
     check_positive("cycles_to_limit: period [s]", period)
     res = model.life(mech, tuple(joints), y0, period=period, limit=limit)
     # a life not computed (NaN) has NaN derivatives, never a silent 0
-    return eqx.tree_at(lambda r: r.cycles, res,
-                       not_computed_is_nan(res.cycles, (model, mech, y0, period, limit)))
+    return eqx.tree_at(lambda r: r.life, res,
+                       not_computed_is_nan(res.life, (model, mech, y0, period, limit)))
 
 
 def check_wearing_joints(what: str, mech: Mechanism, joints) -> None:

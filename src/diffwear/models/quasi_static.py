@@ -11,7 +11,7 @@ their grids match (one loop in the compiled program), one after another
 otherwise.
 
 Every result carries a contact check, `QuasiStaticJoint.contact_margin`: a
-margin below 1 anywhere in the cycle of the unworn joint sets status
+margin below 1 anywhere in the cycle of the unworn joint sets the result
 `RESULTS.contact_lost` (the pin flies across the clearance: the reduction does
 not hold; use `Dynamic`).  Table 2-1 slider-crank: the 5 mm clearance is
 flagged (margin 0.21; thesis Fig. 3-7: contact briefly lost), 0.5 mm is not
@@ -37,10 +37,10 @@ from ..mechanism import GROUND, Mechanism
 from ..mechanism.geometry import safe_angle, safe_norm
 from ..quasistatic.loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
 from ..quasistatic.lubricated import joint_model
-from ..wear.life import LifeResult
 from ..wear.profile_ode import ProfileSolution, integrate_profile
 from ..wear.status import RESULTS, not_an_answer, not_computed, stack, worst
-from ._base import AbstractWearModel, WearEvolution
+from ._base import AbstractWearModel
+from .solution import WearSolution
 
 
 def joint_mass(mech: Mechanism, joint) -> Float[Array, ""]:
@@ -180,7 +180,7 @@ class QuasiStatic(AbstractWearModel):
         return per_joint, loads.ok
 
     @staticmethod
-    def _status(per_joint, loads_ok):
+    def _result(per_joint, loads_ok):
         status = stack([
             RESULTS.where(~loads_ok, RESULTS.cycle_model_failed,
                           RESULTS.where((sol.status == RESULTS.ok) & (margins[0] < 1.0),
@@ -190,49 +190,39 @@ class QuasiStatic(AbstractWearModel):
 
     # -------------------------------------------------------------- results
     def solve(self, mech, joints, y0, *, period, cycles=None, limit=None,
-              wall_thickness=None) -> tuple[WearEvolution, LifeResult]:
+              wall_thickness=None) -> WearSolution:
         """One integration of the wear of ``joints`` from unworn bushings, to
         ``cycles`` real cycles, to ``limit`` [m] of peak depth, or to whichever
         comes first (the engine's `Stop`), stopping a joint at its
-        ``wall_thickness`` [m]: the evolution (`evolve`'s) and the life
-        (`life`'s) of it.  Given as traced values (``limit`` +inf: none;
-        ``cycles`` `MAX_CYCLES`: none), a run and a life are one program: jitted once,
-        it serves both (a lubricated joint's orbit takes tens of seconds to
-        compile)."""
+        ``wall_thickness`` [m]: one `WearSolution` (the profiles reached and,
+        with a limit, the lives).  Given as traced values (``limit`` +inf:
+        none; ``cycles`` `MAX_CYCLES`: none), a run and a life are one
+        program: jitted once, it serves both (a lubricated joint's orbit takes
+        tens of seconds to compile)."""
         per_joint, ok = self._each(mech, joints, y0, period, walls=wall_thickness,
                                    cycles=cycles, limit=limit)
-        joint_status, status = self._status(per_joint, ok)
+        joint_result, result = self._result(per_joint, ok)
         sols: list[ProfileSolution] = [s for s, _ in per_joint]
-        margins = (jnp.stack([m[0] for _, m in per_joint]),
-                   jnp.stack([m[1] for _, m in per_joint]))
         inputs = (self, mech, y0, period, cycles, limit, wall_thickness)
-        failed = not_computed(joint_status)
-        history = {"cycles": jnp.stack([s.history.cycles for s in sols]),
-                   "max_depth": jnp.stack([s.history.peak for s in sols]),
-                   "valid": jnp.stack([s.history.valid for s in sols]),
-                   "joint_status": joint_status,
-                   "contact_margin": margins[0], "contact_margin_worn": margins[1]}
+        failed = not_computed(joint_result)
         # a joint whose cycle model failed (a joint that carries no load: its
         # equilibrium has no solution) or whose slots ran out has no life and,
         # short of ``cycles``, no final profile: NaN, with NaN derivatives by
         # every input (never a silent 0; the profiles it reached stay in the
         # history)
-        life = LifeResult(cycles=not_an_answer(jnp.stack([s.life for s in sols]), failed, inputs),
-                          depth=tuple(s.depth for s in sols), status=status,
-                          dynamic_cycles=jnp.zeros((), int), history=history)
         joint_cycles = jnp.stack([s.cycles for s in sols])
-        evolution = WearEvolution(
+        return WearSolution(
             depth=tuple(not_an_answer(s.depth, failed[k], inputs) for k, s in enumerate(sols)),
-            cycles=jnp.min(joint_cycles),
-            joint_cycles=joint_cycles, status=status, joint_status=joint_status,
-            contact_margin=margins[0], contact_margin_worn=margins[1],
+            joint_cycles=joint_cycles, cycles=jnp.min(joint_cycles),
+            life=not_an_answer(jnp.stack([s.life for s in sols]), failed, inputs),
+            result=result, joint_result=joint_result,
+            contact_margin=jnp.stack([m[0] for _, m in per_joint]),
+            contact_margin_worn=jnp.stack([m[1] for _, m in per_joint]),
+            stats={"steps": jnp.stack([s.steps for s in sols]),
+                   "evaluations": jnp.stack([s.evaluations for s in sols])},
             history=tuple(s.history for s in sols))
-        return evolution, life
 
-    def life(self, mech, joints, y0, *, period, limit) -> LifeResult:
-        return self.solve(mech, joints, y0, period=period, limit=limit)[1]
-
-    def joint_force(self, mech, joint, y0, *, period, evolution: WearEvolution,
+    def joint_force(self, mech, joint, y0, *, period, evolution: WearSolution,
                     samples: int = 180):
         """The ideal mechanism's joint load over the cycle (`samples` of this
         model's): wear does not change it in this model."""
@@ -250,7 +240,7 @@ class QuasiStatic(AbstractWearModel):
                               penetration=gap.max(axis=1), contact_angle=angle,
                               pressure=eq.pressure)
 
-    def cycle_histories(self, mech, joint, y0, *, period, evolution: WearEvolution) -> tuple:
+    def cycle_histories(self, mech, joint, y0, *, period, evolution: WearSolution) -> tuple:
         """The unworn and the final profile's equilibria over the cycle (the
         same joint load: wear does not change it in this model)."""
         history = eqx.filter_jit(self.contact_history)
@@ -258,14 +248,6 @@ class QuasiStatic(AbstractWearModel):
         crank = 2 * jnp.pi * jnp.arange(self.samples) / self.samples
         return (history(mech, joint, y0, period, jnp.zeros_like(depth)),
                 history(mech, joint, y0, period, depth), crank)
-
-    def evolve(self, mech, joints, y0, *, period, cycles,
-               wall_thickness=None) -> WearEvolution:
-        """Wear of ``joints`` after ``cycles`` real cycles from unworn bushings;
-        ``wall_thickness`` [m] (one for all, or one per joint): stop a joint
-        whose peak depth reaches it."""
-        return self.solve(mech, joints, y0, period=period, cycles=cycles,
-                          wall_thickness=wall_thickness)[0]
 
 
 __all__ = ["QuasiStatic", "joint_mass"]

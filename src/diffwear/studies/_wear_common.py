@@ -24,7 +24,7 @@ import numpy as np
 from ..contact import MixedLubrication, centred_state
 from ..dynamics import consistent_state
 from ..errors import SolverError
-from ..models import AbstractWearModel, Dynamic, WearEvolution
+from ..models import AbstractWearModel, Dynamic, WearSolution
 from ..models.execution import Checkpoints, RunTimes, run_model
 from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..report import Block, Bullets, Report, Table
@@ -129,8 +129,8 @@ def run_wear_study(out, study: WearStudy, *, cycles, model: AbstractWearModel, l
     summary = write_outputs(out, study._replace(extra_summary=extra_summary,
                                                 extra_report=tuple(extra_report)),
                             model=model, res=res, cycles=cycles, times=times, log=log)
-    if bool(res.status != RESULTS.ok):
-        raise SolverError(f"{study.name}: {message(res.status)} after "
+    if bool(res.result != RESULTS.ok):
+        raise SolverError(f"{study.name}: {message(res.result)} after "
                           f"{summary['cycles']:.0f} cycles (max depth "
                           f"{summary['max_wear_depth_mm']:.4f} mm; {model.name} model); "
                           f"stopped, results so far written to {out.path}")
@@ -152,7 +152,7 @@ def _evolve(study: WearStudy, model: AbstractWearModel, cycles, checkpoints):
                      cycles=cycles, wall_thickness=study.design.wall, checkpoints=checkpoints)
 
 
-def route_numbers(res: WearEvolution, design: WearJointDesign, times: RunTimes) -> dict:
+def route_numbers(res: WearSolution, design: WearJointDesign, times: RunTimes) -> dict:
     """Max depth (on the grid and as the largest +-4 deg mean, `arc_peak_depth`),
     volume, Archard volume (where the model sums the load), times of one
     route's result."""
@@ -164,14 +164,14 @@ def route_numbers(res: WearEvolution, design: WearJointDesign, times: RunTimes) 
     if res.detail is not None:  # simulated cycles: their normal load x sliding
         out["archard_k_times_load_sliding_mm3"] = float(
             design.k * res.detail.load_sliding) * 1e9
-    out.update(dynamic_cycles_simulated=simulated_cycles(res), status=int(code(res.status)),
+    out.update(dynamic_cycles_simulated=simulated_cycles(res), status=int(code(res.result)),
                wall_time_s=times.wall_time, compile_time_s=times.compile_time)
     return out
 
 
-def simulated_cycles(res: WearEvolution) -> int:
+def simulated_cycles(res: WearSolution) -> int:
     """Dynamic cycles the run simulated (0: none, the quasi-static model)."""
-    return 0 if res.detail is None else int(res.detail.dynamic_cycles)
+    return int(res.stats.get("dynamic_cycles", 0))
 
 
 def route_table(mine: dict, reference: dict, ratio: float) -> list[Block]:
@@ -188,7 +188,7 @@ def route_table(mine: dict, reference: dict, ratio: float) -> list[Block]:
                  "rig, 162 / 92 min = 1.8 on wear-5000)"])]
 
 
-def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearEvolution,
+def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearSolution,
                   cycles, times: RunTimes, log) -> dict:
     """Every output of a wear study's run into ``out``: the profile, the
     history, the first and last cycles' joint force and pin locus (CSV),
@@ -232,14 +232,14 @@ def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearE
                                        clearance_mm=float(design.clearance) * 1e3,
                                        wall_mm=float(design.wall) * 1e3,
                                        label=model_words.label(model),
-                                       markers=model_words.step_words(model), status=res.status,
+                                       markers=model_words.step_words(model), status=res.result,
                                        cf=study.cf, calibrated=study.calibrated))
     settings = model_words.describe(model, cycles)
     summary = {
         "study": study.name, "cycles": float(res.cycles), "cycles_requested": float(cycles),
         **{k: v for k, v in numbers.items()
            if k not in ("wall_time_s", "compile_time_s", "arc_peak_depth_mm")},
-        "status_text": message(res.status),
+        "status_text": message(res.result),
         "wall_time_s": times.wall_time, "compile_time_s": times.compile_time,
         "max_wear_angle_rad": float(theta[np.argmax(depth)]),
         "worn_mass_g": numbers["wear_volume_mm3"] * 1e-9 * PTFE_DENSITY * 1e3,
@@ -282,7 +282,7 @@ def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearE
     return summary
 
 
-def _simulated_columns(res: WearEvolution) -> dict:
+def _simulated_columns(res: WearSolution) -> dict:
     """The history's extrapolation and dynamic cycles per step, where the
     model simulates cycles (the first row: the warm-up)."""
     if res.detail is None:
@@ -293,7 +293,7 @@ def _simulated_columns(res: WearEvolution) -> dict:
             "dynamic_cycles": np.concatenate([[1], h["dynamic_cycles"][valid]])}
 
 
-def _result_words(res: WearEvolution, el) -> list[str]:
+def _result_words(res: WearSolution, el) -> list[str]:
     if res.detail is not None:
         return []
     return ["Model: quasi-static joint (the pin at the equilibrium of "
@@ -308,7 +308,7 @@ def _integrator_label(name: str) -> str:
     return f"{type(solver).__name__}, rtol = atol = {tol:g}"
 
 
-def _run_words(s: dict, res: WearEvolution, times: RunTimes) -> list[str]:
+def _run_words(s: dict, res: WearSolution, times: RunTimes) -> list[str]:
     if res.detail is None:
         return [f"cycles: {s['cycles']:.0f} in {s['wear_steps']} steps of the wear ODE (the "
                 "profile's growth integrated over the cycle count by an adaptive solver); "
@@ -335,7 +335,7 @@ def _run_words(s: dict, res: WearEvolution, times: RunTimes) -> list[str]:
         f"{_integrator_label(s.get('integrator', 'tsit5'))}"]
 
 
-def _contact_words(s: dict, res: WearEvolution, checked: bool) -> list[str]:
+def _contact_words(s: dict, res: WearSolution, checked: bool) -> list[str]:
     if not checked:
         return []
     return [

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models import AbstractWearModel, Dynamic, FemRoute, QuasiStatic, WearEvolution
+from ..models import AbstractWearModel, Dynamic, FemRoute, QuasiStatic, WearSolution
 from ..wear.cycle import integrator_name, lubricated_cycle
 
 # how a model's results are labelled in the reports' tables and figures
@@ -66,7 +66,7 @@ def _dynamic_settings(model: Dynamic, cycles, mech) -> dict:
             "integrator": integrator_name(integrator)}
 
 
-def route_summary(model: AbstractWearModel, evolution: WearEvolution) -> dict:
+def route_summary(model: AbstractWearModel, evolution: WearSolution) -> dict:
     """What a comparison of routes reports of ``model``'s run ``evolution``
     beyond the wear: the FEM route's ring and its explicit fallbacks."""
     if not isinstance(model, FemRoute):

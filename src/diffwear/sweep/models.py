@@ -128,14 +128,14 @@ class RigWear(eqx.Module):
                                   samples=self.force_samples - 1)
         depth = res.depth[0]
         # a failed point's outputs are NaN with NaN derivatives (its status says why)
-        failed = not_computed(res.status)
+        failed = not_computed(res.result)
         return {
             "max_depth_mm": not_an_answer(smooth_max(depth, self.temperature) * 1e3, failed,
                                           params),
             "volume_mm3": not_an_answer(
                 worn_volume(depth, el.bushing_radius, el.law.depth) * 1e9, failed, params),
             "mean_joint_force_N": not_an_answer(jnp.mean(force), failed, params),
-            "status": code(res.status).astype(float),
+            "status": code(res.result).astype(float),
         }
 
 

@@ -27,9 +27,6 @@ from .extrapolation import (
     Constant,
     ErrorControlled,
 )
-from .life import (
-    LifeResult,
-)
 from .peak import (
     arc_peak_depth,
     peak_depth,
@@ -43,7 +40,7 @@ from .status import (
 __all__ = [
     "MM3_PER_NM", "SLIP_RATE_WIDTH", "ArchardWear",
     "CycleResult", "wear_cycle", "reset_wear", "JointsCycleResult", "wear_cycle_joints",
-    "LifeResult", "peak_depth", "arc_peak_depth",
+    "peak_depth", "arc_peak_depth",
     "RESULTS", "not_an_answer", "not_computed",
     "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "AbstractExtrapolation", "Constant", "Adaptive", "ErrorControlled",

@@ -63,33 +63,15 @@ averages over the roughness).
 
 from __future__ import annotations
 
-import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from ..errors import InputError
 from ..mechanism import Mechanism
 from .dynamic_term import CycleSettings, DynamicWear
-from .engine import Stop, initial_state, integrate
+from .engine import Stop, WearState, initial_state, integrate
 from .implicit import DepthGain
-from .status import RESULTS, not_an_answer
-
-
-class LifeResult(eqx.Module):
-    """Per-joint cycles to the limit and the evolution that found them.
-
-    ``cycles[j]``: real cycles until joint j's maximum depth reaches the limit
-    (NaN if it did not within the slots: ``status`` `RESULTS.run_ended_early`).  ``depth``: final
-    profiles (tuple, one per joint; held at the crossing slot's end once a
-    joint is done).  ``history``: per scan slot ``cycles`` (N at its end),
-    ``max_depth`` (per joint), ``step`` (dN) and ``valid``.
-    """
-
-    cycles: Float[Array, " J"]
-    depth: tuple
-    status: RESULTS              # how it ended (`diffwear.wear.RESULTS`; worst over the joints)
-    dynamic_cycles: Array        # dynamic cycles simulated (incl. warm-up; 0: quasi-static)
-    history: dict
+from .status import not_an_answer
 
 
 def not_computed_is_nan(cycles, inputs):
@@ -113,7 +95,7 @@ def dynamic_cycles_to_limit(
     slots: int | None = None,
     warmup_cycles: int = 1,
     cycle: CycleSettings = CycleSettings(),
-) -> LifeResult:
+) -> tuple[WearState, dict]:
     """Cycles until the maximum bushing wear depth of each of ``joints`` reaches
     ``limit`` [m] (see the module notes for the stepping and the derivative).
 
@@ -128,7 +110,15 @@ def dynamic_cycles_to_limit(
     discarded (the pin's start-up transient).  ``cycle``: how each dynamic
     cycle is integrated (`CycleSettings`).
     Pure and jit-able; a solver failure or a joint that never reaches the
-    limit is reported in ``status``.
+    limit is reported in the final state's ``status``.
+
+    Returns the engine's final state (``life``: per joint the cycles at the
+    limit, NaN where not reached, with NaN derivatives; ``h`` the final
+    profiles, held at the crossing slot's end once a joint is done;
+    ``evaluations`` the dynamic cycles simulated, warm-up included) and the
+    history per scan slot: ``cycles`` (N at its end), ``max_depth`` (per
+    joint), ``step`` (dN) and ``valid``.  `diffwear.models.Dynamic.solve`
+    makes the `diffwear.models.WearSolution` of it.
     """
     joints = tuple(joints)
     if not joints:
@@ -146,8 +136,5 @@ def dynamic_cycles_to_limit(
     state = initial_state(term.zeros(), memory, evaluations=warmup_cycles, ok=ok)
     final, hist = integrate(term, solver, state, stop=stop, slots=n_slots)
     # a life not reached is NaN with NaN derivatives, never a silent 0
-    return LifeResult(
-        cycles=not_computed_is_nan(final.life, (mech, y0, period, limit, cycle)),
-        depth=final.h, status=final.status,
-        dynamic_cycles=final.evaluations,
-        history={k: hist[k] for k in ("cycles", "max_depth", "step", "valid")})
+    final = final.replace(life=not_computed_is_nan(final.life, (mech, y0, period, limit, cycle)))
+    return final, {k: hist[k] for k in ("cycles", "max_depth", "step", "valid")}

@@ -25,11 +25,12 @@ __all__ = ["ProfileHistory", "ProfileSolution", "integrate_profile", "NO_WEAR_RA
 
 class ProfileHistory(eqx.Module):
     """Per step (index 0 = the start): real cycles N, peak depth [m], the
-    profile [m], and whether the step was taken."""
+    profile [m] (None where the integration does not keep them), and whether
+    the step was taken."""
 
     cycles: Float[Array, " K"]
     peak: Float[Array, " K"]
-    depth: Float[Array, "K n"]
+    depth: Float[Array, "K n"] | None
     valid: Bool[Array, " K"]
 
 
@@ -38,13 +39,15 @@ class ProfileSolution(eqx.Module):
     at which the peak depth reached the limit (NaN if it did not, or in a run
     of fixed length); ``status``: a `diffwear.wear.RESULTS` member (the
     wall reached, the cycle model failed, the limit not reached within
-    ``max_steps`` steps / ``max_cycles``)."""
+    ``max_steps`` steps / ``max_cycles``); ``steps``: the steps taken,
+    ``evaluations``: the cycle model's evaluations."""
 
     depth: Float[Array, " n"]
     cycles: Float[Array, ""]
     life: Float[Array, ""]
     status: RESULTS
     steps: Array
+    evaluations: Array
     history: ProfileHistory
 
 
@@ -97,6 +100,7 @@ def integrate_profile(
                              stop=stop, slots=solver.slots(stop, max_steps), keep_profiles=True)
     return ProfileSolution(
         depth=s.h[0], cycles=s.n, life=s.life[0], status=s.status, steps=s.steps,
+        evaluations=s.evaluations,
         history=ProfileHistory(
             cycles=jnp.concatenate([jnp.zeros(1), history["cycles"]]),
             peak=jnp.concatenate([solver.peak(h0)[None], history["max_depth"][:, 0]]),

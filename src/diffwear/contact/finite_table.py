@@ -129,7 +129,33 @@ def _along_directions(column, squeeze, wedge):
     return r * g[0], r * g[1]
 
 
-class DynamicFiniteFilm(AbstractFilm):
+class _TabulatedFilm(AbstractFilm):
+    """A finite film read from a table of its dimensionless forces for any
+    centre motion, F = K (g_n, g_t) with K = 6 mu R^4 / c^2: what
+    `DynamicFiniteFilm` and `ShippedFiniteFilm` share.  A subclass gives
+    ``dimensionless_forces(eps, squeeze, wedge)`` and ``_log_peak(eps)``
+    (log max P of the steady film at B = 1)."""
+
+    def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
+        """The film's largest pressure [Pa] with the centre at rest:
+        6 mu R^2 / c^2 eps |omega| max P(eps)."""
+        eps = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
+        return (6.0 * self.viscosity * radius**2 / self.clearance**2 * eps * jnp.abs(omega)
+                * jnp.exp(self._log_peak(eps)))
+
+    def _film_factor(self, radius):
+        """6 mu R^4 / c^2 [N s], as `FiniteBearingFilm`'s."""
+        return 6.0 * self.viscosity * radius**4 / self.clearance**2
+
+    def _excess_components(self, eps_f, squeeze, wedge, radius):
+        """F_n + K pi/2 A and F_t - K pi/2 B [N] (`_film_factor`) of the
+        tabulated film."""
+        k = self._film_factor(radius)
+        f_n, f_t = self.dimensionless_forces(eps_f, squeeze, wedge)
+        return k * f_n + 0.5 * jnp.pi * k * squeeze, k * f_t - 0.5 * jnp.pi * k * wedge
+
+
+class DynamicFiniteFilm(_TabulatedFilm):
     """`FiniteBearingFilm` for any motion of the journal centre (squeeze and
     wedge), tabulated once over the eccentricity ratio and the direction phi =
     atan2(A, B) of the film's drive (module docstring): F = K r g(eps, phi).
@@ -232,23 +258,9 @@ class DynamicFiniteFilm(AbstractFilm):
         g_n, g_t = _along_directions(_catmull_rom(self.scaled, x), squeeze, wedge)
         return envelope * g_n, envelope * g_t
 
-    def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
-        """The film's largest pressure [Pa] with the centre at rest, from the
-        table's phi = 0 column: 6 mu R^2 / c^2 eps |omega| max P(eps)."""
-        eps = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
-        return (6.0 * self.viscosity * radius**2 / self.clearance**2 * eps * jnp.abs(omega)
-                * jnp.exp(_catmull_rom(self.log_peak, self._node_coordinate(eps))))
-
-    def _film_factor(self, radius):
-        """6 mu R^4 / c^2 [N s], as `FiniteBearingFilm`'s."""
-        return 6.0 * self.viscosity * radius**4 / self.clearance**2
-
-    def _excess_components(self, eps_f, squeeze, wedge, radius):
-        """F_n + K pi/2 A and F_t - K pi/2 B [N] (`_film_factor`) of the
-        tabulated film."""
-        k = self._film_factor(radius)
-        f_n, f_t = self.dimensionless_forces(eps_f, squeeze, wedge)
-        return k * f_n + 0.5 * jnp.pi * k * squeeze, k * f_t - 0.5 * jnp.pi * k * wedge
+    def _log_peak(self, eps):
+        """log max P of the steady film at B = 1 (the table's phi = 0 column)."""
+        return _catmull_rom(self.log_peak, self._node_coordinate(eps))
 
 
 class ShippedTables(NamedTuple):
@@ -315,7 +327,7 @@ def _bicubic(padded, il, wl, ie, we):
     return jnp.tensordot(wl, jnp.tensordot(we, block, axes=(0, 1)), axes=(0, 0))
 
 
-class ShippedFiniteFilm(AbstractFilm):
+class ShippedFiniteFilm(_TabulatedFilm):
     """`FiniteBearingFilm` on its default grid (`N_THETA` x `N_Z`, supply
     groove) for any motion of the journal centre, read from the tables
     shipped with the package: `DynamicFiniteFilm`'s dimensionless table
@@ -392,24 +404,9 @@ class ShippedFiniteFilm(AbstractFilm):
         g_n, g_t = _along_directions(column, squeeze, wedge)
         return envelope * g_n, envelope * g_t
 
-    def steady_peak_pressure(self, eccentricity_ratio, omega, radius):
-        """The film's largest pressure [Pa] with the centre at rest:
-        6 mu R^2 / c^2 eps |omega| max P(eps), max P from the tables."""
-        eps = self._saturated(jnp.asarray(eccentricity_ratio, dtype=float))
-        log_peak = _bicubic(_padded_tables()[2], *self._weights(eps))
-        return (6.0 * self.viscosity * radius**2 / self.clearance**2 * eps * jnp.abs(omega)
-                * jnp.exp(log_peak))
-
-    def _film_factor(self, radius):
-        """6 mu R^4 / c^2 [N s], as `FiniteBearingFilm`'s."""
-        return 6.0 * self.viscosity * radius**4 / self.clearance**2
-
-    def _excess_components(self, eps_f, squeeze, wedge, radius):
-        """F_n + K pi/2 A and F_t - K pi/2 B [N] (`_film_factor`) of the
-        tabulated film."""
-        k = self._film_factor(radius)
-        f_n, f_t = self.dimensionless_forces(eps_f, squeeze, wedge)
-        return k * f_n + 0.5 * jnp.pi * k * squeeze, k * f_t - 0.5 * jnp.pi * k * wedge
+    def _log_peak(self, eps):
+        """log max P of the steady film at B = 1, from the tables."""
+        return _bicubic(_padded_tables()[2], *self._weights(eps))
 
 
 def moving_film(film: FiniteBearingFilm, radius) -> AbstractFilm:

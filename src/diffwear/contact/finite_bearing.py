@@ -109,6 +109,7 @@ from .reynolds_grid import (
     _Operator,
     _operator,
     _resolved_eccentricity,
+    block_tridiagonal_solve,
     nodes_for,
 )
 
@@ -136,28 +137,7 @@ def _solve_on(op: _Operator, free, rhs):
     blocks = jax.vmap(block)(op.diag, op.east, free)
     coupling = op.north[None, :] * free[:-1] * free[1:]  # (n_z - 1, n)
     rhs = free * rhs
-
-    def eliminate(carry, row):
-        inverse, y = carry
-        d, r, c = row
-        reduced = d - c[:, None] * inverse * c[None, :]
-        y_new = r - c * (inverse @ y)
-        inverse_new = jnp.linalg.inv(reduced)
-        return (inverse_new, y_new), (inverse_new, y_new)
-
-    first = jnp.linalg.inv(blocks[0])
-    _, (inverses, ys) = lax.scan(eliminate, (first, rhs[0]), (blocks[1:], rhs[1:], coupling))
-    inverses = jnp.concatenate([first[None], inverses], axis=0)
-    ys = jnp.concatenate([rhs[:1], ys], axis=0)
-
-    def substitute(p_next, row):
-        inverse, y, c = row
-        p = inverse @ (y - c * p_next)
-        return p, p
-
-    last = inverses[-1] @ ys[-1]
-    _, ps = lax.scan(substitute, last, (inverses[:-1], ys[:-1], coupling), reverse=True)
-    return jnp.concatenate([ps, last[None]], axis=0)
+    return block_tridiagonal_solve(blocks, rhs, coupling, coupling)
 
 
 def reynolds_pressure(eccentricity_ratio, squeeze, wedge, half_length,

@@ -90,7 +90,14 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from .reynolds_grid import MAX_PASSES, _apply, _grid, _Operator, _operator
+from .reynolds_grid import (
+    MAX_PASSES,
+    _apply,
+    _grid,
+    _Operator,
+    _operator,
+    block_tridiagonal_solve,
+)
 
 __all__ = ["convected_content", "flux_balance", "mass_conserving_pressure"]
 
@@ -144,29 +151,7 @@ def _solve_mixed(op: _Operator, void, pressurised, cavitated, rhs):
     lower = op.north[None, :] * keep[1:] * pressurised[:-1]  # eq j+1 on u_j
     upper = op.north[None, :] * keep[:-1] * pressurised[1:]  # eq j on u_{j+1}
     rhs = keep * rhs
-
-    def eliminate(carry, row):
-        inverse, y = carry
-        d, r, lo, up = row
-        reduced = d - lo[:, None] * inverse * up[None, :]
-        y_new = r - lo * (inverse @ y)
-        inverse_new = jnp.linalg.inv(reduced)
-        return (inverse_new, y_new), (inverse_new, y_new)
-
-    first = jnp.linalg.inv(blocks[0])
-    _, (inverses, ys) = lax.scan(eliminate, (first, rhs[0]),
-                                 (blocks[1:], rhs[1:], lower, upper))
-    inverses = jnp.concatenate([first[None], inverses], axis=0)
-    ys = jnp.concatenate([rhs[:1], ys], axis=0)
-
-    def substitute(u_next, row):
-        inverse, y, up = row
-        u = inverse @ (y - up * u_next)
-        return u, u
-
-    last = inverses[-1] @ ys[-1]
-    _, us = lax.scan(substitute, last, (inverses[:-1], ys[:-1], upper), reverse=True)
-    return jnp.concatenate([us, last[None]], axis=0)
+    return block_tridiagonal_solve(blocks, rhs, lower, upper)
 
 
 def _problem(eccentricity_ratio, squeeze, wedge, half_length, n_theta, n_z, supply_groove,

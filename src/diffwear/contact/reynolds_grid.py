@@ -12,6 +12,7 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+from jax import lax
 
 # Default grid: 96 nodes round the bushing, 12 along the half length; with the
 # clustering below it reproduces Raimondi & Boyd's S and attitude angle to
@@ -106,3 +107,34 @@ def _apply(op: _Operator, p):
     above = jnp.concatenate([p[1:], jnp.zeros_like(p[:1])], axis=0)
     below = jnp.concatenate([jnp.zeros_like(p[:1]), p[:-1]], axis=0)
     return out + op.north[None, :] * (above + below)
+
+
+def block_tridiagonal_solve(blocks, rhs, lower, upper):
+    """u (n_z, n) solving the block-tridiagonal system along zeta with the
+    dense diagonal ``blocks`` (n_z, n, n), the diagonal couplings ``lower``
+    (n_z - 1, n: row j + 1 on u_j) and ``upper`` (n_z - 1, n: row j on
+    u_{j+1}) and right-hand side ``rhs`` (n_z, n), by block elimination
+    (block Thomas: forward elimination, back substitution; one n x n inverse
+    per row)."""
+    def eliminate(carry, row):
+        inverse, y = carry
+        d, r, lo, up = row
+        reduced = d - lo[:, None] * inverse * up[None, :]
+        y_new = r - lo * (inverse @ y)
+        inverse_new = jnp.linalg.inv(reduced)
+        return (inverse_new, y_new), (inverse_new, y_new)
+
+    first = jnp.linalg.inv(blocks[0])
+    _, (inverses, ys) = lax.scan(eliminate, (first, rhs[0]),
+                                 (blocks[1:], rhs[1:], lower, upper))
+    inverses = jnp.concatenate([first[None], inverses], axis=0)
+    ys = jnp.concatenate([rhs[:1], ys], axis=0)
+
+    def substitute(u_next, row):
+        inverse, y, up = row
+        u = inverse @ (y - up * u_next)
+        return u, u
+
+    last = inverses[-1] @ ys[-1]
+    _, us = lax.scan(substitute, last, (inverses[:-1], ys[:-1], upper), reverse=True)
+    return jnp.concatenate([us, last[None]], axis=0)

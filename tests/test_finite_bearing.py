@@ -8,8 +8,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from long_bearing_closed_form import long_bearing
 from scipy.integrate import quad
-from scipy.optimize import brentq
 
 from diffwear.contact import FiniteBearingFilm, PinKinematics, ShortBearingFilm
 from diffwear.contact.finite_bearing import reynolds_forces, reynolds_pressure
@@ -111,31 +111,6 @@ _forces = jax.jit(lambda eps, ld, n_theta=96, n_z=12: reynolds_forces(
     eps, 0.0, eps, ld, n_theta=n_theta, n_z=n_z), static_argnames=("n_theta", "n_z"))
 
 
-def _long_reynolds(eps):
-    """(F_n, F_t) of the infinitely long bearing with the Reynolds condition, per
-    unit wedge B and unit length in zeta = z / R, in units of 6 mu R^4 / c^2: an
-    independent route (quadrature and a root find).  Integrating the long
-    Reynolds equation d/dpsi (H^3 dP/dpsi) = B sin psi = (B / eps) dH/dpsi once,
-    H^3 P' = (B / eps) (H - H*), from the supply at the maximum film (P(pi) = 0)
-    to the cavitation end psi_c in (2 pi, 3 pi), where H(psi_c) = H* and
-    P(psi_c) = 0 (Swift-Stieber: P = P' = 0 there); H* from that condition."""
-    def h(p):
-        return 1 - eps * np.cos(p)
-
-    def pressure(psi, h_star):
-        return quad(lambda p: (h(p) - h_star) / (eps * h(p) ** 3), np.pi, psi,
-                    epsabs=1e-12, epsrel=1e-10, limit=200)[0]
-
-    def end(h_star):
-        return 2 * np.pi + np.arccos((1 - h_star) / eps)
-
-    h_star = brentq(lambda hs: pressure(end(hs), hs), 1 - eps + 1e-12, 1 - 1e-9, xtol=1e-15)
-    psi_c = end(h_star)
-    f_n = -quad(lambda p: pressure(p, h_star) * np.cos(p), np.pi, psi_c, limit=200)[0]
-    f_t = -quad(lambda p: pressure(p, h_star) * np.sin(p), np.pi, psi_c, limit=200)[0]
-    return f_n, f_t
-
-
 @pytest.mark.extended  # ~45 s on 2 cores: grids of 96 x 48 and 96 x 96
 @pytest.mark.parametrize("eps", [0.2, 0.5, 0.8])
 def test_long_bearing_limit_with_reynolds_cavitation(eps):
@@ -143,7 +118,7 @@ def test_long_bearing_limit_with_reynolds_cavitation(eps):
     bearing's (Reynolds condition) as 1 - a D / L (the end leakage lives in a
     layer of fixed width in zeta = z / R); the extrapolation of L/D = 8 and 16
     to D / L = 0 matches it to 1 % in load and attitude angle."""
-    f_n, f_t = _long_reynolds(eps)
+    f_n, f_t, _ = long_bearing(eps)
     ratios = []
     for ld, n_z in [(8.0, 48), (16.0, 96)]:
         g_n, g_t = _forces(eps, ld, n_z=n_z)

@@ -9,8 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from scipy.integrate import quad
-from scipy.optimize import brentq
+from long_bearing_closed_form import long_bearing
 
 from diffwear.contact import FiniteBearingFilm, PinKinematics
 from diffwear.contact.finite_bearing import _film_forces, reynolds_pressure
@@ -156,30 +155,6 @@ def test_the_steady_bearing_is_the_same_under_both_conditions(eps):
     assert float(phi_m) == pytest.approx(float(phi_r), rel=1e-9)
 
 
-def _long_bearing(eps):
-    """(F_n, F_t) per unit wedge and unit length in zeta, in units of
-    6 mu R^4 / c^2, and the film H* at the rupture, of the infinitely long
-    bearing with its groove at the maximum film: H^3 P' = (B / eps) (H - H*)
-    from P(pi) = 0 to the rupture psi_c in (2 pi, 3 pi) where H = H* and
-    P = 0 (quadrature and a root find).  Past the rupture the Couette flux
-    (B / eps) H theta keeps its value at the rupture, so theta = H* / H."""
-    def h(p):
-        return 1 - eps * np.cos(p)
-
-    def pressure(psi, h_star):
-        return quad(lambda p: (h(p) - h_star) / (eps * h(p) ** 3), np.pi, psi,
-                    epsabs=1e-12, epsrel=1e-10, limit=200)[0]
-
-    def end(h_star):
-        return 2 * np.pi + np.arccos((1 - h_star) / eps)
-
-    h_star = brentq(lambda hs: pressure(end(hs), hs), 1 - eps + 1e-12, 1 - 1e-9, xtol=1e-15)
-    psi_c = end(h_star)
-    f_n = -quad(lambda p: pressure(p, h_star) * np.cos(p), np.pi, psi_c, limit=200)[0]
-    f_t = -quad(lambda p: pressure(p, h_star) * np.sin(p), np.pi, psi_c, limit=200)[0]
-    return f_n, f_t, h_star
-
-
 @pytest.mark.parametrize("eps", [0.3, 0.6])
 def test_the_long_bearing_matches_the_closed_form_film_and_its_content(eps):
     """One row (n_z = 1) of half length 1e6 R: the axial flow vanishes and the
@@ -187,7 +162,7 @@ def test_the_long_bearing_matches_the_closed_form_film_and_its_content(eps):
     (second order in the grid) and its content in the cavitated region
     theta = H* / H to 0.01 (first order: the upwind flux), halving as the
     grid is refined."""
-    f_n, f_t, h_star = _long_bearing(eps)
+    f_n, f_t, h_star = long_bearing(eps)
     half = 1e6
     errors = []
     for n in (96, 192):

@@ -186,7 +186,7 @@ def test_a_failed_sweep_point_is_nan_with_nan_derivatives_beside_exact_ones():
             status = RESULTS.where(c > 0.04e-3, RESULTS.cycle_model_failed, RESULTS.ok)
             nan = jnp.full(1, jnp.nan)
             return WearSolution(depth=(depth,), joint_cycles=jnp.asarray([cycles]),
-                                cycles=jnp.asarray(cycles), life=nan, result=status,
+                                life=nan, result=status,
                                 joint_result=stack([status]), contact_margin=nan,
                                 contact_margin_worn=nan, stats={}, history=())
 

@@ -129,7 +129,7 @@ class Dynamic(AbstractWearModel):
         inputs = (self, mech, y0, period, limit)
         return WearSolution(
             depth=tuple(not_an_answer(h, failed[k], inputs) for k, h in enumerate(final.h)),
-            joint_cycles=jnp.full(n, final.n), cycles=final.n, life=final.life,
+            joint_cycles=jnp.full(n, final.n), life=final.life,
             result=final.status, joint_result=joint_result,
             contact_margin=nan, contact_margin_worn=nan,
             stats={"steps": jnp.full(n, final.steps), "evaluations": final.evaluations,
@@ -204,7 +204,7 @@ def as_solution(res: EvolutionResult) -> WearSolution:
     nan = jnp.full(1, jnp.nan)
     steps = jnp.sum(h["valid"]).astype(int)
     return WearSolution(
-        depth=(res.depth,), joint_cycles=res.cycles[None], cycles=res.cycles, life=nan,
+        depth=(res.depth,), joint_cycles=res.cycles[None], life=nan,
         result=res.status, joint_result=stack([res.status]), contact_margin=nan,
         contact_margin_worn=nan,
         stats={"steps": steps[None], "evaluations": res.dynamic_cycles,

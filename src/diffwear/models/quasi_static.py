@@ -213,7 +213,7 @@ class QuasiStatic(AbstractWearModel):
         joint_cycles = jnp.stack([s.cycles for s in sols])
         return WearSolution(
             depth=tuple(not_an_answer(s.depth, failed[k], inputs) for k, s in enumerate(sols)),
-            joint_cycles=joint_cycles, cycles=jnp.min(joint_cycles),
+            joint_cycles=joint_cycles,
             life=not_an_answer(jnp.stack([s.life for s in sols]), failed, inputs),
             result=result, joint_result=joint_result,
             contact_margin=jnp.stack([m[0] for _, m in per_joint]),

@@ -20,9 +20,6 @@ class WearSolution(eqx.Module):
     depth: final wear profiles [m], one per joint (tuple); NaN, with NaN
         derivatives, where a joint has no answer (`diffwear.wear.status.not_computed`)
     joint_cycles: per joint, the real cycles its profile represents
-    cycles: the real cycles reached (the least of ``joint_cycles``): the
-        requested count, or fewer when a joint wore through its wall (or its
-        model failed) first
     life: per joint, the real cycles at which its peak depth reached the
         limit; NaN (with NaN derivatives) where it did not, or where no limit
         was asked
@@ -45,7 +42,6 @@ class WearSolution(eqx.Module):
 
     depth: tuple
     joint_cycles: Float[Array, " J"]
-    cycles: Float[Array, ""]
     life: Float[Array, " J"]
     result: RESULTS
     joint_result: RESULTS
@@ -54,6 +50,13 @@ class WearSolution(eqx.Module):
     stats: dict
     history: tuple
     detail: Any = None
+
+    @property
+    def cycles(self) -> Float[Array, ""]:
+        """The real cycles reached, the least of ``joint_cycles``: the
+        requested count, or fewer when a joint wore through its wall (or its
+        model failed) first."""
+        return jnp.min(self.joint_cycles)
 
     def reached(self) -> "WearSolution":
         """This (concrete) solution with each joint's profile as far as it

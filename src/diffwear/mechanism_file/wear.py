@@ -192,7 +192,7 @@ def _run_and_life(model: QuasiStatic, mech, joints, y0, period, cycles, limit, w
     the run, that of the life, RunTimes: the compile, and the two runs
     together.)"""
     never = jnp.asarray(jnp.inf)
-    walls = jnp.asarray([jnp.inf if w is None else w for w in walls], dtype=float)
+    walls = jnp.asarray(walls, dtype=float)  # `bushing_walls`: inf where none
 
     def solve(y, n, lim, w):
         return model.solve(mech, joints, y, period=period, cycles=n, limit=lim, wall_thickness=w)

@@ -13,16 +13,19 @@ Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
   asperities never touch) under steady loads over five decades, and the
   short bearing's closed-form eps for each load;
 * ``life_viscosity.json``: the Ch. 7 rig's crank-rod joint lubricated
-  (`MixedLubrication(ShortBearingFilm(mu, depth, c), foundation, 0.4 um)`),
+  (`MixedLubrication(default_film(mu, depth, c, R, eps_max), foundation,
+  0.4 um)`: the finite film, L/D = 0.69),
   its quasi-static life to 50 um against the viscosity, the dry life and the
   derivative d(life)/d(mu) by forward-mode autodiff (`jax.jvp`) at a few
   viscosities;
 * ``slider_crank.csv``: the Table 2-1 slider-crank (c = 0.1 mm, EFM) with its
-  crank-rod joint lubricated (sigma 1 um) at 0.5 and 0.02 Pa s, and dry, over
+  crank-rod joint lubricated (sigma 1 um; `default_film`: the finite film,
+  L/D = 0.32) at 0.5 and 0.02 Pa s, and dry, over
   one crank revolution on Rodas4 (rtol = atol = 1e-8): the pin's offset in
   the bushing over the clearance, the film parameter and the asperity load;
 * ``four_bar_squeeze.csv``: the shipped four-bar (``four_bar_wear``) with
-  its coupler-rocker joint in oil (sigma 1 um) at 0.5 and 0.005 Pa s, the
+  its coupler-rocker joint in oil (sigma 1 um; the default film, finite at
+  L/D = 0.83) at 0.5 and 0.005 Pa s, the
   quasi-static model's film over one cycle (360 samples): the journal's
   orbit with the squeeze film and the steady balance at every sample
   (``squeeze=False``), the minimum film and the relative rotation;
@@ -225,7 +228,7 @@ def life_viscosity() -> None:
     import equinox as eqx
     import jax.numpy as jnp
 
-    from diffwear.contact import MixedLubrication, ShortBearingFilm
+    from diffwear.contact import MixedLubrication, default_film
     from diffwear.models import QuasiStatic
     from diffwear.studies import rig_21400
     from diffwear.wear.status import code, name
@@ -234,9 +237,11 @@ def life_viscosity() -> None:
     el = mech.element("crank_rod")
     c = el.bushing_radius - el.pin_radius
     model = QuasiStatic(steps=RIG_STEPS, samples=RIG_SAMPLES)
+    eps_max = float(MixedLubrication.saturation(RIG_ROUGHNESS, c))
 
     def lubricated(mu):
-        law = MixedLubrication(ShortBearingFilm(mu, el.law.depth, c), el.law, RIG_ROUGHNESS)
+        film = default_film(mu, el.law.depth, c, el.pin_radius, eps_max)
+        law = MixedLubrication(film, el.law, RIG_ROUGHNESS)
         return eqx.tree_at(lambda m: m.element("crank_rod").law, mech, law)
 
     def life(mu):
@@ -263,7 +268,8 @@ def life_viscosity() -> None:
     out = {"settings": {"model": f"QuasiStatic(steps={RIG_STEPS}, samples={RIG_SAMPLES})",
                         "limit_m": RIG_LIMIT, "roughness_m": RIG_ROUGHNESS,
                         "clearance_m": float(c), "length_m": float(el.law.depth),
-                        "film": "ShortBearingFilm", "period_s": 2.0},
+                        "film": type(lubricated(1e-3).element("crank_rod").law.film).__name__,
+                        "period_s": 2.0},
            "dry": {"life_cycles": float(dry.life[0]), "status": int(code(dry.result))},
            "lives": rows, "tangents": tangents,
            "wall_s": round(time.perf_counter() - t0, 1)}
@@ -283,7 +289,7 @@ def slider_crank() -> None:
     import jax.numpy as jnp
     import numpy as np
 
-    from diffwear.contact import MixedLubrication, ShortBearingFilm, contact_history
+    from diffwear.contact import MixedLubrication, contact_history, default_film
     from diffwear.dynamics import simulate
     from diffwear.dynamics.rosenbrock import Rodas4
     from diffwear.presets import clearance_slider_crank
@@ -291,6 +297,7 @@ def slider_crank() -> None:
     mech, y0 = clearance_slider_crank("efm", clearance=SC_CLEARANCE, n_theta=90)
     el = mech.element("crank_rod")
     c = float(el.bushing_radius - el.pin_radius)
+    eps_max = float(MixedLubrication.saturation(SC_ROUGHNESS, c))
     ts = jnp.linspace(0.0, 2.0, 401)
 
     def run(m):
@@ -299,10 +306,13 @@ def slider_crank() -> None:
         h = contact_history(m, "crank_rod", tr.ys)
         return h.offset, h.normal_load, tr.result
 
+    def lubricated_law(mu):
+        film = default_film(mu, el.law.depth, c, el.pin_radius, eps_max)
+        return MixedLubrication(film, el.law, SC_ROUGHNESS)
+
     @eqx.filter_jit
     def lubricated(mu):
-        law = MixedLubrication(ShortBearingFilm(mu, el.law.depth, c), el.law, SC_ROUGHNESS)
-        return run(eqx.tree_at(lambda m: m.element("crank_rod").law, mech, law))
+        return run(eqx.tree_at(lambda m: m.element("crank_rod").law, mech, lubricated_law(mu)))
 
     cols: dict[str, list] = {"t_s": list(np.asarray(ts))}
     cases = [(_tag(mu), lambda mu=mu: lubricated(jnp.asarray(mu))) for mu in SC_VISCOSITIES]
@@ -323,7 +333,8 @@ def slider_crank() -> None:
     _write_csv(STORE / "slider_crank.csv", cols)
     meta = {"clearance_m": c, "roughness_m": SC_ROUGHNESS, "viscosities_Pa_s": SC_VISCOSITIES,
             "length_m": float(el.law.depth), "pin_radius_m": float(el.pin_radius),
-            "solver": "Rodas4, rtol = atol = 1e-8", "duration_s": 2.0}
+            "solver": "Rodas4, rtol = atol = 1e-8", "duration_s": 2.0,
+            "film": type(lubricated_law(1e-3).film).__name__}
     (STORE / "slider_crank.json").write_text(json.dumps(meta, indent=1) + "\n")
 
 
@@ -359,7 +370,7 @@ def four_bar() -> None:
         "omega_rad_s": list(np.asarray(loads.omega))}
     for mu in FB_VISCOSITIES:
         oiled = load_text(text.replace(key, key + f'\nlubricant = {{ viscosity = "{mu} Pa s", '
-                                       f'roughness = "{FB_ROUGHNESS}", bearing = "short" }}'),
+                                       f'roughness = "{FB_ROUGHNESS}" }}'),
                           file="four_bar_wear.toml")
         joint = LubricatedQuasiStaticJoint.from_joint(oiled.mechanism.element("coupler_rocker"))
         for tag, model in (("orbit", joint), ("steady", joint.steady())):

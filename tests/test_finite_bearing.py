@@ -245,12 +245,13 @@ def test_a_run_names_a_short_film_out_of_its_range(tmp_path):
     from diffwear.mechanism_file.wear import film_out_of_range
 
     text = (SHIPPED_MECHANISMS / "rig_lubricated.toml").read_text()
-    assert ', bearing = "short" }' in text
+    assert 'roughness = "0.65 um" }' in text
     notes = []
     for k, extra in enumerate((', bearing = "short"', ', length = "0.3 mm"',
                                ', bearing = "finite"', "")):
         path = tmp_path / f"rig{k}.toml"
-        path.write_text(text.replace(', bearing = "short" }', extra + " }"))
+        path.write_text(text.replace('roughness = "0.65 um" }',
+                                     'roughness = "0.65 um"' + extra + " }"))
         notes.append(film_out_of_range(load(path).mechanism.element("crank_rod")))
     assert "L/D = 0.689" in notes[0] and "0.98" in notes[0] and 'bearing = "finite"' in notes[0]
     assert notes[1] is None and notes[2] is None and notes[3] is None

@@ -314,13 +314,12 @@ def test_areal_density_units():
 
 
 def test_the_summit_keys_reach_the_asperity_law(tmp_path):
-    from test_lubricant_file import OIL, _file
+    from test_lubricant_file import ROUGH, _file
 
     from diffwear.config import load
 
-    path = _file(tmp_path, "summits", (OIL, OIL.replace(
-        'bearing = "short"', 'bearing = "short", summit_density = "400 1/mm^2", '
-        'summit_radius = "150 um"')))
+    path = _file(tmp_path, "summits", (ROUGH, ROUGH + ', summit_density = "400 1/mm^2", '
+                                       'summit_radius = "150 um"'))
     gt = load(str(path)).mechanism.element("crank_rod").law.summits
     assert float(gt.summit_density) == pytest.approx(4e8, rel=1e-12)
     assert float(gt.summit_radius) == pytest.approx(150e-6, rel=1e-12)
@@ -348,10 +347,9 @@ def test_the_summit_keys_reach_the_asperity_law(tmp_path):
      ["joints[1].lubricant.summit_density", "'1/s' is a rate unit"]),
 ])
 def test_bad_summit_keys_exit_2_naming_the_key_and_the_range(tmp_path, capsys, extra, words):
-    from test_lubricant_file import OIL, _file
+    from test_lubricant_file import ROUGH, _file
 
-    path = _file(tmp_path, "bad", (OIL, OIL.replace('bearing = "short"',
-                                                    f'bearing = "short", {extra}')))
+    path = _file(tmp_path, "bad", (ROUGH, f"{ROUGH}, {extra}"))
     out = tmp_path / "out"
     assert main(["run", str(path), "--cycles", "2000", "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err

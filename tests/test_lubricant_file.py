@@ -14,11 +14,11 @@ from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
 from diffwear.config import load
 from diffwear.config import units as U
-from diffwear.contact import MixedLubrication, ShortBearingFilm
+from diffwear.contact import MixedLubrication, ShippedFiniteFilm
 
 LUBRICATED = SHIPPED_MECHANISMS / "rig_lubricated.toml"
-OIL = ('lubricant = { grade = "ISO VG 10", temperature = "25 degC", roughness = "0.65 um", '
-       'bearing = "short" }')
+OIL = 'lubricant = { grade = "ISO VG 10", temperature = "25 degC", roughness = "0.65 um" }'
+ROUGH = 'roughness = "0.65 um"'  # the last key of the shipped rig's lubricant
 GRADE = 'grade = "ISO VG 10", temperature = "25 degC"'
 FILM_KEYS = ("min_film_thickness_um", "film_ratio_min", "asperity_load_share")
 
@@ -51,7 +51,10 @@ def test_viscosity_units():
 def test_the_shipped_lubricated_rig_is_the_rig_with_its_oil():
     el = load("rig_lubricated").mechanism.element("crank_rod")
     dry = load("rig").mechanism.element("crank_rod")
-    assert isinstance(el.law, MixedLubrication) and isinstance(el.law.film, ShortBearingFilm)
+    # the finite film by default: L/D = 13.1 / 19 = 0.69 is no short bearing
+    assert isinstance(el.law, MixedLubrication) and isinstance(el.law.film, ShippedFiniteFilm)
+    assert float(el.law.film.radius) == float(dry.pin_radius) == 0.0095
+    assert float(el.law.film.max_eccentricity_ratio) == pytest.approx(1 - 0.65 / 33, rel=1e-12)
     # ISO VG 10 at 25 degC by ASTM D341 (hand computation: the Walther line through
     # log log 10.7 at log 313.15 and log log 3.2 at log 373.15 gives nu = 17.35 mm^2/s,
     # times 870 (1 - 6.5e-4 x 10) kg/m^3)
@@ -96,7 +99,7 @@ def test_a_thicker_oil_keeps_a_thicker_film_and_wears_less_than_dry(runs):
         assert dry["wear_volume_mm3"] >= oiled["wear_volume_mm3"]
     assert "lubricant" not in dry and "min_film_thickness_um" not in dry
     assert thin["lubricant"] == {"viscosity_Pa_s": 0.003, "roughness_um": 0.65,
-                                 "bearing": "short"}
+                                 "bearing": "finite"}
     for w in (thin, thick):
         assert w["min_film_thickness_um"] >= 0.0 and w["max_interference_um"] >= 0.0
         for key in FILM_KEYS:
@@ -146,9 +149,9 @@ def test_the_film_files_and_the_report(runs):
     ('roughness = "0.65 um"', 'roughness = "12 um"',
      ["joints[1].lubricant.roughness", "12 um", "radial clearance 33 um",
       "< clearance / 3 = 11 um"]),
-    ('bearing = "short"', 'bearing = "short", viscocity = "1 cP"',
+    (ROUGH, ROUGH + ', bearing = "short", viscocity = "1 cP"',
      ["joints[1].lubricant.viscocity", "unknown key", "did you mean 'viscosity'"]),
-    ('bearing = "short"', 'bearing = "journal"',
+    (ROUGH, ROUGH + ', bearing = "journal"',
      ["joints[1].lubricant.bearing", "'journal' is not allowed", "'short'", "'long'"]),
     (GRADE, 'grade = "ISO VG 11", temperature = "25 degC"',
      ["joints[1].lubricant.grade", "'ISO VG 11'", "ISO VG 10, ISO VG 15", "ISO VG 1500"]),
@@ -175,28 +178,28 @@ def test_the_film_files_and_the_report(runs):
      ["joints[1].lubricant.grade", "'ISO VG 5'", "ISO VG 10, ISO VG 15"]),
     (GRADE, 'grade = "ISO VG 1500", temperature = "160 degC"',
      ["joints[1].lubricant.temperature", "160 degC", "ASTM D341", "-20 degC to 150 degC"]),
-    ('bearing = "short"', 'bearing = "Short"',
+    (ROUGH, ROUGH + ', bearing = "Short"',
      ["joints[1].lubricant.bearing", "'Short' is not allowed", "'finite'"]),
     # the finite film's grid: the rig saturates at eps_max = 1 - 0.65 / 33 = 0.9803;
     # 8 nodes across the minimum film's half width sqrt(2 (1 - eps) / eps) = 0.2005
     # with the finest spacing (1 - 0.9 eps) 2 pi / n need n >= 8 x 0.1177 x 2 pi /
     # 0.2005 = 29.5, the even 30
-    ('bearing = "short"', 'bearing = "finite", film_n_theta = 28',
+    (ROUGH, ROUGH + ', bearing = "finite", film_n_theta = 28',
      ["joints[1].lubricant.film_n_theta", "28 nodes", "too coarse", "eps_max",
       "0.9803", "an even integer >= 30"]),
-    ('bearing = "short"', 'bearing = "finite", film_n_theta = 31',
+    (ROUGH, ROUGH + ', bearing = "finite", film_n_theta = 31',
      ["joints[1].lubricant.film_n_theta", "31 is odd", "an even integer in [16, 4096]"]),
-    ('bearing = "short"', 'bearing = "finite", film_n_theta = 8',
+    (ROUGH, ROUGH + ', bearing = "finite", film_n_theta = 8',
      ["joints[1].lubricant.film_n_theta", "out of range", "[16, 4096]"]),
-    ('bearing = "short"', 'bearing = "finite", film_n_z = 1',
+    (ROUGH, ROUGH + ', bearing = "finite", film_n_z = 1',
      ["joints[1].lubricant.film_n_z", "out of range", "[2, 1024]"]),
-    ('bearing = "short"', 'bearing = "short", film_n_theta = 96',
+    (ROUGH, ROUGH + ', bearing = "short", film_n_theta = 96',
      ["joints[1].lubricant.film_n_theta", "given for bearing = 'short'",
       'bearing = "finite", or no grid key']),
-    ('bearing = "short"', 'bearing = "short", cavitation = "mass-conserving"',
+    (ROUGH, ROUGH + ', bearing = "short", cavitation = "mass-conserving"',
      ["joints[1].lubricant.cavitation", "'mass-conserving' given for bearing = 'short'",
       'bearing = "finite", or no cavitation key']),
-    ('bearing = "short"', 'bearing = "finite", cavitation = "jfo"',
+    (ROUGH, ROUGH + ', bearing = "finite", cavitation = "jfo"',
      ["joints[1].lubricant.cavitation", "'jfo' is not allowed", "'reynolds'",
       "'mass-conserving'"]),
     ('law = { type = "elastic-foundation", layer_thickness = "6.342 mm", depth = "13.1 mm", '
@@ -223,8 +226,8 @@ def test_a_finite_film_grid_that_resolves_the_saturation_is_taken(tmp_path):
     (28 do not: above); the grid reaches the film law."""
     from diffwear.contact import FiniteBearingFilm
 
-    path = _file(tmp_path, "grid", ('bearing = "short"',
-                                    'bearing = "finite", film_n_theta = 30, film_n_z = 6'))
+    grid = ', bearing = "finite", film_n_theta = 30, film_n_z = 6'
+    path = _file(tmp_path, "grid", (ROUGH, ROUGH + grid))
     film = load(path).mechanism.element("crank_rod").law.film
     assert isinstance(film, FiniteBearingFilm)
     assert (film.n_theta, film.n_z) == (30, 6)
@@ -233,8 +236,8 @@ def test_a_finite_film_grid_that_resolves_the_saturation_is_taken(tmp_path):
 
 
 def test_the_cavitation_condition_reaches_the_finite_film(tmp_path):
-    path = _file(tmp_path, "jfo", ('bearing = "short"',
-                                   'bearing = "finite", cavitation = "mass-conserving"'))
+    path = _file(tmp_path, "jfo", (ROUGH,
+                                   ROUGH + ', bearing = "finite", cavitation = "mass-conserving"'))
     assert load(path).mechanism.element("crank_rod").law.film.cavitation == "mass-conserving"
 
 

@@ -20,15 +20,14 @@ import pytest
 from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
 from diffwear.config import load
-from diffwear.contact import ArchardWear, MixedLubrication, ShortBearingFilm
+from diffwear.contact import ArchardWear, MixedLubrication, ShippedFiniteFilm, ShortBearingFilm
 from diffwear.dynamics import Rodas4, simulate
 from diffwear.mechanism_file import initial_state, integrate_timed, motion_integrator
 from diffwear.models import QuasiStatic
 from diffwear.wear.cycle import FILM_TOLERANCE_FRACTION, lubricated_cycle, wear_cycle
 from diffwear.wear.status import RESULTS, code
 
-OIL = ('lubricant = { grade = "ISO VG 10", temperature = "60 degC", roughness = "0.65 um", '
-       'bearing = "short" }')
+OIL = 'lubricant = { grade = "ISO VG 10", temperature = "60 degC", roughness = "0.65 um" }'
 WEAR_LINE = 'wear = { coefficient = "5.05e-4 mm^3/(N m)" }\n'
 
 
@@ -180,11 +179,13 @@ def test_the_shipped_lubricated_four_bar_is_the_four_bar_with_its_oil():
     """four_bar_lubricated.toml is four_bar_wear.toml, leaf by leaf, but for
     its joint's oil: ISO VG 10 at 60 degC (ASTM D341 through the grade's 10
     and 2.5 mm^2/s at 40 and 100 degC: 5.618 mm^2/s, times 870 (1 - 6.5e-4 x
-    45) kg/m^3), sigma 0.65 um, the short film over the bushing's depth."""
+    45) kg/m^3), sigma 0.65 um, the finite film (L/D = 10 / 12) over the
+    bushing's depth."""
     oiled, dry = load("four_bar_lubricated"), load("four_bar_wear")
     law = oiled.mechanism.element("coupler_rocker").law
     dry_law = dry.mechanism.element("coupler_rocker").law
-    assert isinstance(law, MixedLubrication) and isinstance(law.film, ShortBearingFilm)
+    assert isinstance(law, MixedLubrication) and isinstance(law.film, ShippedFiniteFilm)
+    assert float(law.film.length_over_diameter) == pytest.approx(10 / 12, rel=1e-12)
     assert float(law.film.viscosity) == pytest.approx(5.6177e-6 * 844.5525, rel=1e-4)
     assert float(law.roughness) == 0.65e-6
     assert float(law.film.length) == float(dry_law.depth) == 0.01

@@ -29,6 +29,7 @@ from diffwear.contact import (
     PinKinematics,
     ShippedFiniteFilm,
     ShortBearingFilm,
+    default_film,
 )
 from diffwear.contact.finite_bearing import film_law_for, reynolds_forces
 from diffwear.contact.finite_table import SHIPPED_RATIOS, SHIPPED_TOP, shipped_tables
@@ -133,12 +134,12 @@ def test_out_of_the_tables_is_an_input_error():
 
 # ------------------------------------------------------------ the default film law
 LUBRICATED = SHIPPED_MECHANISMS / "rig_lubricated.toml"
-BEARING = ', bearing = "short" }'
+ROUGH = 'roughness = "0.65 um"'
 
 
 def _rig_text(*edits):
     text = LUBRICATED.read_text()
-    for old, new in ((BEARING, " }"), *edits):
+    for old, new in edits:
         assert old in text, old
         text = text.replace(old, new)
     return text
@@ -160,8 +161,30 @@ def test_the_default_film_is_the_one_that_holds_for_the_joint():
                                  'roughness = "0.65 um", length = "0.5 mm"'))
                       ).mechanism.element("crank_rod")
     assert type(short.law.film) is ShortBearingFilm
-    explicit = load("rig_lubricated").mechanism.element("crank_rod")
+    explicit = load_text(_rig_text((ROUGH, ROUGH + ', bearing = "short"'))
+                         ).mechanism.element("crank_rod")
     assert type(explicit.law.film) is ShortBearingFilm
+    shipped = load("rig_lubricated").mechanism.element("crank_rod")
+    assert type(shipped.law.film) is ShippedFiniteFilm
+
+
+@pytest.mark.parametrize("name, joint", [("rig_lubricated", "crank_rod"),
+                                         ("four_bar_lubricated", "coupler_rocker")])
+def test_default_film_is_the_film_a_file_gets(name, joint):
+    """`default_film` from Python gives the shipped files' films leaf by leaf
+    (both finite: L/D 0.69 and 0.83); a 0.5 mm bushing on the rig's 9.5 mm
+    pin (L/D = 0.026, (L/D)^2 = 6.9e-4 <= 0.05 (1 - 0.98) = 1e-3) the short
+    one; traced geometry cannot choose a law."""
+    el = load(name).mechanism.element(joint)
+    film, c = el.law.film, el.bushing_radius - el.pin_radius
+    eps_max = MixedLubrication.saturation(el.law.roughness, c)
+    ours = default_film(film.viscosity, film.length, c, el.pin_radius, eps_max)
+    assert type(ours) is type(film) is ShippedFiniteFilm
+    for a, b in zip(jax.tree.leaves(ours), jax.tree.leaves(film), strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert type(default_film(0.01, 0.5e-3, 33e-6, 9.5e-3, 0.98)) is ShortBearingFilm
+    with pytest.raises(InputError, match="must be concrete"):
+        jax.jit(lambda r: default_film(0.01, 0.01, c, r, 0.98).viscosity)(0.01)
 
 
 def test_a_default_finite_film_outside_the_tables_says_so():

@@ -532,10 +532,11 @@ def _soft_bore(f: dict) -> str | None:
     worst = int(np.argmax(d - SOFT_BORE_LIMIT * h))
     if d[worst] <= SOFT_BORE_LIMIT * h[worst]:
         return None
+    against = (f"against a film of {h[worst] * 1e6:.3g} um (more than {SOFT_BORE_LIMIT:g} "
+               "of it)" if h[worst] > 0.0 else "where no film is left (the asperities touch)")
     return (f"soft bore: the film's peak pressure {p[worst] / 1e6:.3g} MPa deflects the bore "
-            f"by {d[worst] * 1e6:.3g} um against a film of {h[worst] * 1e6:.3g} um (more "
-            f"than {SOFT_BORE_LIMIT:g} of it): the rigid-bore film is not self-consistent "
-            "there, its numbers are those of a rigid bore")
+            f"by {d[worst] * 1e6:.3g} um {against}: the rigid-bore film is not "
+            "self-consistent there, its numbers are those of a rigid bore")
 
 
 def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> dict:

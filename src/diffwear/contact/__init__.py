@@ -11,7 +11,7 @@ from .clearance_joint import (
     with_clearance,
 )
 from .finite_bearing import FiniteBearingFilm
-from .finite_table import DynamicFiniteFilm, ShippedFiniteFilm
+from .finite_table import DynamicFiniteFilm, ShippedFiniteFilm, default_film
 from .friction import CoulombFriction
 from .kinematics import ContactResult, PinKinematics
 from .laws import (
@@ -32,7 +32,7 @@ __all__ = [
     "CoulombFriction", "ArchardWear", "ContactResult", "PinKinematics",
     "AbstractContactLaw", "AbstractPointLaw", "ElasticFoundation", "KelvinVoigt",
     "LankaraniNikravesh", "AbstractFilm", "FilmForce", "ShortBearingFilm", "LongBearingFilm",
-    "FiniteBearingFilm", "DynamicFiniteFilm", "ShippedFiniteFilm",
+    "FiniteBearingFilm", "DynamicFiniteFilm", "ShippedFiniteFilm", "default_film",
     "GreenwoodTripp", "Lubrication", "MixedLubrication",
     "PTFE", "STEEL", "Material",
     "BushingProfile",

@@ -62,10 +62,11 @@ from .finite_bearing import (
     FiniteBearingFilm,
     _catmull_rom,
     _film_forces,
+    film_law_for,
     film_pressure,
     reynolds_pressure,
 )
-from .lubrication import MAX_ECCENTRICITY_RATIO, AbstractFilm, _safe_unit
+from .lubrication import MAX_ECCENTRICITY_RATIO, AbstractFilm, ShortBearingFilm, _safe_unit
 from .reynolds_grid import _grid
 
 __all__ = ["DynamicFiniteFilm", "ShippedFiniteFilm", "moving_film", "shipped_tables"]
@@ -427,3 +428,26 @@ def moving_film(film: FiniteBearingFilm, radius) -> AbstractFilm:
     top = (min(0.995, film.resolved_eccentricity_ratio) if eps_max is None
            else float(eps_max))
     return DynamicFiniteFilm(film, radius, top_eccentricity_ratio=top)
+
+
+def default_film(viscosity, length, clearance, radius,
+                 max_eccentricity_ratio=MAX_ECCENTRICITY_RATIO) -> AbstractFilm:
+    """The film a journal of ``radius`` [m] in a bushing of ``length`` [m] and
+    radial ``clearance`` [m], run up to ``max_eccentricity_ratio``, gets by
+    default (as a mechanism file's `lubricant` without `bearing`): the short
+    (Ocvirk) film where it holds (`film_law_for`: (L/D)^2 <= 0.05 (1 -
+    eps_max)), else the finite film from the shipped tables
+    (`ShippedFiniteFilm`, L/D in [0.05, 4]).  ``viscosity`` [Pa s] may be
+    traced (a derivative in the oil); the geometry decides the law and must
+    be concrete.  For a lubricated joint, ``max_eccentricity_ratio`` is where
+    its film saturates, `MixedLubrication.saturation(roughness, clearance)`."""
+    ratio, eps_max = (concrete(v) for v in (length / (2.0 * jnp.asarray(radius)),
+                                            max_eccentricity_ratio))
+    if ratio is None or eps_max is None:
+        raise InputError("default_film chooses its law from the bearing's L/D and "
+                         "eps_max, which must be concrete numbers, not traced; name the "
+                         "film (ShortBearingFilm, ShippedFiniteFilm) to trace them")
+    if film_law_for(float(ratio), float(eps_max)) == "short":
+        return ShortBearingFilm(viscosity, length, clearance)
+    return ShippedFiniteFilm(FiniteBearingFilm(viscosity, length, clearance,
+                                               max_eccentricity_ratio=eps_max), radius)

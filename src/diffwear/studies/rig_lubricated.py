@@ -1,9 +1,10 @@
 """Study ``rig-lubricated``: the thesis Ch. 7 rig with its crank-rod joint in oil.
 
 The rig of ``rig-21400`` (Tables 7-1 .. 7-3) with the wearing joint
-lubricated (`MixedLubrication`: short-bearing film plus the bushing's
-asperities), worn over the rig's 21,400 cycles on the quasi-static model;
-the oil and the roughness are those of the shipped mechanism file
+lubricated (`MixedLubrication`: the film `default_film` gives the bushing,
+the finite-length one at its L/D = 0.69, plus the bushing's asperities),
+worn over the rig's 21,400 cycles on the quasi-static model; the oil and
+the roughness are those of the shipped mechanism file
 ``rig_lubricated.toml`` (its comments give their sources).  Beside the wear
 outputs of the other wear studies it writes the film over the cycle on the
 unworn bushing.  The thesis's rig ran dry: there are no thesis values to
@@ -18,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import plots
-from ..contact import MixedLubrication, ShortBearingFilm, oils
+from ..contact import MixedLubrication, default_film, oils
 from ..io import OutputDir
 from ..models import QuasiStatic
 from ..presets import RIG_CYCLES, RIG_JOINT
@@ -45,7 +46,9 @@ def lubricated(mech, viscosity=VISCOSITY, roughness=ROUGHNESS):
     """``mech`` with its crank-rod joint in oil of ``viscosity`` [Pa s] on
     surfaces of combined roughness ``roughness`` [m]."""
     el = mech.element(common.JOINT)
-    film = ShortBearingFilm(viscosity, el.law.depth, el.bushing_radius - el.pin_radius)
+    c = el.bushing_radius - el.pin_radius
+    film = default_film(viscosity, el.law.depth, c, el.pin_radius,
+                        MixedLubrication.saturation(roughness, c))
     law = MixedLubrication(film, el.law, roughness)
     return eqx.tree_at(lambda m: m.element(common.JOINT).law, mech, law)
 
@@ -79,6 +82,7 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
                       title=f"{NAME}: film over the cycle, unworn bushing "
                             f"(μ = {VISCOSITY:g} Pa s, σ = {ROUGHNESS * 1e6:.3g} µm)")
     lube = {"viscosity_Pa_s": VISCOSITY, "roughness_um": ROUGHNESS * 1e6,
+            "film": type(law.film).__name__,
             "min_film_thickness_um": float(jnp.min(eq.min_film_thickness)) * 1e6,
             "film_ratio_min": float(jnp.min(eq.film_ratio)),
             "asperity_load_share": float(jnp.mean(eq.asperity_share)),
@@ -96,7 +100,7 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
         name=NAME, mech_of=_itself, p=mech, design=RIG_JOINT, y0=y0, period=rig_21400.PERIOD,
         thesis={},
         description=("The Ch. 7 rig (rig-21400) with its crank-rod joint lubricated: film "
-                     "(short-bearing Reynolds) and asperities share the load, only the "
+                     "(the finite-length Reynolds film) and asperities share the load, only the "
                      "asperities wear the bushing."),
         extra_summary={"lubricant": lube, "dry": DRY}, extra_report=(words,))
     return common.run_wear_study(out, study, cycles=cycles, model=model, log=log)

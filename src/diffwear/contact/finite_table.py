@@ -441,13 +441,13 @@ def default_film(viscosity, length, clearance, radius,
     traced (a derivative in the oil); the geometry decides the law and must
     be concrete.  For a lubricated joint, ``max_eccentricity_ratio`` is where
     its film saturates, `MixedLubrication.saturation(roughness, clearance)`."""
-    ratio, eps_max = (concrete(v) for v in (length / (2.0 * jnp.asarray(radius)),
-                                            max_eccentricity_ratio))
-    if ratio is None or eps_max is None:
+    geometry = [concrete(v) for v in (length, radius, max_eccentricity_ratio)]
+    if any(v is None for v in geometry):
         raise InputError("default_film chooses its law from the bearing's L/D and "
                          "eps_max, which must be concrete numbers, not traced; name the "
                          "film (ShortBearingFilm, ShippedFiniteFilm) to trace them")
-    if film_law_for(float(ratio), float(eps_max)) == "short":
+    length_, radius_, eps_max = (float(v) for v in geometry)
+    if film_law_for(length_ / (2.0 * radius_), eps_max) == "short":
         return ShortBearingFilm(viscosity, length, clearance)
     return ShippedFiniteFilm(FiniteBearingFilm(viscosity, length, clearance,
                                                max_eccentricity_ratio=eps_max), radius)

@@ -141,12 +141,13 @@ SAMPLES = 60  # 6 degrees of crank per sample (the shipped runs use 360)
 def _four_bar(viscosity=None):
     """The shipped four-bar, its coupler-rocker joint in oil of
     ``viscosity`` [Pa s] (none: dry) on surfaces of sigma = 1 um (a turned
-    pin in a bored bushing: 3 sigma = 3 um against the 50 um clearance)."""
+    pin in a bored bushing: 3 sigma = 3 um against the 50 um clearance), on
+    the film a file gets by default (the finite film: L/D = 10 / 12)."""
     text = FOUR_BAR.read_text()
     assert WEAR_KEY in text
     if viscosity is not None:
         text = text.replace(WEAR_KEY, WEAR_KEY + "\nlubricant = { viscosity = "
-                            f'"{viscosity} Pa s", roughness = "1 um", bearing = "short" }}')
+                            f'"{viscosity} Pa s", roughness = "1 um" }}')
     return load_text(text, file="four_bar_wear.toml")
 
 
@@ -160,6 +161,7 @@ def four_bar():
     assert bool(loads.ok)
     loads = loads.joints[0]
     element = _four_bar(0.5).mechanism.element("coupler_rocker")
+    assert type(element.law.film).__name__ == "ShippedFiniteFilm"
 
     def with_oil(mu):
         return eqx.tree_at(lambda e: e.law.film.viscosity, element, mu)

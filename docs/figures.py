@@ -629,6 +629,11 @@ def lubrication_sommerfeld(path: Path) -> None:
     plt.close(fig)
 
 
+# The stored runs' film laws (their class names) in a figure's words.
+FILM_WORDS = {"ShippedFiniteFilm": "finite-length film", "FiniteBearingFilm": "finite-length film",
+              "ShortBearingFilm": "short-bearing film", "LongBearingFilm": "long-bearing film"}
+
+
 def lubrication_life_viscosity(path: Path) -> None:
     """The Ch. 7 rig's quasi-static life to 50 µm against the viscosity
     (stored), the dry life and the forward-mode slopes d(life)/d(mu)."""
@@ -663,7 +668,7 @@ def lubrication_life_viscosity(path: Path) -> None:
     st = s["settings"]
     ax.set(xscale="log", xlabel="viscosity η [Pa s]", ylabel="cycles to 50 µm wear",
            ylim=(0, 1.18 * top), xlim=(mu.min() / 1.5, mu.max() * 1.5),
-           title=f"Ch. 7 rig, crank-rod joint lubricated (short-bearing film, σ = "
+           title=f"Ch. 7 rig, crank-rod joint lubricated ({FILM_WORDS[st['film']]}, σ = "
                  f"{1e6 * st['roughness_m']:g} µm): life against viscosity")
     ax.title.set_fontsize(9)
     ax.legend(fontsize=7, loc="upper left")
@@ -728,8 +733,8 @@ def lubrication_slider_crank(path: Path) -> None:
         ax.grid(alpha=0.3)
     a.title.set_fontsize(9)
     b.title.set_fontsize(9)
-    fig.suptitle("Table 2-1 slider-crank, crank-rod joint lubricated (dynamic model, "
-                 "Rodas4, rtol = atol = 1e-8)", fontsize=10)
+    fig.suptitle(f"Table 2-1 slider-crank, crank-rod joint lubricated ({FILM_WORDS[m['film']]}; "
+                 "dynamic model, Rodas4, rtol = atol = 1e-8)", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=DPI)
     plt.close(fig)
@@ -769,8 +774,8 @@ def lubrication_four_bar_squeeze(path: Path) -> None:
     b.set(xlabel="crank angle [deg]", ylabel="ω [rad/s]", xlim=(0, 360))
     b.legend(fontsize=7, loc="upper right")
     a.title.set_fontsize(9)
-    fig.suptitle(f"four_bar_wear, coupler-rocker joint in oil (σ = {sigma:g} µm, "
-                 "quasi-static model, unworn bushing)", fontsize=10)
+    fig.suptitle(f"four_bar_wear, coupler-rocker joint in oil (finite-length film, σ = "
+                 f"{sigma:g} µm, quasi-static model, unworn bushing)", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=DPI)
     plt.close(fig)
@@ -788,7 +793,7 @@ def _short_over_finite_units(ld, eps):
 # finite film's (`film_law_for` keeps the short film within 4.5 %); 10 % drawn too.
 MAP_TOLERANCE, MAP_LOOSE = 0.05, 0.10
 # The lubricated mechanisms' joints on the map: L/D from their files.  The rig's
-# eps range from its stored run (shipped file, short film, unworn bushing), up
+# eps range from its stored run (shipped file, finite film, unworn bushing), up
 # to its film's saturation 1 - sigma / c.  The four-bar's
 # coupler-rocker joint (pin R 6 mm, bushing 10 mm deep, c 50 um) turns at most
 # 2.24 rad/s relative to its bushing (the linkage's kinematics at 60 rpm: crank

@@ -365,24 +365,35 @@ def test_oil_film_damps_the_dry_joints_impacts_at_speed():
     assert f_oil.max() < 2.5 * np.median(f_oil)
 
 
-@pytest.mark.slow  # the whole study on the orbit: ~6 min
-def test_the_lubricated_rig_study_wears_far_less_than_the_dry_rig(tmp_path):
-    """``diffwear study rig-lubricated``: the shipped file's oil on the rig,
-    21,400 cycles: mixed lubrication (1 < lambda < 3), the bushing runs in by
-    a micrometre where the dry rig wears 0.445 mm; the study's oil is the
-    shipped file's."""
+@pytest.mark.slow  # the whole study on the orbit: ~5 min
+def test_the_lubricated_rig_study_is_the_shipped_file_and_wears_less_than_the_dry_rig(
+        tmp_path):
+    """``diffwear study rig-lubricated``: the shipped file's joint (its oil,
+    roughness and finite film, leaf by leaf) on the rig, 21,400 cycles.  On
+    the finite film the oil cannot carry the rig's peak load: boundary
+    lubrication there (lambda_min = 0), the asperities carry most of the
+    load, and the bushing wears less than dry but of its order; the study's
+    wear is the shipped file's run (`diffwear run rig_lubricated --cycles
+    21400`: 0.2874 mm on the 2-core CPU), a second route to the same number."""
     import json
 
     from diffwear.cli import main
     from diffwear.config import load
-    from diffwear.studies import STUDIES, rig_lubricated
+    from diffwear.studies import STUDIES, rig_21400, rig_lubricated
 
     law = load("rig_lubricated").mechanism.element("crank_rod").law
+    ours = rig_lubricated.lubricated(rig_21400._setup()[1]).element("crank_rod").law
+    assert type(ours.film) is type(law.film)
+    for a, b in zip(jax.tree.leaves(ours.film), jax.tree.leaves(law.film), strict=True):
+        np.testing.assert_array_equal(a, b)
     assert float(law.film.viscosity) == rig_lubricated.VISCOSITY
     assert float(law.roughness) == rig_lubricated.ROUGHNESS
     assert "rig-lubricated" in STUDIES
     assert main(["study", "rig-lubricated", "--out", str(tmp_path / "s"), "--quiet"]) == 0
     s = json.loads((tmp_path / "s" / "summary.json").read_text())
-    assert 1.0 < s["lubricant"]["film_ratio_min"] < 3.0
-    assert 0.0 < s["max_wear_depth_mm"] < 0.01 * s["dry"]["max_wear_depth_mm"]
+    assert s["lubricant"]["film_ratio_min"] == 0.0
+    assert 0.5 < s["lubricant"]["asperity_load_share"] < 0.8
+    assert s["max_wear_depth_mm"] == pytest.approx(0.2874, rel=1e-3)
+    assert 0.5 * s["dry"]["max_wear_depth_mm"] < s["max_wear_depth_mm"] < s["dry"][
+        "max_wear_depth_mm"]
     assert (tmp_path / "s" / "film.png").exists()

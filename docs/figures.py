@@ -755,8 +755,10 @@ def lubrication_four_bar_squeeze(path: Path) -> None:
         tag = f"mu_{1e3 * mu:g}mPas"
         a.plot(crank, d[f"{tag}_orbit_h_min_um"], color=color, lw=1.4,
                label=f"η = {mu:g} Pa s: orbit with the squeeze film")
-        a.plot(crank, d[f"{tag}_steady_h_min_um"], color=color, lw=1.0, ls="--",
-               label=f"η = {mu:g} Pa s: steady at every sample")
+        steady = d[f"{tag}_steady_h_min_um"]
+        a.plot(crank, steady, color=color, lw=1.0, ls="--",
+               label=f"η = {mu:g} Pa s: steady at every sample"
+                     + (" (0 all cycle)" if np.max(steady) == 0.0 else ""))
     a.axhline(3.0 * sigma, color="tab:red", ls=":", lw=1.0,
               label=f"3σ = {3 * sigma:g} µm: onset of mixed lubrication")
     # where omega changes sign from the sample before (the cycle wraps round)
@@ -851,12 +853,16 @@ def lubrication_validity_map(path: Path) -> None:
     film = read_csv(LUBRICATION / "rig" / "film_crank_rod.csv")
     c_um = 33.0  # the rig's radial clearance (thesis Table 7-1; rig_lubricated.toml)
     sigma = rig["joints"]["crank_rod"]["lubricant"]["roughness_um"]
-    # from the unworn bore's film (the worn groove widens the gap past c) up to
-    # the saturation, where the finite film holds it all cycle (the guide)
-    rig_range = (float(np.min(1.0 - film["h_min_um"] / c_um)), 1.0 - sigma / c_um)
+    # from the unworn bore's thickest film (the worn groove widens the gap past
+    # c) up to the film's saturation, where the mixed law holds the film once
+    # the asperities carry the rest: a point where it is saturated all cycle
+    saturation = 1.0 - sigma / c_um
+    rig_range = (min(float(np.min(1.0 - film["h_min_um"] / c_um)), saturation), saturation)
+    rig_words = (f"ε = {saturation:.2f} all cycle (its run: the film saturated)"
+                 if rig_range[0] == saturation else
+                 f"ε {rig_range[0]:.2f}–{saturation:.2f} (its run, its saturation)")
     marks = [(13.1 / 19.0, rig_range, "s", "tab:red",
-              f"Ch. 7 rig, crank-rod joint: L/D = 13.1/19, ε {rig_range[0]:.2f}–"
-              f"{rig_range[1]:.2f} (its run, its saturation)"),
+              f"Ch. 7 rig, crank-rod joint: L/D = 13.1/19, {rig_words}"),
              (FOUR_BAR_JOINT["length_over_diameter"], FOUR_BAR_JOINT["eps"], "D", "tab:green",
               "four-bar, coupler-rocker joint: L/D = 10/12, ε "
               f"{FOUR_BAR_JOINT['eps'][0]:g}–{FOUR_BAR_JOINT['eps'][1]:g} (estimated)")]

@@ -32,6 +32,8 @@ Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
 * ``rig/``: ``diffwear run rig_lubricated --cycles 21400`` (the shipped file):
   its ``summary.json`` (its ``file`` the repository path) and
   ``film_crank_rod.csv``;
+* ``four_bar/``: ``diffwear run four_bar_lubricated --cycles 1000000 --limit
+  0.05`` alike (``film_coupler_rocker.csv``);
 * ``validity_map.csv``: the finite film's steady load (`reynolds_forces`,
   96 nodes round the bushing, at least 3 rows per radius along it) over
   L/D = 0.05 .. 20 and eps = 0.05 .. 0.99, in units of 6 mu omega R^4 / c^2,
@@ -49,7 +51,8 @@ Writes into ``design_studies/results/studies/lubrication/`` (a few tens of kB):
 Run time on the 2-core CPU, compiles included (measured part by part):
 steady films 5 s, Sommerfeld 7 s, life against viscosity 2.5-5 min (14
 lives and 4 tangents; the longer with other jobs on the cores),
-slider-crank 1 min, the four-bar's films 2 min, the rig run 72 s; all ~8 min.
+slider-crank 1 min, the four-bar's films 1 min, the rig run 4 min, the
+four-bar run 2 min; all ~14 min.
 The finite film's parts, measured with the cores shared with other jobs: the
 validity map 17 min (240 Reynolds solves, the larger L/D the slower),
 Raimondi & Boyd 72 s.
@@ -84,9 +87,11 @@ KF = 1e13  # PTFE-like foundation [Pa/m], as tests/test_lubricated_joint.py
 RIG_ROUGHNESS = 0.4e-6
 RIG_LIMIT = 0.05e-3
 RIG_STEPS, RIG_SAMPLES = 10, 60
-VISCOSITIES = [1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 2e-4, 4e-4, 7e-4, 1e-3, 1.25e-3, 1.5e-3,
-               1.75e-3, 2e-3, 3e-3]
-TANGENTS_AT = [1e-4, 2e-4, 4e-4, 1e-3]
+# (the finite film: from a film that barely matters to one that lifts the pin
+# off its asperities, ~0.1 Pa s at sigma = 0.4 um)
+VISCOSITIES = [1e-5, 1e-4, 1e-3, 3e-3, 1e-2, 2e-2, 3e-2, 4e-2, 5e-2, 6e-2, 7e-2, 8e-2,
+               1e-1, 1.5e-1]
+TANGENTS_AT = [1e-3, 1e-2, 3e-2, 5e-2]
 
 # the four-bar through its reversals (f): the oils of tests/test_squeeze_orbit.py,
 # the shipped runs' 360 samples
@@ -383,22 +388,36 @@ def four_bar() -> None:
     _write_csv(STORE / "four_bar_squeeze.csv", cols)
 
 
-def rig(runs: Path | None = None) -> None:
-    """(e) ``diffwear run rig_lubricated --cycles 21400``: its summary and film."""
-    target = STORE / "rig"
+def _file_run(name: str, folder: str, joint: str, options: list[str],
+              runs: Path | None = None) -> None:
+    """``diffwear run <name> <options>`` of a shipped file (or the finished
+    run folder ``runs``): its summary and its joint's film, into ``folder``."""
+    target = STORE / folder
     target.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         source = runs
         if source is None:
-            source = Path(tmp) / "rig"
-            subprocess.run([sys.executable, "-m", "diffwear.cli", "run", "rig_lubricated",
-                            "--out", str(source), "--cycles", "21400", "--quiet"], check=True,
+            source = Path(tmp) / folder
+            subprocess.run([sys.executable, "-m", "diffwear.cli", "run", name,
+                            "--out", str(source), *options, "--quiet"], check=True,
                            env={**os.environ, "PYTHONPATH": str(ROOT / "src")})
-        shutil.copyfile(source / "film_crank_rod.csv", target / "film_crank_rod.csv")
+        shutil.copyfile(source / f"film_{joint}.csv", target / f"film_{joint}.csv")
         summary = json.loads((source / "summary.json").read_text())
         # the shipped file by its place in the repository, not this machine's path
-        summary["file"] = "src/diffwear/config/mechanisms/rig_lubricated.toml"
+        summary["file"] = f"src/diffwear/config/mechanisms/{name}.toml"
         (target / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+
+
+def rig(runs: Path | None = None) -> None:
+    """(e) ``diffwear run rig_lubricated --cycles 21400``: its summary and film."""
+    _file_run("rig_lubricated", "rig", "crank_rod", ["--cycles", "21400"], runs)
+
+
+def four_bar_run() -> None:
+    """(e) ``diffwear run four_bar_lubricated --cycles 1000000 --limit 0.05``
+    (the file's header command): its summary and film."""
+    _file_run("four_bar_lubricated", "four_bar", "coupler_rocker",
+              ["--cycles", "1000000", "--limit", "0.05"])
 
 
 def validity_map() -> None:
@@ -458,6 +477,7 @@ def raimondi_boyd() -> None:
 
 PARTS = {"steady": steady_films, "sommerfeld": sommerfeld, "life": life_viscosity,
          "slider-crank": slider_crank, "four-bar": four_bar, "rig": rig,
+         "four-bar-run": four_bar_run,
          "validity": validity_map, "raimondi-boyd": raimondi_boyd}
 
 

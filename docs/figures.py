@@ -794,18 +794,24 @@ def _short_over_finite_units(ld, eps):
 # What the validity map calls agreement: a film's steady load within 5 % of the
 # finite film's (`film_law_for` keeps the short film within 4.5 %); 10 % drawn too.
 MAP_TOLERANCE, MAP_LOOSE = 0.05, 0.10
-# The lubricated mechanisms' joints on the map: L/D from their files.  The rig's
-# eps range from its stored run (shipped file, finite film, unworn bushing), up
-# to its film's saturation 1 - sigma / c.  The four-bar's
-# coupler-rocker joint (pin R 6 mm, bushing 10 mm deep, c 50 um) turns at most
-# 2.24 rad/s relative to its bushing (the linkage's kinematics at 60 rpm: crank
-# 0.1 m, coupler 0.4 m, rocker 0.3 m, ground 0.4 m), and twice a revolution not
-# at all (the rocker reverses); in an ISO VG 68 oil at 40 degC (58 mPa s) its
-# film at eps = 0.9 carries about 2 N at that spin (W = (R/c)^2 mu N 2RL / S with
-# Raimondi & Boyd's S = 0.0188 at L/D = 1), so under any load above ~2 N the
-# joint runs at eps >= 0.9, up to the saturation 1 - sigma / c = 0.99 of a
-# 0.5 um roughness: a stated range, not a run.
-FOUR_BAR_JOINT = {"length_over_diameter": 10.0 / 12.0, "eps": (0.9, 0.99)}
+# The lubricated mechanisms' joints on the map: L/D and radial clearance from
+# their files (rig_lubricated.toml: thesis Tables 7-1, 7-2; four_bar_lubricated.toml),
+# the eps range from their stored runs (design_studies/lubrication_figure_data.py).
+MAP_JOINTS = (("rig", "crank_rod", 13.1 / 19.0, 33.0, "s", "tab:red",
+               "Ch. 7 rig, crank-rod joint: L/D = 13.1/19"),
+              ("four_bar", "coupler_rocker", 10.0 / 12.0, 50.0, "D", "tab:green",
+               "four-bar, coupler-rocker joint: L/D = 10/12"))
+
+
+def _run_eccentricities(folder: str, joint: str, c_um: float) -> tuple[float, float]:
+    """A stored file run's eps range on the unworn bore: from its thickest
+    film (the worn groove widens the gap past c) up to the film's saturation
+    1 - sigma / c, where the mixed law holds the film once the asperities
+    carry the rest (a point where the film is saturated all cycle)."""
+    run = json.loads((LUBRICATION / folder / "summary.json").read_text())
+    film = read_csv(LUBRICATION / folder / f"film_{joint}.csv")
+    saturation = 1.0 - run["joints"][joint]["lubricant"]["roughness_um"] / c_um
+    return min(float(np.min(1.0 - film["h_min_um"] / c_um)), saturation), saturation
 
 
 def lubrication_validity_map(path: Path) -> None:
@@ -849,25 +855,12 @@ def lubrication_validity_map(path: Path) -> None:
     eps_line = np.linspace(0.0, 1.0, 200)
     ax.plot(np.sqrt(SHORT_BEARING_LIMIT * (1.0 - eps_line)), eps_line, color="k", lw=1.6,
             label=f"criterion (L/D)² = {SHORT_BEARING_LIMIT:g} (1 − ε): short film left of it")
-    rig = json.loads((LUBRICATION / "rig" / "summary.json").read_text())
-    film = read_csv(LUBRICATION / "rig" / "film_crank_rod.csv")
-    c_um = 33.0  # the rig's radial clearance (thesis Table 7-1; rig_lubricated.toml)
-    sigma = rig["joints"]["crank_rod"]["lubricant"]["roughness_um"]
-    # from the unworn bore's thickest film (the worn groove widens the gap past
-    # c) up to the film's saturation, where the mixed law holds the film once
-    # the asperities carry the rest: a point where it is saturated all cycle
-    saturation = 1.0 - sigma / c_um
-    rig_range = (min(float(np.min(1.0 - film["h_min_um"] / c_um)), saturation), saturation)
-    rig_words = (f"ε = {saturation:.2f} all cycle (its run: the film saturated)"
-                 if rig_range[0] == saturation else
-                 f"ε {rig_range[0]:.2f}–{saturation:.2f} (its run, its saturation)")
-    marks = [(13.1 / 19.0, rig_range, "s", "tab:red",
-              f"Ch. 7 rig, crank-rod joint: L/D = 13.1/19, {rig_words}"),
-             (FOUR_BAR_JOINT["length_over_diameter"], FOUR_BAR_JOINT["eps"], "D", "tab:green",
-              "four-bar, coupler-rocker joint: L/D = 10/12, ε "
-              f"{FOUR_BAR_JOINT['eps'][0]:g}–{FOUR_BAR_JOINT['eps'][1]:g} (estimated)")]
-    for ld, (lo, hi), marker, color, label in marks:
-        ax.plot([ld, ld], [lo, hi], color=color, lw=3.0, marker=marker, ms=6, label=label)
+    for folder, joint, ld, c_um, marker, color, words in MAP_JOINTS:
+        lo, hi = _run_eccentricities(folder, joint, c_um)
+        span = (f"ε = {hi:.2f} all cycle (its run: the film saturated)" if lo == hi
+                else f"ε {lo:.2f}–{hi:.2f} (its run, its saturation)")
+        ax.plot([ld, ld], [lo, hi], color=color, lw=3.0, marker=marker, ms=6,
+                label=f"{words}, {span}")
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.11), ncol=2)
     # from the smallest eps solved (at eps = 0 the steady load vanishes)
     ax.set(xscale="log", xlim=(lds[0], lds[-1]), ylim=(epss[0], 1.0),

@@ -103,3 +103,23 @@ def test_the_map_agrees_with_the_short_film_criterion():
     assert np.all(np.abs(ratio[inside] - 1) < 0.045)
     near_one = np.isclose(ld, ld[np.argmin(np.abs(ld - 1.0))]) & (eps >= 0.2)
     assert np.all(ratio[near_one] > 1.3)
+
+
+@pytest.mark.parametrize("folder, name, joint", [("rig", "rig_lubricated", "crank_rod"),
+                                                 ("four_bar", "four_bar_lubricated",
+                                                  "coupler_rocker")])
+def test_the_stored_file_runs_are_of_the_shipped_files(folder, name, joint):
+    """The guide's stored runs (rig/, four_bar/) ran the shipped file as it is
+    now: its film law, oil and roughness."""
+    import json
+
+    from diffwear.config import load
+    from diffwear.mechanism_file.wear import bearing_name
+
+    run = json.loads((STORE / folder / "summary.json").read_text())
+    assert run["file"] == f"src/diffwear/config/mechanisms/{name}.toml"
+    law = load(name).mechanism.element(joint).law
+    assert run["joints"][joint]["lubricant"] == {
+        "viscosity_Pa_s": float(law.film.viscosity), "roughness_um": float(law.roughness) * 1e6,
+        "bearing": bearing_name(law)}
+    assert bearing_name(law) == "finite"

@@ -237,17 +237,21 @@ def test_lubricated_slider_crank_keeps_its_film_at_high_viscosity_and_touches_at
 @pytest.fixture(scope="module")
 def rig_life():
     """Life of the Ch. 7 rig's lubricated joint to 50 um against the
-    viscosity (quasi-static model, coarse settings), compiled once."""
+    viscosity (quasi-static model, coarse settings; the film a file gets,
+    finite at L/D = 0.69), compiled once."""
+    from diffwear.contact import default_film
     from diffwear.models import QuasiStatic
     from diffwear.studies import rig_21400
 
     _, mech, y0 = rig_21400._setup()
     el = mech.element("crank_rod")
     c = el.bushing_radius - el.pin_radius
+    eps_max = MixedLubrication.saturation(0.4e-6, c)
     model = QuasiStatic(steps=10, samples=60)
 
     def lubricated(mu):
-        law = MixedLubrication(ShortBearingFilm(mu, el.law.depth, c), el.law, 0.4e-6)
+        film = default_film(mu, el.law.depth, c, el.pin_radius, eps_max)
+        law = MixedLubrication(film, el.law, 0.4e-6)
         return eqx.tree_at(lambda m: m.element("crank_rod").law, mech, law)
 
     def life(mu):
@@ -262,12 +266,12 @@ def rig_life():
 @pytest.mark.extended
 def test_life_rises_with_viscosity_and_tends_to_the_dry_life(rig_life):
     life, dry, _ = rig_life
-    mus = [1e-6, 1e-4, 2e-4, 4e-4, 1e-3]
+    mus = [1e-5, 1e-3, 3e-3, 1e-2, 2e-2]
     lives = [float(life(jnp.asarray(mu)).life[0]) for mu in mus]
     assert np.all(np.isfinite(lives))
     assert np.all(np.diff(lives) > 0), lives
-    assert lives[0] == pytest.approx(float(dry().life[0]), rel=2e-2)
-    assert lives[-1] > 2.0 * lives[0]
+    assert lives[0] == pytest.approx(float(dry().life[0]), rel=2e-3)
+    assert lives[-1] > 3.0 * lives[0]
 
 
 @pytest.mark.slow  # a life's tangent and two more lives on the orbit: ~6 min
@@ -278,7 +282,7 @@ def test_life_derivative_in_viscosity_matches_central_differences(rig_life):
     differences of 1e-4 .. 1e-2 wander by up to 0.3 %; from 3e-5 down they
     agree with each other to 1e-6."""
     life, _, plain = rig_life
-    mu = 2e-4
+    mu = 1e-2
     _, dlife = eqx.filter_jit(lambda m: jax.jvp(lambda x: plain(x).life[0], (m,),
                                                   (jnp.ones(()),)))(jnp.asarray(mu))
 

@@ -716,7 +716,7 @@ def lubrication_slider_crank(path: Path) -> None:
           ylabel="film parameter λ = h_min / σ", xlim=(0, m["duration_s"]), ylim=(floor, 130),
           title=f"Film parameter (σ = {1e6 * m['roughness_m']:g} µm, "
                 f"c = {1e3 * m['clearance_m']:g} mm)")
-    a.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+    a.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncol=1)
     reach = 1.0
     if "dry_x_over_c" in d:
         reach = float(np.max(np.hypot(d["dry_x_over_c"], d["dry_y_over_c"])))

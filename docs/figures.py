@@ -938,9 +938,11 @@ def lubrication_rig_film(path: Path) -> None:
     sigma = joint["lubricant"]["roughness_um"] * 1e-6
     cycles = joint["cycles"]
     film_panels(path, f["crank_angle_deg"],
-                {"unworn bushing": (f["h_min_um"] * 1e-6, f["asperity_share"]),
+                {"unworn bushing": (f["h_min_um"] * 1e-6, f["asperity_share"],
+                                    f["interference_um"] * 1e-6),
                  f"worn, {cycles:,.0f} cycles": (f["h_min_um_worn"] * 1e-6,
-                                                 f["asperity_share_worn"])},
+                                                 f["asperity_share_worn"],
+                                                 f["interference_um_worn"] * 1e-6)},
                 onset=ONSET_FILM_RATIO * sigma, onset_ratio=ONSET_FILM_RATIO, roughness=sigma,
                 title=f"rig_lubricated, crank-rod joint (η = "
                       f"{joint['lubricant']['viscosity_Pa_s'] * 1e3:.3g} mPa s, σ = "

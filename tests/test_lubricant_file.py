@@ -263,6 +263,19 @@ def test_the_film_figure_draws_the_onset_line_over_the_crank_angle(tmp_path):
     assert bottom.get_ylim()[1] == pytest.approx(1.08 * 100.0 * share.max())
     for ax in (top, bottom):  # legends right of the data
         assert ax.get_legend().get_window_extent().x0 > ax.get_window_extent().x1
+    # where the pin presses the asperities past the mean surfaces (no film left),
+    # a middle panel draws how far, in um; the film itself stays at 0
+    pressed = np.clip(1.5e-6 - h, 0.0, None)
+    with plots.captured() as figures:
+        plots.film_panels(tmp_path / "film_k.png", crank,
+                          {"unworn": (np.zeros_like(h), share, pressed),
+                           "worn": (h, share / 2, np.zeros_like(h))},
+                          onset=1.95e-6, onset_ratio=3.0, roughness=0.65e-6, title="k")
+    top, middle, bottom = figures["film_k.png"].axes
+    assert [line.get_label() for line in middle.get_lines()] == ["unworn"]
+    assert np.allclose(middle.get_lines()[0].get_ydata(), pressed * 1e6)
+    assert middle.get_ylim()[0] == 0.0 and "interference" in middle.get_ylabel()
+    assert min(float(np.min(line.get_ydata())) for line in top.get_lines()) >= 0.0
 
 
 @pytest.mark.parametrize("grade, celsius, nu_mm2_s", [

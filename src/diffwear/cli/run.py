@@ -554,8 +554,8 @@ def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> 
     out.csv(f"film_{name}.csv", cols)
     plots.film_panels(
         out.file(f"film_{name}.png"), film["crank_angle_deg"],
-        {case: (film[case]["min_film_thickness"], film[case]["asperity_share"])
-         for case in ("unworn", "worn")},
+        {case: (film[case]["min_film_thickness"], film[case]["asperity_share"],
+                film[case]["interference"]) for case in ("unworn", "worn")},
         onset=film["onset_gap"], onset_ratio=film["onset_ratio"], roughness=film["roughness"],
         title=f"{mfile.title or mfile.file}: lubricated joint {name} "
               f"(η = {film['viscosity']:g} Pa s, σ = {film['roughness'] * 1e6:.3g} µm), "

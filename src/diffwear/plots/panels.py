@@ -124,28 +124,48 @@ def wear_panels(path: Path, profiles: Mapping[str, tuple[np.ndarray, np.ndarray]
 
 
 def film_panels(path: Path, crank_deg: np.ndarray,
-                cases: Mapping[str, tuple[np.ndarray, np.ndarray]], *, onset: float,
+                cases: Mapping[str, tuple[np.ndarray, ...]], *, onset: float,
                 onset_ratio: float, roughness: float, title: str) -> Path:
     """A lubricated joint over the crank angle [deg]: the minimum film
     thickness (inputs in m, drawn in um) with the onset of mixed lubrication
     lambda_c sigma (``onset`` [m]) as a labelled line, and the asperities' share of
-    the load (drawn in percent); one curve per case of ``cases`` ({label: (h_min, share)}, e.g.
-    the unworn and the worn bushing).  Legends off the data."""
-    fig, (a, b) = plt.subplots(2, 1, figsize=(8.6, 5.4), sharex=True)
-    for label, (h_min, share) in cases.items():
+    the load (drawn in percent); one curve per case of ``cases`` ({label:
+    (h_min, share)} or {label: (h_min, share, interference)}, e.g. the unworn
+    and the worn bushing).  Where a case's pin presses the asperities past the
+    mean surfaces (an ``interference`` [m] > 0, no film left there), a middle
+    panel draws how far: the film thickness is never drawn negative.  Legends
+    off the data."""
+    pressed = [(label, c[2]) for label, c in cases.items()
+               if len(c) > 2 and float(np.max(c[2])) > 0.0]
+    rows = 3 if pressed else 2
+    fig, axes = plt.subplots(rows, 1, figsize=(8.6, 5.4 if rows == 2 else 7.4), sharex=True)
+    a, b = axes[0], axes[-1]
+    for label, (h_min, share, *_) in cases.items():
         a.plot(crank_deg, np.asarray(h_min) * 1e6, lw=1.2, label=label)
         b.plot(crank_deg, 100.0 * np.asarray(share), lw=1.2, label=label)
     a.axhline(onset * 1e6, color="tab:red", ls="--", lw=1.0,
               label=f"mixed-lubrication onset λ σ = {onset_ratio:g} × {roughness * 1e6:.3g} µm")
     a.set_ylabel("min film thickness [µm]")
+    if all(float(np.max(c[0])) <= 0.0 for c in cases.values()):
+        a.text(0.5, 0.5, "no film left anywhere over the cycle"
+               + (" (the interference below)" if pressed else ""),
+               transform=a.transAxes, ha="center", va="center", fontsize=9, color="0.3")
+    if pressed:
+        colors = {label: line.get_color() for label, line in zip(cases, a.get_lines())}
+        for label, interference in pressed:
+            axes[1].plot(crank_deg, np.asarray(interference) * 1e6, lw=1.2,
+                         color=colors[label], label=label)
+        axes[1].set_ylabel("asperity interference [µm]\n(no film left: the pin past\n"
+                           "the mean surfaces)", fontsize=8)
+        axes[1].set_ylim(bottom=0.0)
     # in percent, scaled to the largest share (a mixed film's few percent are
     # invisible on a 0..100 % axis)
-    top = max(float(np.max(100.0 * np.asarray(s))) for _, s in cases.values())
+    top = max(float(np.max(100.0 * np.asarray(c[1]))) for c in cases.values())
     b.set(xlabel="crank angle [deg]", ylabel="asperity share of load [%]",
           ylim=(0.0, 1.08 * top if top > 0.0 else 1.0))
     first, last = float(np.min(crank_deg)), float(np.max(crank_deg))
     b.set_xlim(first, last + (last - first) / max(len(crank_deg) - 1, 1))
-    for ax in (a, b):
+    for ax in axes:
         ax.grid(alpha=0.3)
         legend_outside(ax)
     a.set_title(wrapped(title), fontsize=10)

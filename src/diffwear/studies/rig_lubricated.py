@@ -76,7 +76,8 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
                          "asperity_load_N": np.asarray(eq.normal_load)})
     plots.film_panels(out.file("film.png"), crank,
                       {"unworn": (np.asarray(eq.min_film_thickness),
-                                  np.asarray(eq.asperity_share))},
+                                  np.asarray(eq.asperity_share),
+                                  np.asarray(eq.interference))},
                       onset=float(law.onset_gap), onset_ratio=float(law.onset_ratio),
                       roughness=ROUGHNESS,
                       title=f"{NAME}: film over the cycle, unworn bushing "

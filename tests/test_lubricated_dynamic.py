@@ -151,12 +151,12 @@ def test_a_lubricated_file_out_of_steps_says_what_helps(tmp_path, capsys):
 @pytest.mark.slow
 def test_a_lubricated_copy_of_a_dry_file_wears_on_both_models(tmp_path):
     """four_bar_wear.toml with an oil added to its worn joint (ISO VG 10 at
-    60 degC, 4.7 mPa s), nothing else edited, runs ``--cycles`` on the
-    quasi-static and on the dynamic model, both on Rodas4's motion.  Both
-    wear, the dynamic model far less: the film's squeeze and the pin's orbit,
-    which the quasi-static equilibrium leaves out, carry most of what the
-    asperities carry there (measured: 1.0e-4 against 2.2e-3 mm^3 in 1,000
-    cycles; docs/notes/lubricated-motion.md)."""
+    60 degC, 4.7 mPa s; no ``bearing``: the finite film), nothing else
+    edited, runs ``--cycles`` on the quasi-static and on the dynamic model,
+    both on Rodas4's motion.  Both wear, and agree within a factor of 1.5:
+    both carry the film's squeeze (the quasi-static model through the
+    journal's periodic orbit), the dynamic model adds the pin's inertia
+    (measured: 6.6e-3 against 5.8e-3 mm^3 in 1,000 cycles)."""
     text = (SHIPPED_MECHANISMS / "four_bar_wear.toml").read_text()
     assert text.count(WEAR_LINE) == 1
     path = tmp_path / "oiled.toml"
@@ -172,7 +172,8 @@ def test_a_lubricated_copy_of_a_dry_file_wears_on_both_models(tmp_path):
         joints[model] = summary["joints"]["coupler_rocker"]
         assert joints[model]["model"] == model and joints[model]["status"] == int(code(RESULTS.ok))
     qs, dyn = joints["quasi-static"]["wear_volume_mm3"], joints["dynamic"]["wear_volume_mm3"]
-    assert 0.0 < dyn < qs
+    assert qs > 0.0 and dyn > 0.0
+    assert 1.0 / 1.5 < dyn / qs < 1.5
 
 
 def test_the_shipped_lubricated_four_bar_is_the_four_bar_with_its_oil():

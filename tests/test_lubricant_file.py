@@ -70,10 +70,11 @@ def test_the_shipped_lubricated_rig_is_the_rig_with_its_oil():
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     """``diffwear run --cycles 2000`` on the lubricated rig at 3 and
-    60 mPa s, and on the same file without its oil."""
+    200 mPa s (boundary and mixed lubrication on its finite film), and on
+    the same file without its oil."""
     tmp = tmp_path_factory.mktemp("lubricant")
     cases = {"thin": _file(tmp, "thin", (GRADE, 'viscosity = "3 mPa s"')),
-             "thick": _file(tmp, "thick", (GRADE, 'viscosity = "60 mPa s"')),
+             "thick": _file(tmp, "thick", (GRADE, 'viscosity = "200 mPa s"')),
              "dry": _file(tmp, "dry", (OIL, ""))}
     out = {}
     for name, path in cases.items():

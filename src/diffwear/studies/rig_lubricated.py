@@ -71,6 +71,7 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
     out.csv("film.csv", {"crank_angle_deg": crank,
                          "h_min_um": np.asarray(eq.min_film_thickness) * 1e6,
                          "film_ratio": np.asarray(eq.film_ratio),
+                         "interference_um": np.asarray(eq.interference) * 1e6,
                          "asperity_share": np.asarray(eq.asperity_share),
                          "film_load_N": np.asarray(eq.film_load),
                          "asperity_load_N": np.asarray(eq.normal_load)})
@@ -86,14 +87,19 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
             "film": type(law.film).__name__,
             "min_film_thickness_um": float(jnp.min(eq.min_film_thickness)) * 1e6,
             "film_ratio_min": float(jnp.min(eq.film_ratio)),
+            "max_interference_um": float(jnp.max(eq.interference)) * 1e6,
             "asperity_load_share": float(jnp.mean(eq.asperity_share)),
             "film_solves_converged": bool(eq.ok)}
     words = Bullets([
         f"oil {VISCOSITY * 1e3:.3g} mPa s ({OIL} at {TEMPERATURE}), combined roughness "
         f"{ROUGHNESS * 1e6:g} um: over the unworn bushing's cycle the thinnest film is "
         f"{lube['min_film_thickness_um']:.3g} um, lambda = h_min / sigma "
-        f"{lube['film_ratio_min']:.3g} (> 3 full film, 1-3 mixed, < 1 boundary), the "
-        f"asperities carry {100 * lube['asperity_load_share']:.3g} % of the load on average "
+        f"{lube['film_ratio_min']:.3g} (> 3 full film, 1-3 mixed, < 1 boundary)"
+        + (f", and where no film is left the pin presses the asperities up to "
+           f"{lube['max_interference_um']:.3g} um past the mean surfaces"
+           if lube["max_interference_um"] > 0.0 else "")
+        + f"; the asperities carry {100 * lube['asperity_load_share']:.3g} % of the load on "
+        "average "
         "([film.png](film.png), [film.csv](film.csv))",
         f"the dry rig (rig-21400, quasi-static): {DRY['max_wear_depth_mm']} mm, "
         f"{DRY['wear_volume_mm3']} mm^3 over the same cycles"])

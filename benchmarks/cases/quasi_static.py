@@ -32,9 +32,10 @@ def rig_21400_quasi_static(repeats: int) -> dict:
 def rig_lubricated_quasi_static(repeats: int) -> dict:
     """The ``rig-lubricated`` study's wear run: the Ch. 7 rig with its
     crank-rod joint in oil (`MixedLubrication`: the finite-length film from
-    its shipped tables, and the asperities) over 21,400 cycles on the quasi-static model, beside the dry
-    rig's in the same run (``ratio_lubricated_to_dry``: what the film's
-    equilibrium costs), each compiled once."""
+    its shipped tables, and the asperities) over 21,400 cycles on the
+    quasi-static model, beside the dry rig's in the same run
+    (``ratio_lubricated_to_dry``: what the film's equilibrium costs), each
+    compiled once."""
     import jax
 
     from diffwear.models import QuasiStatic

@@ -442,12 +442,17 @@ def default_film(viscosity, length, clearance, radius,
     be concrete.  For a lubricated joint, ``max_eccentricity_ratio`` is where
     its film saturates, `MixedLubrication.saturation(roughness, clearance)`."""
     geometry = [concrete(v) for v in (length, radius, max_eccentricity_ratio)]
-    if any(v is None for v in geometry):
+    known = [float(v) for v in geometry if v is not None]
+    if len(known) < len(geometry):
         raise InputError("default_film chooses its law from the bearing's L/D and "
                          "eps_max, which must be concrete numbers, not traced; name the "
                          "film (ShortBearingFilm, ShippedFiniteFilm) to trace them")
-    length_, radius_, eps_max = (float(v) for v in geometry)
+    length_, radius_, eps_max = known
     if film_law_for(length_ / (2.0 * radius_), eps_max) == "short":
-        return ShortBearingFilm(viscosity, length, clearance)
+        # as a file's short film (saturated by the mixed law, not by its own
+        # eps_max): AbstractFilm's __init__, with its defaults, which the
+        # dataclass view of ShortBearingFilm hides from a type checker
+        short: type[AbstractFilm] = ShortBearingFilm
+        return short(viscosity, length, clearance)
     return ShippedFiniteFilm(FiniteBearingFilm(viscosity, length, clearance,
                                                max_eccentricity_ratio=eps_max), radius)

@@ -13,6 +13,8 @@ compare with; the dry rig's are in the report.
 
 from __future__ import annotations
 
+from typing import Any
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -83,11 +85,12 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
                       roughness=ROUGHNESS,
                       title=f"{NAME}: film over the cycle, unworn bushing "
                             f"(μ = {VISCOSITY:g} Pa s, σ = {ROUGHNESS * 1e6:.3g} µm)")
-    lube = {"viscosity_Pa_s": VISCOSITY, "roughness_um": ROUGHNESS * 1e6,
+    pressed = float(jnp.max(eq.interference)) * 1e6  # um past the mean surfaces
+    lube: dict[str, Any] = {"viscosity_Pa_s": VISCOSITY, "roughness_um": ROUGHNESS * 1e6,
             "film": type(law.film).__name__,
             "min_film_thickness_um": float(jnp.min(eq.min_film_thickness)) * 1e6,
             "film_ratio_min": float(jnp.min(eq.film_ratio)),
-            "max_interference_um": float(jnp.max(eq.interference)) * 1e6,
+            "max_interference_um": pressed,
             "asperity_load_share": float(jnp.mean(eq.asperity_share)),
             "film_solves_converged": bool(eq.ok)}
     words = Bullets([
@@ -96,8 +99,7 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
         f"{lube['min_film_thickness_um']:.3g} um, lambda = h_min / sigma "
         f"{lube['film_ratio_min']:.3g} (> 3 full film, 1-3 mixed, < 1 boundary)"
         + (f", and where no film is left the pin presses the asperities up to "
-           f"{lube['max_interference_um']:.3g} um past the mean surfaces"
-           if lube["max_interference_um"] > 0.0 else "")
+           f"{pressed:.3g} um past the mean surfaces" if pressed > 0.0 else "")
         + f"; the asperities carry {100 * lube['asperity_load_share']:.3g} % of the load on "
         "average "
         "([film.png](film.png), [film.csv](film.csv))",

@@ -86,13 +86,14 @@ def run(out: OutputDir, *, cycles: int = RIG_CYCLES, log=print) -> dict:
                       title=f"{NAME}: film over the cycle, unworn bushing "
                             f"(μ = {VISCOSITY:g} Pa s, σ = {ROUGHNESS * 1e6:.3g} µm)")
     pressed = float(jnp.max(eq.interference)) * 1e6  # um past the mean surfaces
-    lube: dict[str, Any] = {"viscosity_Pa_s": VISCOSITY, "roughness_um": ROUGHNESS * 1e6,
-            "film": type(law.film).__name__,
-            "min_film_thickness_um": float(jnp.min(eq.min_film_thickness)) * 1e6,
-            "film_ratio_min": float(jnp.min(eq.film_ratio)),
-            "max_interference_um": pressed,
-            "asperity_load_share": float(jnp.mean(eq.asperity_share)),
-            "film_solves_converged": bool(eq.ok)}
+    lube: dict[str, Any] = {
+        "viscosity_Pa_s": VISCOSITY, "roughness_um": ROUGHNESS * 1e6,
+        "film": type(law.film).__name__,
+        "min_film_thickness_um": float(jnp.min(eq.min_film_thickness)) * 1e6,
+        "film_ratio_min": float(jnp.min(eq.film_ratio)),
+        "max_interference_um": pressed,
+        "asperity_load_share": float(jnp.mean(eq.asperity_share)),
+        "film_solves_converged": bool(eq.ok)}
     words = Bullets([
         f"oil {VISCOSITY * 1e3:.3g} mPa s ({OIL} at {TEMPERATURE}), combined roughness "
         f"{ROUGHNESS * 1e6:g} um: over the unworn bushing's cycle the thinnest film is "

@@ -69,7 +69,8 @@ from .finite_bearing import (
 from .lubrication import MAX_ECCENTRICITY_RATIO, AbstractFilm, ShortBearingFilm, _safe_unit
 from .reynolds_grid import _grid
 
-__all__ = ["DynamicFiniteFilm", "ShippedFiniteFilm", "default_film", "moving_film", "shipped_tables"]
+__all__ = ["DynamicFiniteFilm", "ShippedFiniteFilm", "default_film", "moving_film",
+           "shipped_tables"]
 
 # Default table: 17 eccentricity nodes (uniform in w up to eps = 0.95, step
 # 0.108) by 32 drive directions (17 solved, 15 mirrored): 289 solves, within

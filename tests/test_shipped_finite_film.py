@@ -14,8 +14,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from test_lubricant_file import LUBRICATED, ROUGH
 
-from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
 from diffwear.config import load
 from diffwear.config.loader import loads as load_text
@@ -133,8 +133,6 @@ def test_out_of_the_tables_is_an_input_error():
 
 
 # ------------------------------------------------------------ the default film law
-LUBRICATED = SHIPPED_MECHANISMS / "rig_lubricated.toml"
-ROUGH = 'roughness = "0.65 um"'
 
 
 def _rig_text(*edits):

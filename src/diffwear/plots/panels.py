@@ -140,9 +140,11 @@ def film_panels(path: Path, crank_deg: np.ndarray,
     rows = 3 if pressed else 2
     fig, axes = plt.subplots(rows, 1, figsize=(8.6, 5.4 if rows == 2 else 7.4), sharex=True)
     a, b = axes[0], axes[-1]
+    colors = {}
     for label, (h_min, share, *_) in cases.items():
-        a.plot(crank_deg, np.asarray(h_min) * 1e6, lw=1.2, label=label)
-        b.plot(crank_deg, 100.0 * np.asarray(share), lw=1.2, label=label)
+        (line,) = a.plot(crank_deg, np.asarray(h_min) * 1e6, lw=1.2, label=label)
+        colors[label] = line.get_color()
+        b.plot(crank_deg, 100.0 * np.asarray(share), lw=1.2, color=colors[label], label=label)
     a.axhline(onset * 1e6, color="tab:red", ls="--", lw=1.0,
               label=f"mixed-lubrication onset λ σ = {onset_ratio:g} × {roughness * 1e6:.3g} µm")
     a.set_ylabel("min film thickness [µm]")
@@ -151,7 +153,6 @@ def film_panels(path: Path, crank_deg: np.ndarray,
                + (" (the interference below)" if pressed else ""),
                transform=a.transAxes, ha="center", va="center", fontsize=9, color="0.3")
     if pressed:
-        colors = {label: line.get_color() for label, line in zip(cases, a.get_lines())}
         for label, interference in pressed:
             axes[1].plot(crank_deg, np.asarray(interference) * 1e6, lw=1.2,
                          color=colors[label], label=label)

@@ -16,6 +16,7 @@ import pytest
 from diffwear.calibrate import load_dataset
 from diffwear.calibrate.effects import (
     EFFECTS,
+    LIBRARY,
     NAMES,
     PV_THRESHOLD,
     RUN_IN_CYCLES,
@@ -60,18 +61,20 @@ def test_effects_at_zero_strength_are_the_base_law_bit_for_bit():
     g = rate_factor(shapes, jnp.array([0.0, 3e-6, 4e-5]), 2e-8, 100.0, 50.0)
     np.testing.assert_array_equal(g, np.ones(3))
     # d/d(exponent) at zero is finite at p = 0 (double where)
-    g = jax.grad(lambda a: jnp.sum(ModifiedArchardWear(k, a).depth_rate(p, v)))(0.0)
+    g = jax.grad(lambda a: jnp.sum(ModifiedArchardWear(
+        k, EffectValues(jnp.zeros(len(NAMES)).at[NAMES.index("pressure_exponent")].set(a),
+                        jnp.zeros(len(NAMES)))).depth_rate(p, v)))(0.0)
     assert np.isfinite(g)
 
 
 def test_modified_archard_closed_forms():
     p, v, k = 2.0e6, 0.05, 1e-13
-    w = ModifiedArchardWear(k, exponent=0.5, pv_strength=2.0)
+    w = ModifiedArchardWear(k, EffectValues.of(pressure_exponent=0.5, pv_wear=2.0))
     # p v = 1e5 Pa m/s, far above the threshold's smoothing band: the plain ramp
     expected = k * p * v * (p / 1e6) ** 0.5 * (1 + 2.0 * (p * v - PV_THRESHOLD) / 1e5)
     assert float(w.depth_rate(p, v)) == pytest.approx(expected, rel=1e-13)
     # below the threshold the p v term is off
-    low = ModifiedArchardWear(k, pv_strength=2.0)
+    low = ModifiedArchardWear(k, EffectValues.of(pv_wear=2.0))
     assert float(low.depth_rate(1e5, 0.05)) == pytest.approx(k * 1e5 * 0.05, rel=1e-13)
 
 
@@ -195,7 +198,7 @@ def _linear_fitter(jb, je, r):
     columns ``je``, residual ``r`` at the base fit) and its base `FitResult`."""
     n = r.size
     fitter = SimpleNamespace(
-        problem=SimpleNamespace(holdout=np.zeros(n, bool)),
+        problem=SimpleNamespace(holdout=np.zeros(n, bool)), library=LIBRARY,
         parameter_jacobian=lambda x, names=(): (jb, np.zeros((n, 0)), r),
         effect_jacobian=lambda x, log_shape: je)
     base = FitResult(None, {}, {}, 0.0, 0.0, float(r @ r), n, 0.0, 0, r, r, 0, 0.0,

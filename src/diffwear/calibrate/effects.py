@@ -45,17 +45,24 @@ over a step (it changes over hundreds of cycles; a step is tens).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from ..contact import smoothing
 from ..contact.archard import ArchardWear
+from ..mechanism import STANDARD_GRAVITY
+from ..mechanism import GuideFriction as _GuideForce
+from ..wear import worn_volume
+from ..wear.modifier import AbstractWearModifier, JointGeometry
 from . import discrepancy as _discrepancy
+from .discrepancy import LawPoint, RatePoint, Variable
 
 # Run-in length: PTFE surfaces run in over the first ~10^2-10^3 cycles
 # (Blanchet & Kennedy, Wear 153 (1992) 229); 500 cycles sits in that range and
@@ -98,51 +105,211 @@ class Shape:
 
 @dataclass(frozen=True)
 class Effect:
+    """One candidate effect: its strength's ``scale`` (the optimiser's unit)
+    and physical ``lower`` bound, its ``shape`` (None: none) and ``source``.
+    At strength 0 every hook must give exactly the base model (a factor of
+    exactly 1.0, no force).  The hooks return None where the effect does not
+    act there."""
+
     name: str
     description: str
-    scale: float      # typical strength (optimiser unit)
-    lower: float      # physically allowed lower bound of the strength
+    scale: float
+    lower: float
     shape: Shape | None = None
     source: str = ""
 
+    def law(self, strength, shape, point: LawPoint):
+        """A factor of the wear law's dh/dt at ``point`` (None: none)."""
+        return None
+
+    def rate(self, strength, shape, point: RatePoint):
+        """A factor of a model step's rate per node at ``point`` (None: none)."""
+        return None
+
+    def growth(self, strength):
+        """The clearance profile's growth per unit of worn depth minus 1 (None: none)."""
+        return None
+
+    def forces(self, strength, base: dict) -> tuple:
+        """Forces added to the rig for parameters ``base`` (SI)."""
+        return ()
+
+
+@dataclass(frozen=True)
+class RunIn(Effect):
+    """k (1 + s exp(-N / N_r)), averaged exactly over a step's real cycles."""
+
+    def rate(self, strength, shape, point):
+        return run_in_factor(strength, point.n_start, point.span, shape)
+
+
+@dataclass(frozen=True)
+class PressureExponent(Effect):
+    """k p (p / p_ref)^s, p_ref = `P_REF`."""
+
+    def law(self, strength, shape, point):
+        loaded = point.pressure > 0.0
+        safe = jnp.where(loaded, point.pressure, P_REF)  # double where: log(0) has no gradient
+        return jnp.where(loaded, jnp.exp(strength * jnp.log(safe / P_REF)), 1.0)
+
+
+@dataclass(frozen=True)
+class PvWear(Effect):
+    """k (1 + s ramp(p v - pv_t) / `PV_REF`), pv_t the shape."""
+
+    def law(self, strength, shape, point):
+        excess = smoothing.ramp(point.pressure * point.sliding_rate - shape, PV_BAND)
+        return 1.0 + strength * excess / PV_REF
+
+
+@dataclass(frozen=True)
+class Creep(Effect):
+    """The clearance grows by (1 + s) times the worn depth; mass sees the wear only."""
+
+    def growth(self, strength):
+        return strength
+
+
+@dataclass(frozen=True)
+class SliderGuideFriction(Effect):
+    """Coulomb friction s x slider weight x tanh(v / `GUIDE_SLIP_WIDTH`) in the guide."""
+
+    def forces(self, strength, base):
+        return (_GuideForce("guide_friction", "slider", strength,
+                            base["slider_mass"] * STANDARD_GRAVITY,
+                            slip_width=GUIDE_SLIP_WIDTH),)
+
+
+@dataclass(frozen=True)
+class TransferFilm(Effect):
+    """k (1 - s (1 - exp(-h / h_f))) per node, h_f the shape."""
+
+    def rate(self, strength, shape, point):
+        return 1.0 - strength * (1.0 - jnp.exp(-point.depth / shape))
+
+
+@dataclass(frozen=True)
+class ThirdBody(Effect):
+    """k (1 + s (1 - exp(-V / V_d))), V the worn volume, V_d the shape."""
+
+    def rate(self, strength, shape, point):
+        return 1.0 + strength * (1.0 - jnp.exp(-point.volume / shape))
+
 
 EFFECTS: tuple[Effect, ...] = (
-    Effect("run_in", "higher early wear rate k (1 + s exp(-N/N_r))", 1.0, 0.0,
-           Shape("run_in_cycles", RUN_IN_CYCLES, "cycles", math.log(10.0)),
-           "Blanchet & Kennedy, Wear 153 (1992) 229"),
-    Effect("pressure_exponent", "non-linear Archard k p (p/1 MPa)^s", 0.1, -1.0,
-           source="polymer wear exponents: Lancaster, Tribology 4 (1971) 82"),
-    Effect("pv_wear", "k (1 + s ramp(p v - pv_t) / 0.1 MPa m/s) above a p v threshold",
+    RunIn("run_in", "higher early wear rate k (1 + s exp(-N/N_r))", 1.0, 0.0,
+          Shape("run_in_cycles", RUN_IN_CYCLES, "cycles", math.log(10.0)),
+          "Blanchet & Kennedy, Wear 153 (1992) 229"),
+    PressureExponent("pressure_exponent", "non-linear Archard k p (p/1 MPa)^s", 0.1, -1.0,
+                     source="polymer wear exponents: Lancaster, Tribology 4 (1971) 82"),
+    PvWear("pv_wear", "k (1 + s ramp(p v - pv_t) / 0.1 MPa m/s) above a p v threshold",
            1.0, -1.0, Shape("pv_threshold", PV_THRESHOLD, "Pa m/s", math.log(3.0)),
            "Lancaster, Tribology 4 (1971) 82"),
-    Effect("creep", "bushing creep: profile change s x wear, no mass loss", 0.1, 0.0),
-    Effect("guide_friction", "Coulomb friction s x slider weight in the slider guide",
-           0.05, 0.0),
-    Effect("transfer_film", "transfer film: k (1 - s (1 - exp(-h/h_f))) per node", 0.3, 0.0,
-           Shape("film_depth", FILM_DEPTH, "m", math.log(10.0)),
-           "Bahadur, Wear 245 (2000) 92"),
-    Effect("third_body", "retained debris: k (1 + s (1 - exp(-V/V_d)))", 0.3, 0.0,
-           Shape("debris_volume", DEBRIS_VOLUME, "m^3", math.log(10.0)),
-           "Godet, Wear 100 (1984) 437"),
+    Creep("creep", "bushing creep: profile change s x wear, no mass loss", 0.1, 0.0),
+    SliderGuideFriction("guide_friction",
+                        "Coulomb friction s x slider weight in the slider guide", 0.05, 0.0),
+    TransferFilm("transfer_film", "transfer film: k (1 - s (1 - exp(-h/h_f))) per node", 0.3,
+                 0.0, Shape("film_depth", FILM_DEPTH, "m", math.log(10.0)),
+                 "Bahadur, Wear 245 (2000) 92"),
+    ThirdBody("third_body", "retained debris: k (1 + s (1 - exp(-V/V_d)))", 0.3, 0.0,
+              Shape("debris_volume", DEBRIS_VOLUME, "m^3", math.log(10.0)),
+              "Godet, Wear 100 (1984) 437"),
 )
-NAMES = tuple(e.name for e in EFFECTS)
+
+
+@dataclass(frozen=True)
+class Library:
+    """The effects and the discrepancy variables a calibration chooses among
+    (their order is the order of `EffectValues`' arrays).  Hashable: models
+    hold it as static data."""
+
+    effects: tuple[Effect, ...] = EFFECTS
+    variables: tuple[Variable, ...] = _discrepancy.DEFAULT_VARIABLES
+
+    def __post_init__(self):
+        for kind, names in (("effect", self.names), ("discrepancy variable", self.variable_names)):
+            twice = sorted({n for n in names if names.count(n) > 1})
+            if twice:
+                raise ValueError(f"calibration library: {kind} {', '.join(twice)} given twice")
+        for v in self.variables:
+            if v.stage not in ("law", "rate"):
+                raise ValueError(f"discrepancy variable {v.name!r}: stage {v.stage!r}; "
+                                 "allowed 'law', 'rate'")
+
+    def extended(self, effects=(), variables=()) -> "Library":
+        """This library with ``effects`` and ``variables`` added after its own."""
+        return replace(self, effects=self.effects + tuple(effects),
+                       variables=self.variables + tuple(variables))
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(e.name for e in self.effects)
+
+    @property
+    def shaped(self) -> tuple[bool, ...]:
+        return tuple(e.shape is not None for e in self.effects)
+
+    @property
+    def variable_names(self) -> tuple[str, ...]:
+        return tuple(v.name for v in self.variables)
+
+    def index(self, name: str) -> int:
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise KeyError(f"unknown effect {name!r}; effects: {', '.join(self.names)}") from None
+
+    def effect(self, name: str) -> Effect:
+        return self.effects[self.index(name)]
+
+    def variable(self, name: str) -> Variable:
+        for v in self.variables:
+            if v.name == name:
+                return v
+        raise KeyError(f"unknown discrepancy variable {name!r}; allowed: "
+                       f"{', '.join(self.variable_names)}")
+
+    @functools.cached_property
+    def slices(self) -> dict[str, slice]:
+        """Each variable's part of the flat coefficient vector."""
+        starts = np.cumsum([0] + [v.size for v in self.variables])
+        return {v.name: slice(int(starts[i]), int(starts[i + 1]))
+                for i, v in enumerate(self.variables)}
+
+    @property
+    def size(self) -> int:
+        """Length of the flat coefficient vector of every variable."""
+        return sum(v.size for v in self.variables)
+
+    @property
+    def scales(self) -> np.ndarray:
+        return np.array([e.scale for e in self.effects])
+
+    @property
+    def log_std(self) -> np.ndarray:
+        return np.array([e.shape.log_std if e.shape else 0.0 for e in self.effects])
+
+
+LIBRARY = Library()
+NAMES = LIBRARY.names
 INDEX = {n: i for i, n in enumerate(NAMES)}
-SHAPED = tuple(e.shape is not None for e in EFFECTS)
+SHAPED = LIBRARY.shaped
 
 
-def log_shape(name: str, value: float) -> float:
+def log_shape(name: str, value: float, library: Library = LIBRARY) -> float:
     """ln(value / default) of effect ``name``'s shape (SI ``value``)."""
-    shape = EFFECTS[INDEX[name]].shape
+    shape = library.effect(name).shape
     if shape is None:
         raise KeyError(f"effect {name!r} has no shape parameter")
     return math.log(value / shape.default)
 
 
 class EffectValues(eqx.Module):
-    """Strength of every effect (`NAMES` order; zeros: the base model), the
-    logarithm of each shape over its default (zeros: the defaults; ignored
-    for effects without a shape) and the coefficients of the learned
-    discrepancy of k (`discrepancy`; zeros: none)."""
+    """Strength of every effect of ``library`` (its order; zeros: the base
+    model), the logarithm of each shape over its default (zeros: the
+    defaults; ignored for effects without a shape) and the coefficients of
+    the learned discrepancy of k (`discrepancy`, `Library.slices`; zeros:
+    none)."""
 
     strength: Float[Array, " E"]
     log_shape: Float[Array, " E"]
@@ -152,93 +319,118 @@ class EffectValues(eqx.Module):
     # truth may hold that no candidate can give exactly (None: none; the
     # calibration never sets it)
     outside: Callable | None = eqx.field(static=True, default=None)
+    library: Library = eqx.field(static=True, default=LIBRARY)
 
-    def __init__(self, strength, log_shape, discrepancy=None, outside=None):
+    def __init__(self, strength, log_shape, discrepancy=None, outside=None,
+                 library: Library = LIBRARY):
+        self.library = library
         self.strength = jnp.asarray(strength, dtype=float)
         self.log_shape = jnp.asarray(log_shape, dtype=float)
-        self.discrepancy = (jnp.zeros(_discrepancy.SIZE) if discrepancy is None
+        self.discrepancy = (jnp.zeros(library.size) if discrepancy is None
                             else jnp.asarray(discrepancy, dtype=float))
         self.outside = outside
 
     @classmethod
-    def zero(cls) -> "EffectValues":
-        return cls(jnp.zeros(len(NAMES)), jnp.zeros(len(NAMES)))
+    def zero(cls, library: Library = LIBRARY) -> "EffectValues":
+        n = len(library.effects)
+        return cls(jnp.zeros(n), jnp.zeros(n), library=library)
 
     def with_discrepancy(self, variable: str, coefficients) -> "EffectValues":
         """These values with ``variable``'s discrepancy coefficients set."""
-        d = self.discrepancy.at[_discrepancy.SLICES[variable]].set(
+        d = self.discrepancy.at[self.library.slices[variable]].set(
             jnp.asarray(coefficients, dtype=float))
-        return EffectValues(self.strength, self.log_shape, d, self.outside)
+        return EffectValues(self.strength, self.log_shape, d, self.outside, self.library)
 
     def with_outside(self, factor: Callable) -> "EffectValues":
         """These values with the outside rate ``factor`` (theta, depth, cycles)
         -> multiplier (a synthetic truth)."""
-        return EffectValues(self.strength, self.log_shape, self.discrepancy, factor)
+        return EffectValues(self.strength, self.log_shape, self.discrepancy, factor,
+                            self.library)
 
     @classmethod
-    def of(cls, **strengths) -> "EffectValues":
+    def of(cls, library: Library = LIBRARY, **strengths) -> "EffectValues":
         """``EffectValues.of(run_in=2.0)``; a shape as ``<shape name>=value`` (SI)."""
-        s, g = [0.0] * len(NAMES), [0.0] * len(NAMES)
-        shapes = {e.shape.name: (i, e.shape) for i, e in enumerate(EFFECTS) if e.shape}
+        n = len(library.effects)
+        s, g = [0.0] * n, [0.0] * n
+        shapes = {e.shape.name: (i, e.shape) for i, e in enumerate(library.effects) if e.shape}
         for key, value in strengths.items():
-            if key in INDEX:
-                s[INDEX[key]] = value
+            if key in library.names:
+                s[library.index(key)] = value
             elif key in shapes:
                 i, shape = shapes[key]
                 g[i] = math.log(value / shape.default)
             else:
-                raise KeyError(f"unknown effect or shape {key!r}; effects: {NAMES}")
-        return cls(jnp.asarray(s, dtype=float), jnp.asarray(g, dtype=float))
+                raise KeyError(f"unknown effect or shape {key!r}; effects: {library.names}")
+        return cls(jnp.asarray(s, dtype=float), jnp.asarray(g, dtype=float), library=library)
 
     def __getitem__(self, name: str):
-        return self.strength[INDEX[name]]
+        return self.strength[self.library.index(name)]
 
     def shape(self, name: str):
         """The shape of effect ``name`` in SI."""
-        i = INDEX[name]
-        shape = EFFECTS[i].shape
+        i = self.library.index(name)
+        shape = self.library.effects[i].shape
         if shape is None:
             raise KeyError(f"effect {name!r} has no shape parameter")
         return shape.default * jnp.exp(self.log_shape[i])
 
+    def _shape_or_none(self, i: int):
+        shape = self.library.effects[i].shape
+        return None if shape is None else shape.default * jnp.exp(self.log_shape[i])
+
+    def coefficients(self, variable: Variable):
+        return self.discrepancy[self.library.slices[variable.name]]
+
+    def growth(self):
+        """The clearance profile's growth per unit of worn depth (1: none)."""
+        g = 1.0
+        for i, e in enumerate(self.library.effects):
+            d = e.growth(self.strength[i])
+            if d is not None:
+                g = g + d
+        return jnp.asarray(g, dtype=float)
+
+    def forces(self, base: dict) -> tuple:
+        """The forces the effects add to the rig for parameters ``base``."""
+        return tuple(f for i, e in enumerate(self.library.effects)
+                     for f in e.forces(self.strength[i], base))
+
+    def law_factors(self, pressure, sliding_rate) -> list:
+        """The factors of the wear law's dh/dt, in the library's order: the
+        effects' ``law`` hooks, then the discrepancy's law-stage variables
+        (each exactly 1.0 at zero values)."""
+        point = LawPoint(pressure, sliding_rate)
+        out = []
+        for i, e in enumerate(self.library.effects):
+            f = e.law(self.strength[i], self._shape_or_none(i), point)
+            if f is not None:
+                out.append(f)
+        for v in self.library.variables:
+            if v.stage == "law":
+                out.append(v.factor(self.coefficients(v), v.read(point)))
+        return out
+
 
 class ModifiedArchardWear(ArchardWear):
-    """Archard's law with the pressure exponent and the p v term:
-    dh/dt = k p v (p / p_ref)^a (1 + b ramp(p v - pv_t) / pv_ref); a = b = 0 is
-    `ArchardWear`."""
+    """Archard's law with the effects' law factors (`EffectValues.law_factors`:
+    the pressure exponent, the p v term, the discrepancy in pressure and
+    sliding speed); zero values are `ArchardWear`."""
 
-    exponent: jnp.ndarray
-    pv_strength: jnp.ndarray
-    pv_threshold: jnp.ndarray
-    discrepancy: jnp.ndarray | None
+    effects: EffectValues
 
-    def __init__(self, coefficient, exponent=0.0, pv_strength=0.0, pv_threshold=PV_THRESHOLD,
-                 discrepancy=None):
+    def __init__(self, coefficient, effects: EffectValues | None = None):
         super().__init__(coefficient)
-        self.exponent = jnp.asarray(exponent, dtype=float)
-        self.pv_strength = jnp.asarray(pv_strength, dtype=float)
-        self.pv_threshold = jnp.asarray(pv_threshold, dtype=float)
-        self.discrepancy = None if discrepancy is None else jnp.asarray(discrepancy, dtype=float)
+        self.effects = EffectValues.zero() if effects is None else effects
 
     def depth_rate(self, pressure, sliding_rate):
-        base = self.coefficient * pressure * sliding_rate
-        loaded = pressure > 0.0
-        safe = jnp.where(loaded, pressure, P_REF)  # double where: log(0) has no gradient
-        power = jnp.where(loaded, jnp.exp(self.exponent * jnp.log(safe / P_REF)), 1.0)
-        excess = smoothing.ramp(pressure * sliding_rate - self.pv_threshold, PV_BAND)
-        pv = 1.0 + self.pv_strength * excess / PV_REF
-        rate = base * power * pv
-        if self.discrepancy is None:
-            return rate
-        # the learned discrepancy's pressure and sliding-speed factors (exactly
-        # 1.0 at zero coefficients)
-        return (rate * _discrepancy.factor(self.discrepancy, "pressure", pressure)
-                * _discrepancy.factor(self.discrepancy, "sliding_speed", jnp.abs(sliding_rate)))
+        rate = self.coefficient * pressure * sliding_rate
+        for f in self.effects.law_factors(pressure, sliding_rate):
+            rate = rate * f
+        return rate
 
 
 def wear_law(k, effects: EffectValues) -> ModifiedArchardWear:
-    return ModifiedArchardWear(k, effects["pressure_exponent"], effects["pv_wear"],
-                               effects.shape("pv_wear"), effects.discrepancy)
+    return ModifiedArchardWear(k, effects)
 
 
 def run_in_factor(strength, n_start, span, cycles=RUN_IN_CYCLES):
@@ -252,22 +444,38 @@ def rate_factor(effects: EffectValues, depth, volume, n_start, span, theta=None,
                 total_cycles: float = 1.0):
     """Multiplier of the wear rate per profile node over the real cycles
     [n_start, n_start + span] at wear ``depth`` [m] (n,) and worn volume
-    ``volume`` [m^3] (module notes); with the node angles ``theta`` (n,) and
-    the campaign's length ``total_cycles``, the learned discrepancy's angle,
-    cycle-count (at the span's middle) and depth factors as well."""
-    run_in = run_in_factor(effects["run_in"], n_start, span, effects.shape("run_in"))
-    film = 1.0 - effects["transfer_film"] * (
-        1.0 - jnp.exp(-depth / effects.shape("transfer_film")))
-    debris = 1.0 + effects["third_body"] * (
-        1.0 - jnp.exp(-volume / effects.shape("third_body")))
-    g = run_in * debris * film
+    ``volume`` [m^3] (module notes): the effects' ``rate`` hooks; with the
+    node angles ``theta`` (n,) and the fit window's end ``total_cycles``,
+    the learned discrepancy's rate-stage factors (angle, cycle count at the
+    span's middle, depth) as well."""
+    point = RatePoint(theta, depth, volume, n_start, span, total_cycles)
+    g = jnp.ones_like(depth)
+    for i, e in enumerate(effects.library.effects):
+        f = e.rate(effects.strength[i], effects._shape_or_none(i), point)
+        if f is not None:
+            g = g * f
     if theta is None:
-        return g
-    d = effects.discrepancy
-    middle = n_start + 0.5 * span
-    g = (g * _discrepancy.factor(d, "angle", theta)
-         * _discrepancy.factor(d, "cycles", middle, total_cycles)
-         * _discrepancy.factor(d, "depth", depth))
+        return jnp.asarray(g, dtype=float)
+    for v in effects.library.variables:
+        if v.stage == "rate":
+            g = g * v.factor(effects.coefficients(v), v.read(point), total_cycles)
     if effects.outside is not None:
-        g = g * effects.outside(theta, depth, middle)
+        g = g * effects.outside(theta, depth, point.middle)
     return g
+
+
+class EffectsModifier(AbstractWearModifier):
+    """The effects as a wear model's modifier (`diffwear.wear.modifier`):
+    the clearance grows by `EffectValues.growth` times the worn depth, and a
+    step's rate is scaled by `rate_factor` over its real cycles (``window``:
+    the fit window's end, the cycle-count discrepancy's time scale)."""
+
+    effects: EffectValues
+    window: float = eqx.field(static=True, default=1.0)
+
+    def growth(self):
+        return self.effects.growth()
+
+    def rate(self, h, n, dn, geometry: JointGeometry):
+        volume = worn_volume(h, geometry.bushing_radius, geometry.bushing_depth)
+        return rate_factor(self.effects, h, volume, n, dn, geometry.theta, self.window)

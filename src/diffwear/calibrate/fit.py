@@ -38,9 +38,8 @@ import numpy as np
 
 from ..errors import InputError, SolverError
 from ..wear.status import not_an_answer
-from . import discrepancy as disc
 from .dataset import Dataset
-from .effects import EFFECTS, NAMES, SHAPED, EffectValues, log_shape
+from .effects import LIBRARY, EffectValues, Library, log_shape
 from .model import BASE_NAMES, Observation, RigHistory, rig_defaults
 from .quasi_static import DEFAULT_STEPS, QuasiStaticRigHistory
 
@@ -71,6 +70,8 @@ class ModelSettings:
     force_samples: int = 91
     cycle_rtol: float = 1e-6
     steps: int = DEFAULT_STEPS
+    # the effects and discrepancy variables the calibration chooses among
+    library: Library = LIBRARY
 
     def __post_init__(self):
         if not callable(getattr(self.model, "for_campaign", None)):
@@ -116,6 +117,7 @@ class Problem:
     probe_cycles: tuple = ()
     cycles_of_point: np.ndarray | None = None   # the cycle count of each point
     kinds: tuple = ()                           # each series' kind
+    library: Library = LIBRARY                  # the candidate effects and variables
 
     @property
     def kind_of_point(self) -> np.ndarray:
@@ -128,7 +130,7 @@ class Problem:
         if data.preset != "rig":
             raise InputError(f"{data.path}: preset {data.preset!r}: only 'rig' is modelled")
         model = settings.build(data.max_cycles, _checkpoints(data), data.fit_cycles)
-        return cls._assemble(data, model, rig_defaults(), BASE_NAMES)
+        return cls._assemble(data, model, rig_defaults(), BASE_NAMES, settings.library)
 
     @classmethod
     def _from_mechanism_file(cls, data: Dataset, settings: ModelSettings):
@@ -143,10 +145,12 @@ class Problem:
                            window=float(data.fit_cycles),
                            checkpoints=tuple(sorted(set(_checkpoints(data)))),
                            steps=settings.steps)
-        return cls._assemble(data, model, dict(model.file_parameters.value0), names)
+        return cls._assemble(data, model, dict(model.file_parameters.value0), names,
+                             settings.library)
 
     @classmethod
-    def _assemble(cls, data: Dataset, model, defaults: dict, names: tuple):
+    def _assemble(cls, data: Dataset, model, defaults: dict, names: tuple,
+                  library: Library = LIBRARY):
         obs, ys, sig, hold, which, counts = [], [], [], [], [], []
         for k, s in enumerate(data.series):
             obs.append(Observation(s.kind, np.asarray(s.x), cycles=float(s.cycles or 0.0),
@@ -173,7 +177,7 @@ class Problem:
                    np.concatenate(hold), np.concatenate(which), tuple(data.fit_names),
                    {k: jnp.asarray(v, dtype=float) for k, v in base0.items()},
                    np.asarray(tau, dtype=float), suspects, names, probes,
-                   np.concatenate(counts), tuple(s.kind for s in data.series))
+                   np.concatenate(counts), tuple(s.kind for s in data.series), library)
 
     def with_model(self, model) -> "Problem":
         return dataclasses.replace(self, model=model)
@@ -224,8 +228,6 @@ class Problem:
         return (pred - self.y) / self.sigma, not_an_answer(volume, ~h.ok, inputs)
 
 
-SCALES = np.array([e.scale for e in EFFECTS])
-LOG_STD = np.array([e.shape.log_std if e.shape else 0.0 for e in EFFECTS])
 
 
 @dataclass
@@ -275,16 +277,19 @@ class FitResult:
                 self.shapes = self.shapes or {self.effect: self.shape}
                 self.shape_intervals = self.shape_intervals or {self.effect: self.shape_interval}
 
-    def effect_values(self) -> EffectValues:
-        """The fitted effects (and discrepancy) as `EffectValues` (zeros for
-        the base model)."""
+    def effect_values(self, library: Library | None = None) -> EffectValues:
+        """The fitted effects (and discrepancy) as `EffectValues` of the fit's
+        library (zeros for the base model)."""
+        if library is None:
+            lay = self.notes.get("layout")
+            library = LIBRARY if lay is None else lay.library
         values: dict = {}
         for name in self.effects:
             values[name] = self.strengths[name]
-            shape = EFFECTS[NAMES.index(name)].shape
+            shape = library.effect(name).shape
             if self.shapes.get(name) is not None and shape is not None:
                 values[shape.name] = self.shapes[name]
-        out = EffectValues.of(**values)
+        out = EffectValues.of(library, **values)
         if self.discrepancy is not None:
             out = out.with_discrepancy(self.discrepancy, self.discrepancy_coefficients)
         return out
@@ -345,14 +350,15 @@ class Fitter:
     def __init__(self, problem: Problem, *, xtol=1e-2, ftol=1e-4, max_steps=30):
         self.problem = problem
         self.xtol, self.ftol, self.max_steps = xtol, ftol, max_steps
-        nb, ne = problem.n_base, len(NAMES)
+        self.library = library = problem.library
+        nb, ne = problem.n_base, len(library.effects)
         # every unknown the loop differentiates by, packed: v = (fitted x,
         # strengths, ln shapes, ln multipliers of every rig parameter,
         # discrepancy coefficients)
         nu = len(problem.names)
         self._slices = (slice(0, nb), slice(nb, nb + ne), slice(nb + ne, nb + 2 * ne),
                         slice(nb + 2 * ne, nb + 2 * ne + nu))
-        self._disc = slice(nb + 2 * ne + nu, nb + 2 * ne + nu + disc.SIZE)
+        self._disc = slice(nb + 2 * ne + nu, nb + 2 * ne + nu + library.size)
         self.n_packed = self._disc.stop
         # directional derivatives per call: the one-effect fit's unknowns (x,
         # strength, shape); more come in batches of this size, so one compiled
@@ -363,7 +369,8 @@ class Fitter:
         sd = self._disc
 
         def outputs(v):
-            return problem.outputs(v[sx], EffectValues(v[ss], v[sg], v[sd]), v[su])
+            return problem.outputs(v[sx], EffectValues(v[ss], v[sg], v[sd], library=library),
+                                   v[su])
 
         def columns(v, tangents):
             """(outputs, d outputs / dv . t for each row t of ``tangents``)."""
@@ -505,7 +512,7 @@ class Fitter:
                           f"{self.max_steps} steps (chi2 {chi2:.6g})")
 
     def effect_jacobian(self, x, log_shape, v=None) -> np.ndarray:
-        """dr/ds of every effect (columns, `NAMES` order) at the log-shapes
+        """dr/ds of every effect (columns, the library's order) at the log-shapes
         ``log_shape`` (ln of shape / default) and zero strength, or at the
         packed point ``v`` (a fitted model) with its ln shapes replaced by
         ``log_shape`` for the effects it has at zero strength."""
@@ -516,7 +523,7 @@ class Fitter:
             _, ss, sg, _ = self._slices
             off = v[ss] == 0.0
             v[sg] = np.where(off, log_shape, v[sg])
-        return self._directional(v, self._unit(1, range(len(NAMES))))[1]
+        return self._directional(v, self._unit(1, range(len(self.library.effects))))[1]
 
     def parameter_jacobian(self, x, u=None, names=None):
         """(dr/dx of the fitted unknowns, dr/d ln p of the rig parameters
@@ -689,34 +696,36 @@ class Layout:
     @classmethod
     def of(cls, fitter: Fitter, effects: tuple, discrepancy: str | None,
            constrained: bool = True) -> "Layout":
+        lib = fitter.library
         for e in effects:
-            if e not in NAMES:
-                raise InputError(f"unknown effect {e!r}; allowed: {', '.join(NAMES)}")
-        if discrepancy is not None and discrepancy not in disc.VARIABLES:
+            if e not in lib.names:
+                raise InputError(f"unknown effect {e!r}; allowed: {', '.join(lib.names)}")
+        if discrepancy is not None and discrepancy not in lib.variable_names:
             raise InputError(f"unknown discrepancy variable {discrepancy!r}; allowed: "
-                             f"{', '.join(disc.VARIABLES)}")
+                             f"{', '.join(lib.variable_names)}")
         nb = fitter.problem.n_base
-        shaped = tuple(e for e in effects if SHAPED[NAMES.index(e)])
-        nd = disc.SIZES[discrepancy] if discrepancy else 0
+        shaped = tuple(e for e in effects if lib.effect(e).shape is not None)
+        nd = lib.variable(discrepancy).size if discrepancy else 0
         size = nb + len(effects) + len(shaped) + nd
         t = np.zeros((size, fitter.n_packed))
         t[:nb] = fitter._unit(0, range(nb))
         lower, upper = np.full(size, -np.inf), np.full(size, np.inf)
+        scales, log_std = lib.scales, lib.log_std
         for i, e in enumerate(effects):
-            k = NAMES.index(e)
-            t[nb + i] = fitter._unit(1, [k])[0] * SCALES[k]
-            lower[nb + i] = EFFECTS[k].lower / SCALES[k]
+            k = lib.index(e)
+            t[nb + i] = fitter._unit(1, [k])[0] * scales[k]
+            lower[nb + i] = lib.effects[k].lower / scales[k]
         o = nb + len(effects)
         for i, e in enumerate(shaped):
-            k = NAMES.index(e)
-            t[o + i] = fitter._unit(2, [k])[0] * LOG_STD[k]
+            k = lib.index(e)
+            t[o + i] = fitter._unit(2, [k])[0] * log_std[k]
             lower[o + i], upper[o + i] = -SHAPE_PRIOR_SIGMAS, SHAPE_PRIOR_SIGMAS
         o += len(shaped)
         projection = None
         if discrepancy:
-            sl = disc.SLICES[discrepancy]
+            sl = lib.slices[discrepancy]
             t[o:] = fitter._unit(4, range(sl.start, sl.stop)) \
-                * disc.prior_std(discrepancy)[:, None]
+                * lib.variable(discrepancy).prior_std()[:, None]
             u = fitter.k_direction(discrepancy) if constrained else None
             if u is not None:
                 projection = np.eye(nd) - np.outer(u, u)
@@ -727,14 +736,24 @@ class Layout:
         return cls(fitter, effects, shaped, discrepancy, size, t, lower, upper, prior, pj,
                    projection)
 
+    @property
+    def library(self) -> Library:
+        return self.fitter.library
+
+    def _prior_std(self) -> np.ndarray:
+        """The discrepancy's prior spread per coefficient."""
+        assert self.discrepancy is not None, "a layout without a discrepancy"
+        return self.library.variable(self.discrepancy).prior_std()
+
     def discrepancy_coefficients(self, z) -> np.ndarray:
         """The coefficients delta acts with at unknowns ``z`` (..., size), in
         the discrepancy's own units (P z_d times the prior scale)."""
         assert self.discrepancy is not None, "a layout without a discrepancy"
-        zd = np.asarray(z)[..., self.size - disc.SIZES[self.discrepancy]:]
+        scale = self._prior_std()
+        zd = np.asarray(z)[..., self.size - scale.size:]
         if self.projection is not None:
             zd = zd @ self.projection
-        return zd * disc.prior_std(self.discrepancy)
+        return zd * scale
 
     @property
     def n_base(self) -> int:
@@ -763,10 +782,10 @@ class Layout:
                 x = x - z[:, self.size - self.k_identification.size:] @ self.k_identification
             out[name] = float(p.base0[name]) * np.exp(p.tau[i] * x)
         for i, e in enumerate(self.effects):
-            out[e] = z[:, nb + i] * SCALES[NAMES.index(e)]
+            out[e] = z[:, nb + i] * self.library.effect(e).scale
         o = nb + len(self.effects)
         for i, e in enumerate(self.shaped):
-            shape = EFFECTS[NAMES.index(e)].shape
+            shape = self.library.effect(e).shape
             assert shape is not None  # a shaped effect
             out[shape.name] = shape.default * np.exp(z[:, o + i] * shape.log_std)
         o += len(self.shaped)
@@ -782,27 +801,27 @@ class Layout:
         if start is not None:
             x0 = start.notes["x"] if x0 is None else x0
             s0 = {**start.strengths, **(s0 if isinstance(s0, dict) else {})}
-            log_shape0 = {**{e: log_shape(e, v) for e, v in start.shapes.items()
+            log_shape0 = {**{e: log_shape(e, v, self.library) for e, v in start.shapes.items()
                              if v is not None},
                           **(log_shape0 if isinstance(log_shape0, dict) else {})}
             variable = self.discrepancy
             if variable is not None and start.discrepancy == variable:
-                z[-disc.SIZES[variable]:] = (np.asarray(start.discrepancy_coefficients)
-                                            / disc.prior_std(variable))
+                scale = self._prior_std()
+                z[-scale.size:] = np.asarray(start.discrepancy_coefficients) / scale
         if x0 is not None:
             z[:nb] = np.asarray(x0, dtype=float)
         one = len(self.effects) == 1
         for i, e in enumerate(self.effects):
-            k = NAMES.index(e)
+            k = self.library.index(e)
             s = s0 if one and not isinstance(s0, dict) else (
                 s0.get(e, 0.0) if isinstance(s0, dict) else 0.0)
-            z[nb + i] = float(s) / SCALES[k]
+            z[nb + i] = float(s) / self.library.scales[k]
         o = nb + len(self.effects)
         for i, e in enumerate(self.shaped):
-            k = NAMES.index(e)
+            k = self.library.index(e)
             g = log_shape0 if one and not isinstance(log_shape0, dict) else (
                 log_shape0.get(e, 0.0) if isinstance(log_shape0, dict) else 0.0)
-            z[o + i] = float(g) / LOG_STD[k]
+            z[o + i] = float(g) / self.library.log_std[k]
         return z
 
     def result(self, z, cov, jac_fit, r, steps, wall, prior_chi2, fit_rows) -> FitResult:
@@ -816,14 +835,15 @@ class Layout:
                       for i, n in enumerate(p.fit_names)}
         strengths, strengths_std, shapes, intervals = {}, {}, {}, {}
         for i, e in enumerate(self.effects):
-            k = NAMES.index(e)
-            strengths[e] = float(z[nb + i] * SCALES[k])
-            strengths_std[e] = float(std_z[nb + i] * SCALES[k])
+            scale = self.library.effect(e).scale
+            strengths[e] = float(z[nb + i] * scale)
+            strengths_std[e] = float(std_z[nb + i] * scale)
         o = nb + len(self.effects)
         for i, e in enumerate(self.shaped):
-            k = NAMES.index(e)
-            default = EFFECTS[k].shape.default  # type: ignore[union-attr]
-            ln, half = z[o + i] * LOG_STD[k], std_z[o + i] * LOG_STD[k]
+            shape = self.library.effect(e).shape
+            assert shape is not None  # a shaped effect
+            default = shape.default
+            ln, half = z[o + i] * shape.log_std, std_z[o + i] * shape.log_std
             shapes[e] = float(default * math.exp(ln))
             intervals[e] = (float(default * math.exp(ln - half)),
                             float(default * math.exp(ln + half)))
@@ -831,10 +851,10 @@ class Layout:
         coef = cov_d = None
         b = None
         if self.discrepancy:
-            scale = disc.prior_std(self.discrepancy)
+            prior = self._prior_std()
             coef = self.discrepancy_coefficients(z)
-            proj = np.eye(len(scale)) if self.projection is None else self.projection
-            cov_d = (proj @ cov[o:, o:] @ proj) * np.outer(scale, scale)
+            proj = np.eye(len(prior)) if self.projection is None else self.projection
+            cov_d = (proj @ cov[o:, o:] @ proj) * np.outer(prior, prior)
             ki = self.fitter.k_index
             if ki is not None:
                 # the wear coefficient identified beside the discrepancy
@@ -845,7 +865,7 @@ class Layout:
                 e = np.zeros(self.size)
                 e[k], e[o:] = 1.0, -a
                 x_id = x[k] - a @ z[o:]
-                b = p.tau[k] * a / scale               # ln(k_model / k_id) per coefficient
+                b = p.tau[k] * a / prior               # ln(k_model / k_id) per coefficient
                 name = p.fit_names[k]
                 params[name] = float(p.base0[name] * math.exp(p.tau[k] * x_id))
                 params_std[name] = float(params[name] * p.tau[k]

@@ -47,9 +47,8 @@ import numpy as np
 from ..errors import InputError, SolverError
 from . import learned
 from .dataset import Dataset
-from .discrepancy import VARIABLES
-from .effects import EFFECTS, NAMES, log_shape
-from .fit import SCALES, FitResult, Fitter, ModelSettings, Problem
+from .effects import LIBRARY, Effect, Library, log_shape
+from .fit import FitResult, Fitter, ModelSettings, Problem
 from .forecast import Forecast, Outlook, forecast
 from .parameters import RIG_PARAMETERS, plausible_range
 from .plausibility import check_depths, unit_slips
@@ -250,13 +249,12 @@ class Selection:
     paths: list = field(default_factory=list)   # every path's end, best criterion first
 
 
-def _starts(score: Score, effect: str):
-    """Starting (strength, ln shape) pairs of a refit: the score's first step
-    (at most `FIRST_STEP_SCALES` of the effect's scale), a tenth of the scale
-    in its direction, then the scale at the default shape and at the shape
-    grid's ends."""
-    k = NAMES.index(effect)
-    eff, scale = EFFECTS[k], float(SCALES[k])
+def _starts(score: Score, eff: Effect):
+    """Starting (strength, ln shape) pairs of a refit of effect ``eff``: the
+    score's first step (at most `FIRST_STEP_SCALES` of the effect's scale),
+    a tenth of the scale in its direction, then the scale at the default
+    shape and at the shape grid's ends."""
+    scale = float(eff.scale)
     sign = 1.0 if score.first_step >= 0 or eff.lower >= 0 else -1.0
     first = float(np.clip(score.first_step, max(eff.lower, -FIRST_STEP_SCALES * scale),
                           FIRST_STEP_SCALES * scale))
@@ -281,9 +279,9 @@ def refit(fitter: Fitter, current: FitResult, effect: str, score: Score, log):
         return cache[key], None
     errors, best = [], None
     t0 = time.perf_counter()
-    for tried, (s0, g0) in enumerate(_starts(score, effect), 1):
+    for tried, (s0, g0) in enumerate(_starts(score, fitter.library.effect(effect)), 1):
         strengths = {**current.strengths, effect: s0}
-        shapes = {e: log_shape(e, v) for e, v in current.shapes.items()}
+        shapes = {e: log_shape(e, v, fitter.library) for e, v in current.shapes.items()}
         shapes[effect] = g0
         try:
             f = fitter.fit((*current.effects, effect), s0=strengths, log_shape0=shapes,
@@ -718,7 +716,8 @@ class Calibration:
             "parameters": final.params,
             "parameters_std": final.params_std,
             "candidates": [_candidate(s, self.refits.get(s.effect), s.effect in self.qualifying,
-                                      self.notes.get("failed_refits", {}).get(s.effect))
+                                      self.notes.get("failed_refits", {}).get(s.effect),
+                                      self.problem.library)
                            for s in self.scores],
             "stages": [_stage_summary(st) for st in (sel.stages if sel else [])],
             "detection_limits": self.limits,
@@ -796,7 +795,7 @@ def _discrepancy(c: Calibration) -> dict | None:
     assert variable is not None  # an adopted discrepancy is in the final model
     b = f.notes.get("log_k_per_coefficient")
     out = learned.describe(variable, f.discrepancy_coefficients, f.discrepancy_cov,
-                           c.dataset, b)
+                           c.dataset, b, c.problem.library)
     out.update(effective_coefficients=f.notes.get("discrepancy_edf"), tried=tried,
                likelihood_ratio=d.likelihood_ratio,
                log_k_per_coefficient=None if b is None else np.asarray(b).tolist())
@@ -817,7 +816,7 @@ def _or_list(items) -> str:
 
 
 def _candidate(s: Score, refit: FitResult | None, qualifies: bool,
-               failure: str | None = None) -> dict:
+               failure: str | None = None, library: Library = LIBRARY) -> dict:
     out = {"name": s.effect, "score": s.statistic, "p_value": s.p_value,
            "first_step": s.first_step}
     if failure:
@@ -827,7 +826,7 @@ def _candidate(s: Score, refit: FitResult | None, qualifies: bool,
             out.update(refit_chi2_fit=refit.chi2_fit, qualifies=qualifies,
                        effective_coefficients=refit.notes.get("discrepancy_edf"))
         return out
-    shape = EFFECTS[NAMES.index(s.effect)].shape
+    shape = library.effect(s.effect).shape
     if shape is not None:
         out["scored_shape"] = shape.default * math.exp(s.log_shape)
     if refit is not None:
@@ -862,9 +861,11 @@ def require_fit_points(data: Dataset, n_fitted: int | None = None) -> None:
             "(or measurements before holdout_from_cycles) or fit fewer parameters")
 
 
-def discrepancy_variables(data: Dataset, spec: str) -> tuple:
-    """The ``--discrepancy`` option: 'all' (every variable the data can show),
-    'none', or comma-separated names, each checked against the data."""
+def discrepancy_variables(data: Dataset, spec: str, library: Library = LIBRARY) -> tuple:
+    """The ``--discrepancy`` option: 'all' (every variable of ``library`` the
+    data can show), 'none', or comma-separated names, each checked against
+    the data."""
+    VARIABLES = library.variable_names
     text = str(spec).strip().lower()
     if text == "all":
         return VARIABLES
@@ -878,25 +879,30 @@ def discrepancy_variables(data: Dataset, spec: str) -> tuple:
         if v not in VARIABLES:
             raise InputError(f"--discrepancy {v!r}: unknown variable; allowed "
                              f"{', '.join(VARIABLES)}, 'all' or 'none'")
-    learned.check_variables(data, names)
+    learned.check_variables(data, names, library)
     return names
 
 
 def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
-              top: int = DEFAULT_TOP, check: bool = True, discrepancy=VARIABLES,
+              top: int = DEFAULT_TOP, check: bool = True, discrepancy=None,
               outlook: Outlook | None = Outlook(), log=print) -> Calibration:
     """The whole loop on one dataset (module notes).  ``check``: evaluate the
     chosen fit on the dynamic model too (when the fit ran on another);
     ``discrepancy``: the candidate variables of a learned discrepancy
-    (empty: none); ``outlook``: the posterior, the life and the next
-    measurement (None: none).  ``top`` is kept for compatibility: every
+    (None: every variable of ``settings.library``; empty: none);
+    ``outlook``: the posterior, the life and the next measurement (None:
+    none).  ``top`` is kept for compatibility: every
     candidate is refitted."""
     del top
     t0 = time.perf_counter()
-    discrepancy = tuple(discrepancy)
     problem = Problem.from_dataset(data, settings)
-    if discrepancy != VARIABLES:  # asked for by name: refuse what the data cannot show
-        learned.check_variables(data, discrepancy)
+    library = settings.library
+    if discrepancy is None:
+        discrepancy = library.variable_names
+    discrepancy = tuple(discrepancy)
+    if discrepancy != library.variable_names:
+        # asked for by name: refuse what the data cannot show
+        learned.check_variables(data, discrepancy, library)
     require_fit_points(data, problem.n_base)
     wall = problem.base0.get("wall")
     check_depths(data, None if wall is None else float(wall))
@@ -966,7 +972,8 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
     slips = unit_slips(data, problem, base, None if stated_k is None else float(stated_k))
     for w in slips:
         log(f"warning: {w['message']}")
-    variables = tuple(v for v in discrepancy if learned.unsupported(data, v) is None)
+    variables = tuple(v for v in discrepancy
+                      if learned.unsupported(data, v, fitter.library) is None)
     too_few = base.n_fit - problem.n_base - 2 < MIN_DOF_FOR_EFFECT
     fitter.fits[(frozenset(), None)] = base
     if too_few:
@@ -1011,7 +1018,8 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
         identified = "ambiguous"
     else:
         identified = found[0].effect if found else "none"
-    limits = detection_limits(score_tests(fitter, final, kinds)) if not too_few else {}
+    limits = (detection_limits(score_tests(fitter, final, kinds), fitter.library)
+              if not too_few else {})
     result = Calibration(data, problem, base, scores, refits, qualifying, chosen, identified,
                          unexplained, gof, 0.0, suspects,
                          notes={"failed_refits": failed, "unit_warnings": slips},

@@ -22,7 +22,8 @@ import numpy as np
 
 from ..errors import InputError
 from . import chi2
-from . import discrepancy as disc
+from .discrepancy import BushingAngle
+from .effects import LIBRARY, Library
 from .fit import FitResult, Fitter
 
 # A discrepancy is refitted when its score test passes this p-value (a
@@ -42,29 +43,22 @@ def variable_of(name: str) -> str | None:
     return name[len(PREFIX):] if name.startswith(PREFIX) else None
 
 
-def label(name: str) -> str:
+def label(name: str, library: Library = LIBRARY) -> str:
     """A candidate in words: "run_in", "discrepancy in the bushing angle"."""
     v = variable_of(name)
-    return name if v is None else f"discrepancy in {disc.WORDS[v]}"
+    if v is None:
+        return name
+    words = library.variable(v).words if v in library.variable_names else v.replace("_", " ")
+    return f"discrepancy in {words}"
 
 
-def unsupported(data, variable: str) -> str | None:
+def unsupported(data, variable: str, library: Library = LIBRARY) -> str | None:
     """Why ``data`` cannot show a discrepancy in ``variable`` (None: they can)."""
-    if variable not in disc.VARIABLES:
-        return f"unknown variable; allowed: {', '.join(disc.VARIABLES)}"
-    wear = [s for s in data.series if s.kind != "force"]
-    if not wear:
+    if variable not in library.variable_names:
+        return f"unknown variable; allowed: {', '.join(library.variable_names)}"
+    if not any(s.kind != "force" for s in data.series):
         return "the dataset has no wear measurement (profile, volume or depth)"
-    if variable == "angle":
-        angles = sum(s.x.size for s in data.series if s.kind == "profile")
-        if angles < 2 * disc.SIZES["angle"]:
-            return ("it needs worn profiles over the bushing angle (at least "
-                    f"{2 * disc.SIZES['angle']} points); the dataset has {angles}")
-    if variable == "cycles":
-        counts = {float(c) for s in wear for c in np.unique(s.cycle_counts)}
-        if len(counts) < 2:
-            return "it needs wear measured at two or more cycle counts"
-    return None
+    return library.variable(variable).unsupported(data)
 
 
 def effective_coefficients(fit: FitResult) -> float:
@@ -85,7 +79,7 @@ def score(fitter: Fitter, fit: FitResult, variable: str, jb: np.ndarray, v) -> d
     discrepancy"."""
     rows = fit.notes.get("rows", ~fitter.problem.holdout)
     lay = fitter.layout(fit.effects, variable)
-    nd = disc.SIZES[variable]
+    nd = fitter.library.variable(variable).size
     jd = fitter.linearise(v, lay.tangents[-nd:]).jac[rows]
     r = fit.residual[rows]
     g = jd.T @ r
@@ -106,43 +100,32 @@ def score(fitter: Fitter, fit: FitResult, variable: str, jb: np.ndarray, v) -> d
 
 
 def curve(variable: str, coefficients, cov, span: tuple, total_cycles: float | None = None,
-          log_k_per_coefficient=None):
+          log_k_per_coefficient=None, library: Library = LIBRARY):
     """(x in report units, delta, 1-sigma band) over ``span`` (SI), delta
     relative to the identified k: (1 + phi c) exp(b.c) - 1, b the move of ln k
     per coefficient (`fit.identified_k`; None: none); the band by
     the delta method.  ``total_cycles``: the cycle-count basis's time scale
     (default the span's end)."""
+    var = library.variable(variable)
     lo, hi = span
-    if variable in ("pressure", "sliding_speed"):
+    if var.log_spaced:
         x = np.geomspace(lo, hi, 200)
     else:
         x = np.linspace(lo, hi, 361 if variable == "angle" else 200)
-    total = (hi if total_cycles is None else total_cycles) if variable == "cycles" else 1.0
-    phi = np.asarray(disc.basis(variable, jnp.asarray(x), total))
+    total = hi if total_cycles is None else total_cycles
+    phi = np.asarray(var.basis(jnp.asarray(x), total))
     c = np.asarray(coefficients, dtype=float)
     b = np.zeros(c.size) if log_k_per_coefficient is None else np.asarray(log_k_per_coefficient)
     shift = math.exp(float(b @ c))
     d = (1.0 + phi @ c) * shift - 1.0
     grad = shift * (phi + np.outer(1.0 + phi @ c, b))
     band = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", grad, cov, grad), 0.0, None))
-    scale = {"angle": 180.0 / math.pi, "pressure": 1e-6, "sliding_speed": 1e3,
-             "cycles": 1.0, "depth": 1e3}[variable]
-    return x * scale, d, band
+    return x * var.scale, d, band
 
 
-def span(variable: str, data) -> tuple:
+def span(variable: str, data, library: Library = LIBRARY) -> tuple:
     """The range (SI) over which ``variable``'s delta is drawn and described."""
-    if variable == "angle":
-        return (0.0, 2 * math.pi)
-    if variable == "pressure":
-        return (1e5, 1e7)        # 0.1-10 MPa around the 1 MPa reference
-    if variable == "sliding_speed":
-        return (3e-3, 3e-1)      # 3-300 mm/s around the 30 mm/s reference
-    if variable == "cycles":
-        return (0.0, float(data.max_cycles))
-    deepest = max((float(np.max(s.y)) for s in data.series if s.kind == "profile"),
-                  default=disc.LAYERS[-1])
-    return (0.0, max(deepest, 1e-6))
+    return library.variable(variable).span(data)
 
 
 def worn_arc(data) -> tuple | None:
@@ -190,7 +173,7 @@ def _angle_shape(c, data, b) -> dict:
     if hi < lo:
         hi += 360.0
     x = np.linspace(lo, hi, max(int(4 * (hi - lo)), 16))
-    d = (1.0 + np.asarray(disc.basis("angle", jnp.asarray(np.radians(x)))) @ c) \
+    d = (1.0 + np.asarray(BushingAngle().basis(jnp.asarray(np.radians(x)))) @ c) \
         * math.exp(float(b @ c)) - 1.0
     maxima, minima = _extrema(d)
     extrema = sorted([(x[i], 1) for i in maxima] + [(x[i], -1) for i in minima])
@@ -238,7 +221,8 @@ def _turns(d) -> list[int]:
     return keep
 
 
-def describe(variable: str, coefficients, cov, data, log_k_per_coefficient=None) -> dict:
+def describe(variable: str, coefficients, cov, data, log_k_per_coefficient=None,
+             library: Library = LIBRARY) -> dict:
     """The discrepancy's shape in words and numbers, relative to the
     identified k (``log_k_per_coefficient``: `curve`), over the range the
     data cover."""
@@ -249,11 +233,11 @@ def describe(variable: str, coefficients, cov, data, log_k_per_coefficient=None)
     if variable == "angle":
         out.update(_angle_shape(c, data, b))
         return out
-    lo, hi = span(variable, data)
+    lo, hi = span(variable, data, library)
     if variable == "cycles":
         hi = float(data.fit_cycles)
-    x, d, _ = curve(variable, c, cov, (lo, hi), float(data.fit_cycles), b)
-    unit = disc.UNITS[variable]
+    x, d, _ = curve(variable, c, cov, (lo, hi), float(data.fit_cycles), b, library)
+    unit = library.variable(variable).unit
     points = _turns(d)
     values = [f"{100 * d[i]:+.0f} % at {x[i]:.3g} {unit}" for i in points]
     if len(points) == 2:
@@ -267,9 +251,9 @@ def describe(variable: str, coefficients, cov, data, log_k_per_coefficient=None)
     return out
 
 
-def check_variables(data, variables) -> None:
+def check_variables(data, variables, library: Library = LIBRARY) -> None:
     """Refuse (InputError) a requested variable the dataset cannot show."""
     for v in variables:
-        why = unsupported(data, v)
+        why = unsupported(data, v, library)
         if why is not None:
             raise InputError(f"{data.path}: discrepancy variable {v!r}: {why}")

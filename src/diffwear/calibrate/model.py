@@ -34,12 +34,11 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
 
-from ..contact import centred_state, contact_history
+from ..contact import centred_state
 from ..dynamics import consistent_state
 from ..errors import InputError
-from ..mechanism import STANDARD_GRAVITY, GuideFriction
+from ..models import Dynamic
 from ..presets import (
     RIG_JOINT,
     RIG_SPRING_FREE_LENGTH,
@@ -52,11 +51,10 @@ from ..presets import (
 )
 from ..wear import smooth_max, worn_volume
 from ..wear.cycle import clearance_element
-from ..wear.dynamic_term import CycleSettings, DynamicWear
-from ..wear.engine import CycleWear, Stop, initial_state, integrate
+from ..wear.dynamic_term import CycleSettings
 from ..wear.extrapolation import Constant
-from ..wear.status import RESULTS
-from .effects import GUIDE_SLIP_WIDTH, EffectValues, rate_factor, wear_law
+from ..wear.status import not_computed
+from .effects import EffectsModifier, EffectValues, wear_law
 from .parameters import NAMES
 
 JOINT = "crank_rod"
@@ -100,11 +98,9 @@ def rig_mechanism(base: dict, effects: EffectValues, *, n_theta: int,
         l1=base["crank_length"] / 2, l2=base["rod_length"] / 2, m1=base["crank_mass"],
         inertia1=base["crank_inertia"], m2=base["rod_mass"], inertia2=base["rod_inertia"],
         m3=base["slider_mass"], inertia3=p.inertia3, omega=p.omega)
-    friction = GuideFriction("guide_friction", "slider", effects["guide_friction"],
-                             base["slider_mass"] * STANDARD_GRAVITY, slip_width=GUIDE_SLIP_WIDTH)
     mech0, q_guess = rig_slider_crank(params, free_length=base["free_length"],
                                       spring_stiffness=base["spring_stiffness"],
-                                      extra_forces=(friction,))
+                                      extra_forces=effects.forces(base))
     design = WearJointDesign(base["k"], base["clearance"], base["depth"], base["diameter"],
                              base["wall"], base["mu"], RIG_JOINT.restitution)
     mech = with_wear_joint(mech0, design, n_theta=n_theta, penetration_width=penetration_width)
@@ -218,25 +214,25 @@ class RigHistory(eqx.Module):
         return rig_mechanism(base, effects, n_theta=self.n_theta,
                              penetration_width=self.penetration_width, p=self.p)
 
+    def wear_model(self, effects: EffectValues) -> Dynamic:
+        """`diffwear.models.Dynamic` with this model's constant extrapolation,
+        the effects as its modifier and each dynamic cycle's force trace kept;
+        forward-mode adjoint (the calibration differentiates with jacfwd: few
+        parameters, many residuals)."""
+        return Dynamic(cycle=CycleSettings(self.cycle_rtol, self.cycle_atol,
+                                           adjoint=diffrax.ForwardMode()),
+                       warmup_cycles=1, extrapolation=Constant(self.extrapolation),
+                       modifier=EffectsModifier(effects, self.fit_window),
+                       force_samples=self.force_samples)
+
     def __call__(self, base: dict, effects: EffectValues) -> History:
         mech, y0 = self.mechanism(base, effects)
         el = mech.element(JOINT)
-        # forward-mode adjoint: the calibration differentiates with jacfwd
-        # (few parameters, many residuals)
-        settings = CycleSettings(self.cycle_rtol, self.cycle_atol,
-                                 adjoint=diffrax.ForwardMode())
-        grow = 1.0 + effects["creep"]
-        term = _RigDynamicWear(mech, (JOINT,), jnp.asarray(self.period), settings,
-                               saves=self.force_samples, effects=effects, grow=grow,
-                               total_cycles=self.fit_window)
-        memory, ok = term.warm_up(y0, 1)
-        stop = Stop(cycles=self.cycles)
-        solver = Constant(self.extrapolation)
-        end, hist = integrate(term, solver, initial_state(term.zeros(), memory, ok=ok),
-                              stop=stop, slots=self.dynamic_cycles, keep_profiles=True,
-                              keep_memory=True)
+        solution = self.wear_model(effects).solve(mech, (JOINT,), y0, period=self.period,
+                                                  cycles=self.cycles)
+        d = self.dynamic_cycles
         zeros = jnp.zeros(self.n_theta)
-        hs, forces = hist["depth"][0], hist["memory"]["force"]
+        hs, forces = solution.detail.history["depth"][:d], solution.detail.history["force"][:d]
         crank0 = mech.frames(mech.split(y0)[0]).pose("crank")[2]
         # The samples span [a0, a0 + 2 pi]; drop the first: the cycle starts on
         # the profile just deepened by A cycles' wear, so the pin is
@@ -245,6 +241,7 @@ class RigHistory(eqx.Module):
         angle = crank0 + jnp.linspace(0.0, 2 * jnp.pi, self.force_samples)[1:]
         angle, forces = sorted_trace(angle, forces[:, 1:])
         a = self.extrapolation
+        grow = effects.growth()
         wear = jnp.concatenate([zeros[None], hs])
         return History(
             cycles=a * jnp.arange(self.dynamic_cycles + 1, dtype=float),
@@ -252,40 +249,7 @@ class RigHistory(eqx.Module):
             force=forces, force_cycles=a * jnp.arange(self.dynamic_cycles, dtype=float),
             force_angle=angle, theta=el.profile.theta,
             bushing_radius=el.bushing_radius, bushing_depth=el.law.depth,
-            ok=end.status == RESULTS.ok)
-
-
-class _RigDynamicWear(DynamicWear):
-    """The rig joint's dynamic wear with the effects: each cycle at the
-    clearance profile c0 + (1 + s_c) h (creep), its rate scaled by the
-    effects' rate factor over the step; the memory keeps the cycle's |joint
-    force| trace (``saves`` samples)."""
-
-    effects: EffectValues | None = None
-    grow: Float[Array, ""] | None = None
-    total_cycles: float = eqx.field(static=True, default=1.0)
-
-    def warm_up(self, y0, cycles: int):
-        memory, ok = super().warm_up(y0, cycles)
-        assert self.saves is not None
-        return dict(memory, force=jnp.zeros(self.saves)), ok
-
-    def cycle(self, h, memory) -> CycleWear:
-        assert self.grow is not None
-        profile = (self.grow * h[0],)
-        r, after, worn = self.run(profile, memory, self.saves)
-        assert r.ys is not None  # saved: ``saves`` states
-        force = contact_history(worn, JOINT, r.ys).force_magnitude
-        return CycleWear(rate=tuple(r.depth_increment), ok=r.ok, memory=dict(after, force=force),
-                         load_sliding=jnp.stack(r.load_sliding))
-
-    def modulate(self, cw: CycleWear, h, n, dn) -> CycleWear:
-        assert self.effects is not None
-        el = self.mech.element(JOINT)
-        volume = worn_volume(h[0], el.bushing_radius, el.law.depth)
-        g = rate_factor(self.effects, h[0], volume, n, dn, el.profile.theta, self.total_cycles)
-        return CycleWear(rate=(g * cw.rate[0],), ok=cw.ok, memory=cw.memory,
-                         load_sliding=cw.load_sliding)
+            ok=~not_computed(solution.result))
 
 
 # ------------------------------------------------------------------ observation

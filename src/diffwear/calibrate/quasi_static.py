@@ -1,10 +1,12 @@
 """The calibration's quasi-static forward model (`QuasiStaticRigHistory`).
 
-The rig's crank-rod joint in the quasi-static reduction (`diffwear.quasistatic`):
-the ideal mechanism's joint loads over one cycle (with the guide friction of
-the effects), the pin at the equilibrium of the EFM springs, the profile
-integrated in the cycle count by the linearly implicit Euler step with the
-exact wear response A (`diffwear.wear.profile_ode` explains the step):
+The rig's crank-rod joint on the quasi-static wear model
+(`diffwear.models.QuasiStatic`) with the effects as its modifier
+(`effects.EffectsModifier`): the ideal mechanism's joint loads over one cycle
+(with the guide friction of the effects), the pin at the equilibrium of the
+EFM springs, the profile integrated in the cycle count on this model's grid
+by the linearly implicit Euler step with the exact wear response A
+(`diffwear.wear.modifier`):
 
     (I + dN (1 + s_c) diag(g) A) dh = dN g w((1 + s_c) h),
 
@@ -30,18 +32,13 @@ from typing import ClassVar
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
 
 from ..errors import InputError
 from ..mechanism.geometry import safe_norm
+from ..models import QuasiStatic
 from ..presets import TABLE_7_1, SliderCrankParameters
-from ..quasistatic.joint import QuasiStaticJoint
-from ..quasistatic.loads import JointLoads, cycle_loads
-from ..wear import worn_volume
-from ..wear.engine import AbstractWearTerm, CycleWear, Stop, initial_state, integrate
-from ..wear.implicit import CycleGrid
-from ..wear.status import RESULTS
-from .effects import EffectValues, rate_factor
+from ..wear.status import not_computed
+from .effects import EffectsModifier, EffectValues
 from .model import (
     JOINT,
     PENETRATION_WIDTH,
@@ -150,50 +147,25 @@ class QuasiStaticRigHistory(eqx.Module):
         """The crank's angle at t = 0 (the force trace's angle origin)."""
         return mech.frames(mech.split(y0)[0]).pose("crank")[2]
 
+    def wear_model(self, effects: EffectValues) -> QuasiStatic:
+        """`diffwear.models.QuasiStatic` on this model's cycle grid with the
+        effects as its modifier."""
+        return QuasiStatic(samples=self.samples, grid=jnp.asarray(self.grid),
+                           modifier=EffectsModifier(effects, self.fit_window))
+
     def __call__(self, base: dict, effects: EffectValues) -> History:
         mech, y0 = self.mechanism(base, effects)
         el = mech.element(self.joint)
-        loads = cycle_loads(mech, (self.joint,), y0, self.period, samples=self.samples)
-        lo = loads.joints[0]
-        term = _RigWear(QuasiStaticJoint.from_joint(el), lo, effects, 1.0 + effects["creep"],
-                        el.profile.theta, el.bushing_radius, el.law.depth, self.fit_window)
-        solver = CycleGrid(jnp.asarray(self.grid))
-        zeros = jnp.zeros(term.joint.n)
-        state = initial_state((zeros,), jnp.full_like(lo.force, jnp.nan), ok=loads.ok)
-        end, history = integrate(term, solver, state, stop=Stop(cycles=self.grid[-1]),
-                                 slots=solver.slots(Stop(cycles=self.grid[-1]), None),
-                                 keep_profiles=True)
-        wear = jnp.concatenate([zeros[None], history["depth"][0]])
+        joints = (self.joint,)
+        model = self.wear_model(effects).prepared(mech, joints, y0, self.period)
+        solution = model.solve(mech, joints, y0, period=self.period, cycles=self.grid[-1])
+        lo = model.loads(mech, joints, y0, self.period).joints[0]
+        wear = solution.history[0].depth
+        grow = effects.growth()
         angle = self.crank_angle(mech, y0) + 2 * jnp.pi * jnp.arange(self.samples) / self.samples
         angle, force = sorted_trace(angle, safe_norm(lo.force)[None])
         return History(
-            cycles=solver.grid, wear=wear, creep=(term.grow - 1.0) * wear, force=force,
+            cycles=jnp.asarray(self.grid), wear=wear, creep=(grow - 1.0) * wear, force=force,
             force_cycles=jnp.zeros(1), force_angle=angle, theta=el.profile.theta,
             bushing_radius=el.bushing_radius, bushing_depth=el.law.depth,
-            ok=end.status == RESULTS.ok)
-
-
-class _RigWear(AbstractWearTerm):
-    """The rig joint's quasi-static wear with the effects: the rate at the
-    clearance profile c0 + (1 + s_c) h (creep), scaled by the effects' rate
-    factor over each step (module notes)."""
-
-    joint: QuasiStaticJoint
-    loads: JointLoads
-    effects: EffectValues
-    grow: Float[Array, ""]
-    theta: Float[Array, " n"]
-    bushing_radius: Float[Array, ""]
-    bushing_depth: Float[Array, ""]
-    window: float = eqx.field(static=True)   # the cycle-count discrepancy's time scale
-
-    def cycle(self, h, memory) -> CycleWear:
-        dw, _, eq = self.joint.cycle_wear(self.grow * h[0], self.loads, memory)
-        a = self.joint.wear_response(self.grow * h[0], self.loads, eq)
-        return CycleWear(rate=(dw,), ok=eq.ok, memory=eq.offset, response=(a,))
-
-    def modulate(self, cw: CycleWear, h, n, dn) -> CycleWear:
-        volume = worn_volume(h[0], self.bushing_radius, self.bushing_depth)
-        g = rate_factor(self.effects, h[0], volume, n, dn, self.theta, self.window)
-        return CycleWear(rate=(g * cw.rate[0],), ok=cw.ok, memory=cw.memory,
-                         response=(self.grow * g[:, None] * cw.response[0],))
+            ok=~not_computed(solution.result))

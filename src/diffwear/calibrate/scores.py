@@ -26,8 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .effects import EFFECTS, INDEX, SHAPED
-from .fit import LOG_STD
+from .effects import LIBRARY, Library
 
 # Shapes at which a shaped effect is scored: ln(shape / default) in units of
 # its prior spread (+-1.5 sigma: a factor 32 either way for a decade prior)
@@ -106,21 +105,23 @@ def score_tests(fitter, fit, kinds, exclude=()) -> list[Score]:
     r = fit.residual[rows]
     best: dict[str, Score] = {}
     info: dict[str, tuple[float, float]] = {}
+    lib = fitter.library
+    log_std = lib.log_std
     for g in SHAPE_GRID:
-        je = (fitter.effect_jacobian(x, LOG_STD * g) if v is None
-              else fitter.effect_jacobian(x, LOG_STD * g, v))[rows]
-        for k, eff in enumerate(EFFECTS):
-            if eff.name in fitted or (not SHAPED[k] and g != 0.0):
+        je = (fitter.effect_jacobian(x, log_std * g) if v is None
+              else fitter.effect_jacobian(x, log_std * g, v))[rows]
+        for k, eff in enumerate(lib.effects):
+            if eff.name in fitted or (eff.shape is None and g != 0.0):
                 continue
             s = efficient_score(eff.name, je[:, k], jb, r, eff.lower, kinds[rows])
-            s.log_shape = float(LOG_STD[k] * g)
+            s.log_shape = float(log_std[k] * g)
             if s.information > info.get(eff.name, (-1.0, 0.0))[0]:
                 info[eff.name] = (s.information, s.log_shape)
             if eff.name not in best or s.statistic > best[eff.name].statistic:
                 best[eff.name] = s
     for name, s in best.items():
         s.information, s.limit_log_shape = info[name]
-        if SHAPED[INDEX[name]]:  # the grid's largest: Bonferroni
+        if lib.effect(name).shape is not None:  # the grid's largest: Bonferroni
             s.p_value = min(1.0, len(SHAPE_GRID) * s.p_value)
     return sorted(best.values(), key=lambda s: -s.statistic)
 
@@ -136,11 +137,11 @@ def score_suspects(fitter, base, kinds) -> list[Score]:
     return sorted(out, key=lambda s: -s.statistic)
 
 
-def detection_limits(scores: list[Score]) -> dict:
+def detection_limits(scores: list[Score], library: Library = LIBRARY) -> dict:
     """{effect: {"strength": limit, "shape": SI shape where it holds or None}}."""
     out = {}
     for s in scores:
-        eff = EFFECTS[INDEX[s.effect]]
+        eff = library.effect(s.effect)
         shape = (eff.shape.default * math.exp(s.limit_log_shape)) if eff.shape else None
         limit = s.detection_limit
         out[s.effect] = {"strength": limit if math.isfinite(limit) else None, "shape": shape}

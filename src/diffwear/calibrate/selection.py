@@ -40,7 +40,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import chi2
-from .effects import EFFECTS, NAMES
 from .fit import FitResult, Fitter
 
 # adoption's test level: a chi-square drop this improbable under "no effect"
@@ -69,13 +68,13 @@ class IdentifiedForm:
     cycles: float
     early: bool
     shape_determined: bool = False   # the shape is, but not apart from the strength
+    shape_name: str = "shape"        # the effect's shape parameter, in words
 
     def sentence(self, effect: str) -> str:
         what = "bedding-in" if effect == "run_in" else effect.replace("_", " ")
         when = (f"before the first inspection ({self.cycles:g} cycles)" if self.early
                 else f"by {self.cycles:g} cycles")
-        shape = EFFECTS[NAMES.index(effect)].shape
-        unit = shape.name.replace("_", " ") if shape else "shape"
+        unit = self.shape_name
         known = (f"its strength and {unit} are not determined apart from each other"
                  if self.shape_determined else
                  f"its {unit} cannot be measured from these data")
@@ -189,15 +188,16 @@ def identified_form(fitter: Fitter, fit: FitResult, effect: str,
     v0, j0 = volumes(fitter, fit, effect)
     g = j1[k] - j0[k]
     var = float(g @ fit.notes["cov"] @ g)
+    shape = fitter.library.effect(effect).shape
     return IdentifiedForm(float(v1[k] - v0[k]), math.sqrt(max(var, 0.0)), float(probes[k]),
-                          early)
+                          early, shape_name=shape.name.replace("_", " ") if shape else "shape")
 
 
 def assess(fitter: Fitter, effect: str, fit: FitResult, reference: FitResult,
            inspections: list) -> Assessment:
     """Whether ``effect`` (fitted in ``fit`` on top of ``reference``) qualifies
     (module notes)."""
-    eff = EFFECTS[NAMES.index(effect)]
+    eff = fitter.library.effect(effect)
     lr = reference.chi2_fit - fit.chi2_fit
     determined = shape_determined(fit, effect)
     form = None

@@ -17,8 +17,7 @@ import numpy as np  # noqa: E402
 
 from ..calibrate import learned
 from ..calibrate.dataset import PARAMETERS, Dataset  # noqa: E402
-from ..calibrate.discrepancy import VARIABLES
-from ..calibrate.effects import EFFECTS  # noqa: E402
+from ..calibrate.effects import LIBRARY, Library  # noqa: E402
 from ..calibrate.fit import ModelSettings  # noqa: E402
 from ..calibrate.forecast import Outlook
 from ..calibrate.frame_check import frame_warnings  # noqa: E402
@@ -91,16 +90,15 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
             adopted, AMBIGUITY).name)
     if final.discrepancy is not None:
         d = final.discrepancy
-        span = learned.span(d, c.dataset)
+        lib = c.problem.library
+        span = learned.span(d, c.dataset, lib)
         b = c.summary_discrepancy().get("log_k_per_coefficient")
         x, delta, band_d = learned.curve(d, final.discrepancy_coefficients,
-                                         final.discrepancy_cov, span, c.dataset.fit_cycles, b)
-        label = {"angle": "bushing angle [deg]", "pressure": "contact pressure [MPa]",
-                 "sliding_speed": "sliding speed [mm/s]", "cycles": "cycles",
-                 "depth": "wear depth [mm]"}[d]
+                                         final.discrepancy_cov, span, c.dataset.fit_cycles, b,
+                                         lib)
         files.append(plots_calibration.discrepancy(
-            out.file("discrepancy.png"), x, delta, band_d, label,
-            f"learned discrepancy of k over {disc_words(d)}", _covered(d, c)).name)
+            out.file("discrepancy.png"), x, delta, band_d, lib.variable(d).axis,
+            f"learned discrepancy of k over {disc_words(d, lib)}", _covered(d, c)).name)
     if c.posterior is not None:
         post = c.posterior
         columns = {_number_label(n, c.dataset): _in_dataset_unit(n, v, c.dataset)
@@ -133,10 +131,8 @@ def _members_of(fit) -> list[str]:
     return [*fit.effects, *([learned.candidate(fit.discrepancy)] if fit.discrepancy else [])]
 
 
-def disc_words(variable: str) -> str:
-    from ..calibrate.discrepancy import WORDS
-
-    return WORDS[variable]
+def disc_words(variable: str, library: Library = LIBRARY) -> str:
+    return library.variable(variable).words
 
 
 def _covered(variable: str, c: Calibration):
@@ -212,6 +208,7 @@ def _param_text(name: str, value: float, std: float, data) -> str:
 
 def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
     d = c.dataset
+    lib = c.problem.library
     blocks: list[Block] = [
         d.description or "",
         f"Dataset `{d.path}`: {len(d.series)} series, "
@@ -240,7 +237,7 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
                    f"(Q {significant(check['statistic'], 4)} on {check['points']} points, "
                    f"limit {significant(check['limit'], 4)})")
     blocks.append(Section("Answer", [
-        Bullets([*_effect_lines(summary), *_discrepancy_lines(summary),
+        Bullets([*_effect_lines(summary, lib), *_discrepancy_lines(summary, lib),
                  ("the data are explained: " if not summary["residual_unexplained"] else
                   "**the residual is unexplained** by these causes: ") + "; ".join(why)]),
         Bullets(_suspect_lines(summary)),
@@ -276,7 +273,8 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
         Table(("candidate", "score", "p", "refit strength", "refit shape", "refit chi2",
                "qualifies"), candidates),
         "Library: " + "; ".join(f"`{e.name}`: {e.description}"
-                                + (f" ({e.source})" if e.source else "") for e in EFFECTS)]))
+                                + (f" ({e.source})" if e.source else "")
+                                for e in lib.effects)]))
     if summary["suspects"]:
         blocks.append(Section("Mechanism suspects", [
             "No cause in the library explains the data, so the rig parameters the dataset "
@@ -298,7 +296,7 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
             "where the data are most sensitive to it): \"none\" reads \"none above these\".",
             Table(("effect", "detection limit (strength)", "at shape"),
                   [(name, significant(v["strength"], 3),
-                    _limit_shape(name, v["shape"]) if v["shape"] else "")
+                    _limit_shape(name, v["shape"], lib) if v["shape"] else "")
                    for name, v in limits.items()])]))
     mc = summary.get("model_check")
     if mc:
@@ -359,8 +357,8 @@ def _suspects_verdict(summary: dict) -> str:
     return ("None named: no score passes p = 0.001 corrected for the number of suspects.")
 
 
-def _limit_shape(effect: str, value: float) -> str:
-    shape = next(e.shape for e in EFFECTS if e.name == effect)
+def _limit_shape(effect: str, value: float, library: Library = LIBRARY) -> str:
+    shape = library.effect(effect).shape
     return f"{significant(value, 3)} {shape.unit}" if shape else significant(value, 3)
 
 
@@ -473,25 +471,25 @@ def _life_blocks(summary: dict) -> list[Block]:
         "posterior's draws.", Bullets(lines)])]
 
 
-def _shape_text(entry: dict) -> str:
-    shape = next(e.shape for e in EFFECTS if e.name == entry["name"])
+def _shape_text(entry: dict, library: Library = LIBRARY) -> str:
+    shape = library.effect(entry["name"]).shape
     assert shape is not None  # called for effects with a fitted shape only
     lo, hi = entry["shape_interval"] or (math.nan, math.nan)
     return (f"{shape.name.replace('_', ' ')} {significant(entry['shape'], 3)} {shape.unit} "
             f"(1 sigma: {significant(lo, 3)} to {significant(hi, 3)})")
 
 
-def _effect_text(entry: dict) -> str:
+def _effect_text(entry: dict, library: Library = LIBRARY) -> str:
     if "identified_form" in entry:
         return entry["identified_form"]["sentence"]
     text = (f"**{entry['name']}**, strength "
             f"{plus_minus(entry['strength'], entry['strength_std'])} (1 sigma)")
     if entry.get("shape") is not None:
-        text += f", {_shape_text(entry)}"
+        text += f", {_shape_text(entry, library)}"
     return text
 
 
-def _effect_lines(summary: dict) -> list[str]:
+def _effect_lines(summary: dict, library: Library = LIBRARY) -> list[str]:
     """The named effects (or the ambiguity) in words."""
     effects = summary["effects_identified"]
     lines = [f"effect identified: **{summary['effect_identified']}**"]
@@ -499,23 +497,24 @@ def _effect_lines(summary: dict) -> list[str]:
         if e.get("ambiguous"):
             lines.append(f"**{e['name']}**: these data cannot tell them apart; "
                          + "; ".join(f"{a['name']}: "
-                                     + ", ".join(_effect_text(x) for x in a["effects"])
+                                     + ", ".join(_effect_text(x, library)
+                                                 for x in a["effects"])
                                      for a in e["alternatives"]))
         else:
-            lines.append(_effect_text(e))
+            lines.append(_effect_text(e, library))
     for e in summary.get("effects_partial", []):
         lines.append(f"partial candidate (leaves the residual unexplained): "
-                     f"{_effect_text(e)}")
+                     f"{_effect_text(e, library)}")
     return lines
 
 
-def _discrepancy_lines(summary: dict) -> list[str]:
+def _discrepancy_lines(summary: dict, library: Library = LIBRARY) -> list[str]:
     d = summary.get("discrepancy")
     if not d:
         return []
     if d.get("variable") is None:
         return [f"learned discrepancy: {d['shape']}"]
-    return [f"learned discrepancy of k over **{disc_words(d['variable'])}**: {d['shape']}"
+    return [f"learned discrepancy of k over **{disc_words(d['variable'], library)}**: {d['shape']}"
             " (`discrepancy.png`)"]
 
 
@@ -540,7 +539,7 @@ def _suspect_lines(summary: dict) -> list[str]:
 
 
 def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSettings(),
-        top: int = 3, check: bool = True, discrepancy=VARIABLES, outlook=Outlook(),
+        top: int = 3, check: bool = True, discrepancy=None, outlook=Outlook(),
         log=print) -> dict:
     """The loop on a loaded dataset (`load_dataset`: bad input is found before
     ``out`` exists), writing the outputs listed in the module notes."""

@@ -15,12 +15,16 @@ Each solves the wear of its joints to a number of cycles or to a depth limit
 (`solve`, one `WearSolution`; `evolve` and `life`, `cycles_to_limit`, are
 calls of it) and gives the joint force at the end, on the wear engine
 (`diffwear.wear.engine`).
+A model may carry a modifier (`AbstractWearModifier`: hooks on the profile
+each cycle sees and on the rate of each step), which is how the calibration's
+effects reach them.
 The models are the physics: a run of one (compiled once, timed, in chunks
 with checkpoints) is `execution.run_model`, and what the reports say of a
 model is `diffwear.studies.model_words`.
 """
 
 from ..wear.engine import MAX_CYCLES
+from ..wear.modifier import AbstractWearModifier, JointGeometry
 from ._base import AbstractWearModel
 from .dynamic import Dynamic
 from .execution import (
@@ -39,4 +43,5 @@ from .solution import WearSolution
 
 __all__ = ["AbstractWearModel", "WearSolution", "Dynamic", "QuasiStatic", "FemRoute",
            "cycles_to_limit", "joint_mass", "run_model", "Checkpoints", "RunTimes",
-           "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint", "MAX_CYCLES"]
+           "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint", "MAX_CYCLES",
+           "AbstractWearModifier", "JointGeometry"]

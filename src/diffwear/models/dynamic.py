@@ -23,6 +23,7 @@ from ..wear.dynamic_term import CycleSettings
 from ..wear.evolution import EvolutionResult, Evolver, worn_mechanism
 from ..wear.extrapolation import AbstractExtrapolation, Constant
 from ..wear.life import dynamic_cycles_to_limit
+from ..wear.modifier import AbstractWearModifier
 from ..wear.profile_ode import ProfileHistory
 from ..wear.status import RESULTS, not_an_answer, not_computed, stack
 from ._base import AbstractWearModel
@@ -47,7 +48,11 @@ class Dynamic(AbstractWearModel):
     implicit profile update (else explicit Euler).  Evolutions (one wearing
     joint): ``extrapolation`` (`Constant`, `Adaptive`, `ErrorControlled`;
     default constant A = cycles / ``dynamic_cycles``), ``max_dynamic`` scan
-    slots of the adaptive methods (default 4 ``dynamic_cycles``).
+    slots of the adaptive methods (default 4 ``dynamic_cycles``),
+    ``modifier``: an `AbstractWearModifier` of the joint's wear (its rate
+    factor is held over each extrapolated step), ``force_samples``: keep
+    each dynamic cycle's |joint force| at this many states in the history
+    (``detail.history["force"]``).
     """
 
     name: ClassVar[str] = "dynamic"
@@ -59,6 +64,8 @@ class Dynamic(AbstractWearModel):
     extrapolation: AbstractExtrapolation | None = None
     dynamic_cycles: int = eqx.field(static=True, default=50)
     max_dynamic: int | None = eqx.field(static=True, default=None)
+    modifier: AbstractWearModifier | None = None
+    force_samples: int | None = eqx.field(static=True, default=None)
 
     def __check_init__(self):
         # counts of slots and cycles: a zero or negative one has nothing to
@@ -81,7 +88,8 @@ class Dynamic(AbstractWearModel):
                        max_dynamic=(4 * self.dynamic_cycles if self.max_dynamic is None
                                     else self.max_dynamic),
                        wall_thickness=wall_thickness, warmup_cycles=self.warmup_cycles,
-                       cycle=self.cycle)
+                       cycle=self.cycle, modifier=self.modifier,
+                       force_samples=self.force_samples)
 
     def solve(self, mech, joints, y0, *, period, cycles=None, limit=None,
               wall_thickness=None) -> WearSolution:
@@ -95,6 +103,11 @@ class Dynamic(AbstractWearModel):
                              f"limit= (a life), not {'both' if cycles is not None else 'neither'}"
                              "; allowed: one of them (QuasiStatic takes both)")
         if limit is not None:
+            if self.modifier is not None or self.force_samples is not None:
+                raise InputError(f"{type(self).__name__}.solve: a life to limit= steps in "
+                                 "depth, where a modifier's rate over a step and a force "
+                                 "trace per cycle are not defined; allowed: cycles= with "
+                                 "modifier= or force_samples=")
             if wall_thickness is not None:
                 raise InputError(f"{type(self).__name__}.solve: a life to limit= runs "
                                  f"without a wall, got wall_thickness={wall_thickness!r}; "

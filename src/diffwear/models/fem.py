@@ -25,6 +25,9 @@ class FemRoute(Dynamic):
     def __check_init__(self):
         if not isinstance(self.fem, FemWearModel):
             raise InputError(f"FemRoute: fem must be a FemWearModel, got {self.fem!r}")
+        if self.modifier is not None or self.force_samples is not None:
+            raise InputError("FemRoute: its FE wear term takes no modifier or force trace; "
+                             "allowed: Dynamic(modifier=..., force_samples=...)")
 
     def evolver(self, mech, joint: str, cycles, *, period, wall_thickness=None) -> FemEvolver:
         assert self.fem is not None

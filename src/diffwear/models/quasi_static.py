@@ -33,11 +33,15 @@ from jaxtyping import Array, Float
 
 from .._checks import check_int_option, check_range, require_float64
 from ..contact import ContactHistory
+from ..errors import InputError
 from ..mechanism import GROUND, Mechanism
 from ..mechanism.geometry import safe_angle, safe_norm
 from ..quasistatic.loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
 from ..quasistatic.lubricated import joint_model
-from ..wear.profile_ode import ProfileSolution, integrate_profile
+from ..wear.engine import AbstractWearTerm, CycleWear, Stop, initial_state, integrate
+from ..wear.implicit import CycleGrid
+from ..wear.modifier import AbstractWearModifier, JointGeometry, modulated
+from ..wear.profile_ode import ProfileHistory, ProfileSolution, integrate_profile
 from ..wear.status import RESULTS, not_an_answer, not_computed, stack, worst
 from ._base import AbstractWearModel
 from .solution import WearSolution
@@ -73,7 +77,11 @@ class QuasiStatic(AbstractWearModel):
     the contact check (default `joint_mass`); ``max_steps``: scan slots of the
     wear ODE (default ``steps + 3``, counted tight for vmapped design sweeps; a
     groove whose peak grows slower than the step rule expects needs more: a
-    single run can afford ``4 steps + 8``).
+    single run can afford ``4 steps + 8``); ``grid``: real cycle counts 0 =
+    N_0 < N_1 < ... to step on instead (one linearly implicit step per
+    interval, the profile kept at each: `diffwear.wear.implicit.CycleGrid`),
+    which a ``modifier`` (`AbstractWearModifier`: the calibration's effects)
+    needs.
     """
 
     name: ClassVar[str] = "quasi-static"
@@ -85,8 +93,14 @@ class QuasiStatic(AbstractWearModel):
     contact_mass: Float[Array, ""] | None = None
     fixed_loads: CycleLoads | None = None
     max_steps: int | None = eqx.field(static=True, default=None)
+    grid: Float[Array, " K"] | None = None
+    modifier: AbstractWearModifier | None = None
 
     def __check_init__(self):
+        if self.modifier is not None and self.grid is None:
+            raise InputError("QuasiStatic: a modifier's rate is held over each step, so its "
+                             "steps must be given in advance; allowed: grid= (real cycle "
+                             "counts) with modifier=")
         # counts of the quadrature and of the wear ODE: a zero or negative one
         # has no cycle to integrate (an `InputError` here, not a shape error
         # or a division by zero in the traced program)
@@ -154,20 +168,27 @@ class QuasiStatic(AbstractWearModel):
         walls = (jnp.full(len(models), jnp.inf) if walls is None
                  else jnp.broadcast_to(jnp.asarray(walls, dtype=float), (len(models),)))
 
-        def one(j, lo: JointLoads, mass, wall):
+        # what a modifier reads of each joint (a grid run only)
+        geometries = (tuple(JointGeometry.of(el) for el in clearance_joints(mech, joints))
+                      if self.grid is not None else (None,) * len(models))
+
+        def one(j, lo: JointLoads, mass, wall, geometry):
             def evaluate(h, offsets):
                 # warm start: the pin offsets of the previous step's profile
                 dh, _, eq = j.cycle_wear(h, lo, offsets)
                 return dh, eq.ok, j.wear_response(h, lo, eq), eq.offset
 
-            sol = integrate_profile(evaluate, jnp.zeros(j.n), steps=self.steps,
-                                    max_steps=slots, memory=jnp.full_like(lo.force, jnp.nan),
-                                    wall=wall, **target)
+            memory = jnp.full_like(lo.force, jnp.nan)
+            if self.grid is None:
+                sol = integrate_profile(evaluate, jnp.zeros(j.n), steps=self.steps,
+                                        max_steps=slots, memory=memory, wall=wall, **target)
+            else:
+                sol = self._on_grid(j, lo, memory, wall, geometry, **target)
             margins = jnp.stack([jnp.min(j.contact_margin(jnp.zeros(j.n), lo, mass)),
                                  jnp.min(j.contact_margin(sol.depth, lo, mass))])
             return sol, margins
 
-        parts = (models, loads.joints, masses, tuple(walls))
+        parts = (models, loads.joints, masses, tuple(walls), geometries)
         if len(models) > 1 and all(_stackable(p) for p in parts):
             # one vmapped loop, not two side by side in one program (XLA's CPU
             # runtime: docs/notes/quasi-static-model.md, "Joints side by side")
@@ -178,6 +199,26 @@ class QuasiStatic(AbstractWearModel):
         else:
             per_joint = [one(*args) for args in zip(*parts)]
         return per_joint, loads.ok
+
+    def _on_grid(self, joint, loads: JointLoads, memory, wall, geometry: JointGeometry,
+                 cycles=None, limit=None) -> ProfileSolution:
+        """One joint's profile stepped on ``grid`` (with the modifier)."""
+        assert self.grid is not None  # called with a grid only
+        term = _JointWear(joint, loads, self.modifier, geometry)
+        solver = CycleGrid(jnp.asarray(self.grid, dtype=float))
+        stop = Stop(cycles=solver.grid[-1] if cycles is None else cycles, limit=limit,
+                    wall=wall)
+        h0 = jnp.zeros(joint.n)
+        s, history = integrate(term, solver, initial_state((h0,), memory), stop=stop,
+                               slots=solver.slots(stop, None), keep_profiles=True)
+        return ProfileSolution(
+            depth=s.h[0], cycles=s.n, life=s.life[0], status=s.status, steps=s.steps,
+            evaluations=s.evaluations,
+            history=ProfileHistory(
+                cycles=solver.grid,
+                peak=jnp.concatenate([jnp.zeros(1), history["max_depth"][:, 0]]),
+                depth=jnp.concatenate([h0[None], history["depth"][0]]),
+                valid=jnp.concatenate([jnp.array([True]), history["valid"]])))
 
     @staticmethod
     def _result(per_joint, loads_ok):
@@ -248,6 +289,31 @@ class QuasiStatic(AbstractWearModel):
         crank = 2 * jnp.pi * jnp.arange(self.samples) / self.samples
         return (history(mech, joint, y0, period, jnp.zeros_like(depth)),
                 history(mech, joint, y0, period, depth), crank)
+
+
+class _JointWear(AbstractWearTerm):
+    """One quasi-static joint's wear per cycle at the clearance profile
+    c0 + g h (g the modifier's growth), its rate and response modulated by
+    the modifier over each step (`diffwear.wear.modifier`)."""
+
+    joint: Any
+    loads: JointLoads
+    modifier: AbstractWearModifier | None
+    geometry: JointGeometry
+
+    def _growth(self):
+        return 1.0 if self.modifier is None else self.modifier.growth()
+
+    def cycle(self, h, memory) -> CycleWear:
+        seen = self._growth() * h[0]
+        dw, _, eq = self.joint.cycle_wear(seen, self.loads, memory)
+        a = self.joint.wear_response(seen, self.loads, eq)
+        return CycleWear(rate=(dw,), ok=eq.ok, memory=eq.offset, response=(a,))
+
+    def modulate(self, cw: CycleWear, h, n, dn) -> CycleWear:
+        if self.modifier is None:
+            return cw
+        return modulated(cw, h, n, dn, self.modifier, self.geometry)
 
 
 __all__ = ["QuasiStatic", "joint_mass"]

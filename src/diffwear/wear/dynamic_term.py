@@ -18,9 +18,11 @@ import jax.numpy as jnp
 from jax import lax
 from jaxtyping import Array, Float
 
+from ..contact import contact_history
 from ..mechanism import Mechanism
 from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle_joints, wear_parts
 from .engine import AbstractWearTerm, CycleWear
+from .modifier import AbstractWearModifier, JointGeometry, modulated
 
 # Ridge added to M = U^T D U (units: grid nodes in contact) in `wear_operator`.
 # Without it M^-1 is singular in free flight and its derivative (through the
@@ -107,7 +109,12 @@ class DynamicWear(AbstractWearTerm):
     with ``ts``/``ys``); ``response``: with `wear_operator` from ``saves``
     states (contact band ``operator_width`` [m]); ``fresh_state``: each cycle
     starts from its inherited state without its derivative
-    (`lax.stop_gradient`: the life's derivative, `diffwear.wear.life`)."""
+    (`lax.stop_gradient`: the life's derivative, `diffwear.wear.life`);
+    ``force_trace``: the memory keeps the first joint's |joint force| at the
+    ``saves`` states of each cycle (``memory["force"]``); ``modifier``: a
+    `diffwear.wear.modifier.AbstractWearModifier` of one joint's wear
+    (its growth on the profile each cycle sees, its rate factor over each
+    step), reading ``geometry``."""
 
     mech: Mechanism
     joints: tuple[str, ...] = eqx.field(static=True)
@@ -117,6 +124,9 @@ class DynamicWear(AbstractWearTerm):
     response: bool = eqx.field(static=True, default=False)
     operator_width: float = 1e-6
     fresh_state: bool = eqx.field(static=True, default=False)
+    force_trace: bool = eqx.field(static=True, default=False)
+    modifier: AbstractWearModifier | None = None
+    geometry: JointGeometry | None = None
 
     def zeros(self) -> tuple:
         """Unworn profiles, one per joint."""
@@ -138,13 +148,26 @@ class DynamicWear(AbstractWearTerm):
         return r, dict(memory, y=r.y_end, t=memory["t"] + self.period), worn
 
     def cycle(self, h, memory) -> CycleWear:
+        if self.modifier is not None:
+            h = tuple(self.modifier.growth() * x for x in h)
         r, memory, worn = self.run(h, memory, self.saves)
         response = None
         if self.response:
             response = tuple(wear_operator(worn, j, r.ys, self.period, self.operator_width)
                              for j in self.joints)
+        if self.force_trace:
+            assert r.ys is not None  # saved: ``saves`` states
+            memory = dict(memory, force=contact_history(worn, self.joints[0], r.ys)
+                          .force_magnitude)
         return CycleWear(rate=tuple(r.depth_increment), ok=r.ok, memory=memory,
                          load_sliding=jnp.stack(r.load_sliding), response=response, extra=r)
+
+    def modulate(self, cw: CycleWear, h, n, dn) -> CycleWear:
+        """The rate over [n, n + dn]: the modifier's factor (none: unchanged)."""
+        if self.modifier is None:
+            return cw
+        assert self.geometry is not None, "a modifier reads the joint's geometry"
+        return modulated(cw, h, n, dn, self.modifier, self.geometry)
 
     def warm_up(self, y0, cycles: int):
         """``cycles`` dynamic cycles of the unworn joints from ``y0`` at t = 0,
@@ -154,6 +177,9 @@ class DynamicWear(AbstractWearTerm):
         for _ in range(int(cycles)):
             r, memory, _ = self.run(h0, memory, None)
             ok = ok & r.ok
+        if self.force_trace:
+            assert self.saves is not None, "a force trace needs saves="
+            memory = dict(memory, force=jnp.zeros(self.saves))
         return memory, ok
 
     def bushing(self, index: int = 0):

@@ -20,6 +20,7 @@ raises inside jit (`eqx.error_if`, as diffrax's ``diffeqsolve(throw=True)``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import equinox as eqx
@@ -34,6 +35,7 @@ from .cycle import clearance_element, wear_parts
 from .dynamic_term import CycleSettings, DynamicWear
 from .engine import Engine, Stop, WearState, initial_state
 from .extrapolation import AbstractExtrapolation, Constant
+from .modifier import AbstractWearModifier, JointGeometry
 from .status import RESULTS, message, name
 
 
@@ -165,7 +167,8 @@ class Evolver:
 
     def __init__(self, mech: Mechanism, joint: str, cycles, *, period,
                  method: AbstractExtrapolation = Constant(), max_dynamic=None,
-                 wall_thickness=None, warmup_cycles=1, cycle: CycleSettings = CycleSettings()):
+                 wall_thickness=None, warmup_cycles=1, cycle: CycleSettings = CycleSettings(),
+                 modifier: AbstractWearModifier | None = None, force_samples: int | None = None):
         if not isinstance(method, AbstractExtrapolation):
             raise InputError(f"method must be an extrapolation (Constant(A), Adaptive(), "
                              f"ErrorControlled()), got {method!r}")
@@ -174,12 +177,20 @@ class Evolver:
         law, _ = wear_parts(el)
         self.radius, self.bdepth = el.bushing_radius, law.depth
         self.term = self.make_term(mech, joint, jnp.asarray(period, dtype=float), cycle)
+        self.force_samples = force_samples
+        if modifier is not None or force_samples is not None:
+            self.term = eqx.tree_at(
+                lambda t: (t.modifier, t.geometry), self.term,
+                (modifier, JointGeometry.of(el)), is_leaf=lambda x: x is None)
+            if force_samples is not None:
+                self.term = dataclasses.replace(self.term, saves=int(force_samples),
+                                                force_trace=True)
         self.warmup_cycles = int(warmup_cycles)
         self.cycles_arr = jnp.asarray(cycles, dtype=float)
         stop = Stop(cycles=cycles, wall=wall_thickness)
         self.n_slots = self.strategy.slots(stop, max_dynamic)
         self.engine = Engine(self.term, self.strategy, stop, slots=self.n_slots,
-                             keep_profiles=True)
+                             keep_profiles=True, keep_memory=force_samples is not None)
 
     def make_term(self, mech, joint, period, settings) -> DynamicWear:
         """The wear term of one dynamic cycle (the FEM route's is another)."""
@@ -192,10 +203,13 @@ class Evolver:
         return self.engine.init(state)
 
     def _history(self, h: dict) -> dict:
-        return dict(cycles=h["cycles"], max_depth=h["max_depth"][..., 0],
-                    volume=worn_volume(h["depth"][0], self.radius, self.bdepth),
-                    extrapolation=h["step"], valid=h["valid"], dynamic_cycles=h["evaluations"],
-                    depth=h["depth"][0])
+        out = dict(cycles=h["cycles"], max_depth=h["max_depth"][..., 0],
+                   volume=worn_volume(h["depth"][0], self.radius, self.bdepth),
+                   extrapolation=h["step"], valid=h["valid"], dynamic_cycles=h["evaluations"],
+                   depth=h["depth"][0])
+        if self.force_samples is not None:   # each slot's |joint force| trace
+            out["force"] = h["memory"]["force"]
+        return out
 
     def run(self, state: WearState, length: int):
         """``length`` scan slots from ``state``: (new state, history of these slots)."""

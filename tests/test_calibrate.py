@@ -437,6 +437,11 @@ bushing_density = "2250 kg/m^3"
     assert res.params["joints.crank_rod.wear.coefficient"] == pytest.approx(6.06e-13, rel=0.03)
     assert res.params["forces.slider_spring.free_length"] == pytest.approx(0.5579, abs=1e-3)
     assert p.suspects == ("bodies.slider.mass",)
+    # the slider guide's friction adds a force to the rig's mechanism, which
+    # the file replaces: refused with its reason, not scored at zero effect
+    assert [n for n, _ in p.refused] == ["guide_friction"]
+    assert "guide_friction" not in p.library.names
+    assert "mechanism file" in p.refused[0][1]
     # the route carries the whole loop's model: an effect and the learned
     # discrepancy reach the file's wear law, exactly nothing at zero
     from diffwear.calibrate import discrepancy as disc

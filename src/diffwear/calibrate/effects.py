@@ -134,6 +134,12 @@ class Effect:
         """Forces added to the rig for parameters ``base`` (SI)."""
         return ()
 
+    @property
+    def adds_forces(self) -> bool:
+        """Whether the effect adds forces to the rig (a user's mechanism file
+        has no rig to add them to)."""
+        return type(self).forces is not Effect.forces
+
 
 @dataclass(frozen=True)
 class RunIn(Effect):
@@ -240,6 +246,10 @@ class Library:
         """This library with ``effects`` and ``variables`` added after its own."""
         return replace(self, effects=self.effects + tuple(effects),
                        variables=self.variables + tuple(variables))
+
+    def without(self, names) -> "Library":
+        """This library without the effects ``names``."""
+        return replace(self, effects=tuple(e for e in self.effects if e.name not in names))
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -118,6 +118,7 @@ class Problem:
     cycles_of_point: np.ndarray | None = None   # the cycle count of each point
     kinds: tuple = ()                           # each series' kind
     library: Library = LIBRARY                  # the candidate effects and variables
+    refused: tuple = ()                         # (effect, why) the model cannot take
 
     @property
     def kind_of_point(self) -> np.ndarray:
@@ -141,12 +142,18 @@ class Problem:
                              "quasi-static model; allowed: --model quasi-static")
         names = tuple(data.parameters)
         assert data.mechanism is not None  # this route is taken for a mechanism file only
+        # an effect that adds forces to the rig (the slider guide's friction)
+        # has no place in a user's mechanism: refused with the reason
+        refused = tuple((e.name, "it adds forces to the rig's mechanism, which a mechanism "
+                         "file replaces") for e in settings.library.effects if e.adds_forces)
+        library = settings.library.without({n for n, _ in refused})
         model = file_model(data.mechanism, names, data.joint, cycles=float(data.max_cycles),
                            window=float(data.fit_cycles),
                            checkpoints=tuple(sorted(set(_checkpoints(data)))),
                            steps=settings.steps)
-        return cls._assemble(data, model, dict(model.file_parameters.value0), names,
-                             settings.library)
+        problem = cls._assemble(data, model, dict(model.file_parameters.value0), names,
+                                library)
+        return dataclasses.replace(problem, refused=refused)
 
     @classmethod
     def _assemble(cls, data: Dataset, model, defaults: dict, names: tuple,

@@ -707,6 +707,7 @@ class Calibration:
             "effect_shape_interval": first.get("shape_interval") if first else None,
             "residual_unexplained": self.residual_unexplained,
             "unit_warnings": self.notes.get("unit_warnings", []),
+            "effects_refused": [{"name": n, "reason": why} for n, why in self.problem.refused],
             "heldout_rmse_before": self.base.rmse_holdout,
             "heldout_rmse_after": final.rmse_holdout,
             "heldout_rmse_units": "stated 1-sigma measurement noise",
@@ -965,6 +966,8 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
     kinds = problem.kind_of_point
     inspections = _inspections(data, problem)
     log(f"{problem.model.describe()}; fitting {', '.join(problem.fit_names)}")
+    for effect, why in problem.refused:
+        log(f"not a candidate: {effect} ({why})")
     base = fitter.fit(None)
     log(f"base fit: chi2 {base.chi2_fit:.1f} on {base.n_fit} points ({base.iterations} steps, "
         f"{base.wall_time_s:.1f} s)")

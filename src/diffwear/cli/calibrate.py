@@ -274,7 +274,9 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
                "qualifies"), candidates),
         "Library: " + "; ".join(f"`{e.name}`: {e.description}"
                                 + (f" ({e.source})" if e.source else "")
-                                for e in lib.effects)]))
+                                for e in lib.effects)
+        + "".join(f"; not a candidate here: `{r['name']}` ({r['reason']})"
+                  for r in summary.get("effects_refused", []))]))
     if summary["suspects"]:
         blocks.append(Section("Mechanism suspects", [
             "No cause in the library explains the data, so the rig parameters the dataset "

@@ -236,7 +236,7 @@ def life_viscosity() -> None:
     from diffwear.contact import MixedLubrication, default_film
     from diffwear.models import QuasiStatic
     from diffwear.studies import rig_21400
-    from diffwear.wear.status import code, name
+    from diffwear.wear.status import name
 
     _, mech, y0 = rig_21400._setup()
     el = mech.element("crank_rod")
@@ -260,7 +260,7 @@ def life_viscosity() -> None:
     for mu in VISCOSITIES:
         cycles, status = fast(jnp.asarray(mu))
         rows.append({"viscosity_Pa_s": mu, "life_cycles": float(cycles),
-                     "status": int(code(status))})
+                     "status": name(status)})
         print(f"  mu {mu:.3g} Pa s: life {float(cycles):.6g} ({name(status)})",
               flush=True)
     slope = eqx.filter_jit(lambda m: jax.jvp(lambda x: life(x)[0], (m,), (jnp.ones(()),)))
@@ -275,7 +275,7 @@ def life_viscosity() -> None:
                         "clearance_m": float(c), "length_m": float(el.law.depth),
                         "film": type(lubricated(1e-3).element("crank_rod").law.film).__name__,
                         "period_s": 2.0},
-           "dry": {"life_cycles": float(dry.life[0]), "status": int(code(dry.result))},
+           "dry": {"life_cycles": float(dry.life[0]), "status": name(dry.result)},
            "lives": rows, "tangents": tangents,
            "wall_s": round(time.perf_counter() - t0, 1)}
     (STORE / "life_viscosity.json").write_text(json.dumps(out, indent=1) + "\n")

@@ -12,10 +12,9 @@ import pytest
 
 from diffwear.choices import SHIPPED_MECHANISMS
 from diffwear.cli import main
-from diffwear.wear.status import RESULTS, code
 
 # summary.json keeps a status as its `RESULTS` member's code
-OK = int(code(RESULTS.ok))
+OK = "ok"  # a summary names the status
 STUDY = "ideal-slider-crank"
 
 

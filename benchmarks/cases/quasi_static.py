@@ -15,7 +15,7 @@ def rig_21400_quasi_static(repeats: int) -> dict:
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies.rig_21400 import PERIOD, RIG_JOINT, _setup
     from diffwear.wear import worn_volume
-    from diffwear.wear.status import code
+    from diffwear.wear.status import name
 
     _, mech, y0 = _setup()
     model = QuasiStatic()
@@ -26,7 +26,7 @@ def rig_21400_quasi_static(repeats: int) -> dict:
     depth = res.depth[0]
     return {**metrics, "max_wear_depth_mm": float(depth.max()) * 1e3,
             "wear_volume_mm3": float(worn_volume(depth, el.bushing_radius, el.law.depth)) * 1e9,
-            "status": int(code(res.result)), "pair": "rig-21400 (constant A)", "goal_s": 0.5}
+            "status": name(res.result), "pair": "rig-21400 (constant A)", "goal_s": 0.5}
 
 
 def rig_lubricated_quasi_static(repeats: int) -> dict:
@@ -42,7 +42,7 @@ def rig_lubricated_quasi_static(repeats: int) -> dict:
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies.rig_21400 import PERIOD, RIG_JOINT, _setup
     from diffwear.studies.rig_lubricated import lubricated
-    from diffwear.wear.status import code
+    from diffwear.wear.status import name
 
     _, dry, y0 = _setup()
     model = QuasiStatic()
@@ -54,7 +54,7 @@ def rig_lubricated_quasi_static(repeats: int) -> dict:
         res, m = time_jitted(fn, (mech,), repeats)
         out.update({f"{tag}_compile_s": m["compile_s"], f"{tag}_run_s": m["run_s"],
                     f"{tag}_max_wear_depth_mm": float(res.depth[0].max()) * 1e3,
-                    f"{tag}_status": int(code(res.result))})
+                    f"{tag}_status": name(res.result)})
     return {"compile_s": out["lubricated_compile_s"], "run_s": out["lubricated_run_s"],
             "ratio_lubricated_to_dry": out["lubricated_run_s"] / out["dry_run_s"], **out,
             "repeats": repeats}

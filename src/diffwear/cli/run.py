@@ -50,7 +50,8 @@ from ..mechanism_file import (
 from ..mechanism_file import wear as mechanism_wear
 from ..models.execution import Checkpoints
 from ..report import Block, Bullets, Figure, Report, Section, Table, render
-from ..wear.status import RESULTS, code, message
+from ..wear.status import RESULTS, message
+from ..wear.status import name as status_name
 from . import objects
 
 # Dynamic cycles simulated by a file's dynamic wear run with constant
@@ -470,7 +471,7 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                                              "max_depth_mm": w["history_peak"] * 1e3})
         joints[name] = {"max_wear_depth_mm": float(np.max(w["depth"])) * 1e3,
                         "wear_volume_mm3": w["volume"] * 1e9, "cycles": w["cycles"],
-                        "model": w["model"], "status": int(code(w["status"])),
+                        "model": w["model"], "status": status_name(w["status"]),
                         **{k: w[k] for k in _REPORTED if k in w}}
         if limit is not None:
             joints[name]["limit_mm"] = limit * 1e3

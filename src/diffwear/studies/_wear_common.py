@@ -30,7 +30,8 @@ from ..presets import PTFE_DENSITY, WearJointDesign, with_wear_joint
 from ..report import Block, Bullets, Report, Table
 from ..wear import Constant, CycleSettings, arc_peak_depth, worn_volume
 from ..wear.cycle import cycle_integrator
-from ..wear.status import RESULTS, code, message
+from ..wear.status import RESULTS, message
+from ..wear.status import name as status_name
 from . import model_words
 from ._report import COMPARISON_WORDS, comparison_table, peak_line, write_report
 
@@ -157,14 +158,14 @@ def route_numbers(res: WearSolution, design: WearJointDesign, times: RunTimes) -
     volume, Archard volume (where the model sums the load), times of one
     route's result."""
     depth = res.depth[0]
-    out = {"max_wear_depth_mm": float(np.max(np.asarray(depth))) * 1e3,
-           "arc_peak_depth_mm": float(arc_peak_depth(depth)) * 1e3,
-           "wear_volume_mm3": float(worn_volume(depth, design.bushing_radius,
-                                                design.depth)) * 1e9}
+    out: dict = {"max_wear_depth_mm": float(np.max(np.asarray(depth))) * 1e3,
+                 "arc_peak_depth_mm": float(arc_peak_depth(depth)) * 1e3,
+                 "wear_volume_mm3": float(worn_volume(depth, design.bushing_radius,
+                                                      design.depth)) * 1e9}
     if res.detail is not None:  # simulated cycles: their normal load x sliding
         out["archard_k_times_load_sliding_mm3"] = float(
             design.k * res.detail.load_sliding) * 1e9
-    out.update(dynamic_cycles_simulated=simulated_cycles(res), status=int(code(res.result)),
+    out.update(dynamic_cycles_simulated=simulated_cycles(res), status=status_name(res.result),
                wall_time_s=times.wall_time, compile_time_s=times.compile_time)
     return out
 

@@ -123,8 +123,6 @@ def evolve(
     wall_thickness=None,
     warmup_cycles: int = 1,
     cycle: CycleSettings = CycleSettings(),
-    start: WearState | None = None,
-    slots: int | None = None,
     throw: bool = False,
 ) -> EvolutionResult:
     """Evolve the wear of clearance joint ``joint`` over ``cycles`` real cycles.
@@ -138,10 +136,10 @@ def evolve(
     position; the thesis drops its first ~1.3 revolutions too).  ``cycle``:
     how each dynamic cycle is integrated (`CycleSettings`).
 
-    Resuming: ``start`` is an engine state (``EvolutionResult.state`` of an
-    earlier call, or `Evolver.init`); the warm-up is then skipped and ``y0``
-    ignored.  ``slots`` scan slots are run (default: all of the method's).  See
-    `ChunkedEvolution` for a checkpointing driver.
+    Resuming is `Evolver.solve` (``start``: an engine state,
+    ``EvolutionResult.state`` of an earlier run or `Evolver.init`; ``slots``:
+    how many scan slots to run); `ChunkedEvolution` is a checkpointing
+    driver.
 
     ``throw``: raise (`eqx.error_if`, at run time inside jit; under
     `jax.vmap` if any point stopped) with the status's message where the
@@ -152,7 +150,7 @@ def evolve(
     require_float64("evolve")
     ev = Evolver(mech, joint, cycles, period=period, method=method, max_dynamic=max_dynamic,
                  wall_thickness=wall_thickness, warmup_cycles=warmup_cycles, cycle=cycle)
-    res = ev.solve(y0, start, slots)
+    res = ev.solve(y0)
     return res.status.error_if(res, res.status != RESULTS.ok) if throw else res
 
 

@@ -228,8 +228,8 @@ class Problem:
         model run."""
         h = self.model(self.base(x, log_multipliers), effects)
         pred = jnp.concatenate([o(h) for o in self.observations])
-        volume = Observation("volume", np.asarray(self.probe_cycles, float))(h) \
-            if self.probe_cycles else jnp.zeros(0)
+        volume = (Observation("volume", np.asarray(self.probe_cycles, float))(h)
+                  if self.probe_cycles else jnp.zeros(0))
         inputs = (x, effects, log_multipliers)
         pred = not_an_answer(pred, ~h.ok, inputs)
         return (pred - self.y) / self.sigma, not_an_answer(volume, ~h.ok, inputs)
@@ -484,8 +484,8 @@ class Fitter:
         ``evaluate(z) -> (all residuals, fit-row Jacobian)``; ``rows(r_all, z)``:
         the objective's rows; ``bounds``: (lower, upper) arrays of z (a step
         is cut back to the box)."""
-        lower, upper = (np.full(z.shape, -np.inf), np.full(z.shape, np.inf)) \
-            if bounds is None else bounds
+        lower, upper = ((np.full(z.shape, -np.inf), np.full(z.shape, np.inf))
+                        if bounds is None else bounds)
         r_all, jac = evaluate(z)
         r = rows(r_all, z)
         if not np.all(np.isfinite(r)):
@@ -632,8 +632,8 @@ class Fitter:
         effects = () if effect is None else (effect,) if isinstance(effect, str) else tuple(effect)
         lay = self.layout(effects, discrepancy)
         z0 = lay.start(x0, s0, log_shape0, start) if z0 is None else z0
-        what = "base model" + "".join(f" + {e}" for e in effects) \
-            + (f" + discrepancy in {discrepancy}" if discrepancy else "")
+        what = ("base model" + "".join(f" + {e}" for e in effects)
+                + (f" + discrepancy in {discrepancy}" if discrepancy else ""))
         fit_rows = ~p.holdout if rows is None else np.asarray(rows, bool)
 
         def objective_rows(r_all, z):
@@ -731,8 +731,8 @@ class Layout:
         projection = None
         if discrepancy:
             sl = lib.slices[discrepancy]
-            t[o:] = fitter._unit(4, range(sl.start, sl.stop)) \
-                * lib.variable(discrepancy).prior_std()[:, None]
+            t[o:] = (fitter._unit(4, range(sl.start, sl.stop))
+                     * lib.variable(discrepancy).prior_std()[:, None])
             u = fitter.k_direction(discrepancy) if constrained else None
             if u is not None:
                 projection = np.eye(nd) - np.outer(u, u)

@@ -71,6 +71,11 @@ class Outlook:
         return limit, horizon
 
 
+# What a calibration looks ahead to by default (the life to the dataset's or
+# mechanism's limit, the posterior, the next measurement)
+DEFAULT_OUTLOOK = Outlook()
+
+
 @dataclass
 class Forecast:
     limit: float                 # m, the maximum wear depth that ends the life

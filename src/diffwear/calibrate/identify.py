@@ -49,7 +49,7 @@ from . import learned
 from .dataset import Dataset
 from .effects import LIBRARY, Effect, Library, log_shape
 from .fit import FitResult, Fitter, ModelSettings, Problem
-from .forecast import Forecast, Outlook, forecast
+from .forecast import DEFAULT_OUTLOOK, Forecast, Outlook, forecast
 from .parameters import RIG_PARAMETERS, plausible_range
 from .plausibility import check_depths, unit_slips
 from .posterior import Posterior, refined
@@ -632,9 +632,9 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
 
 def _words(a: Assessment) -> str:
     f = a.fit
-    verdict = (" (qualifies)" if a.qualifies else f" ({'; '.join(a.reasons)})") \
-        + f" [{f.notes.get('starts', 1)} start(s), {f.iterations} steps, " \
-          f"{f.notes.get('refit_s', f.wall_time_s):.1f} s]"
+    verdict = ((" (qualifies)" if a.qualifies else f" ({'; '.join(a.reasons)})")
+               + f" [{f.notes.get('starts', 1)} start(s), {f.iterations} steps, "
+                 f"{f.notes.get('refit_s', f.wall_time_s):.1f} s]")
     if a.edf is not None:
         return (f"chi2 {f.chi2_fit:.1f}, {a.edf:.2g} effective coefficients, chi2 drop "
                 f"{a.likelihood_ratio:.1f}" + verdict)
@@ -884,18 +884,19 @@ def discrepancy_variables(data: Dataset, spec: str, library: Library = LIBRARY) 
     return names
 
 
-def calibrate(data: Dataset, settings: ModelSettings = ModelSettings(), *,
+def calibrate(data: Dataset, settings: ModelSettings | None = None, *,
               top: int = DEFAULT_TOP, check: bool = True, discrepancy=None,
-              outlook: Outlook | None = Outlook(), log=print) -> Calibration:
+              outlook: Outlook | None = DEFAULT_OUTLOOK, log=print) -> Calibration:
     """The whole loop on one dataset (module notes).  ``check``: evaluate the
     chosen fit on the dynamic model too (when the fit ran on another);
     ``discrepancy``: the candidate variables of a learned discrepancy
     (None: every variable of ``settings.library``; empty: none);
     ``outlook``: the posterior, the life and the next measurement (None:
-    none).  ``top`` is kept for compatibility: every
-    candidate is refitted."""
+    none; default `DEFAULT_OUTLOOK`); ``settings`` default `ModelSettings()`.
+    ``top`` is kept for compatibility: every candidate is refitted."""
     del top
     t0 = time.perf_counter()
+    settings = ModelSettings() if settings is None else settings
     problem = Problem.from_dataset(data, settings)
     library = settings.library
     if discrepancy is None:
@@ -1005,8 +1006,8 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
     log(f"selected: {' + '.join(learned.label(m) for m in _members(chosen)) or 'no effect'}"
         + (" (the residual stays unexplained)" if unexplained else ""))
     suspects = []
-    if (not _members(chosen) or unexplained) and sel.ambiguous is None and problem.suspects \
-            and not too_few:
+    if ((not _members(chosen) or unexplained) and sel.ambiguous is None and problem.suspects
+            and not too_few):
         suspects = _suspects(fitter, base, kinds, unexplained, log)
     members = list(sel.adopted)
     found = [a for a in members if learned.variable_of(a.effect) is None]

@@ -173,8 +173,8 @@ def _angle_shape(c, data, b) -> dict:
     if hi < lo:
         hi += 360.0
     x = np.linspace(lo, hi, max(int(4 * (hi - lo)), 16))
-    d = (1.0 + np.asarray(BushingAngle().basis(jnp.asarray(np.radians(x)))) @ c) \
-        * math.exp(float(b @ c)) - 1.0
+    d = ((1.0 + np.asarray(BushingAngle().basis(jnp.asarray(np.radians(x)))) @ c)
+         * math.exp(float(b @ c)) - 1.0)
     maxima, minima = _extrema(d)
     extrema = sorted([(x[i], 1) for i in maxima] + [(x[i], -1) for i in minima])
     gaps = [q[0] - p[0] for p, q in zip(extrema, extrema[1:]) if p[1] != q[1]]
@@ -185,8 +185,8 @@ def _angle_shape(c, data, b) -> dict:
     top = float(x[maxima[int(np.argmax(d[maxima]))]]) if maxima.size else float(x[np.argmax(d)])
     peaks = sorted((top + k * 360.0 / lobes) % 360.0 for k in range(lobes))
     a = float(np.max(np.abs(d)))
-    listed = ", ".join(f"{v:.0f}" for v in peaks[:-1]) + \
-        (f" and {peaks[-1]:.0f}" if len(peaks) > 1 else f"{peaks[-1]:.0f}")
+    listed = (", ".join(f"{v:.0f}" for v in peaks[:-1])
+              + (f" and {peaks[-1]:.0f}" if len(peaks) > 1 else f"{peaks[-1]:.0f}"))
     where = ("the whole bore" if hi - lo >= 360.0 else
              f"the worn arc {lo % 360:.0f}-{hi % 360:.0f} deg")
     return {"worn_arc_deg": [lo, hi], "lobes": lobes, "peaks_deg": peaks, "amplitude": a,

@@ -96,10 +96,10 @@ def residual_structure(c: Calibration) -> dict:
                              np.abs(np.angle(np.exp(1j * (x - np.pi)))))
             near = off < np.radians(REVERSAL_DEG)
             rr = r[m]
-            out["force_residual_rms_near_reversal"] = float(np.sqrt(np.mean(rr[near] ** 2))) \
-                if near.any() else None
-            out["force_residual_rms_elsewhere"] = float(np.sqrt(np.mean(rr[~near] ** 2))) \
-                if (~near).any() else None
+            out["force_residual_rms_near_reversal"] = (
+                float(np.sqrt(np.mean(rr[near] ** 2))) if near.any() else None)
+            out["force_residual_rms_elsewhere"] = (
+                float(np.sqrt(np.mean(rr[~near] ** 2))) if (~near).any() else None)
     if any(s.kind == "volume" and s.basis == "mass" for s in c.dataset.series) and prof.any():
         # data-only check: volume of the measured profiles vs weighed volume
         out["note_mass_vs_profile"] = ("compare the 'volume' residual (mass-based) with the "

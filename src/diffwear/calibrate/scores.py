@@ -73,8 +73,8 @@ def efficient_score(name, j, jb, r, lower, kinds) -> Score:
     """The efficient score test of column ``j`` against the fitted columns ``jb``."""
     g = float(j @ r)
     cross = jb.T @ j
-    info = float(j @ j - cross @ np.linalg.lstsq(jb.T @ jb, cross, rcond=None)[0]) \
-        if jb.size else float(j @ j)
+    info = (float(j @ j - cross @ np.linalg.lstsq(jb.T @ jb, cross, rcond=None)[0])
+            if jb.size else float(j @ j))
     if not np.isfinite(info) or info <= 1e-12 * max(float(j @ j), 1e-300):
         return Score(name, 0.0, 0.0, 1.0)  # not identifiable from these data
     step = -g / info

@@ -19,7 +19,7 @@ from ..calibrate import learned
 from ..calibrate.dataset import PARAMETERS, Dataset  # noqa: E402
 from ..calibrate.effects import LIBRARY, Library  # noqa: E402
 from ..calibrate.fit import ModelSettings  # noqa: E402
-from ..calibrate.forecast import Outlook
+from ..calibrate.forecast import DEFAULT_OUTLOOK
 from ..calibrate.frame_check import frame_warnings  # noqa: E402
 from ..calibrate.identify import (  # noqa: E402
     AMBIGUITY,
@@ -447,8 +447,8 @@ def _posterior_words(post) -> str:
         return "NUTS"
     if post.diagnostics.get("weights") == "gaussian, unchecked":
         return "Laplace, unchecked: the importance check failed"
-    return "Laplace, importance-weighted" if "pareto_k" in post.diagnostics \
-        else "Laplace, linearised"
+    return ("Laplace, importance-weighted" if "pareto_k" in post.diagnostics
+            else "Laplace, linearised")
 
 
 def _life_blocks(summary: dict) -> list[Block]:
@@ -540,8 +540,8 @@ def _suspect_lines(summary: dict) -> list[str]:
     return []
 
 
-def run(data: Dataset, out: OutputDir, *, settings: ModelSettings = ModelSettings(),
-        top: int = 3, check: bool = True, discrepancy=None, outlook=Outlook(),
+def run(data: Dataset, out: OutputDir, *, settings: ModelSettings | None = None,
+        top: int = 3, check: bool = True, discrepancy=None, outlook=DEFAULT_OUTLOOK,
         log=print) -> dict:
     """The loop on a loaded dataset (`load_dataset`: bad input is found before
     ``out`` exists), writing the outputs listed in the module notes."""

@@ -417,12 +417,8 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
         # a file's dynamic run: about `FILE_DYNAMIC_CYCLES` dynamic cycles
         wear_model = objects.wear_model(model, cycles=cycles, method=method,
                                         target_dynamic=FILE_DYNAMIC_CYCLES)
-        joints = mechanism_wear.wearing_joints(mfile)
-        mechanism_wear.check_joints(mfile, wear_model, joints)
-        mechanism_wear.bushing_walls(mfile, joints, limit)
-        mechanism_wear.drive_period(mfile)
-    if resume:
-        mechanism_wear.check_resumed_file(mfile, out_dir)
+        mechanism_wear.check_wear(mfile, wear_model, limit=limit,
+                                  resume_folder=out_dir if resume else None)
     y0 = initial_state(mfile)
     check_motion(mfile, y0)
     out = OutputDir(out_dir, overwrite=overwrite, resume=resume)
@@ -485,7 +481,7 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                            f"bushing wall after {w['cycles']:,.0f} cycles (max depth "
                            f"{joints[name]['max_wear_depth_mm']:.4f} mm)")
         elif w["status"] != RESULTS.ok:
-            causes = mechanism_wear.likely_causes(mfile, name)
+            causes = w.get("causes", [])
             pierced.append(f"the wear of clearance joint {name!r} stopped after "
                            f"{w['cycles']:,.0f} cycles: "
                            f"{message(w['status'])}"

@@ -100,6 +100,20 @@ def likely_causes(mfile: MechanismFile, name: str) -> list[str]:
     return out
 
 
+def check_wear(mfile: MechanismFile, model: AbstractWearModel, *, limit: float | None = None,
+               resume_folder=None) -> None:
+    """Every check of a file's wear run, before anything runs or is written:
+    a wearing joint, a driver, walls that allow ``limit``, the checkpoint in
+    ``resume_folder`` (if resuming) of a run of this file, and joints
+    ``model`` evolves (`InputError` naming the file)."""
+    joints = wearing_joints(mfile)
+    drive(mfile)
+    bushing_walls(mfile, joints, limit)
+    if resume_folder is not None:
+        check_resumed_file(mfile, resume_folder)
+    check_joints(mfile, model, joints)
+
+
 def file_meta(mfile: MechanismFile) -> dict:
     """What a checkpoint records of the file it belongs to: its name and the
     CRC-32 of its bytes (an edited file is another file)."""
@@ -132,7 +146,8 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
                 model: AbstractWearModel | None = None,
                 checkpoints: Checkpoints | None = None) -> dict:
     """Per joint: depth profile [m], grid angles, peak-depth history, volume
-    [m^3], status, and (with ``limit`` [m]) the cycles to reach it, on
+    [m^3], status, the inputs to change should its cycle model fail
+    (``causes``), and (with ``limit`` [m]) the cycles to reach it, on
     ``model`` (default `QuasiStatic`; the dynamic model evolves one joint and
     keeps ``checkpoints``, whose meta this adds the file's name and checksum
     to: the checkpoint of another file, or an edited one, is not resumed)."""
@@ -147,7 +162,10 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     walls = bushing_walls(mfile, joints, limit)
     mech = mfile.mechanism
     if checkpoints is not None:
-        meta = {**file_meta(mfile), **describe(model, cycles, mech),
+        # a lubricated joint anywhere runs the cycles on a Rosenbrock method
+        lubricated = any(isinstance(getattr(f, "law", None), MixedLubrication)
+                         for f in mech.forces)
+        meta = {**file_meta(mfile), **describe(model, cycles, lubricated),
                 "limit_mm": None if limit is None else round(limit * 1e3, 12),
                 "cycles": float(cycles),
                 "n_theta": int(mech.element(joints[0]).profile.n)}
@@ -178,6 +196,8 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
             "model": model.name, "wall_time_s": times.wall_time,
             "compile_time_s": times.compile_time, **times.info,
             **model_numbers(model, res, k, cycles),
+            # what to change where the joint's cycle model failed (words)
+            "causes": likely_causes(mfile, name),
         }
     for name, film in film_cycle(mfile, y0, {n: out[n]["depth"] for n in joints}).items():
         out[name]["film"] = film

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..models import AbstractWearModel, Dynamic, FemRoute, QuasiStatic, WearSolution
-from ..wear.cycle import integrator_name, lubricated_cycle
+from ..wear.cycle import film_integrator, integrator_name
 
 # how a model's results are labelled in the reports' tables and figures
 LABELS = {AbstractWearModel: "diffwear", Dynamic: "diffwear (EFM)",
@@ -37,30 +37,29 @@ def step_words(model: AbstractWearModel) -> str:
     return _nearest(STEP_WORDS, model)
 
 
-def describe(model: AbstractWearModel, cycles, mech=None) -> dict:
+def describe(model: AbstractWearModel, cycles, lubricated: bool = False) -> dict:
     """The settings of an evolution of ``model`` over ``cycles`` that a summary
     reports and a checkpoint records (a checkpoint resumes only a run with the
-    same); with the mechanism ``mech``, the integrator its cycles run on (a
-    lubricated joint's run on Rodas4: `lubricated_cycle`)."""
+    same); ``lubricated``: the mechanism has a lubricated joint, whose cycles
+    run on a Rosenbrock method (`film_integrator`)."""
     if isinstance(model, FemRoute):
         assert model.fem is not None
         fem = model.fem
-        return {**_dynamic_settings(model, cycles, mech), "model": "dynamic", "contact": "fem",
+        return {**_dynamic_settings(model, cycles, lubricated), "model": "dynamic",
+                "contact": "fem",
                 "fem_refresh_interval": float(fem.refresh_interval),
                 "fem_samples": fem.n_samples, "fem_layers": fem.n_layers,
                 "fem_force": fem.force}
     if isinstance(model, Dynamic):
-        return _dynamic_settings(model, cycles, mech)
+        return _dynamic_settings(model, cycles, lubricated)
     if isinstance(model, QuasiStatic):
         return {"model": model.name, "load_samples_per_cycle": model.samples}
     return {"model": model.name}
 
 
-def _dynamic_settings(model: Dynamic, cycles, mech) -> dict:
+def _dynamic_settings(model: Dynamic, cycles, lubricated: bool) -> dict:
     solver = model.solver(cycles)
-    integrator = model.cycle.solver
-    if mech is not None:
-        integrator = lubricated_cycle(mech, 1.0, 1.0, integrator)[2]
+    integrator = film_integrator(model.cycle.solver) if lubricated else model.cycle.solver
     return {"model": model.name, "method": solver.name,
             "extrapolation": float(solver.first_step(cycles)), "contact": "efm",
             "integrator": integrator_name(integrator)}

@@ -80,9 +80,15 @@ def lubricated_cycle(mech: Mechanism, rtol, atol, solver: diffrax.AbstractSolver
     tol = film_tolerance(mech)
     if tol is None:
         return rtol, atol, solver
+    return jnp.minimum(rtol, tol), jnp.minimum(atol, tol), film_integrator(solver)
+
+
+def film_integrator(solver: diffrax.AbstractSolver | None) -> diffrax.AbstractSolver:
+    """The integrator of a cycle with a lubricated joint given ``solver``:
+    a Rosenbrock method as it is, anything else (or the default) Rodas4."""
     if solver is None or not isinstance(stepping_solver(solver), AbstractRosenbrock):
-        solver = Rodas4()
-    return jnp.minimum(rtol, tol), jnp.minimum(atol, tol), solver
+        return Rodas4()
+    return solver
 
 
 def cycle_integrator(name: str) -> tuple[diffrax.AbstractSolver, float]:

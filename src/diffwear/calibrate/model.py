@@ -7,15 +7,17 @@ it onto one measured series (profile at N, volume or maximum depth against N,
 force against crank angle at N): profiles are linear in N between snapshots
 and periodic-linear in angle between grid nodes.
 
-* `RigHistory` (dynamic): a warm-up cycle (wear discarded, the pin's start-up
-  transient), then ``dynamic_cycles`` dynamic cycles with a constant
-  extrapolation factor A = cycles / dynamic_cycles (thesis Eq. 4-18), like
-  `wear.evolve` with `Constant(A)`, keeping the profiles after every dynamic cycle
-  (at N_j = j A) and each cycle's joint-force trace.  A must stay below
+* `RigHistory` (dynamic): `diffwear.models.Dynamic` with the effects as its
+  modifier (`effects.EffectsModifier`): a warm-up cycle (wear discarded, the
+  pin's start-up transient), then ``dynamic_cycles`` dynamic cycles with a
+  constant extrapolation factor A = cycles / dynamic_cycles (thesis Eq.
+  4-18), keeping the profiles after every dynamic cycle (at N_j = j A) and
+  each cycle's joint-force trace (``force_samples``).  A must stay below
   ~1/lambda (lambda = k k_f s ~ 1e-3 per cycle on the rig, see `wear.life`):
   `MAX_EXTRAPOLATION` is enforced.
-* `quasi_static.QuasiStaticRigHistory`: the quasi-static joint (milliseconds
-  per step, exact derivatives), the model the calibration runs on by default.
+* `quasi_static.QuasiStaticRigHistory`: `diffwear.models.QuasiStatic` on a
+  cycle grid with the same modifier (milliseconds per step, exact
+  derivatives), the model the calibration runs on by default.
 
 `RigParameters` names what a dataset may fit or hold: the joint (wear
 coefficient, clearance, bushing depth, pin diameter, friction, wall), the

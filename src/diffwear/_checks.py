@@ -86,8 +86,8 @@ def check_int_option(option: str, value: Any, low: int, high: int | None = None)
     """A count (``--cycles``, ``n_samples``, ...): an integer in [low, high]
     (``high`` None: >= low), else `InputError` naming the option, the allowed
     range and the value."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low \
-            or (high is not None and value > high):
+    if (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low
+            or (high is not None and value > high)):
         allowed = f">= {low:,}" if high is None else f"in [{low:,}, {high:,}]"
         raise InputError(f"{option} must be an integer {allowed}, got {value!r}")
 

@@ -228,9 +228,9 @@ class OutputDir:
             try:
                 target.unlink()
             except OSError as err:
-                raise InputError(f"--out {self.path}: cannot remove the previous run's {name} "
-                                 f"({err.strerror}); allowed: a folder you can write to") \
-                    from None
+                raise InputError(
+                    f"--out {self.path}: cannot remove the previous run's {name} "
+                    f"({err.strerror}); allowed: a folder you can write to") from None
 
     def _write_manifest(self) -> None:
         names = "".join(f"{n}\n" for n in dict.fromkeys(self.files))

@@ -67,8 +67,8 @@ def _block(block: Block, level: int) -> list[str]:
     if isinstance(block, str):
         return [block]
     if isinstance(block, Table):
-        rule = [":---" if a == "l" else "---:" for a in block.align] if block.align else \
-            ["---"] * len(block.header)
+        rule = ([":---" if a == "l" else "---:" for a in block.align] if block.align
+                else ["---"] * len(block.header))
         return ["| " + " | ".join(_cell(h) for h in block.header) + " |",
                 "|" + "|".join(rule) + "|",
                 *("| " + " | ".join(_cell(c) for c in row) + " |" for row in block.rows)]

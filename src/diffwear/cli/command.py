@@ -233,8 +233,8 @@ def _sweep(args: argparse.Namespace) -> int:
     try:
         from distributed import Client, LocalCluster
     except ImportError:
-        raise InputError("--cluster / --workers need Dask: pip install 'diffwear[cluster]'") \
-            from None
+        raise InputError(
+            "--cluster / --workers need Dask: pip install 'diffwear[cluster]'") from None
     if args.cluster is not None:
         try:
             client = Client(args.cluster, timeout="20s")

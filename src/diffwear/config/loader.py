@@ -264,8 +264,8 @@ def _elements(ctx: Context, section: str, raw, types: Mapping[str, ElementType],
             raise ctx.error(f"{path}.{err.key}", err.what, err.allowed) from None
         except InputError as err:
             raise ctx.wrap(path, err) from None
-        if isinstance(element, AbstractForceElement) and section == "joints" \
-                and spec.assembly is None:
+        if (isinstance(element, AbstractForceElement) and section == "joints"
+                and spec.assembly is None):
             raise TypeError(f"joint type {kind!r} builds a force element but has no assembly")
         names = element.bodies
         if len(set(names)) < len(names):

@@ -216,8 +216,9 @@ class AbstractRosenbrock(diffrax.AbstractAdaptiveSolver):
     tableau: eqx.AbstractClassVar[RosenbrockTableau]
 
     term_structure: ClassVar = diffrax.AbstractTerm
-    interpolation_cls: ClassVar[Callable[..., diffrax.ThirdOrderHermitePolynomialInterpolation]] \
-        = diffrax.ThirdOrderHermitePolynomialInterpolation
+    interpolation_cls: ClassVar[
+        Callable[..., diffrax.ThirdOrderHermitePolynomialInterpolation]
+    ] = diffrax.ThirdOrderHermitePolynomialInterpolation
 
     def __check_init__(self):
         if self.sensitivity not in SENSITIVITIES:

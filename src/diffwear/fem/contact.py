@@ -288,8 +288,8 @@ class RingContact(eqx.Module):
         if guess is not None:
             e0, x0 = guess[0], guess[1] / f_s
         else:  # pin touching the nearest wall point along F (or the guess), nothing loaded
-            e0 = unit * (jnp.min(self.boundary_radius) - self.pin_radius) \
-                if offset_guess is None else offset_guess
+            e0 = (unit * (jnp.min(self.boundary_radius) - self.pin_radius)
+                  if offset_guess is None else offset_guess)
             x0 = jnp.zeros(n)
         z0 = jax.lax.stop_gradient(jnp.concatenate([x0, e0 / l_g]))
         args = (self, force, scales)

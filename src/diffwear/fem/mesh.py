@@ -102,8 +102,8 @@ def connectivity(n_theta: int, n_r: int) -> np.ndarray:
 def check_theta_nodes(what: str, n_theta) -> None:
     """Nodes around a Q9 ring or disc: an even integer >= `MIN_THETA_NODES`
     (two nodes per element), else `InputError` naming ``what`` and the value."""
-    if not isinstance(n_theta, (int, np.integer)) or isinstance(n_theta, bool) \
-            or n_theta < MIN_THETA_NODES or n_theta % 2:
+    if (not isinstance(n_theta, (int, np.integer)) or isinstance(n_theta, bool)
+            or n_theta < MIN_THETA_NODES or n_theta % 2):
         raise InputError(f"{what} must be an even integer >= {MIN_THETA_NODES}, "
                          f"got {n_theta!r}")
 

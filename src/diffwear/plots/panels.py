@@ -109,8 +109,8 @@ def wear_panels(path: Path, profiles: Mapping[str, tuple[np.ndarray, np.ndarray]
     notes = [depth_references(ax, deepest, walls_mm=walls_mm, limit_mm=limit_mm)
              for ax in (a, b)]
     for name, life in (lives or {}).items():
-        if limit_mm is not None and life is not None and np.isfinite(life) and histories \
-                and life <= max(float(np.max(c, initial=0.0)) for c, _ in histories.values()):
+        if (limit_mm is not None and life is not None and np.isfinite(life) and histories
+                and life <= max(float(np.max(c, initial=0.0)) for c, _ in histories.values())):
             b.plot([life], [limit_mm], "v", color="tab:red", ms=7,
                    label=f"{name} at the limit: {life:,.0f} cycles")
     a.set(xlabel="bushing angle [deg]", ylabel="wear depth [mm]", xlim=(0, 360),

@@ -81,8 +81,8 @@ def _damped_newton(x0, u, c, scale, width, ratio, pull, direction):
         delta = u @ (scale * x) - c
         # the energy is a merit function for the line search only: that of the
         # single ramp (exact outside the onset band, where all but a few springs are)
-        energy = ratio * jnp.sum(smoothing.ramp_integral(delta, width)) / scale**2 \
-            - pull * (direction @ x)
+        energy = (ratio * jnp.sum(smoothing.ramp_integral(delta, width)) / scale**2
+                  - pull * (direction @ x))
         grad = ratio * spring(delta, width) @ u / scale - pull * direction
         hess = ratio * (u.T * spring_slope(delta, width)) @ u
         return energy, grad, hess

@@ -72,7 +72,7 @@ class WornVolume(Variable):
 GREASE = GreaseDepletion("grease_depletion", "k (1 + s sigmoid((N - N_d) / (N_d / 10)))", 0.3,
                          0.0, Shape("depletion_cycles", 500.0, "cycles", math.log(3.0)))
 LIBRARY_PLUS = LIBRARY.extended(effects=(GREASE,), variables=(WornVolume(),))
-SETTINGS = ModelSettings(n_theta=60, force_samples=61, library=LIBRARY_PLUS)
+SETTINGS = ModelSettings(n_theta=40, force_samples=41, steps=20, library=LIBRARY_PLUS)
 PLAN = Plan(cycles=1000.0, profile_cycles=(250.0, 500.0, 750.0, 1000.0),
             volume_cycles=tuple(50.0 * i for i in range(1, 21)), force_cycles=(0.0,),
             profile_angles=48, force_angles=48, holdout_from_cycles=750.0)

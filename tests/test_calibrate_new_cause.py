@@ -54,7 +54,8 @@ class WornVolume(Variable):
     reference: float = 5e-9   # m^3
 
     def prior_std(self) -> np.ndarray:
-        """A wide prior (3 per coefficient): the volume trend is what it is."""
+        """A wide prior (3 per coefficient): the truth below (0.8) sits well inside
+        it, so the fit is the data's, not the prior's."""
         return np.full(3, 3.0)
 
     def basis(self, x, window: float = 1.0):

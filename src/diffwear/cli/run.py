@@ -481,7 +481,7 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                            f"bushing wall after {w['cycles']:,.0f} cycles (max depth "
                            f"{joints[name]['max_wear_depth_mm']:.4f} mm)")
         elif w["status"] != RESULTS.ok:
-            causes = w.get("causes", [])
+            causes = w["causes"]
             pierced.append(f"the wear of clearance joint {name!r} stopped after "
                            f"{w['cycles']:,.0f} cycles: "
                            f"{message(w['status'])}"

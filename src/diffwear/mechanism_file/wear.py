@@ -35,6 +35,7 @@ from ..models import MAX_CYCLES, AbstractWearModel, QuasiStatic, WearSolution
 from ..models.execution import Checkpoints, RunTimes, run_model
 from ..studies.model_words import describe
 from ..wear import worn_volume
+from ..wear.cycle import film_tolerance
 from ..wear.status import at
 from .motion import first_driver
 
@@ -101,17 +102,19 @@ def likely_causes(mfile: MechanismFile, name: str) -> list[str]:
 
 
 def check_wear(mfile: MechanismFile, model: AbstractWearModel, *, limit: float | None = None,
-               resume_folder=None) -> None:
+               resume_folder=None) -> tuple[tuple[str, ...], float, list[float]]:
     """Every check of a file's wear run, before anything runs or is written:
     a wearing joint, a driver, walls that allow ``limit``, the checkpoint in
     ``resume_folder`` (if resuming) of a run of this file, and joints
-    ``model`` evolves (`InputError` naming the file)."""
+    ``model`` evolves (`InputError` naming the file).  Returns what they read:
+    (the wearing joints, the cycle's period [s], each joint's wall [m])."""
     joints = wearing_joints(mfile)
-    drive(mfile)
-    bushing_walls(mfile, joints, limit)
+    period = drive_period(mfile)
+    walls = bushing_walls(mfile, joints, limit)
     if resume_folder is not None:
         check_resumed_file(mfile, resume_folder)
     check_joints(mfile, model, joints)
+    return joints, period, walls
 
 
 def file_meta(mfile: MechanismFile) -> dict:
@@ -156,15 +159,11 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     # peak grows slower than the step rule expects (slots after the end cost
     # nothing; the four-bar example's joint needs ~12x the 40 steps to its wall)
     model = QuasiStatic(max_steps=FILE_WEAR_SLOTS) if model is None else model
-    joints = wearing_joints(mfile)
-    check_joints(mfile, model, joints)
-    period = drive_period(mfile)
-    walls = bushing_walls(mfile, joints, limit)
+    joints, period, walls = check_wear(mfile, model, limit=limit)
     mech = mfile.mechanism
     if checkpoints is not None:
         # a lubricated joint anywhere runs the cycles on a Rosenbrock method
-        lubricated = any(isinstance(getattr(f, "law", None), MixedLubrication)
-                         for f in mech.forces)
+        lubricated = film_tolerance(mech) is not None
         meta = {**file_meta(mfile), **describe(model, cycles, lubricated),
                 "limit_mm": None if limit is None else round(limit * 1e3, 12),
                 "cycles": float(cycles),

@@ -38,10 +38,10 @@ from ..mechanism import GROUND, Mechanism
 from ..mechanism.geometry import safe_angle, safe_norm
 from ..quasistatic.loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
 from ..quasistatic.lubricated import joint_model
-from ..wear.engine import AbstractWearTerm, CycleWear, Stop, initial_state, integrate
+from ..wear.engine import AbstractWearTerm, CycleWear, Stop
 from ..wear.implicit import CycleGrid
 from ..wear.modifier import AbstractWearModifier, JointGeometry, modulated
-from ..wear.profile_ode import ProfileHistory, ProfileSolution, integrate_profile
+from ..wear.profile_ode import ProfileSolution, integrate_profile, solve_profile
 from ..wear.status import RESULTS, not_an_answer, not_computed, stack, worst
 from ._base import AbstractWearModel
 from .solution import WearSolution
@@ -208,17 +208,8 @@ class QuasiStatic(AbstractWearModel):
         solver = CycleGrid(jnp.asarray(self.grid, dtype=float))
         stop = Stop(cycles=solver.grid[-1] if cycles is None else cycles, limit=limit,
                     wall=wall)
-        h0 = jnp.zeros(joint.n)
-        s, history = integrate(term, solver, initial_state((h0,), memory), stop=stop,
-                               slots=solver.slots(stop, None), keep_profiles=True)
-        return ProfileSolution(
-            depth=s.h[0], cycles=s.n, life=s.life[0], status=s.status, steps=s.steps,
-            evaluations=s.evaluations,
-            history=ProfileHistory(
-                cycles=solver.grid,
-                peak=jnp.concatenate([jnp.zeros(1), history["max_depth"][:, 0]]),
-                depth=jnp.concatenate([h0[None], history["depth"][0]]),
-                valid=jnp.concatenate([jnp.array([True]), history["valid"]])))
+        return solve_profile(term, solver, jnp.zeros(joint.n), memory, stop,
+                             solver.slots(stop, None))
 
     @staticmethod
     def _result(per_joint, loads_ok):

@@ -176,13 +176,13 @@ class Evolver:
         self.radius, self.bdepth = el.bushing_radius, law.depth
         self.term = self.make_term(mech, joint, jnp.asarray(period, dtype=float), cycle)
         self.force_samples = force_samples
-        if modifier is not None or force_samples is not None:
-            self.term = eqx.tree_at(
-                lambda t: (t.modifier, t.geometry), self.term,
-                (modifier, JointGeometry.of(el)), is_leaf=lambda x: x is None)
-            if force_samples is not None:
-                self.term = dataclasses.replace(self.term, saves=int(force_samples),
-                                                force_trace=True)
+        changes: dict = {}
+        if modifier is not None:
+            changes.update(modifier=modifier, geometry=JointGeometry.of(el))
+        if force_samples is not None:
+            changes.update(saves=int(force_samples), force_trace=True)
+        if changes:
+            self.term = dataclasses.replace(self.term, **changes)
         self.warmup_cycles = int(warmup_cycles)
         self.cycles_arr = jnp.asarray(cycles, dtype=float)
         stop = Stop(cycles=cycles, wall=wall_thickness)

@@ -36,10 +36,12 @@ class JointGeometry(eqx.Module):
 
     @classmethod
     def of(cls, joint) -> "JointGeometry":
-        """The geometry of clearance joint ``joint`` (a `ClearanceJoint`)."""
-        law = joint.law
-        depth = law.depth if hasattr(law, "depth") else law.asperity.depth
-        return cls(joint.profile.theta, joint.bushing_radius, depth)
+        """The geometry of clearance joint ``joint`` (a `ClearanceJoint`; its
+        bushing depth that of the foundation that wears, `wear_parts`)."""
+        from .cycle import wear_parts
+
+        foundation, _ = wear_parts(joint)
+        return cls(joint.profile.theta, joint.bushing_radius, foundation.depth)
 
 
 class AbstractWearModifier(eqx.Module):

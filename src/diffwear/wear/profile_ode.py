@@ -16,11 +16,20 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-from .engine import MAX_CYCLES, AbstractWearTerm, CycleWear, Stop, initial_state, integrate
+from .engine import (
+    MAX_CYCLES,
+    AbstractWearSolver,
+    AbstractWearTerm,
+    CycleWear,
+    Stop,
+    initial_state,
+    integrate,
+)
 from .implicit import NO_WEAR_RATE, LinearlyImplicitEuler
 from .status import RESULTS
 
-__all__ = ["ProfileHistory", "ProfileSolution", "integrate_profile", "NO_WEAR_RATE"]
+__all__ = ["ProfileHistory", "ProfileSolution", "integrate_profile", "solve_profile",
+           "NO_WEAR_RATE"]
 
 
 class ProfileHistory(eqx.Module):
@@ -96,8 +105,17 @@ def integrate_profile(
         memory = jnp.zeros(())
     solver = LinearlyImplicitEuler(int(steps), extrapolate=extrapolate)
     stop = Stop(cycles=cycles, limit=limit, wall=wall, max_cycles=max_cycles)
-    s, history = integrate(_Function(evaluate), solver, initial_state((h0,), memory),
-                             stop=stop, slots=solver.slots(stop, max_steps), keep_profiles=True)
+    return solve_profile(_Function(evaluate), solver, h0, memory, stop,
+                         solver.slots(stop, max_steps))
+
+
+def solve_profile(term: AbstractWearTerm, solver: AbstractWearSolver, h0: Float[Array, " n"],
+                  memory: Any, stop: Stop, slots: int) -> ProfileSolution:
+    """One joint's profile from ``h0`` with ``term`` and ``solver`` until
+    ``stop``, in ``slots`` scan slots, as a `ProfileSolution` (the history
+    with every slot's profile)."""
+    s, history = integrate(term, solver, initial_state((h0,), memory), stop=stop, slots=slots,
+                           keep_profiles=True)
     return ProfileSolution(
         depth=s.h[0], cycles=s.n, life=s.life[0], status=s.status, steps=s.steps,
         evaluations=s.evaluations,

@@ -117,6 +117,21 @@ def test_imports_follow_the_layers():
     assert not upward, "\n".join(f"{m} -> {d}" for m, d in upward)
 
 
+def test_only_the_models_and_the_wear_package_import_the_engine():
+    """The wear engine is private: every way into it is a model's ``solve``.
+    Its importers in the package are the models and the wear package itself;
+    the tests, benchmarks and studies reach it through `diffwear.models`."""
+    engine = "diffwear.wear._engine"
+    importers = sorted(m for m, path in MODULES.items() if engine in _imports(path, m))
+    assert importers and all(m.startswith(("diffwear.models", "diffwear.wear"))
+                             for m in importers), importers
+    root = SRC.parents[1]
+    outside = [str(p.relative_to(root)) for folder in ("tests", "benchmarks", "design_studies")
+               for p in (root / folder).rglob("*.py")
+               if "wear._engine" in p.read_text() or "wear.engine" in p.read_text()]
+    assert outside == [str(Path(__file__).relative_to(root))], outside
+
+
 def test_the_core_does_not_import_the_command_line_layer():
     """mechanism, dynamics, contact, fem, wear and quasistatic never import the
     studies, drivers, plots or the CLI."""

@@ -156,11 +156,10 @@ def _snapshot(folder):
 
 def _checkpoint_of(folder, meta):
     """A checkpoint as a wear run leaves it, recording ``meta``."""
-    from diffwear.models import Checkpoint, save_checkpoint
-    from diffwear.wear.engine import initial_state
+    from diffwear.models import Checkpoint, WearState, save_checkpoint
 
     folder.mkdir()
-    state = jax.tree.map(np.asarray, initial_state((np.zeros(3),),
+    state = jax.tree.map(np.asarray, WearState.initial((np.zeros(3),),
                                                    {"y": np.zeros(2), "t": np.asarray(0.0)}))
     save_checkpoint(folder / "checkpoint.npz", Checkpoint(state, {"cycles": np.zeros(1)}, 1),
                     meta)

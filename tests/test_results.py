@@ -9,7 +9,6 @@ import pytest
 
 from diffwear.errors import InputError
 from diffwear.wear import WearState
-from diffwear.wear.engine import initial_state
 from diffwear.wear.status import (
     RESULTS,
     at,
@@ -73,7 +72,7 @@ def test_statuses_pass_jit_and_vmap():
 
 
 def test_a_checkpoint_keeps_the_status_as_its_code():
-    state = initial_state((jnp.zeros(3),), {}, ok=False)
+    state = WearState.initial((jnp.zeros(3),), {}, ok=False)
     assert bool(state.status == RESULTS.cycle_model_failed)
     flat = state.as_dict()
     assert np.asarray(flat["status"]).tolist() == 2

@@ -193,11 +193,10 @@ def test_a_checkpoint_write_cut_short_keeps_the_previous_one_and_leaves_no_file(
     """Ctrl-C while the checkpoint is written: the previous checkpoint stays
     whole and readable, and no temporary file is left in the folder (which
     the next run would otherwise find there)."""
-    from diffwear.models import Checkpoint, load_checkpoint, save_checkpoint
-    from diffwear.wear.engine import initial_state
+    from diffwear.models import Checkpoint, WearState, load_checkpoint, save_checkpoint
 
     path = tmp_path / "checkpoint.npz"
-    state = jax.tree.map(np.asarray, initial_state((np.zeros(3),),
+    state = jax.tree.map(np.asarray, WearState.initial((np.zeros(3),),
                                                    {"y": np.zeros(2), "t": np.asarray(0.0)}))
     ck = Checkpoint(state, {"cycles": np.zeros(1)}, 1)
     save_checkpoint(path, ck, {"cycles": 1})

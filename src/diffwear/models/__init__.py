@@ -14,7 +14,8 @@ objects that every consumer of wear takes (as diffrax takes a solver).
 Each solves the wear of its joints to a number of cycles or to a depth limit
 (`solve`, one `WearSolution`; `evolve` and `life`, `cycles_to_limit`, are
 calls of it) and gives the joint force at the end, on the wear engine
-(`diffwear.wear.engine`).
+(`diffwear.wear._engine`, private: its extension points, the term, the
+solver, the stop and the state, are re-exported here).
 A model may carry a modifier (`AbstractWearModifier`: hooks on the profile
 each cycle sees and on the rate of each step), which is how the calibration's
 effects reach them.
@@ -23,7 +24,14 @@ with checkpoints) is `execution.run_model`, and what the reports say of a
 model is `diffwear.studies.model_words`.
 """
 
-from ..wear.engine import MAX_CYCLES
+from ..wear._engine import (
+    MAX_CYCLES,
+    AbstractWearSolver,
+    AbstractWearTerm,
+    CycleWear,
+    Stop,
+    WearState,
+)
 from ..wear.modifier import AbstractWearModifier, JointGeometry
 from ._base import AbstractWearModel
 from .dynamic import Dynamic
@@ -44,4 +52,5 @@ from .solution import WearSolution
 __all__ = ["AbstractWearModel", "WearSolution", "Dynamic", "QuasiStatic", "FemRoute",
            "cycles_to_limit", "joint_mass", "run_model", "Checkpoints", "RunTimes",
            "ChunkedEvolution", "Checkpoint", "save_checkpoint", "load_checkpoint", "MAX_CYCLES",
-           "AbstractWearModifier", "JointGeometry"]
+           "AbstractWearModifier", "JointGeometry", "AbstractWearTerm", "AbstractWearSolver",
+           "CycleWear", "Stop", "WearState"]

@@ -28,7 +28,7 @@ import numpy as np
 from .. import interrupt
 from ..errors import InputError
 from ..io import CHECKPOINT
-from ..wear.engine import WearState
+from ..wear._engine import WearState
 from ..wear.evolution import EvolutionResult
 from ..wear.status import RESULTS
 from ._base import AbstractWearModel

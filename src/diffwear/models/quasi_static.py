@@ -38,7 +38,7 @@ from ..mechanism import GROUND, Mechanism
 from ..mechanism.geometry import safe_angle, safe_norm
 from ..quasistatic.loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
 from ..quasistatic.lubricated import joint_model
-from ..wear.engine import AbstractWearTerm, CycleWear, Stop
+from ..wear._engine import AbstractWearTerm, CycleWear, Stop
 from ..wear.implicit import CycleGrid
 from ..wear.modifier import AbstractWearModifier, JointGeometry, modulated
 from ..wear.profile_ode import ProfileSolution, integrate_profile, solve_profile

@@ -1,7 +1,7 @@
 """The pin-pivot study's own wear integrator: quasi-static wear of an
 oscillating steel pin in a steel pivot (thesis Ch. 4).
 
-Why it is not on the wear engine (`diffwear.wear.engine`).  The engine
+Why it is not on the wear engine (`diffwear.wear._engine`).  The engine
 integrates bushing profiles of a mechanism's clearance joints in the crank-cycle
 count: a term gives the wear of one cycle at A = 1 and a solver multiplies it
 by the extrapolation factor.  The thesis's Ch. 4 procedure, which this study

@@ -3,6 +3,7 @@ increments, evolution over many cycles and the life.  The wear models and
 their runs (in chunks, with checkpoints) are `diffwear.models`."""
 
 from ..contact.archard import MM3_PER_NM, SLIP_RATE_WIDTH, ArchardWear
+from ._engine import WearState
 from .cycle import (
     CycleResult,
     JointsCycleResult,
@@ -11,7 +12,6 @@ from .cycle import (
     wear_cycle_joints,
 )
 from .dynamic_term import CycleSettings, DynamicWear
-from .engine import WearState
 from .evolution import (
     EvolutionResult,
     Evolver,

@@ -3,7 +3,7 @@ of the mechanism with its clearance joints (`wear_cycle_joints`).
 
 `CycleSettings` holds how a dynamic cycle is integrated (tolerances,
 integrator, adjoint, step budget), written once for every route.
-`DynamicWear` is the engine's term (`diffwear.wear.engine`): the bushing
+`DynamicWear` is the engine's term (`diffwear.wear._engine`): the bushing
 profiles enter the joints' clearance c0 + h, the mechanism state and time
 carry from the end of one cycle into the next (no restart transient), and
 the response A of the linearly implicit step is `wear_operator`.
@@ -20,8 +20,8 @@ from jaxtyping import Array, Float
 
 from ..contact import contact_history
 from ..mechanism import Mechanism
+from ._engine import AbstractWearTerm, CycleWear
 from .cycle import CYCLE_ATOL, CYCLE_RTOL, clearance_element, wear_cycle_joints, wear_parts
-from .engine import AbstractWearTerm, CycleWear
 from .modifier import AbstractWearModifier, JointGeometry, modulated
 
 # Ridge added to M = U^T D U (units: grid nodes in contact) in `wear_operator`.

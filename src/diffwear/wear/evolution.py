@@ -31,9 +31,9 @@ from jaxtyping import Array, Float
 from .._checks import require_float64
 from ..errors import InputError, SolverError
 from ..mechanism import Mechanism
+from ._engine import Engine, Stop, WearState
 from .cycle import clearance_element, wear_parts
 from .dynamic_term import CycleSettings, DynamicWear
-from .engine import Engine, Stop, WearState, initial_state
 from .extrapolation import AbstractExtrapolation, Constant
 from .modifier import AbstractWearModifier, JointGeometry
 from .status import RESULTS, message, name
@@ -155,7 +155,7 @@ def evolve(
 
 
 class Evolver:
-    """One joint's wear evolution on the wear engine (`diffwear.wear.engine`):
+    """One joint's wear evolution on the wear engine (`diffwear.wear._engine`):
     the dynamic term (`DynamicWear`), the extrapolation solver and the stop at
     ``cycles`` (or the wall).  `init` (warm-up, the initial state), `run`
     (``length`` scan slots from a state), `result`.  Running the slots in
@@ -197,7 +197,7 @@ class Evolver:
     def init(self, y0) -> WearState:
         """Warm-up cycles (wear discarded), then the initial engine state."""
         memory, ok = self.term.warm_up(y0, self.warmup_cycles)
-        state = initial_state(self.term.zeros(), memory, evaluations=self.warmup_cycles, ok=ok)
+        state = WearState.initial(self.term.zeros(), memory, evaluations=self.warmup_cycles, ok=ok)
         return self.engine.init(state)
 
     def _history(self, h: dict) -> dict:

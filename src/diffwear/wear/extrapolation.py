@@ -1,5 +1,5 @@
 """The wear engine's explicit solvers: one simulated crank cycle extrapolated
-over many real ones (`diffwear.wear.engine`; passed to `evolve` as
+over many real ones (`diffwear.wear._engine`; passed to `evolve` as
 ``method=``, as diffrax takes a solver object).
 
 `Constant` (thesis Eq. 4-19): every simulated cycle stands for A real ones.
@@ -23,7 +23,7 @@ from jax import lax
 
 from ..choices import METHOD_OF_SOLVER
 from ..errors import InputError
-from .engine import AbstractWearSolver, Proposal, Stop, WearState
+from ._engine import AbstractWearSolver, Proposal, Stop, WearState
 
 ADAPTIVE_CRITERIA = ("increment_change", "pressure_jump")
 

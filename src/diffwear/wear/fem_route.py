@@ -107,9 +107,9 @@ from ..fem.condense import inner_compliance, tributary_lengths
 from ..fem.contact import CONTACT_FRACTION, TOL
 from ..mechanism import Mechanism
 from ..mechanism.geometry import grid_angles, safe_norm
+from ._engine import CycleWear
 from .cycle import clearance_element, wear_parts
 from .dynamic_term import DynamicWear
-from .engine import CycleWear
 from .evolution import EvolutionResult, Evolver
 from .extrapolation import AbstractExtrapolation, Constant
 

@@ -37,7 +37,7 @@ from jax import lax
 from jaxtyping import Array, Float
 
 from ..errors import InputError
-from .engine import (
+from ._engine import (
     AbstractWearSolver,
     Proposal,
     Stop,

@@ -68,8 +68,8 @@ from jaxtyping import Array, Float
 
 from ..errors import InputError
 from ..mechanism import Mechanism
+from ._engine import Stop, WearState, integrate
 from .dynamic_term import CycleSettings, DynamicWear
-from .engine import Stop, WearState, initial_state, integrate
 from .implicit import DepthGain
 from .status import not_an_answer
 
@@ -133,7 +133,7 @@ def dynamic_cycles_to_limit(
                        saves=operator_samples if implicit else None, response=implicit,
                        operator_width=operator_width, fresh_state=True)
     memory, ok = term.warm_up(y0, warmup_cycles)
-    state = initial_state(term.zeros(), memory, evaluations=warmup_cycles, ok=ok)
+    state = WearState.initial(term.zeros(), memory, evaluations=warmup_cycles, ok=ok)
     final, hist = integrate(term, solver, state, stop=stop, slots=n_slots)
     # a life not reached is NaN with NaN derivatives, never a silent 0
     final = final.replace(life=not_computed_is_nan(final.life, (mech, y0, period, limit, cycle)))

@@ -1,6 +1,6 @@
 """The wear profile as an ODE in the cycle count, dh/dN = w(h), for one joint
 given as a plain function: `integrate_profile`, the wear engine
-(`diffwear.wear.engine`) with the `LinearlyImplicitEuler` solver.
+(`diffwear.wear._engine`) with the `LinearlyImplicitEuler` solver.
 
 w(h) is the wear of one crank cycle at profile h (any cycle model); A(h) =
 -dw/dh its response to the profile.  The solver's notes
@@ -16,13 +16,13 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-from .engine import (
+from ._engine import (
     MAX_CYCLES,
     AbstractWearSolver,
     AbstractWearTerm,
     CycleWear,
     Stop,
-    initial_state,
+    WearState,
     integrate,
 )
 from .implicit import NO_WEAR_RATE, LinearlyImplicitEuler
@@ -114,7 +114,7 @@ def solve_profile(term: AbstractWearTerm, solver: AbstractWearSolver, h0: Float[
     """One joint's profile from ``h0`` with ``term`` and ``solver`` until
     ``stop``, in ``slots`` scan slots, as a `ProfileSolution` (the history
     with every slot's profile)."""
-    s, history = integrate(term, solver, initial_state((h0,), memory), stop=stop, slots=slots,
+    s, history = integrate(term, solver, WearState.initial((h0,), memory), stop=stop, slots=slots,
                            keep_profiles=True)
     return ProfileSolution(
         depth=s.h[0], cycles=s.n, life=s.life[0], status=s.status, steps=s.steps,

@@ -6,7 +6,7 @@ was not computed, NaN with NaN derivatives.
 
 A result (an evolution, a life, one joint's part of them) carries one member
 of `RESULTS` as its ``status``, through `jax.jit`, `jax.vmap` and the scan of
-the wear engine (`diffwear.wear.engine`).  Outside jit a status is written as
+the wear engine (`diffwear.wear._engine`).  Outside jit a status is written as
 its member's integer `code` (summary.json, checkpoints, the sweep tables):
 the members are declared in the order of those codes, 0 to 4, so results
 stored before the enumeration read the same."""

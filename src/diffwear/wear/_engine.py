@@ -3,7 +3,7 @@
 Every wear result of the package (an evolution over N cycles, a life to a
 depth limit, a calibration's forward history) is one call of `integrate`:
 
-    integrate(term, solver, initial_state(h0, memory), stop=..., slots=...)
+    integrate(term, solver, WearState.initial(h0, memory), stop=..., slots=...)
 
 in the shape of diffrax's ``diffeqsolve(terms, solver, ...)``:
 
@@ -111,6 +111,20 @@ class WearState(eqx.Module):
     fail_n: Float[Array, ""]
     fail_h: Float[Array, ""]
     solver: dict
+
+    @classmethod
+    def initial(cls, h0: tuple, memory, *, evaluations=0, ok=True) -> "WearState":
+        """The state before the first step: profiles ``h0``, the term's
+        ``memory`` (e.g. after warm-up cycles, ``evaluations`` of them, ``ok``
+        if they succeeded)."""
+        j = len(h0)
+        return cls(
+            h=tuple(h0), memory=memory, n=jnp.zeros(()),
+            status=RESULTS.where(jnp.asarray(ok, dtype=bool), RESULTS.ok,
+                                 RESULTS.cycle_model_failed),
+            evaluations=jnp.asarray(evaluations), steps=jnp.zeros((), int),
+            load_sliding=jnp.zeros(j), life=jnp.full((j,), jnp.nan),
+            done=jnp.zeros((j,), bool), fail_n=jnp.zeros(()), fail_h=jnp.zeros(()), solver={})
 
     def replace(self, **changes) -> "WearState":
         """A copy with the named fields changed; solver memory by its names."""
@@ -318,20 +332,6 @@ class Integration(NamedTuple):
     history: dict
 
 
-def initial_state(h0: tuple, memory, *, evaluations=0, ok=True) -> WearState:
-    """The state before the first step: profiles ``h0``, the term's ``memory``
-    (e.g. after warm-up cycles, ``evaluations`` of them, ``ok`` if they
-    succeeded)."""
-    j = len(h0)
-    return WearState(
-        h=tuple(h0), memory=memory, n=jnp.zeros(()),
-        status=RESULTS.where(jnp.asarray(ok, dtype=bool), RESULTS.ok,
-                             RESULTS.cycle_model_failed),
-        evaluations=jnp.asarray(evaluations), steps=jnp.zeros((), int),
-        load_sliding=jnp.zeros(j), life=jnp.full((j,), jnp.nan), done=jnp.zeros((j,), bool),
-        fail_n=jnp.zeros(()), fail_h=jnp.zeros(()), solver={})
-
-
 class Engine(eqx.Module):
     """One integration set up: ``term``, ``solver``, ``stop`` and ``slots``
     (``keep_profiles``, ``keep_memory``: the history holds every slot's
@@ -450,7 +450,7 @@ class Engine(eqx.Module):
 def integrate(term: AbstractWearTerm, solver: AbstractWearSolver, state: WearState, *,
               stop: Stop, slots: int, keep_profiles: bool = False,
               keep_memory: bool = False) -> Integration:
-    """Integrate the profiles of ``state`` (`initial_state`) with ``term`` and
+    """Integrate the profiles of ``state`` (`WearState.initial`) with ``term`` and
     ``solver`` until ``stop``, in ``slots`` scan slots.  Pure, jit-able and
     differentiable."""
     engine = Engine(term, solver, stop, slots=int(slots), keep_profiles=keep_profiles,

@@ -39,9 +39,9 @@ from ..mechanism.geometry import safe_angle, safe_norm
 from ..quasistatic.loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
 from ..quasistatic.lubricated import joint_model
 from ..wear._engine import AbstractWearTerm, CycleWear, Stop
-from ..wear.implicit import CycleGrid
+from ..wear.implicit import CycleGrid, LinearlyImplicitEuler
 from ..wear.modifier import AbstractWearModifier, JointGeometry, modulated
-from ..wear.profile_ode import ProfileSolution, integrate_profile, solve_profile
+from ..wear.profile_ode import ProfileSolution, solve_profile
 from ..wear.status import RESULTS, not_an_answer, not_computed, stack, worst
 from ._base import AbstractWearModel
 from .solution import WearSolution
@@ -173,17 +173,12 @@ class QuasiStatic(AbstractWearModel):
                       if self.grid is not None else (None,) * len(models))
 
         def one(j, lo: JointLoads, mass, wall, geometry):
-            def evaluate(h, offsets):
-                # warm start: the pin offsets of the previous step's profile
-                dh, _, eq = j.cycle_wear(h, lo, offsets)
-                return dh, eq.ok, j.wear_response(h, lo, eq), eq.offset
-
+            term = _JointWear(j, lo, self.modifier, geometry)
+            # warm start: the pin offsets of the previous step's profile
             memory = jnp.full_like(lo.force, jnp.nan)
-            if self.grid is None:
-                sol = integrate_profile(evaluate, jnp.zeros(j.n), steps=self.steps,
-                                        max_steps=slots, memory=memory, wall=wall, **target)
-            else:
-                sol = self._on_grid(j, lo, memory, wall, geometry, **target)
+            solver, stop = self._stepping(wall, **target)
+            sol = solve_profile(term, solver, jnp.zeros(j.n), memory, stop,
+                                solver.slots(stop, slots))
             margins = jnp.stack([jnp.min(j.contact_margin(jnp.zeros(j.n), lo, mass)),
                                  jnp.min(j.contact_margin(sol.depth, lo, mass))])
             return sol, margins
@@ -200,16 +195,16 @@ class QuasiStatic(AbstractWearModel):
             per_joint = [one(*args) for args in zip(*parts)]
         return per_joint, loads.ok
 
-    def _on_grid(self, joint, loads: JointLoads, memory, wall, geometry: JointGeometry,
-                 cycles=None, limit=None) -> ProfileSolution:
-        """One joint's profile stepped on ``grid`` (with the modifier)."""
-        assert self.grid is not None  # called with a grid only
-        term = _JointWear(joint, loads, self.modifier, geometry)
+    def _stepping(self, wall, cycles=None, limit=None):
+        """The step rule and the stop of one joint's integration: the
+        linearly implicit rule in `steps` steps, or the given cycle `grid`
+        (to its last count unless ``cycles`` says otherwise)."""
+        if self.grid is None:
+            return (LinearlyImplicitEuler(int(self.steps)),
+                    Stop(cycles=cycles, limit=limit, wall=wall))
         solver = CycleGrid(jnp.asarray(self.grid, dtype=float))
-        stop = Stop(cycles=solver.grid[-1] if cycles is None else cycles, limit=limit,
-                    wall=wall)
-        return solve_profile(term, solver, jnp.zeros(joint.n), memory, stop,
-                             solver.slots(stop, None))
+        return solver, Stop(cycles=solver.grid[-1] if cycles is None else cycles, limit=limit,
+                            wall=wall)
 
     @staticmethod
     def _result(per_joint, loads_ok):

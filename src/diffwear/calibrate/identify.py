@@ -502,13 +502,13 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
                 beside = " + ".join(learned.label(m) for m in _members(current))
                 if not after < before:
                     a.qualifies = False
-                    a.reasons.append(f"the dynamic model's chi2 rises ({before:.1f} -> "
-                                     f"{after:.1f}): the fitted model's own error")
+                    a.reasons.append(f"the dynamic model's chi2 rises ({before:.5g} -> "
+                                     f"{after:.5g}): the fitted model's own error")
                     log(f"+ {learned.label(a.effect)} beside {beside}: the dynamic "
-                        f"model's chi2 rises {before:.1f} -> {after:.1f}; not adopted")
+                        f"model's chi2 rises {before:.5g} -> {after:.5g}; not adopted")
                 else:
                     log(f"+ {learned.label(a.effect)} beside {beside}: the dynamic "
-                        f"model's chi2 falls {before:.1f} -> {after:.1f}")
+                        f"model's chi2 falls {before:.5g} -> {after:.5g}")
                     break
             ranked = [a for a in ranked if a.qualifies]
         if not ranked:

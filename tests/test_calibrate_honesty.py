@@ -240,3 +240,31 @@ def test_nuts_agrees_with_the_checked_laplace_posterior_where_it_is_gaussian(sma
         assert b[name]["r_hat"] < 1.1   # two short chains (R-hat's own scatter ~0.03)
     # and both agree with the Gauss-Newton 1-sigma of the fit
     assert a["k"]["std"] == pytest.approx(base.params_std["k"], rel=0.25)
+
+
+@pytest.mark.extended  # one synthetic campaign fitted and its posterior drawn (a minute)
+def test_one_coverage_campaign_reproduces_its_recorded_count(tmp_path):
+    """The coverage study's first campaign counts the held-out points inside
+    their 90 % band as the benchmark record states (within one point: a
+    point on the band's edge may fall either side on another machine)."""
+    import json
+
+    from diffwear.calibrate.coverage import FIRST_SEED, one
+
+    record = json.loads((ROOT / "benchmarks" / "records" / "calibration_coverage.json")
+                        .read_text())
+    want = record["rows"][0]
+    row = one(FIRST_SEED, tmp_path)
+    assert row["effects"] == want["effects"] and row["held_out_points"] == want["held_out_points"]
+    assert abs(row["inside"] - want["inside"]) <= 1, (row, want)
+
+
+@pytest.mark.long  # twenty synthetic campaigns: about seven minutes on 2 cores
+def test_ninety_percent_bands_cover_ninety_percent_of_held_out_points():
+    """Coverage as a tested property: over 20 synthetic campaigns (noise
+    known, each fitted in its truth's form) the 90 % predictive bands hold
+    85-95 % of the held-out points, pooled."""
+    from diffwear.calibrate.coverage import GOAL, run
+
+    result = run(20, log=lambda *_: None)
+    assert GOAL[0] <= result["pooled_heldout_coverage"] <= GOAL[1], result

@@ -18,7 +18,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .dataset import load_dataset
 from .effects import EffectValues
 from .fit import Fitter, ModelSettings, Problem
 from .model import rig_defaults
@@ -58,9 +57,9 @@ def one(seed: int, folder: Path) -> dict:
     its truth, and its held-out points counted inside their band."""
     rng = np.random.default_rng(seed)
     params, effects, values = truth(rng)
+    # the dataset as written and loaded back (`write_dataset`)
     data = synthesize(folder / f"c{seed}", name=f"coverage-{seed}", effects=values, seed=seed,
                       plan=PLAN, settings=SETTINGS, truth=params)
-    data = load_dataset(folder / f"c{seed}")
     problem = Problem.from_dataset(data, SETTINGS)
     fitter = Fitter(problem)
     base = fitter.fit(None)

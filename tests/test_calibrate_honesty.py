@@ -171,8 +171,9 @@ def test_identified_k_is_orthogonal_to_the_discrepancy_and_keeps_its_uncertainty
 
 @pytest.mark.extended  # compiles the small campaign's model (a minute)
 def test_log_posterior_gradient_against_central_differences(small):
-    """The sampler's gradient (-J^T r from the forward-mode program, through a
-    custom VJP) against central differences of the log posterior."""
+    """The sampler's gradient (one reverse pass, through a custom VJP that
+    zeroes it where the model fails) against central differences of the log
+    posterior."""
     data, fitter, base = small
     fit = fitter.fit("run_in", start=base, s0=0.5)
     log_p = jax.jit(fitter.log_posterior(fit))

@@ -410,9 +410,10 @@ class Fitter:
 
     def log_posterior(self, fit: "FitResult"):
         """z -> log p(z | data) up to a constant, a JAX function of ``fit``'s
-        unknowns (`posterior` module notes; -inf outside the layout's bounds),
-        whose gradient -J^T r comes from the same forward-mode program as the
-        fit's Jacobian (one pass of its unknowns' tangents), not reverse mode."""
+        unknowns (`posterior` module notes; -inf outside the layout's bounds).
+        Its gradient is one reverse pass of the model (a sampler asks for a
+        scalar's gradient: one pass, where the fit's forward-mode program
+        would push one tangent per unknown), zeroed where the model fails."""
         lay: Layout = fit.notes["layout"]
         rows = jnp.asarray(np.asarray(fit.notes["rows"], bool))
         tangents = jnp.asarray(lay.tangents)
@@ -420,28 +421,28 @@ class Fitter:
         lower, upper = jnp.asarray(lay.lower), jnp.asarray(lay.upper)
         outputs = self._raw_outputs
 
-        def residual_and_jacobian(z):
-            v = tangents.T @ z
-            (r, _), (jac, _) = jax.vmap(lambda t: jax.jvp(outputs, (v,), (t,)),
-                                        out_axes=((None, None), (1, 1)))(tangents)
-            return jnp.where(rows, r, 0.0), jnp.where(rows[:, None], jac, 0.0)
+        def fit_residuals(z):
+            return jnp.where(rows, outputs(tangents.T @ z)[0], 0.0)
+
+        def misfit(z):
+            r = fit_residuals(z)
+            # double where: a point the model cannot reach adds nothing, and
+            # no NaN flows back through it
+            finite = jnp.isfinite(r)
+            safe = jnp.where(finite, r, 0.0)
+            return -0.5 * (safe @ safe + z[prior] @ z[prior]), jnp.all(finite)
 
         @jax.custom_vjp
         def log_p(z):
-            r = outputs(tangents.T @ z)[0]
-            return _value(z, jnp.where(rows, r, 0.0))
+            return _bounded(z, *misfit(z))
 
-        def _value(z, r):
-            inside = jnp.all((z >= lower) & (z <= upper)) & jnp.all(jnp.isfinite(r))
-            safe = jnp.where(jnp.isfinite(r), r, 0.0)
-            value = -0.5 * (safe @ safe + z[prior] @ z[prior])
+        def _bounded(z, value, finite):
+            inside = jnp.all((z >= lower) & (z <= upper)) & finite
             return jnp.where(inside, value, -jnp.inf)
 
         def forward(z):
-            r, jac = residual_and_jacobian(z)
-            safe = jnp.where(jnp.isfinite(r), r, 0.0)
-            grad = -(jac.T @ safe) - jnp.zeros_like(z).at[prior].set(z[prior])
-            return _value(z, r), jnp.where(jnp.all(jnp.isfinite(grad)), grad, 0.0)
+            (value, finite), grad = jax.value_and_grad(misfit, has_aux=True)(z)
+            return _bounded(z, value, finite), jnp.where(jnp.all(jnp.isfinite(grad)), grad, 0.0)
 
         def backward(grad, g):
             return (g * grad,)

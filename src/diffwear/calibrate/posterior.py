@@ -24,8 +24,8 @@ coefficients, and flat priors on the rest.  Two ways to it:
   the sampler.
 * **NUTS** (`method="nuts"`): the No-U-Turn sampler (Hoffman and Gelman, J.
   Mach. Learn. Res. 15 (2014) 1593; blackjax) on the same compiled model,
-  its gradient -J^T r from the same forward-mode derivative program as the
-  fit, the Gauss-Newton covariance as its inverse mass matrix (so that only
+  its gradient one reverse pass of the model (`Fitter.log_posterior`), the
+  Gauss-Newton covariance as its inverse mass matrix (so that only
   the step size is adapted), `CHAINS` chains, the rank-normalised split
   R-hat and the bulk effective sample size of each number reported (Vehtari,
   Gelman, Simpson, Carpenter and Buerkner, Bayesian Anal. 16 (2021) 667).

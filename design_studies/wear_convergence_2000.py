@@ -60,9 +60,9 @@ def main() -> None:
         res = jax.block_until_ready(fn(p, y0)).check(name)
         wall = time.perf_counter() - t0
         rows[name] = {
-            "max_depth_mm": float(res.depth.max()) * 1e3,
-            "volume_mm3": float(worn_volume(res.depth, el.bushing_radius, el.law.depth)) * 1e9,
-            "dynamic_cycles": int(res.dynamic_cycles),
+            "max_depth_mm": float(res.depth[0].max()) * 1e3,
+            "volume_mm3": float(worn_volume(res.depth[0], el.bushing_radius, el.law.depth)) * 1e9,
+            "dynamic_cycles": int(res.stats["dynamic_cycles"]),
             "wall_time_s_incl_compile": wall,
         }
         print(f"{name}: {rows[name]}", flush=True)

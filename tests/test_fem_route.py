@@ -174,11 +174,12 @@ def test_refresh_interval_agrees_with_every_cycle_rebuild():
     for m in (1.0, 3.0):
         res = run(jnp.asarray(m))
         res.check("FEM route test")
-        vol = float(worn_volume(res.depth, el.bushing_radius, el.law.depth))
-        out[m] = (float(res.depth.max()), vol)
-        archard = float(el.wear.coefficient * res.load_sliding)
+        depth = res.depth[0]
+        vol = float(worn_volume(depth, el.bushing_radius, el.law.depth))
+        out[m] = (float(depth.max()), vol)
+        archard = float(el.wear.coefficient * res.state.load_sliding[0])
         w0 = fr.unworn_tributary(base, el.bushing_radius, N)
-        assert float(el.law.depth * jnp.sum(res.depth * w0)) / archard == pytest.approx(1, abs=1e-9)
+        assert float(el.law.depth * jnp.sum(depth * w0)) / archard == pytest.approx(1, abs=1e-9)
         assert abs(vol / archard - 1) < 1e-2
     assert out[1.0][0] > 2e-4  # real wear: > 0.2 mm (measured 0.241 mm)
     assert abs(out[3.0][0] / out[1.0][0] - 1) < 2e-3
@@ -273,7 +274,7 @@ def test_fem_route_takes_rodas4_and_drops_its_dense_output():
     # over, not arguments): the route's branches are not hashed with them
     y0 = common.initial_state(mech0, q_guess, mech)
     out = jax.eval_shape(lambda y: ev.solve(y, slots=1), y0)
-    assert out.depth.shape == (N,)
+    assert out.depth[0].shape == (N,)
     assert isinstance(ev.term.settings.solver, Rodas4)
     assert ev.term.settings.solver.dense_output is False
     assert fr.FemEvolver(mech, JOINT, 100, fem=model, period=PERIOD).term.settings.solver is None

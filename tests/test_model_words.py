@@ -47,8 +47,7 @@ def test_the_fem_route_settings_and_numbers_are_those_of_the_stored_run():
     assert settings == {k: stored[k] for k in (*SETTINGS, *fem_keys)}
     # the reference route it is compared with reports the EFM contact
     assert model_words.describe(model.reference(), 21400)["contact"] == "efm"
-    run = SimpleNamespace(detail=SimpleNamespace(state=SimpleNamespace(
-        memory={"fem_explicit": np.asarray(0)})))
+    run = SimpleNamespace(state=SimpleNamespace(memory={"fem_explicit": np.asarray(0)}))
     route = model_words.route_summary(model, run)
     assert route == {k: stored["fem_route"][k] for k in route}
     assert set(route) == {"explicit_fallback_cycles", "refresh_interval", "samples_per_cycle",

@@ -154,10 +154,10 @@ def test_constant_wear_rate_gives_the_closed_form_life_and_profile():
         return b, jnp.asarray(True), jnp.zeros((n, n))
 
     sol = integrate_profile(evaluate, jnp.zeros(n), steps=7, limit=2e-3)
-    assert bool(sol.status == RESULTS.ok)
-    np.testing.assert_allclose(float(sol.life), 2e-3 / float(peak_depth(b)), rtol=1e-10)
+    assert bool(sol.result == RESULTS.ok)
+    np.testing.assert_allclose(float(sol.life[0]), 2e-3 / float(peak_depth(b)), rtol=1e-10)
     run = integrate_profile(evaluate, jnp.zeros(n), steps=5, cycles=12_345.0)
-    np.testing.assert_allclose(np.asarray(run.depth), 12_345.0 * np.asarray(b), rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(run.depth[0]), 12_345.0 * np.asarray(b), rtol=1e-12)
     np.testing.assert_allclose(float(run.cycles), 12_345.0, rtol=1e-14)
 
 
@@ -175,10 +175,10 @@ def test_a_run_through_the_wall_stops_at_the_wall():
 
     wall = 5e-3
     run = integrate_profile(evaluate, jnp.zeros(n), steps=5, cycles=1e12, wall=wall)
-    assert bool(run.status == RESULTS.wall_reached)
+    assert bool(run.result == RESULTS.wall_reached)
     reached = wall / float(peak_depth(b))
     np.testing.assert_allclose(float(run.cycles), reached, rtol=1e-10)
-    np.testing.assert_allclose(np.asarray(run.depth), reached * np.asarray(b), rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(run.depth[0]), reached * np.asarray(b), rtol=1e-9)
 
     a = 2e-6 * jnp.eye(n) + 1e-7
 
@@ -187,9 +187,9 @@ def test_a_run_through_the_wall_stops_at_the_wall():
 
     run = integrate_profile(responding, jnp.zeros(n), steps=40, cycles=1e12, wall=wall)
     life = integrate_profile(responding, jnp.zeros(n), steps=40, limit=wall)
-    assert bool(run.status == RESULTS.wall_reached)
-    np.testing.assert_allclose(float(peak_depth(run.depth)), wall, rtol=1e-9)
-    np.testing.assert_allclose(float(run.cycles), float(life.life), rtol=1e-3)
+    assert bool(run.result == RESULTS.wall_reached)
+    np.testing.assert_allclose(float(peak_depth(run.depth[0])), wall, rtol=1e-9)
+    np.testing.assert_allclose(float(run.cycles), float(life.life[0]), rtol=1e-3)
 
 
 def test_linear_wear_ode_converges_to_its_exact_solution():
@@ -210,7 +210,7 @@ def test_linear_wear_ode_converges_to_its_exact_solution():
     for steps in (10, 40):
         run = integrate_profile(evaluate, jnp.zeros(n), steps=steps, cycles=cycles,
                                 max_steps=steps + 2)
-        errors.append(np.max(np.abs(np.asarray(run.depth) - exact)) / np.max(np.abs(exact)))
+        errors.append(np.max(np.abs(np.asarray(run.depth[0]) - exact)) / np.max(np.abs(exact)))
     assert errors[1] < 2e-2 and errors[1] < 0.5 * errors[0]
 
 

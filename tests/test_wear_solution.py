@@ -83,7 +83,7 @@ def test_a_run_and_a_life_of_one_program_are_evolve_and_life(setup):
         # the steps taken are the history's valid slots after the start
         assert int(sol.stats["steps"][0]) == int(valid.sum()) - 1
         assert int(sol.stats["evaluations"][0]) >= int(sol.stats["steps"][0])
-        assert "dynamic_cycles" not in sol.stats and sol.detail is None
+        assert "dynamic_cycles" not in sol.stats and sol.state is None and sol.slots is None
     assert float(run.contact_margin[0]) > 0.0
 
 

@@ -88,16 +88,16 @@ def rig_21400(repeats: int, integrator: str = "tsit5") -> dict:
     model = common.dynamic_model(RIG_CYCLES, TARGET_DYNAMIC, integrator)
     fn = jax.jit(lambda p, y: model.evolve(mech_of_p(p), (common.JOINT,), y, period=PERIOD,
                                            cycles=RIG_CYCLES,
-                                           wall_thickness=RIG_JOINT.wall).detail)
+                                           wall_thickness=RIG_JOINT.wall))
     res, metrics = time_jitted(fn, (common.params_of(RIG_JOINT), y0), min(repeats, 2))
     res.check("benchmark rig-21400")
-    dyn = int(res.dynamic_cycles)
+    dyn = int(res.stats["dynamic_cycles"])
     el = mech.element(common.JOINT)
     return {"simulated_s": dyn * PERIOD, **metrics, "dynamic_cycles": dyn,
             "run_s_per_cycle": metrics["run_s"] / dyn,
             "run_s_per_simulated_s": metrics["run_s"] / (dyn * PERIOD),
-            "max_wear_depth_mm": float(res.depth.max()) * 1e3,
-            "wear_volume_mm3": float(worn_volume(res.depth, el.bushing_radius,
+            "max_wear_depth_mm": float(res.depth[0].max()) * 1e3,
+            "wear_volume_mm3": float(worn_volume(res.depth[0], el.bushing_radius,
                                                  el.law.depth)) * 1e9,
             "repeats": min(repeats, 2)}
 

@@ -18,7 +18,6 @@ def rig_21400_fem_route(repeats: int) -> dict:
     import jax
 
     from diffwear.models import FemRoute
-    from diffwear.models.dynamic import as_solution
     from diffwear.models.execution import RunTimes
     from diffwear.presets import RIG_CYCLES
     from diffwear.studies import _wear_common as common
@@ -51,7 +50,7 @@ def rig_21400_fem_route(repeats: int) -> dict:
             wall_thickness=RIG_JOINT.wall).solve(y))
         res, m = time_jitted(run, (p, y0), n_runs)
         res.check(f"benchmark rig-21400 {tag} route")
-        nums = common.route_numbers(as_solution(res), RIG_JOINT,
+        nums = common.route_numbers(res, RIG_JOINT,
                                     RunTimes(m["compile_s"], m["run_s"], {}))
         out.update({f"{tag}_{k}": v for k, v in nums.items()})
         out[f"{tag}_run_s_all"] = m["run_s_all"]

@@ -56,8 +56,8 @@ def rig_gradient(repeats: int, integrator: str = "tsit5", rtol: float | None = N
                        cycle=CycleSettings(tol, tol, solver, adjoint))
             el = m.element(common.JOINT)
             # RigWear's outputs: smooth max (temperature 0.1 um) and volume
-            return jnp.stack([smooth_max(r.depth, 1e-7) * 1e3,
-                              worn_volume(r.depth, el.bushing_radius, el.law.depth) * 1e9])
+            return jnp.stack([smooth_max(r.depth[0], 1e-7) * 1e3,
+                              worn_volume(r.depth[0], el.bushing_radius, el.law.depth) * 1e9])
         return f
 
     x0 = jnp.zeros(4)

@@ -107,8 +107,8 @@ def scipy_peer(repeats: int) -> dict:
                                       method=Constant(a), wall_thickness=RIG_JOINT.wall))
     res, de = time_jitted(evo, (mech, y0), 1)
     res.check("benchmark scipy-peer evolution")
-    depth_dw = float(res.depth.max()) * 1e3
-    vol_dw = float(worn_volume(res.depth, el.bushing_radius, el.law.depth)) * 1e9
+    depth_dw = float(res.depth[0].max()) * 1e3
+    vol_dw = float(worn_volume(res.depth[0], el.bushing_radius, el.law.depth)) * 1e9
     t_start = time.perf_counter()
     ev_p = peer.evolve(RIG_CYCLES, SCIPY_DYNAMIC)
     peer_evo_s = time.perf_counter() - t_start

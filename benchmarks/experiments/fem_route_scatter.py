@@ -77,14 +77,14 @@ def scatter(setting: str, runs: int) -> dict:
         t0 = time.perf_counter()
         res = jax.block_until_ready(compiled(p, y))
         wall = time.perf_counter() - t0
-        res.detail.check(f"{setting} run {k}")
+        res.check(f"{setting} run {k}")
         d = np.asarray(res.depth[0]) * 1e3
         out["runs"].append({
             "max_depth_mm": float(d.max()),
             "smoothed_max_depth_mm": float(arc_peak_depth(res.depth[0])) * 1e3,
             "volume_mm3": float(worn_volume(res.depth[0], RIG_JOINT.bushing_radius,
                                             RIG_JOINT.depth)) * 1e9,
-            "archard_mm3": float(RIG_JOINT.k * res.detail.load_sliding) * 1e9,
+            "archard_mm3": float(RIG_JOINT.k * res.state.load_sliding[0]) * 1e9,
             "roughness_mm": float(np.sqrt(np.mean((np.roll(d, 1) - 2 * d + np.roll(d, -1)) ** 2))),
             "run_s": wall})
     for key in ("max_depth_mm", "smoothed_max_depth_mm", "volume_mm3", "archard_mm3",

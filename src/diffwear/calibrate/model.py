@@ -234,7 +234,8 @@ class RigHistory(eqx.Module):
                                                   cycles=self.cycles)
         d = self.dynamic_cycles
         zeros = jnp.zeros(self.n_theta)
-        hs, forces = solution.detail.history["depth"][:d], solution.detail.history["force"][:d]
+        assert solution.slots is not None  # the dynamic evolution records its slots
+        hs, forces = solution.slots["depth"][:d], solution.slots["force"][:d]
         crank0 = mech.frames(mech.split(y0)[0]).pose("crank")[2]
         # The samples span [a0, a0 + 2 pi]; drop the first: the cycle starts on
         # the profile just deepened by A cycles' wear, so the pin is

@@ -33,6 +33,7 @@ from ..wear._engine import (
     WearState,
 )
 from ..wear.modifier import AbstractWearModifier, JointGeometry
+from ..wear.solution import WearSolution
 from ._base import AbstractWearModel
 from .dynamic import Dynamic
 from .execution import (
@@ -47,7 +48,6 @@ from .execution import (
 from .fem import FemRoute
 from .life import cycles_to_limit
 from .quasi_static import QuasiStatic, joint_mass
-from .solution import WearSolution
 
 __all__ = ["AbstractWearModel", "WearSolution", "Dynamic", "QuasiStatic", "FemRoute",
            "cycles_to_limit", "joint_mass", "run_model", "Checkpoints", "RunTimes",

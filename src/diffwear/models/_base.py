@@ -10,7 +10,7 @@ import equinox as eqx
 from jaxtyping import Array, Float
 
 from ..mechanism import Mechanism
-from .solution import WearSolution
+from ..wear.solution import WearSolution
 
 
 class AbstractWearModel(eqx.Module):

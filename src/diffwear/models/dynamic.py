@@ -20,14 +20,13 @@ from ..contact import contact_history
 from ..errors import InputError
 from ..wear.cycle import wear_cycle
 from ..wear.dynamic_term import CycleSettings
-from ..wear.evolution import EvolutionResult, Evolver, worn_mechanism
+from ..wear.evolution import Evolver, worn_mechanism
 from ..wear.extrapolation import AbstractExtrapolation, Constant
 from ..wear.life import dynamic_cycles_to_limit
 from ..wear.modifier import AbstractWearModifier
-from ..wear.profile_ode import ProfileHistory
-from ..wear.status import RESULTS, not_an_answer, not_computed, stack
+from ..wear.solution import WearSolution
+from ..wear.status import not_an_answer, not_computed
 from ._base import AbstractWearModel
-from .solution import WearSolution
 
 
 class Dynamic(AbstractWearModel):
@@ -52,7 +51,7 @@ class Dynamic(AbstractWearModel):
     ``modifier``: an `AbstractWearModifier` of the joint's wear (its rate
     factor is held over each extrapolated step), ``force_samples``: keep
     each dynamic cycle's |joint force| at this many states in the history
-    (``detail.history["force"]``).
+    (``slots["force"]``).
     """
 
     name: ClassVar[str] = "dynamic"
@@ -118,9 +117,9 @@ class Dynamic(AbstractWearModel):
         if wall_thickness is not None:
             wall = jnp.reshape(jnp.asarray(wall_thickness, dtype=float), (-1,))[0]
         ev = self.evolver(mech, joints[0], cycles, period=period, wall_thickness=wall)
-        solution = as_solution(ev.solve(y0))
+        solution = ev.solve(y0)
         # a failed or cut-short evolution has no final profile: NaN with NaN
-        # derivatives (the profiles reached stay in ``history`` and ``detail``)
+        # derivatives (the profiles reached stay in ``history``, ``slots`` and ``state``)
         depth = not_an_answer(solution.depth[0], not_computed(solution.result),
                               (self, mech, y0, period, cycles, wall_thickness))
         return eqx.tree_at(lambda e: e.depth, solution, (depth,))
@@ -128,30 +127,9 @@ class Dynamic(AbstractWearModel):
     def _life(self, mech, joints, y0, *, period, limit) -> WearSolution:
         """The lives of ``joints`` (`dynamic_cycles_to_limit`): the history
         holds cycles, peak depths and valid slots, not the profiles."""
-        final, hist = dynamic_cycles_to_limit(
+        return dynamic_cycles_to_limit(
             mech, joints, y0, period=period, limit=limit, steps=self.steps,
             implicit=self.implicit, warmup_cycles=self.warmup_cycles, cycle=self.cycle)
-        n = len(joints)
-        start = jnp.zeros(1)
-        nan = jnp.full(n, jnp.nan)
-        # the joints run together: a joint at its limit is done (its life
-        # and profile are answers), the others share the run's result
-        joint_result = stack([RESULTS.where(final.done[k], RESULTS.ok, final.status)
-                              for k in range(n)])
-        failed = not_computed(joint_result)
-        inputs = (self, mech, y0, period, limit)
-        return WearSolution(
-            depth=tuple(not_an_answer(h, failed[k], inputs) for k, h in enumerate(final.h)),
-            joint_cycles=jnp.full(n, final.n), life=final.life,
-            result=final.status, joint_result=joint_result,
-            contact_margin=nan, contact_margin_worn=nan,
-            stats={"steps": jnp.full(n, final.steps), "evaluations": final.evaluations,
-                   "dynamic_cycles": final.evaluations},
-            history=tuple(ProfileHistory(
-                cycles=jnp.concatenate([start, hist["cycles"]]),
-                peak=jnp.concatenate([start, hist["max_depth"][:, k]]),
-                depth=None,
-                valid=jnp.concatenate([jnp.ones(1, bool), hist["valid"]])) for k in range(n)))
 
     def check_joints(self, mech, joints, what: str = "mechanism") -> None:
         """One wearing joint.  A lubricated one is taken: its cycles run on
@@ -166,12 +144,13 @@ class Dynamic(AbstractWearModel):
         deeper final profile the pin would first drop into the groove, an
         impact the gradually worn joint never sees).  Both at the default
         cycle tolerances, `CYCLE_SAMPLES` states each."""
-        res = evolution.detail
+        end = _end_state(evolution)
         warm = _cycle(mech, joint, y0, 0.0, period)
         first = _cycle(mech, joint, warm.y_end, period, period)
-        worn = worn_mechanism(mech, joint, res.depth)
-        settle = _cycle(worn, joint, res.y, res.t, period)
-        last = _cycle(worn, joint, settle.y_end, res.t + period, period)
+        worn = worn_mechanism(mech, joint, end.h[0])
+        y, t = end.memory["y"], end.memory["t"]
+        settle = _cycle(worn, joint, y, t, period)
+        last = _cycle(worn, joint, settle.y_end, t + period, period)
         crank = 2 * jnp.pi * (first.ts - first.ts[0]) / period
         return (contact_history(mech, joint, first.ys), contact_history(worn, joint, last.ys),
                 crank)
@@ -179,12 +158,12 @@ class Dynamic(AbstractWearModel):
     def joint_force(self, mech, joint, y0, *, period, evolution: WearSolution,
                     samples: int = 180):
         """One more dynamic cycle on the final profile, from the evolution's
-        end state (``evolution.detail``), at ``samples`` equally spaced
+        end state (``evolution.state``), at ``samples`` equally spaced
         states (its end, a repeat of its start, left out)."""
-        res = evolution.detail
-        worn = worn_mechanism(mech, joint, res.depth)
-        cyc = wear_cycle(worn, joint, res.y, res.t, period, n_save=samples + 1,
-                         **self.cycle.options())
+        end = _end_state(evolution)
+        worn = worn_mechanism(mech, joint, end.h[0])
+        cyc = wear_cycle(worn, joint, end.memory["y"], end.memory["t"], period,
+                         n_save=samples + 1, **self.cycle.options())
         assert cyc.ys is not None  # saved: n_save is given
         return contact_history(worn, joint, cyc.ys).force_magnitude[:-1]
 
@@ -211,23 +190,12 @@ def _cycle(mech, joint, y, t, period):
     return wear_cycle(mech, joint, y, t, period, n_save=CYCLE_SAMPLES)
 
 
-def as_solution(res: EvolutionResult) -> WearSolution:
-    """One joint's `EvolutionResult` as a `WearSolution` (``detail`` keeps it)."""
-    h = res.history
-    nan = jnp.full(1, jnp.nan)
-    steps = jnp.sum(h["valid"]).astype(int)
-    return WearSolution(
-        depth=(res.depth,), joint_cycles=res.cycles[None], life=nan,
-        result=res.status, joint_result=stack([res.status]), contact_margin=nan,
-        contact_margin_worn=nan,
-        stats={"steps": steps[None], "evaluations": res.dynamic_cycles,
-               "dynamic_cycles": res.dynamic_cycles},
-        history=(ProfileHistory(
-            cycles=jnp.concatenate([jnp.zeros(1), h["cycles"]]),
-            peak=jnp.concatenate([jnp.zeros(1), h["max_depth"]]),
-            depth=jnp.concatenate([jnp.zeros_like(res.depth)[None], h["depth"]]),
-            valid=jnp.concatenate([jnp.ones(1, bool), h["valid"]])),),
-        detail=res)
+def _end_state(evolution: WearSolution):
+    """The engine's final state of a dynamic evolution (`Dynamic.solve`)."""
+    if evolution.state is None:
+        raise InputError("the joint force at the end needs a dynamic evolution's final state "
+                         "(WearSolution.state); this solution has none")
+    return evolution.state
 
 
-__all__ = ["Dynamic", "as_solution", "one_joint"]
+__all__ = ["Dynamic", "one_joint"]

@@ -29,11 +29,10 @@ from .. import interrupt
 from ..errors import InputError
 from ..io import CHECKPOINT
 from ..wear._engine import WearState
-from ..wear.evolution import EvolutionResult
+from ..wear.solution import WearSolution
 from ..wear.status import RESULTS
 from ._base import AbstractWearModel
-from .dynamic import Dynamic, as_solution, one_joint
-from .solution import WearSolution
+from .dynamic import Dynamic, one_joint
 
 CHUNKS = 10  # a run is cut into ~10 chunks: checkpoint and progress after each
 # checkpoint keys added later, with the value that checkpoints written before meant
@@ -87,7 +86,7 @@ class ChunkedEvolution:
     def done(self, state) -> bool:
         return not (bool(state.status == RESULTS.ok) and float(state.n) < self.cycles - 1e-9)
 
-    def run(self, start: Checkpoint | None = None, on_chunk=None) -> EvolutionResult:
+    def run(self, start: Checkpoint | None = None, on_chunk=None) -> WearSolution:
         p = self._p
         if start is None:
             state = _as_numpy(self._init(p, self._y0))
@@ -185,7 +184,7 @@ def timed(fn: Callable, *args) -> tuple[Any, RunTimes]:
 
 
 def run_evolution(make: Callable, p, y0, checkpoints: Checkpoints | None = None,
-                  chunks: int = CHUNKS) -> tuple[EvolutionResult, RunTimes]:
+                  chunks: int = CHUNKS) -> tuple[WearSolution, RunTimes]:
     """Compile (timed) and run (timed) the evolution ``make(p)`` (an `Evolver`
     from the traced parameters ``p``) from ``y0``.
 
@@ -261,8 +260,7 @@ def run_model(model: AbstractWearModel, mech_of: Callable, p, joints: tuple[str,
             return model.evolver(mech_of(p), joint, cycles, period=period,
                                  wall_thickness=wall_thickness)
 
-        res, times = run_evolution(make, p, y0, checkpoints)
-        return as_solution(res), times
+        return run_evolution(make, p, y0, checkpoints)
 
     if checkpoints is not None and checkpoints.resume:
         raise InputError(f"--resume: the {model.name} model runs whole, without "

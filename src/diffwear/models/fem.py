@@ -7,8 +7,8 @@ from typing import ClassVar
 
 from ..errors import InputError
 from ..wear.fem_route import FemEvolver, FemWearModel
+from ..wear.solution import WearSolution
 from .dynamic import Dynamic
-from .solution import WearSolution
 
 
 class FemRoute(Dynamic):

@@ -10,9 +10,9 @@ from ..contact.clearance_joint import ClearanceJoint
 from ..errors import InputError
 from ..mechanism import Mechanism
 from ..wear.life import not_computed_is_nan
+from ..wear.solution import WearSolution
 from ._base import AbstractWearModel
 from .dynamic import Dynamic
-from .solution import WearSolution
 
 
 def cycles_to_limit(mech: Mechanism, joints: tuple[str, ...], y0: Float[Array, " s"], *,

@@ -41,10 +41,10 @@ from ..quasistatic.lubricated import joint_model
 from ..wear._engine import AbstractWearTerm, CycleWear, Stop
 from ..wear.implicit import CycleGrid, LinearlyImplicitEuler
 from ..wear.modifier import AbstractWearModifier, JointGeometry, modulated
-from ..wear.profile_ode import ProfileSolution, solve_profile
+from ..wear.profile_ode import solve_profile
+from ..wear.solution import WearSolution
 from ..wear.status import RESULTS, not_an_answer, not_computed, stack, worst
 from ._base import AbstractWearModel
-from .solution import WearSolution
 
 
 def joint_mass(mech: Mechanism, joint) -> Float[Array, ""]:
@@ -151,7 +151,7 @@ class QuasiStatic(AbstractWearModel):
         return tuple(joint_mass(mech, j) for j in clearance_joints(mech, joints))
 
     def _each(self, mech, joints, y0, period, walls=None, **target):
-        """Per joint: (ProfileSolution, (unworn, worn) contact margins); and
+        """Per joint: (its `WearSolution`, (unworn, worn) contact margins); and
         the loads' success.  ``walls``: per joint wall thickness [m] (none:
         no wall)."""
         require_float64("QuasiStatic")
@@ -180,7 +180,7 @@ class QuasiStatic(AbstractWearModel):
             sol = solve_profile(term, solver, jnp.zeros(j.n), memory, stop,
                                 solver.slots(stop, slots))
             margins = jnp.stack([jnp.min(j.contact_margin(jnp.zeros(j.n), lo, mass)),
-                                 jnp.min(j.contact_margin(sol.depth, lo, mass))])
+                                 jnp.min(j.contact_margin(sol.depth[0], lo, mass))])
             return sol, margins
 
         parts = (models, loads.joints, masses, tuple(walls), geometries)
@@ -210,8 +210,8 @@ class QuasiStatic(AbstractWearModel):
     def _result(per_joint, loads_ok):
         status = stack([
             RESULTS.where(~loads_ok, RESULTS.cycle_model_failed,
-                          RESULTS.where((sol.status == RESULTS.ok) & (margins[0] < 1.0),
-                                        RESULTS.contact_lost, sol.status))
+                          RESULTS.where((sol.result == RESULTS.ok) & (margins[0] < 1.0),
+                                        RESULTS.contact_lost, sol.result))
             for sol, margins in per_joint])
         return status, worst(status)
 
@@ -229,7 +229,7 @@ class QuasiStatic(AbstractWearModel):
         per_joint, ok = self._each(mech, joints, y0, period, walls=wall_thickness,
                                    cycles=cycles, limit=limit)
         joint_result, result = self._result(per_joint, ok)
-        sols: list[ProfileSolution] = [s for s, _ in per_joint]
+        sols: list[WearSolution] = [s for s, _ in per_joint]
         inputs = (self, mech, y0, period, cycles, limit, wall_thickness)
         failed = not_computed(joint_result)
         # a joint whose cycle model failed (a joint that carries no load: its
@@ -237,17 +237,16 @@ class QuasiStatic(AbstractWearModel):
         # short of ``cycles``, no final profile: NaN, with NaN derivatives by
         # every input (never a silent 0; the profiles it reached stay in the
         # history)
-        joint_cycles = jnp.stack([s.cycles for s in sols])
         return WearSolution(
-            depth=tuple(not_an_answer(s.depth, failed[k], inputs) for k, s in enumerate(sols)),
-            joint_cycles=joint_cycles,
-            life=not_an_answer(jnp.stack([s.life for s in sols]), failed, inputs),
+            depth=tuple(not_an_answer(s.depth[0], failed[k], inputs) for k, s in enumerate(sols)),
+            joint_cycles=jnp.concatenate([s.joint_cycles for s in sols]),
+            life=not_an_answer(jnp.concatenate([s.life for s in sols]), failed, inputs),
             result=result, joint_result=joint_result,
             contact_margin=jnp.stack([m[0] for _, m in per_joint]),
             contact_margin_worn=jnp.stack([m[1] for _, m in per_joint]),
-            stats={"steps": jnp.stack([s.steps for s in sols]),
-                   "evaluations": jnp.stack([s.evaluations for s in sols])},
-            history=tuple(s.history for s in sols))
+            stats={"steps": jnp.concatenate([s.stats["steps"] for s in sols]),
+                   "evaluations": jnp.stack([s.stats["evaluations"] for s in sols])},
+            history=tuple(s.history[0] for s in sols))
 
     def joint_force(self, mech, joint, y0, *, period, evolution: WearSolution,
                     samples: int = 180):

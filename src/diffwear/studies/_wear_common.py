@@ -162,9 +162,9 @@ def route_numbers(res: WearSolution, design: WearJointDesign, times: RunTimes) -
                  "arc_peak_depth_mm": float(arc_peak_depth(depth)) * 1e3,
                  "wear_volume_mm3": float(worn_volume(depth, design.bushing_radius,
                                                       design.depth)) * 1e9}
-    if res.detail is not None:  # simulated cycles: their normal load x sliding
+    if res.state is not None:  # simulated cycles: their normal load x sliding
         out["archard_k_times_load_sliding_mm3"] = float(
-            design.k * res.detail.load_sliding) * 1e9
+            design.k * res.state.load_sliding[0]) * 1e9
     out.update(dynamic_cycles_simulated=simulated_cycles(res), status=status_name(res.result),
                wall_time_s=times.wall_time, compile_time_s=times.compile_time)
     return out
@@ -254,7 +254,7 @@ def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearS
         summary.update(contact_margin=margins[0], contact_margin_worn=margins[1],
                        wear_steps=int(valid.sum()) - 1)
     warnings = []
-    if res.detail is not None:
+    if res.slots is not None:
         warnings += contact_loss_warnings({"first": first, "last": last},
                                           settings.get("extrapolation", 1.0))
     if checked and margins[1] < 1.0:
@@ -286,16 +286,16 @@ def write_outputs(out, study: WearStudy, *, model: AbstractWearModel, res: WearS
 def _simulated_columns(res: WearSolution) -> dict:
     """The history's extrapolation and dynamic cycles per step, where the
     model simulates cycles (the first row: the warm-up)."""
-    if res.detail is None:
+    if res.slots is None:
         return {}
-    h = {k: np.asarray(v) for k, v in res.detail.history.items()}
+    h = {k: np.asarray(v) for k, v in res.slots.items()}
     valid = h["valid"].astype(bool)
     return {"extrapolation": np.concatenate([[0.0], h["extrapolation"][valid]]),
             "dynamic_cycles": np.concatenate([[1], h["dynamic_cycles"][valid]])}
 
 
 def _result_words(res: WearSolution, el) -> list[str]:
-    if res.detail is not None:
+    if res.slots is not None:
         return []
     return ["Model: quasi-static joint (the pin at the equilibrium of "
             + ("the oil film and the asperities (the EFM springs at the summit height)"
@@ -310,7 +310,7 @@ def _integrator_label(name: str) -> str:
 
 
 def _run_words(s: dict, res: WearSolution, times: RunTimes) -> list[str]:
-    if res.detail is None:
+    if res.slots is None:
         return [f"cycles: {s['cycles']:.0f} in {s['wear_steps']} steps of the wear ODE (the "
                 "profile's growth integrated over the cycle count by an adaptive solver); "
                 f"status: {s['status_text']}",

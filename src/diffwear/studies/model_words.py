@@ -72,7 +72,8 @@ def route_summary(model: AbstractWearModel, evolution: WearSolution) -> dict:
         return {}
     assert model.fem is not None
     fem = model.fem
-    fallback = evolution.detail.state.memory["fem_explicit"]
+    assert evolution.state is not None  # a FEM route's evolution simulates cycles
+    fallback = evolution.state.memory["fem_explicit"]
     return {"explicit_fallback_cycles": int(np.asarray(fallback)),
             "refresh_interval": float(fem.refresh_interval),
             "samples_per_cycle": fem.n_samples + 1, "layers": fem.n_layers,

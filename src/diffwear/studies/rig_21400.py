@@ -89,7 +89,7 @@ def calibrate_free_length(l0_guesses=(0.50, 0.56), *, cycles=RIG_CYCLES, dynamic
         m = eqx.tree_at(lambda m: m.forces[spring].free_length, mech, l0)
         r = evolve(m, common.JOINT, y0, cycles, period=PERIOD,
                    method=Constant(float(cycles) / dynamic))
-        return worn_volume(r.depth, m.forces[idx].bushing_radius, m.forces[idx].law.depth) * 1e9
+        return worn_volume(r.depth[0], m.forces[idx].bushing_radius, m.forces[idx].law.depth) * 1e9
 
     x0, x1 = l0_guesses
     f0, f1 = float(volume(x0)) - TARGET_VOLUME_MM3, float(volume(x1)) - TARGET_VOLUME_MM3

@@ -13,9 +13,7 @@ from .cycle import (
 )
 from .dynamic_term import CycleSettings, DynamicWear
 from .evolution import (
-    EvolutionResult,
     Evolver,
-    WearLimitError,
     evolve,
     smooth_max,
     worn_mechanism,
@@ -31,6 +29,7 @@ from .peak import (
     arc_peak_depth,
     peak_depth,
 )
+from .solution import WearLimitError, WearSolution
 from .status import (
     RESULTS,
     not_an_answer,
@@ -42,7 +41,7 @@ __all__ = [
     "CycleResult", "wear_cycle", "reset_wear", "JointsCycleResult", "wear_cycle_joints",
     "peak_depth", "arc_peak_depth",
     "RESULTS", "not_an_answer", "not_computed",
-    "EvolutionResult", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
+    "WearSolution", "evolve", "smooth_max", "worn_volume", "worn_mechanism", "WearLimitError",
     "AbstractExtrapolation", "Constant", "Adaptive", "ErrorControlled",
     "Evolver", "WearState", "CycleSettings", "DynamicWear",
 ]

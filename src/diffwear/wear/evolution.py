@@ -11,8 +11,8 @@ differentiates (reverse or forward mode) w.r.t. the wear coefficient,
 clearance, bushing depth and diameter.
 
 Failure (bushing worn through, integrator failure) never raises inside jit:
-the evolution stops updating, keeps the results so far and reports ``status``
-(a `diffwear.wear.RESULTS` member); `EvolutionResult.check` raises
+the evolution stops updating, keeps the results so far and reports its
+``result`` (a `diffwear.wear.RESULTS` member); `WearSolution.check` raises
 `WearLimitError` naming the cycle and depth, and ``evolve(..., throw=True)``
 raises inside jit (`eqx.error_if`, as diffrax's ``diffeqsolve(throw=True)``).
 `ChunkedEvolution` runs the same scan in chunks with checkpoints.
@@ -29,22 +29,16 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .._checks import require_float64
-from ..errors import InputError, SolverError
+from ..errors import InputError
 from ..mechanism import Mechanism
 from ._engine import Engine, Stop, WearState
 from .cycle import clearance_element, wear_parts
 from .dynamic_term import CycleSettings, DynamicWear
 from .extrapolation import AbstractExtrapolation, Constant
 from .modifier import AbstractWearModifier, JointGeometry
-from .status import RESULTS, message, name
-
-
-class WearLimitError(SolverError):
-    """The wear evolution stopped early; ``.result`` holds the results so far."""
-
-    def __init__(self, message, result=None):
-        super().__init__(message)
-        self.result = result
+from .profile_ode import ProfileHistory
+from .solution import WearSolution
+from .status import RESULTS, stack
 
 
 def smooth_max(x: Float[Array, " n"], temperature) -> Float[Array, ""]:
@@ -60,52 +54,13 @@ def worn_volume(depth_profile, bushing_radius, bushing_depth) -> Float[Array, ""
     return bushing_depth * bushing_radius * (2 * jnp.pi / n) * jnp.sum(depth_profile, axis=-1)
 
 
-class EvolutionResult(eqx.Module):
-    """Final wear profile and state, counters, and per-slot history.
-
-    ``history`` arrays have one entry per scan slot; ``history["valid"]`` marks
-    the slots that advanced the profile.
-    """
-
-    depth: Float[Array, " n"]           # final wear depth on the grid [m]
-    y: Float[Array, " s"]               # mechanism state at the end
-    t: Float[Array, ""]                 # simulated time at the end [s]
-    cycles: Float[Array, ""]            # real cycles represented
-    dynamic_cycles: Array               # dynamic cycles simulated (incl. warm-up)
-    load_sliding: Float[Array, ""]      # A-weighted sum of int N ds [N m]
-    status: RESULTS                     # how it ended (`diffwear.wear.RESULTS`)
-    fail_cycles: Float[Array, ""]       # real cycles done when it stopped
-    fail_depth: Float[Array, ""]        # max depth when it stopped [m]
-    history: dict
-    state: WearState | None = None  # engine state at the end (`Evolver`): resumable
-
-    def check(self, what: str = "wear evolution") -> "EvolutionResult":
-        """Raise `WearLimitError` (carrying this result) if the run stopped early."""
-        if bool(self.status == RESULTS.ok):
-            return self
-        cyc, dep = float(self.fail_cycles), float(self.fail_depth) * 1e3
-        raise WearLimitError(f"{what}: {message(self.status)} after {cyc:.0f} cycles "
-                             f"(max depth {dep:.4f} mm); {_REMEDY[name(self.status)]}", self)
-
-
-# what to do about an evolution that stopped early, by `RESULTS` member name
-_REMEDY = {
-    "wall_reached": "stopped, results so far kept",
-    "cycle_model_failed": ("stopped, results so far kept. Tighten the cycle tolerances or "
-                           "reduce the extrapolation factor"),
-    "run_ended_early": ("all max_dynamic scan slots were used; raise max_dynamic or loosen "
-                        "the extrapolation tolerances"),
-    "contact_lost": "stopped, results so far kept",
-}
-
-
 def _with_profile(mech: Mechanism, index: int, clearance):
     return eqx.tree_at(lambda m: m.forces[index].profile.clearance, mech, clearance)
 
 
 def worn_mechanism(mech: Mechanism, joint: str, depth) -> Mechanism:
     """``mech`` with the bushing of clearance joint ``joint`` worn by ``depth`` [m]
-    on its profile grid (e.g. ``EvolutionResult.depth``): the mechanism of the
+    on its profile grid (e.g. ``WearSolution.depth[0]``): the mechanism of the
     next dynamic cycle."""
     index, el = clearance_element(mech, joint)
     return _with_profile(mech, index, el.profile.clearance + depth)
@@ -124,7 +79,7 @@ def evolve(
     warmup_cycles: int = 1,
     cycle: CycleSettings = CycleSettings(),
     throw: bool = False,
-) -> EvolutionResult:
+) -> WearSolution:
     """Evolve the wear of clearance joint ``joint`` over ``cycles`` real cycles.
 
     ``period`` [s]: one crank cycle (2 pi / omega).  ``y0``: state at t = 0.
@@ -136,22 +91,25 @@ def evolve(
     position; the thesis drops its first ~1.3 revolutions too).  ``cycle``:
     how each dynamic cycle is integrated (`CycleSettings`).
 
-    Resuming is `Evolver.solve` (``start``: an engine state,
-    ``EvolutionResult.state`` of an earlier run or `Evolver.init`; ``slots``:
-    how many scan slots to run); `ChunkedEvolution` is a checkpointing
-    driver.
+    Resuming is `Evolver.solve` (``start``: an engine state from
+    `Evolver.init` or `Evolver.run`; ``slots``: how many scan slots to run);
+    `ChunkedEvolution` is a checkpointing driver.
+
+    Returns a `WearSolution` of the one joint: its final profile (as
+    reached, also where the run stopped early), the engine's final
+    ``state`` and the record of every scan slot (``slots``).
 
     ``throw``: raise (`eqx.error_if`, at run time inside jit; under
-    `jax.vmap` if any point stopped) with the status's message where the
+    `jax.vmap` if any point stopped) with the result's message where the
     evolution stopped early, as diffrax's ``diffeqsolve(throw=True)``; by
-    default the result reports it in ``status`` (`EvolutionResult.check`
+    default the solution reports it in ``result`` (`WearSolution.check`
     raises outside jit).
     """
     require_float64("evolve")
     ev = Evolver(mech, joint, cycles, period=period, method=method, max_dynamic=max_dynamic,
                  wall_thickness=wall_thickness, warmup_cycles=warmup_cycles, cycle=cycle)
     res = ev.solve(y0)
-    return res.status.error_if(res, res.status != RESULTS.ok) if throw else res
+    return res.result.error_if(res, res.result != RESULTS.ok) if throw else res
 
 
 class Evolver:
@@ -219,7 +177,7 @@ class Evolver:
         return self._history(self.engine.idle_record(state))
 
     def solve(self, y0, start: WearState | None = None, slots: int | None = None
-              ) -> EvolutionResult:
+              ) -> WearSolution:
         """The evolution from ``y0`` (its warm-up, then every slot) in one call;
         from the engine state ``start`` instead (``y0`` ignored), ``slots``
         of them (default: all)."""
@@ -227,10 +185,22 @@ class Evolver:
         state, hist = self.run(state, self.n_slots if slots is None else int(slots))
         return self.result(state, hist)
 
-    def result(self, final: WearState, hist: dict) -> EvolutionResult:
+    def result(self, final: WearState, hist: dict) -> WearSolution:
+        """The `WearSolution` of the slots run to ``final`` with the record
+        ``hist`` (the profile as reached: a model masks one that is no
+        answer)."""
         done = self.engine.finish(final)
-        return EvolutionResult(
-            depth=done.h[0], y=done.memory["y"], t=done.memory["t"], cycles=done.n,
-            dynamic_cycles=done.evaluations, load_sliding=done.load_sliding[0],
-            status=done.status, fail_cycles=done.fail_n, fail_depth=done.fail_h, history=hist,
-            state=final)
+        depth = done.h[0]
+        nan = jnp.full(1, jnp.nan)
+        start = jnp.zeros(1)
+        return WearSolution(
+            depth=(depth,), joint_cycles=done.n[None], life=nan, result=done.status,
+            joint_result=stack([done.status]), contact_margin=nan, contact_margin_worn=nan,
+            stats={"steps": jnp.sum(hist["valid"]).astype(int)[None],
+                   "evaluations": done.evaluations, "dynamic_cycles": done.evaluations},
+            history=(ProfileHistory(
+                cycles=jnp.concatenate([start, hist["cycles"]]),
+                peak=jnp.concatenate([start, hist["max_depth"]]),
+                depth=jnp.concatenate([jnp.zeros_like(depth)[None], hist["depth"]]),
+                valid=jnp.concatenate([jnp.ones(1, bool), hist["valid"]])),),
+            state=done, slots=hist)

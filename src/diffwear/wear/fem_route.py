@@ -110,8 +110,9 @@ from ..mechanism.geometry import grid_angles, safe_norm
 from ._engine import CycleWear
 from .cycle import clearance_element, wear_parts
 from .dynamic_term import DynamicWear
-from .evolution import EvolutionResult, Evolver
+from .evolution import Evolver
 from .extrapolation import AbstractExtrapolation, Constant
+from .solution import WearSolution
 
 FORCE_MODES = ("resultant", "normal")
 
@@ -513,7 +514,7 @@ class FemEvolver(Evolver):
 
 
 def evolve_fem(mech: Mechanism, joint: str, y0, cycles, *, period, fem: FemWearModel,
-               extrapolation=1.0, **kw) -> EvolutionResult:
+               extrapolation=1.0, **kw) -> WearSolution:
     """`evolve` with constant A = ``extrapolation`` and the FE wear pressure;
     ``kw`` as `evolve` (wall_thickness, warmup_cycles, cycle, ...)."""
     require_float64("evolve_fem")

@@ -71,7 +71,9 @@ from ..mechanism import Mechanism
 from ._engine import Stop, WearState, integrate
 from .dynamic_term import CycleSettings, DynamicWear
 from .implicit import DepthGain
-from .status import not_an_answer
+from .profile_ode import ProfileHistory
+from .solution import WearSolution
+from .status import RESULTS, not_an_answer, not_computed, stack
 
 
 def not_computed_is_nan(cycles, inputs):
@@ -95,7 +97,7 @@ def dynamic_cycles_to_limit(
     slots: int | None = None,
     warmup_cycles: int = 1,
     cycle: CycleSettings = CycleSettings(),
-) -> tuple[WearState, dict]:
+) -> WearSolution:
     """Cycles until the maximum bushing wear depth of each of ``joints`` reaches
     ``limit`` [m] (see the module notes for the stepping and the derivative).
 
@@ -112,13 +114,14 @@ def dynamic_cycles_to_limit(
     Pure and jit-able; a solver failure or a joint that never reaches the
     limit is reported in the final state's ``status``.
 
-    Returns the engine's final state (``life``: per joint the cycles at the
-    limit, NaN where not reached, with NaN derivatives; ``h`` the final
-    profiles, held at the crossing slot's end once a joint is done;
-    ``evaluations`` the dynamic cycles simulated, warm-up included) and the
-    history per scan slot: ``cycles`` (N at its end), ``max_depth`` (per
-    joint), ``step`` (dN) and ``valid``.  `diffwear.models.Dynamic.solve`
-    makes the `diffwear.models.WearSolution` of it.
+    Returns the joints' `WearSolution`: ``life`` per joint the cycles at the
+    limit (NaN where not reached, with NaN derivatives); ``depth`` the final
+    profiles, held at the crossing slot's end once a joint is done (NaN
+    where a joint has no answer); ``joint_result`` per joint (a joint at
+    its limit is done, the others share the run's result); the history per
+    joint (cycles, peak depth, valid slots; not the profiles); ``stats``
+    with the dynamic cycles simulated, warm-up included; the engine's final
+    ``state``.  `diffwear.models.Dynamic.solve` with ``limit=`` is this.
     """
     joints = tuple(joints)
     if not joints:
@@ -135,6 +138,26 @@ def dynamic_cycles_to_limit(
     memory, ok = term.warm_up(y0, warmup_cycles)
     state = WearState.initial(term.zeros(), memory, evaluations=warmup_cycles, ok=ok)
     final, hist = integrate(term, solver, state, stop=stop, slots=n_slots)
+    inputs = (mech, y0, period, limit, cycle)
     # a life not reached is NaN with NaN derivatives, never a silent 0
-    final = final.replace(life=not_computed_is_nan(final.life, (mech, y0, period, limit, cycle)))
-    return final, {k: hist[k] for k in ("cycles", "max_depth", "step", "valid")}
+    final = final.replace(life=not_computed_is_nan(final.life, inputs))
+    n = len(joints)
+    # the joints run together: a joint at its limit is done (its life and
+    # profile are answers), the others share the run's result
+    joint_result = stack([RESULTS.where(final.done[k], RESULTS.ok, final.status)
+                          for k in range(n)])
+    failed = not_computed(joint_result)
+    start, nan = jnp.zeros(1), jnp.full(n, jnp.nan)
+    return WearSolution(
+        depth=tuple(not_an_answer(h, failed[k], inputs) for k, h in enumerate(final.h)),
+        joint_cycles=jnp.full(n, final.n), life=final.life,
+        result=final.status, joint_result=joint_result,
+        contact_margin=nan, contact_margin_worn=nan,
+        stats={"steps": jnp.full(n, final.steps), "evaluations": final.evaluations,
+               "dynamic_cycles": final.evaluations},
+        history=tuple(ProfileHistory(
+            cycles=jnp.concatenate([start, hist["cycles"]]),
+            peak=jnp.concatenate([start, hist["max_depth"][:, k]]),
+            depth=None,
+            valid=jnp.concatenate([jnp.ones(1, bool), hist["valid"]])) for k in range(n)),
+        state=final)

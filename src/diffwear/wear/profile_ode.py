@@ -26,10 +26,10 @@ from ._engine import (
     integrate,
 )
 from .implicit import NO_WEAR_RATE, LinearlyImplicitEuler
-from .status import RESULTS
+from .solution import WearSolution
+from .status import stack
 
-__all__ = ["ProfileHistory", "ProfileSolution", "integrate_profile", "solve_profile",
-           "NO_WEAR_RATE"]
+__all__ = ["ProfileHistory", "integrate_profile", "solve_profile", "NO_WEAR_RATE"]
 
 
 class ProfileHistory(eqx.Module):
@@ -41,23 +41,6 @@ class ProfileHistory(eqx.Module):
     peak: Float[Array, " K"]
     depth: Float[Array, "K n"] | None
     valid: Bool[Array, " K"]
-
-
-class ProfileSolution(eqx.Module):
-    """Final profile ``depth`` [m] after ``cycles`` real cycles; ``life``: cycles
-    at which the peak depth reached the limit (NaN if it did not, or in a run
-    of fixed length); ``status``: a `diffwear.wear.RESULTS` member (the
-    wall reached, the cycle model failed, the limit not reached within
-    ``max_steps`` steps / ``max_cycles``); ``steps``: the steps taken,
-    ``evaluations``: the cycle model's evaluations."""
-
-    depth: Float[Array, " n"]
-    cycles: Float[Array, ""]
-    life: Float[Array, ""]
-    status: RESULTS
-    steps: Array
-    evaluations: Array
-    history: ProfileHistory
 
 
 class _Function(AbstractWearTerm):
@@ -82,7 +65,7 @@ def integrate_profile(
     wall=jnp.inf,
     extrapolate: bool = False,
     memory: Any = None,
-) -> ProfileSolution:
+) -> WearSolution:
     """Integrate dh/dN = w(h) from ``h0`` over ``cycles`` real cycles, or until
     the peak depth reaches ``limit`` [m], or to whichever comes first (`Stop`).
 
@@ -93,8 +76,9 @@ def integrate_profile(
     answer, only its cost).  ``steps``: the accuracy knob
     (`LinearlyImplicitEuler`); ``max_steps`` scan slots (default 4 steps + 8).
     ``wall`` [m]: stop when the peak depth reaches it (`RESULTS.wall_reached`; ``cycles``
-    and ``depth`` are then those at the wall).  Pure, jit-able and
-    differentiable (forward and reverse mode).
+    and ``depth`` are then those at the wall).  Returns the joint's
+    `WearSolution`.  Pure, jit-able and differentiable (forward and reverse
+    mode).
     """
     if memory is None:
         plain = evaluate
@@ -110,17 +94,19 @@ def integrate_profile(
 
 
 def solve_profile(term: AbstractWearTerm, solver: AbstractWearSolver, h0: Float[Array, " n"],
-                  memory: Any, stop: Stop, slots: int) -> ProfileSolution:
+                  memory: Any, stop: Stop, slots: int) -> WearSolution:
     """One joint's profile from ``h0`` with ``term`` and ``solver`` until
-    ``stop``, in ``slots`` scan slots, as a `ProfileSolution` (the history
-    with every slot's profile)."""
+    ``stop``, in ``slots`` scan slots: its `WearSolution` (the history with
+    every slot's profile; no contact margins, no engine state)."""
     s, history = integrate(term, solver, WearState.initial((h0,), memory), stop=stop, slots=slots,
                            keep_profiles=True)
-    return ProfileSolution(
-        depth=s.h[0], cycles=s.n, life=s.life[0], status=s.status, steps=s.steps,
-        evaluations=s.evaluations,
-        history=ProfileHistory(
+    nan = jnp.full(1, jnp.nan)
+    return WearSolution(
+        depth=(s.h[0],), joint_cycles=s.n[None], life=s.life, result=s.status,
+        joint_result=stack([s.status]), contact_margin=nan, contact_margin_worn=nan,
+        stats={"steps": s.steps[None], "evaluations": s.evaluations},
+        history=(ProfileHistory(
             cycles=jnp.concatenate([jnp.zeros(1), history["cycles"]]),
             peak=jnp.concatenate([solver.peak(h0)[None], history["max_depth"][:, 0]]),
             depth=jnp.concatenate([h0[None], history["depth"][0]]),
-            valid=jnp.concatenate([jnp.array([True]), history["valid"]])))
+            valid=jnp.concatenate([jnp.array([True]), history["valid"]])),))

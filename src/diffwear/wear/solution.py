@@ -1,17 +1,26 @@
-"""`WearSolution`: what every wear model's `solve` returns (as diffrax's
+"""`WearSolution`: the one result of a wear integration (as diffrax's
 `Solution`): the wear of each joint after one integration, to a number of
-cycles, to a depth limit, or to whichever comes first."""
+cycles, to a depth limit, or to whichever comes first.  Every model's
+`solve`, `evolve` and the dynamic evolution (`Evolver`) return it."""
 
 from __future__ import annotations
-
-from typing import Any
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..wear.status import RESULTS
+from ..errors import SolverError
+from ._engine import WearState
+from .status import RESULTS, message, name
+
+
+class WearLimitError(SolverError):
+    """The wear integration stopped early; ``.result`` holds the results so far."""
+
+    def __init__(self, message, result=None):
+        super().__init__(message)
+        self.result = result
 
 
 class WearSolution(eqx.Module):
@@ -35,9 +44,14 @@ class WearSolution(eqx.Module):
     history: per joint a `diffwear.wear.profile_ode.ProfileHistory` (index 0
         the start): cycles, peak depth, whether the step was taken, and the
         profiles where the integration keeps them (else ``depth`` None)
-    detail: the dynamic evolution's final state (`diffwear.wear.EvolutionResult`:
-        end state for a checkpoint or the joint force on the final profile,
-        load x sliding), or None
+    state: the engine's final `WearState` where the model simulates
+        cycles (the mechanism's end state ``memory["y"]``, ``memory["t"]``
+        for the joint force on the final profile, the profiles as reached
+        ``h``, load x sliding per joint, where the run stopped early
+        ``fail_n`` / ``fail_h``), else None
+    slots: the dynamic evolution's record per scan slot (``cycles``,
+        ``max_depth``, ``volume``, ``extrapolation``, ``valid``,
+        ``dynamic_cycles``, ``depth``; ``force`` where kept), else None
     """
 
     depth: tuple
@@ -49,7 +63,8 @@ class WearSolution(eqx.Module):
     contact_margin_worn: Float[Array, " J"]
     stats: dict
     history: tuple
-    detail: Any = None
+    state: WearState | None = None
+    slots: dict | None = None
 
     @property
     def cycles(self) -> Float[Array, ""]:
@@ -57,6 +72,21 @@ class WearSolution(eqx.Module):
         requested count, or fewer when a joint wore through its wall (or its
         model failed) first."""
         return jnp.min(self.joint_cycles)
+
+    def check(self, what: str = "wear evolution") -> "WearSolution":
+        """This (concrete) solution, or `WearLimitError` (carrying it) naming
+        the cycle and the depth where the integration stopped early."""
+        if bool(self.result == RESULTS.ok):
+            return self
+        if self.state is not None:
+            cyc, dep = float(self.state.fail_n), float(self.state.fail_h)
+        else:
+            cyc = float(self.cycles)
+            dep = max(float(np.max(np.asarray(h.peak)[np.asarray(h.valid)]))
+                      for h in self.history)
+        raise WearLimitError(f"{what}: {message(self.result)} after {cyc:.0f} cycles "
+                             f"(max depth {dep * 1e3:.4f} mm); {_REMEDY[name(self.result)]}",
+                             self)
 
     def reached(self) -> "WearSolution":
         """This (concrete) solution with each joint's profile as far as it
@@ -75,4 +105,15 @@ class WearSolution(eqx.Module):
         return eqx.tree_at(lambda e: e.depth, self, tuple(depth))
 
 
-__all__ = ["WearSolution"]
+# what to do about an integration that stopped early, by `RESULTS` member name
+_REMEDY = {
+    "wall_reached": "stopped, results so far kept",
+    "cycle_model_failed": ("stopped, results so far kept. Tighten the cycle tolerances or "
+                           "reduce the extrapolation factor"),
+    "run_ended_early": ("all max_dynamic scan slots were used; raise max_dynamic or loosen "
+                        "the extrapolation tolerances"),
+    "contact_lost": "stopped, results so far kept",
+}
+
+
+__all__ = ["WearSolution", "WearLimitError"]

@@ -141,6 +141,45 @@ def test_a_pool_of_processes_gives_the_loops_numbers_exactly():
     assert np.all(np.diff(loop["max_depth_mm"]) != 0)  # the points differ
 
 
+_CACHED_POOL = """
+import json, sys
+import jax
+import numpy as np
+jax.config.update("jax_enable_x64", True)
+jax.config.update("jax_compilation_cache_dir", sys.argv[1])
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+from diffwear.models import QuasiStatic
+from diffwear.sweep import Pooled, sweep
+from diffwear.sweep.models import RigWear
+
+model = RigWear(cycles=2000.0, n_theta=60, wear_model=QuasiStatic())
+grid = {"clearance": np.linspace(0.2e-3, 0.4e-3, 5)}
+run = sweep(model, model.defaults, grid, execution=Pooled(workers=2))
+print(json.dumps([run.info["execution"], run["max_depth_mm"].tolist()]))
+"""
+
+
+def test_a_pool_runs_a_program_the_compilation_cache_already_holds(tmp_path):
+    """With JAX's persistent compilation cache on (as the command line has
+    it), a second process's pooled sweep of the same model finds its
+    program in the cache.  A CPU program loaded from there serialises
+    without some of its kernels (the pool's processes would fail to run
+    it), so the program sent to the pool is compiled afresh: both sweeps
+    give the loop's numbers, bit for bit."""
+    runs = []
+    for _ in range(2):  # the first fills the cache, the second loads from it
+        out = subprocess.run([sys.executable, "-c", _CACHED_POOL, str(tmp_path)],
+                             capture_output=True, text=True, timeout=600)
+        assert out.returncode == 0, out.stderr[-2000:]
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    assert any(tmp_path.iterdir())
+    model, grid = _small_rig()
+    loop = sweep(model, model.defaults, grid, execution=Looped())
+    for execution, depth in runs:
+        assert execution == "pooled"
+        np.testing.assert_array_equal(depth, loop["max_depth_mm"])
+
+
 def test_auto_moves_the_rest_to_a_pool_when_it_pays(monkeypatch):
     """`Auto` runs the first two points here (compile, then one timed), and
     the other three over the pool when `pool_pays` says so; a model that does

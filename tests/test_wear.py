@@ -266,6 +266,29 @@ def test_interrupted_chunked_run_resumes_to_the_same_result(problem, short_run, 
                                    err_msg=k)
 
 
+def test_an_evolution_cut_after_some_slots_continues_from_its_state(problem, short_run):
+    """6 cycles at A = 2 (3 scan slots) stopped after one slot: the run ended
+    early (an error, not a short answer), and continued from its
+    ``WearSolution.state`` it ends where the single scan ends (1e-12)."""
+    from diffwear.wear import Evolver
+
+    mech_of, p, y0 = problem
+    ref = short_run(p, y0, jnp.inf).check()
+
+    def evolver(p):
+        return Evolver(mech_of(p), "crank_rod", 6, period=PERIOD, method=Constant(2.0))
+
+    part = jax.jit(lambda p, y: evolver(p).solve(y, slots=1))(p, y0)
+    assert bool(part.result == RESULTS.run_ended_early) and float(part.cycles) == 2.0
+    with pytest.raises(WearLimitError, match=r"after 2 cycles"):
+        part.check()
+    rest = jax.jit(lambda p, s: evolver(p).solve(None, start=s))(p, part.state).check()
+    assert float(rest.cycles) == 6.0
+    np.testing.assert_allclose(np.asarray(rest.depth[0]), np.asarray(ref.depth[0]), rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(rest.state.load_sliding),
+                               np.asarray(ref.state.load_sliding), rtol=1e-12)
+
+
 def test_contact_loss_over_a_large_part_of_a_cycle_warns():
     from types import SimpleNamespace
 

@@ -131,10 +131,34 @@ def _point(cols: Mapping[str, np.ndarray], i: int) -> dict:
     return {k: np.asarray(v[i], dtype=np.float64) for k, v in cols.items()}
 
 
-def compile_point(model_fn: Callable, names: Sequence[str]):
-    """``jit(model_fn)`` compiled for one point (a dict of float64 scalars)."""
+def compile_point(model_fn: Callable, names: Sequence[str], *, fresh: bool = False):
+    """``jit(model_fn)`` compiled for one point (a dict of float64 scalars).
+    ``fresh``: compiled here, not loaded from JAX's persistent compilation
+    cache: a program to send to a pool (`serialized`).  A CPU program loaded
+    from that cache serialises without some of its kernels, and a process
+    that loads it fails when it runs ("Function ... not found")."""
     spec = {k: jax.ShapeDtypeStruct((), jnp.float64) for k in names}
-    return jax.jit(model_fn).lower(spec).compile()
+    lowered = jax.jit(model_fn).lower(spec)
+    if not fresh or not persistent_cache_on():
+        return lowered.compile()
+    from jax.experimental.compilation_cache import compilation_cache
+
+    # JAX decides once per process whether its cache is in use: reset, so
+    # that the switch is read again, and again after
+    jax.config.update("jax_enable_compilation_cache", False)
+    compilation_cache.reset_cache()
+    try:
+        return lowered.compile()
+    finally:
+        jax.config.update("jax_enable_compilation_cache", True)
+        compilation_cache.reset_cache()
+
+
+def persistent_cache_on() -> bool:
+    """Whether JAX's persistent compilation cache is in use (enabled, with a
+    folder: the command line sets one, `diffwear.cli.command`)."""
+    values = jax.config.values
+    return bool(values["jax_enable_compilation_cache"] and values["jax_compilation_cache_dir"])
 
 
 def run_points(compiled, cols: Mapping[str, np.ndarray], indices, results: dict,
@@ -150,8 +174,9 @@ def run_points(compiled, cols: Mapping[str, np.ndarray], indices, results: dict,
 
 
 def serialized(compiled) -> tuple | None:
-    """The compiled program as bytes a pool process can load (XLA's own
-    serialisation: the CPU backend has it), or None where it cannot be."""
+    """The compiled program (`compile_point` with ``fresh=True``) as bytes a
+    pool process can load (XLA's own serialisation: the CPU backend has
+    it), or None where it cannot be."""
     from jax.experimental import serialize_executable
 
     try:

@@ -22,6 +22,7 @@ from .execution import (
     Looped,
     Pooled,
     compile_point,
+    persistent_cache_on,
     platform,
     pool_pays,
     run_points,
@@ -253,7 +254,8 @@ def _one_at_a_time(model_fn, cols, order, out_names, execution: Looped | Pooled 
     info: dict = {"execution": "looped", "processes": 1, "chunks": n, "chunk_size": 1,
                   "padding": 0, "bytes_per_point": None, "devices": 1}
     t0 = time.perf_counter()
-    compiled = compile_point(model_fn, list(cols))
+    # a program sent to a pool is compiled afresh (`compile_point`)
+    compiled = compile_point(model_fn, list(cols), fresh=isinstance(execution, Pooled))
     compile_s = time.perf_counter() - t0
     t_run = time.perf_counter()
     done = 0
@@ -268,7 +270,8 @@ def _one_at_a_time(model_fn, cols, order, out_names, execution: Looped | Pooled 
         pays = (isinstance(execution, Auto) and worker.AVAILABLE
                 and pool_pays(n - done, per_point, workers))
         if pays:  # serialised only now; a program that cannot be sent is compiled there
-            program = serialized(compiled)
+            program = serialized(compile_point(model_fn, list(cols), fresh=True)
+                                 if persistent_cache_on() else compiled)
             pays = program is not None or pool_pays(n - done, per_point, workers, compile_s)
         if not pays:
             run_points(compiled, cols, order[done:], results, progress)

@@ -91,13 +91,15 @@ def evolve(
     position; the thesis drops its first ~1.3 revolutions too).  ``cycle``:
     how each dynamic cycle is integrated (`CycleSettings`).
 
-    Resuming is `Evolver.solve` (``start``: an engine state from
-    `Evolver.init` or `Evolver.run`; ``slots``: how many scan slots to run);
+    Resuming is `Evolver.solve` (``start``: ``WearSolution.state`` of an
+    earlier run, or a state of `Evolver.init` or `Evolver.run`; ``slots``:
+    how many scan slots to run);
     `ChunkedEvolution` is a checkpointing driver.
 
     Returns a `WearSolution` of the one joint: its final profile (as
-    reached, also where the run stopped early), the engine's final
-    ``state`` and the record of every scan slot (``slots``).
+    reached, also where the run stopped early), the engine's ``state`` at
+    the end (`Evolver.solve` continues from it) and the record of every scan
+    slot (``slots``).
 
     ``throw``: raise (`eqx.error_if`, at run time inside jit; under
     `jax.vmap` if any point stopped) with the result's message where the
@@ -188,7 +190,7 @@ class Evolver:
     def result(self, final: WearState, hist: dict) -> WearSolution:
         """The `WearSolution` of the slots run to ``final`` with the record
         ``hist`` (the profile as reached: a model masks one that is no
-        answer)."""
+        answer; ``state`` is ``final``, from which `solve` continues)."""
         done = self.engine.finish(final)
         depth = done.h[0]
         nan = jnp.full(1, jnp.nan)
@@ -203,4 +205,4 @@ class Evolver:
                 peak=jnp.concatenate([start, hist["max_depth"]]),
                 depth=jnp.concatenate([jnp.zeros_like(depth)[None], hist["depth"]]),
                 valid=jnp.concatenate([jnp.ones(1, bool), hist["valid"]])),),
-            state=done, slots=hist)
+            state=final, slots=hist)

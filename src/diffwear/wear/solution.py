@@ -44,11 +44,12 @@ class WearSolution(eqx.Module):
     history: per joint a `diffwear.wear.profile_ode.ProfileHistory` (index 0
         the start): cycles, peak depth, whether the step was taken, and the
         profiles where the integration keeps them (else ``depth`` None)
-    state: the engine's final `WearState` where the model simulates
+    state: the engine's `WearState` at the end where the model simulates
         cycles (the mechanism's end state ``memory["y"]``, ``memory["t"]``
         for the joint force on the final profile, the profiles as reached
-        ``h``, load x sliding per joint, where the run stopped early
-        ``fail_n`` / ``fail_h``), else None
+        ``h``, load x sliding per joint, where a step failed or the wall was
+        reached ``fail_n`` / ``fail_h``; a dynamic evolution continues from
+        it, `Evolver.solve`), else None
     slots: the dynamic evolution's record per scan slot (``cycles``,
         ``max_depth``, ``volume``, ``extrapolation``, ``valid``,
         ``dynamic_cycles``, ``depth``; ``force`` where kept), else None
@@ -78,9 +79,10 @@ class WearSolution(eqx.Module):
         the cycle and the depth where the integration stopped early."""
         if bool(self.result == RESULTS.ok):
             return self
-        if self.state is not None:
+        if self.state is not None and not bool(self.result == RESULTS.run_ended_early):
+            # where the step failed or the wall was reached
             cyc, dep = float(self.state.fail_n), float(self.state.fail_h)
-        else:
+        else:  # where the steps ran out: the last profile reached
             cyc = float(self.cycles)
             dep = max(float(np.max(np.asarray(h.peak)[np.asarray(h.valid)]))
                       for h in self.history)

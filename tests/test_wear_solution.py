@@ -87,6 +87,33 @@ def test_a_run_and_a_life_of_one_program_are_evolve_and_life(setup):
     assert float(run.contact_margin[0]) > 0.0
 
 
+def test_check_names_where_a_run_stopped_at_its_wall(setup):
+    """A run whose wall is thinner than the wear of its cycles stops there:
+    `WearSolution.check` raises `WearLimitError` (carrying the solution)
+    with the cycles and the peak depth it reached, the history's last; a run
+    that ends as asked passes through."""
+    from diffwear.wear import WearLimitError
+
+    model, mech, _ = setup
+    run = eqx.filter_jit(lambda: model.evolve(mech, JOINT, jnp.zeros(1), period=1.0,
+                                              cycles=200.0))()
+    assert run.check() is run
+    wall = 0.5 * float(peak_depth(run.depth[0]))
+    cut = eqx.filter_jit(lambda: model.evolve(mech, JOINT, jnp.zeros(1), period=1.0,
+                                              cycles=200.0, wall_thickness=wall))()
+    assert bool(cut.result == RESULTS.wall_reached) and float(cut.cycles) < 200.0
+    with pytest.raises(WearLimitError) as err:
+        cut.check("wall test")
+    assert err.value.result is cut
+    h = cut.history[0]
+    valid = np.asarray(h.valid)
+    assert str(err.value) == (
+        f"wall test: the wear reached the bushing wall after {float(cut.cycles):.0f} cycles "
+        f"(max depth {float(np.asarray(h.peak)[valid][-1]) * 1e3:.4f} mm); "
+        "stopped, results so far kept")
+    assert float(np.asarray(h.peak)[valid][-1]) == pytest.approx(wall, rel=1e-9)
+
+
 def test_the_dynamic_models_take_cycles_or_a_limit():
     mech = None  # refused before the mechanism is read
     for kwargs in ({}, {"cycles": 10.0, "limit": 1e-4}):

@@ -16,6 +16,8 @@ The names most users need, by task::
     wear        evolve (method=Constant(A) | Adaptive() | ErrorControlled()),
                 CycleSettings, worn_volume
     models      Dynamic, QuasiStatic, FemRoute, cycles_to_limit
+    results     WearSolution (what every wear model and evolve return),
+                WearLimitError (WearSolution.check: a run that stopped early)
     design      TwoJointLife
     sweeps      sweep.sweep, sensitivity, finite_differences
     data        load_dataset, calibrate.calibrate
@@ -62,6 +64,8 @@ from .wear import (
     Constant,
     CycleSettings,
     ErrorControlled,
+    WearLimitError,
+    WearSolution,
     evolve,
     worn_volume,
 )
@@ -77,7 +81,8 @@ __all__ = [
     "with_clearance", "contact_history", "LankaraniNikravesh", "KelvinVoigt",
     "ElasticFoundation", "CoulombFriction", "ArchardWear", "evolve", "Constant",
     "Adaptive", "ErrorControlled", "CycleSettings", "cycles_to_limit",
-    "Dynamic", "QuasiStatic", "FemRoute", "worn_volume", "TwoJointLife", "sweep", "sensitivity",
+    "Dynamic", "QuasiStatic", "FemRoute", "WearSolution", "WearLimitError", "worn_volume",
+    "TwoJointLife", "sweep", "sensitivity",
     "finite_differences", "load_dataset", "calibrate", "gradcheck", "GradCheck",
     "DiffwearError", "InputError", "SolverError",
 ]

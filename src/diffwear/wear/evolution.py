@@ -194,15 +194,12 @@ class Evolver:
         done = self.engine.finish(final)
         depth = done.h[0]
         nan = jnp.full(1, jnp.nan)
-        start = jnp.zeros(1)
         return WearSolution(
             depth=(depth,), joint_cycles=done.n[None], life=nan, result=done.status,
             joint_result=stack([done.status]), contact_margin=nan, contact_margin_worn=nan,
             stats={"steps": jnp.sum(hist["valid"]).astype(int)[None],
                    "evaluations": done.evaluations, "dynamic_cycles": done.evaluations},
-            history=(ProfileHistory(
-                cycles=jnp.concatenate([start, hist["cycles"]]),
-                peak=jnp.concatenate([start, hist["max_depth"]]),
-                depth=jnp.concatenate([jnp.zeros_like(depth)[None], hist["depth"]]),
-                valid=jnp.concatenate([jnp.ones(1, bool), hist["valid"]])),),
+            history=(ProfileHistory.from_slots(jnp.zeros_like(depth), 0.0, hist["cycles"],
+                                               hist["max_depth"], hist["valid"],
+                                               hist["depth"]),),
             state=final, slots=hist)

@@ -147,7 +147,7 @@ def dynamic_cycles_to_limit(
     joint_result = stack([RESULTS.where(final.done[k], RESULTS.ok, final.status)
                           for k in range(n)])
     failed = not_computed(joint_result)
-    start, nan = jnp.zeros(1), jnp.full(n, jnp.nan)
+    nan = jnp.full(n, jnp.nan)
     return WearSolution(
         depth=tuple(not_an_answer(h, failed[k], inputs) for k, h in enumerate(final.h)),
         joint_cycles=jnp.full(n, final.n), life=final.life,
@@ -155,9 +155,6 @@ def dynamic_cycles_to_limit(
         contact_margin=nan, contact_margin_worn=nan,
         stats={"steps": jnp.full(n, final.steps), "evaluations": final.evaluations,
                "dynamic_cycles": final.evaluations},
-        history=tuple(ProfileHistory(
-            cycles=jnp.concatenate([start, hist["cycles"]]),
-            peak=jnp.concatenate([start, hist["max_depth"][:, k]]),
-            depth=None,
-            valid=jnp.concatenate([jnp.ones(1, bool), hist["valid"]])) for k in range(n)),
+        history=tuple(ProfileHistory.from_slots(None, 0.0, hist["cycles"], hist["max_depth"][:, k],
+                                                hist["valid"]) for k in range(n)),
         state=final)

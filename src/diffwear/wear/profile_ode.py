@@ -42,6 +42,18 @@ class ProfileHistory(eqx.Module):
     depth: Float[Array, "K n"] | None
     valid: Bool[Array, " K"]
 
+    @classmethod
+    def from_slots(cls, h0, peak0, cycles, peak, valid, depth=None) -> "ProfileHistory":
+        """The start (no cycles, the profile ``h0`` of peak depth ``peak0``),
+        then one entry per scan slot of an integration's record: its
+        ``cycles``, ``peak`` depths, ``valid`` flags and, where kept, profiles
+        ``depth`` (else the history keeps none)."""
+        return cls(cycles=jnp.concatenate([jnp.zeros(1), cycles]),
+                   peak=jnp.concatenate([jnp.reshape(jnp.asarray(peak0, dtype=float), (1,)),
+                                         peak]),
+                   depth=None if depth is None else jnp.concatenate([h0[None], depth]),
+                   valid=jnp.concatenate([jnp.ones(1, bool), valid]))
+
 
 class _Function(AbstractWearTerm):
     """A cycle model given as ``evaluate(h, memory) -> (w, ok, A, memory)``."""
@@ -105,8 +117,6 @@ def solve_profile(term: AbstractWearTerm, solver: AbstractWearSolver, h0: Float[
         depth=(s.h[0],), joint_cycles=s.n[None], life=s.life, result=s.status,
         joint_result=stack([s.status]), contact_margin=nan, contact_margin_worn=nan,
         stats={"steps": s.steps[None], "evaluations": s.evaluations},
-        history=(ProfileHistory(
-            cycles=jnp.concatenate([jnp.zeros(1), history["cycles"]]),
-            peak=jnp.concatenate([solver.peak(h0)[None], history["max_depth"][:, 0]]),
-            depth=jnp.concatenate([h0[None], history["depth"][0]]),
-            valid=jnp.concatenate([jnp.array([True]), history["valid"]])),))
+        history=(ProfileHistory.from_slots(h0, solver.peak(h0), history["cycles"],
+                                           history["max_depth"][:, 0], history["valid"],
+                                           history["depth"][0]),))

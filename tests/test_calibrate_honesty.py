@@ -51,6 +51,40 @@ def test_chi2_survival_against_closed_forms(dof):
     assert chi2.isf(0.001, 1.0) < chi2.isf(0.001, 1.5) < chi2.isf(0.001, 2.0)
 
 
+def test_a_cached_fit_in_a_poorer_minimum_is_fitted_again_from_a_larger_model():
+    """A model less a member can be no better than the model: a cached fit far
+    above a larger model that holds it sat in a poorer minimum and is fitted
+    again from the larger model's numbers (the better fit kept); a larger
+    model that fits about as well, or one that does not hold it, leaves it."""
+    from types import SimpleNamespace
+
+    from diffwear.calibrate.identify import LR_CRITICAL, _fit_cached
+
+    def fit(chi2, effects=(), discrepancy=None):
+        return SimpleNamespace(chi2_fit=chi2, effects=effects, discrepancy=discrepancy,
+                               notes={})
+
+    class Stand:  # a fitter whose fit from a start lands at the start's chi2 + 3
+        def __init__(self):
+            self.fits, self.calls = {}, 0
+
+        def fit(self, effects, start, discrepancy=None):
+            self.calls += 1
+            return fit(start.chi2_fit + 3.0, effects, discrepancy)
+
+    f = Stand()
+    poor = _fit_cached(f, ("creep",), None, fit(5790.0))           # the first fit
+    assert poor.chi2_fit == 5793.0 and f.calls == 1
+    near = fit(poor.chi2_fit - 0.9 * LR_CRITICAL[1], ("creep", "run_in"))
+    assert _fit_cached(f, ("creep",), None, near) is poor and f.calls == 1
+    other = fit(1172.2, ("run_in",))                                 # does not hold creep
+    assert _fit_cached(f, ("creep",), None, other) is poor and f.calls == 1
+    larger = fit(1172.2, ("creep", "run_in"))
+    better = _fit_cached(f, ("creep",), None, larger)
+    assert better.chi2_fit == pytest.approx(1175.2) and f.calls == 2
+    assert _fit_cached(f, ("creep",), None, fit(10.0)) is better     # a subset start: cached
+
+
 def test_grid_in_the_fit_window_does_not_depend_on_later_measurements():
     """The nodes up to the fit window's end are the same whether the run ends
     there or goes on to held-out inspections (or a life); beyond, the steps

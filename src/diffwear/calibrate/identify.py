@@ -309,13 +309,27 @@ def _note_edf(fit: FitResult) -> None:
 
 
 def _fit_cached(fitter: Fitter, effects: tuple, discrepancy: str | None, start: FitResult):
-    """The model of ``effects`` and ``discrepancy`` (fitted once, from ``start``)."""
+    """The model of ``effects`` and ``discrepancy``, fitted from ``start``
+    once; fitted again from a later ``start`` that holds it and fits better
+    by more than `LR_CRITICAL` of one number (a model less a member can be
+    no better than the model, so a cached fit that far above it sits in a
+    poorer minimum, which the larger model's numbers lead out of); the
+    better of the two is kept."""
     key = (frozenset(effects), discrepancy)
-    if key not in fitter.fits:
-        f = fitter.fit(effects, start=start, discrepancy=discrepancy)
-        _note_edf(f)
+    cached = fitter.fits.get(key)
+    if cached is not None and not (start.chi2_fit < cached.chi2_fit - LR_CRITICAL[1]
+                                   and _holds(start, effects, discrepancy)):
+        return cached
+    f = fitter.fit(effects, start=start, discrepancy=discrepancy)
+    _note_edf(f)
+    if cached is None or f.chi2_fit < cached.chi2_fit:
         fitter.fits[key] = f
     return fitter.fits[key]
+
+
+def _holds(model: FitResult, effects: tuple, discrepancy: str | None) -> bool:
+    """Whether ``model`` holds every member of (``effects``, ``discrepancy``)."""
+    return set(effects) <= set(model.effects) and discrepancy in (None, model.discrepancy)
 
 
 def _refit_discrepancy(fitter: Fitter, current: FitResult, variable: str, log):

@@ -276,6 +276,9 @@ def test_calibrate_cli_identifies_guide_friction_on_a_small_campaign(small_datas
     assert check["model"] == "dynamic" and check["ok"] and check["chi2_fit"] > 0
     for f in ("report.md", "residuals.csv", "candidates.png", "residual_structure.png"):
         assert (out / f).is_file()
+    report = (out / "report.md").read_text()
+    for f in s["plots"]:   # every figure listed is drawn and shown in the report
+        assert (out / f).is_file() and f"({f})" in report, f
     # a second run refuses to overwrite the results
     before = (out / "summary.json").read_bytes()
     assert main(["calibrate", str(small_dataset), "--out", str(out), "--quiet"]) == 2

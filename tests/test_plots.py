@@ -287,7 +287,7 @@ def test_the_commands_wear_figure_of_a_run_stopped_at_the_wall(tmp_path):
     wall at 122,862 of the 200,000 cycles asked (as the quasi-static model
     returns it): wear.png says the cycles reached and why, not the cycles
     asked, and draws the wall and the --limit on both panels."""
-    from diffwear.cli.run import write_wear
+    from diffwear.cli.run import wear_outputs
     from diffwear.io import OutputDir
 
     theta = 2 * np.pi * np.arange(N_THETA) / N_THETA
@@ -300,9 +300,14 @@ def test_the_commands_wear_figure_of_a_run_stopped_at_the_wall(tmp_path):
         "model": "quasi-static"}}
     mfile = SimpleNamespace(title="new rig", file="new_rig.toml")
     with plots.captured() as figures:
-        written = write_wear(mfile, OutputDir(tmp_path / "run"), wear, cycles=200000.0,
-                             limit=0.5e-3)
+        written = wear_outputs(mfile, wear, limit=0.5e-3)
+        assert not figures   # gathered, not drawn: the files are written together
+        OutputDir(tmp_path / "run").write(written["outputs"])
     assert written["stopped"] and written["figure"] == "wear.png"
+    assert written["outputs"].names == ["wear_profile_crank_rod.csv",
+                                        "wear_history_crank_rod.csv", "wear.png"]
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()
+                  if not p.name.startswith(".")) == sorted(written["outputs"].names)
     fig = figures["wear.png"]
     title = fig.texts[0].get_text().replace("\n", " ")
     assert title == ("new rig: wear after 122,862 cycles (stopped: wall reached) "

@@ -46,8 +46,9 @@ import errno
 import json
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -326,6 +327,49 @@ class OutputDir:
     def text(self, name: str, body: str) -> Path:
         self.file(name)
         return self._atomic(name, lambda tmp: tmp.write_text(body))
+
+    def write(self, outputs: Outputs) -> list[Path]:
+        """Write every file of ``outputs``, in the order they were gathered."""
+        written = []
+        for name, kind, payload in outputs.items:
+            if kind == "csv":
+                written.append(self.csv(name, payload))
+            elif kind == "text":
+                written.append(self.text(name, payload() if callable(payload) else payload))
+            else:  # a figure draws itself to the path it is given
+                payload(self.file(name))
+                written.append(self.path / name)
+        return written
+
+
+class Outputs:
+    """A run's files gathered before any is written (`OutputDir.write`): the
+    numbers of every table, figure and report are computed first, then the
+    files are written together.  A text's body or a figure may be given as
+    a callable (``body()`` -> str, ``draw(path)``), called when written."""
+
+    def __init__(self) -> None:
+        self.items: list[tuple[str, str, Any]] = []
+
+    def csv(self, name: str, columns: Mapping[str, ArrayLike]) -> str:
+        return self._add(name, "csv", columns)
+
+    def text(self, name: str, body: str | Callable[[], str]) -> str:
+        return self._add(name, "text", body)
+
+    def figure(self, name: str, draw: Callable[[Path], object]) -> str:
+        return self._add(name, "figure", draw)
+
+    def extend(self, other: Outputs) -> None:
+        self.items += other.items
+
+    @property
+    def names(self) -> list[str]:
+        return [name for name, _, _ in self.items]
+
+    def _add(self, name: str, kind: str, payload) -> str:
+        self.items.append((name, kind, payload))
+        return name
 
 
 def output_error(err: OSError, target: Path) -> OutputError:

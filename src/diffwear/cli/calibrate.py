@@ -12,6 +12,7 @@ angle, against cycle count, and the force residual's harmonic spectrum),
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np  # noqa: E402
 
@@ -32,7 +33,7 @@ from ..calibrate.identify import (  # noqa: E402
 from ..calibrate.residual_structure import residual_structure, series_rms
 from ..calibrate.residual_words import describe_residuals  # noqa: E402
 from ..config import units
-from ..io import OutputDir  # noqa: E402
+from ..io import OutputDir, Outputs  # noqa: E402
 from ..plots import calibration as plots_calibration
 from ..report import (
     Block,
@@ -58,8 +59,9 @@ UNIT = {"profile": (1e6, "um", "bushing angle [deg]", 180 / math.pi),
         "force": (1.0, "N", "crank angle [deg]", 180 / math.pi)}
 
 
-def _plots(out: OutputDir, c: Calibration) -> list[str]:
-    """The calibration's figures (`plots.calibration`) from its numbers."""
+def _figures(c: Calibration) -> Outputs:
+    """The calibration's figures (`plots.calibration`) from its numbers, each
+    drawn when the files are written."""
     p = c.problem
     which = p.series_of_point
     final = c.final or c.base
@@ -74,20 +76,22 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
             chosen=None if final is c.base else final.prediction[m],
             chosen_label=_final_label(final), cycles=s.cycles,
             band=None if band is None else (band[0][m], band[1][m])))
-    files = [plots_calibration.series_fit(out.file(f"fit_{f.name}.png"), f).name for f in fits]
+    files = Outputs()
+    for fit in fits:
+        files.figure(f"fit_{fit.name}.png", partial(plots_calibration.series_fit, f=fit))
     cycles = [s.cycle_counts for s in c.dataset.series]
     residuals = [c.base.residual[which == k] for k in range(len(c.dataset.series))]
     harmonics = residual_structure(c).get("force_residual_harmonics")
-    files.append(plots_calibration.residual_structure(
-        out.file("residual_structure.png"), fits, residuals, cycles, harmonics).name)
+    files.figure("residual_structure.png", lambda path: plots_calibration.residual_structure(
+        path, fits, residuals, cycles, harmonics))
     stage1 = c.selection.stages[0] if c.selection is not None and c.selection.stages else None
     if stage1 is not None and stage1.assessed:
         ranked = sorted(stage1.assessed.values(), key=lambda a: a.criterion)
         adopted = [learned.label(m) for m in _members_of(final)]
-        files.append(plots_calibration.candidates(
-            out.file("candidates.png"), [learned.label(a.effect) for a in ranked],
-            [a.criterion for a in ranked], [a.qualifies for a in ranked],
-            adopted, AMBIGUITY).name)
+        labels = [learned.label(a.effect) for a in ranked]
+        files.figure("candidates.png", lambda path: plots_calibration.candidates(
+            path, labels, [a.criterion for a in ranked], [a.qualifies for a in ranked],
+            adopted, AMBIGUITY))
     if final.discrepancy is not None:
         d = final.discrepancy
         lib = c.problem.library
@@ -96,22 +100,22 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
         x, delta, band_d = learned.curve(d, final.discrepancy_coefficients,
                                          final.discrepancy_cov, span, c.dataset.fit_cycles, b,
                                          lib)
-        files.append(plots_calibration.discrepancy(
-            out.file("discrepancy.png"), x, delta, band_d, lib.variable(d).axis,
-            f"learned discrepancy of k over {disc_words(d, lib)}", _covered(d, c)).name)
+        axis, words, covered = lib.variable(d).axis, disc_words(d, lib), _covered(d, c)
+        files.figure("discrepancy.png", lambda path: plots_calibration.discrepancy(
+            path, x, delta, band_d, axis, f"learned discrepancy of k over {words}", covered))
     if c.posterior is not None:
         post = c.posterior
         columns = {_number_label(n, c.dataset): _in_dataset_unit(n, v, c.dataset)
                    for n, v in post.layout.natural(post.z).items()
                    if not n.startswith("delta_")}
-        files.append(plots_calibration.posterior(
-            out.file("posterior.png"), columns, post.weights,
-            "posterior of the final model (" + _posterior_words(post) + ")").name)
+        title = "posterior of the final model (" + _posterior_words(post) + ")"
+        files.figure("posterior.png", lambda path: plots_calibration.posterior(
+            path, columns, post.weights, title))
     if c.forecast is not None and c.forecast.trajectory:
         f = c.forecast
-        files.append(plots_calibration.life(
-            out.file("life.png"), f.trajectory, f.limit, _deepest(c.dataset), f.horizon,
-            (f.life["q05"], f.life["q95"])).name)
+        deepest = _deepest(c.dataset)
+        files.figure("life.png", lambda path: plots_calibration.life(
+            path, f.trajectory, f.limit, deepest, f.horizon, (f.life["q05"], f.life["q95"])))
         nxt = f.next_measurement or {}
         if f.scores:
             chosen = None
@@ -122,8 +126,8 @@ def _plots(out: OutputDir, c: Calibration) -> list[str]:
                       if "expected_separation_sigma" in nxt else
                       "life band narrowed by [share]" if "life_band_reduction" in nxt else
                       "depth band narrowed by [share]")
-            files.append(plots_calibration.next_measurement(
-                out.file("next_measurement.png"), f.scores, ylabel, chosen).name)
+            files.figure("next_measurement.png", lambda path: plots_calibration.next_measurement(
+                path, f.scores, ylabel, chosen))
     return files
 
 
@@ -554,17 +558,20 @@ def run(data: Dataset, out: OutputDir, *, settings: ModelSettings | None = None,
     summary["frame_warnings"] = frame_warnings(c)
     for w in summary["frame_warnings"]:
         log(f"warning: {w['message']}")
-    files = _plots(out, c)
+    # every number first, then every file (`Outputs`)
+    files = _figures(c)
+    figures = files.names
     p = c.problem
-    names = [s.name for s in data.series]
-    out.csv("residuals.csv", {
+    files.csv("residuals.csv", {
         "series": p.series_of_point, "x": np.concatenate([s.x for s in data.series]),
         "data": p.y, "base_model": c.base.prediction, "final_model": final.prediction,
         "base_residual": c.base.residual, "final_residual": final.residual,
         "held_out": p.holdout.astype(int)})
-    summary["series"] = names
-    summary["plots"] = files
-    out.text("report.md", render(_report(c, summary, files)))
+    summary["series"] = [s.name for s in data.series]
+    summary["plots"] = figures
+    report = _report(c, summary, figures)
+    files.text("report.md", lambda: render(report))
+    out.write(files)
     out.json("summary.json", summary)
     log(f"wrote {out.path}")
     return summary

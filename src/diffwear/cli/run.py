@@ -30,7 +30,7 @@ from .. import plots
 from ..choices import WEAR_METHODS
 from ..config import MechanismFile
 from ..errors import InputError, SolverError
-from ..io import OutputDir
+from ..io import OutputDir, Outputs
 from ..mechanism import Mechanism
 from ..mechanism_file import (
     Results,
@@ -87,16 +87,20 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
     mech, sim = mfile.mechanism, mfile.simulation
     transient = start_up_transient(mfile, r)
     settled = settled_part(r.ts, transient)
+    # every number first, then every file (`Outputs`); the wear's files first
+    files = Outputs()
+    if wear is not None:
+        files.extend(wear["outputs"])
     if input_text is not None:
-        out.text("input.toml", input_text)
-    out.csv("trajectory.csv", _trajectory_columns(mech, r))
+        files.text("input.toml", input_text)
+    files.csv("trajectory.csv", _trajectory_columns(mech, r))
     by_joint = {c.name: float(np.max(np.abs(r.violation[:, mech.constraint_rows(c.name)])))
                 for c in mech.constraints}
     reactions = {}
     for o in mfile.reactions:
         w = r.reactions[o.joint]
-        name = f"reaction_{o.joint}.csv"
-        out.csv(name, {"t_s": r.ts, "fx_N": w[:, 0], "fy_N": w[:, 1], "m_Nm": w[:, 2]})
+        name = files.csv(f"reaction_{o.joint}.csv",
+                         {"t_s": r.ts, "fx_N": w[:, 0], "fy_N": w[:, 1], "m_Nm": w[:, 2]})
         reactions[o.joint] = {
             "on_body": o.on,
             "max_force_N": float(np.max(np.hypot(w[:, 0], w[:, 1]))),
@@ -109,9 +113,9 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
     warnings = []
     for co in mfile.contacts:
         h = r.contacts[co.joint]
-        name = f"contact_{co.joint}.csv"
-        out.csv(name, {"t_s": r.ts, "force_N": h[:, 0], "normal_load_N": h[:, 1],
-                       "theta_rad": h[:, 2], "penetration_m": h[:, 3]})
+        name = files.csv(f"contact_{co.joint}.csv",
+                         {"t_s": r.ts, "force_N": h[:, 0], "normal_load_N": h[:, 1],
+                          "theta_rad": h[:, 2], "penetration_m": h[:, 3]})
         contacts[co.joint] = {
             "max_force_N": float(np.max(h[:, 0])),
             "max_penetration_m": float(np.max(h[:, 3])),
@@ -131,17 +135,18 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
     if r.violation.shape[1]:
         panels.append(("max |Φ| [m, rad]", {"all constraints": np.max(np.abs(r.violation),
                                                                       axis=1)}))
-    figures = [plots.stacked(out.file("trajectory.png"), r.ts, panels, xlabel="time [s]",
-                             logy=[False, False, False, True][: len(panels)],
-                             title=f"{mfile.title or mfile.file}: body coordinates")]
+    title = mfile.title or mfile.file
+    figures = [files.figure("trajectory.png", lambda path: plots.stacked(
+        path, r.ts, panels, xlabel="time [s]", logy=[False, False, False, True][: len(panels)],
+        title=f"{title}: body coordinates"))]
     if mfile.reactions:
-        figures.append(plots.stacked(out.file("reactions.png"), r.ts, [
-            ("|F| [N]", {f"{o.joint} on {o.on}": np.hypot(r.reactions[o.joint][:, 0],
-                                                           r.reactions[o.joint][:, 1])
-                         for o in mfile.reactions}),
-            ("M about COM [N m]", {f"{o.joint} on {o.on}": r.reactions[o.joint][:, 2]
-                                   for o in mfile.reactions}),
-        ], xlabel="time [s]", title=f"{mfile.title or mfile.file}: joint reactions"))
+        forces = [("|F| [N]", {f"{o.joint} on {o.on}": np.hypot(r.reactions[o.joint][:, 0],
+                                                                r.reactions[o.joint][:, 1])
+                               for o in mfile.reactions}),
+                  ("M about COM [N m]", {f"{o.joint} on {o.on}": r.reactions[o.joint][:, 2]
+                                         for o in mfile.reactions})]
+        figures.append(files.figure("reactions.png", lambda path: plots.stacked(
+            path, r.ts, forces, xlabel="time [s]", title=f"{title}: joint reactions")))
 
     wall = time.perf_counter() - started if started is not None else simulate_time
     summary = {
@@ -160,7 +165,7 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
         "integrator_steps": steps,
         "simulate_time_s": simulate_time,
         "wall_time_s": wall,
-        "files": sorted(set(out.files)) + ["report.md", "summary.json"],
+        "files": sorted(set(out.files) | set(files.names)) + ["report.md", "summary.json"],
         "warnings": [w for w, _ in warnings] + (wear["warnings"] if wear else []),
     }
     if wear is not None:
@@ -171,16 +176,17 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
                             default=0.0)
         if wear["stopped"]:
             summary["wear_stopped"] = wear["stopped"]
-        figures.append(out.path / wear["figure"])
-        figures += [out.path / f"film_{j}.png" for j, w in wear["joints"].items()
-                    if "lubricant" in w]
+        figures.append(wear["figure"])
+        figures += [f"film_{j}.png" for j, w in wear["joints"].items() if "lubricant" in w]
     if stopped is not None:
         summary["stopped"] = {"at_time_s": float(r.ts[-1]), "reason": stopped}
         warnings.append((f"the integration stopped at t = {r.ts[-1]:.6g} s of "
                          f"{sim.duration:g} s: {stopped}", True))
     summary["compile_time_s"] = compile_time
     summary["run_time_s"] = wall - compile_time
-    out.text("report.md", render(_report(mfile, summary, [f.name for f in figures])))
+    report = _report(mfile, summary, figures)
+    files.text("report.md", lambda: render(report))
+    out.write(files)
     out.json("summary.json", summary)
     fatal = [w for w, is_fatal in warnings if is_fatal]
     if fatal:  # the outputs are written; the run is reported as failed
@@ -438,7 +444,7 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
             mfile, y0, cycles=cycles, limit=limit,
             model=None if model == "quasi-static" else wear_model,
             checkpoints=Checkpoints(out, {}, resume=resume, progress=progress))
-        wear = write_wear(mfile, out, evolved, cycles=cycles, limit=limit)
+        wear = wear_outputs(mfile, evolved, limit=limit)
     summary = write(mfile, results, out, steps=int(traj.num_steps),
                     simulate_time=timed.compile_time_s + timed.run_time_s,
                     compile_time=timed.compile_time_s, input_text=input_text, started=started,
@@ -454,17 +460,19 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
     return summary
 
 
-def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: float,
-               limit: float | None) -> dict:
-    """CSV files and a figure per joint; returns the summary's ``joints`` and
-    warnings, and ``stopped``: a sentence per joint that wore through its wall
-    or whose model failed (the caller reports them as a failure once
-    everything is written)."""
+def wear_outputs(mfile: MechanismFile, wear: dict, *, limit: float | None) -> dict:
+    """The wear's files (``outputs``: CSV files per joint and one figure,
+    ``figure``) and the summary's ``joints`` and ``warnings``, and
+    ``stopped``: a sentence per joint that wore through its wall or whose
+    model failed (the caller reports them as a failure once everything is
+    written)."""
+    files = Outputs()
     joints, warnings, pierced = {}, [], []
     for name, w in wear.items():
-        out.csv(f"wear_profile_{name}.csv", {"theta_rad": w["theta"], "depth_mm": w["depth"] * 1e3})
-        out.csv(f"wear_history_{name}.csv", {"cycles": w["history_cycles"],
-                                             "max_depth_mm": w["history_peak"] * 1e3})
+        files.csv(f"wear_profile_{name}.csv",
+                  {"theta_rad": w["theta"], "depth_mm": w["depth"] * 1e3})
+        files.csv(f"wear_history_{name}.csv", {"cycles": w["history_cycles"],
+                                               "max_depth_mm": w["history_peak"] * 1e3})
         joints[name] = {"max_wear_depth_mm": float(np.max(w["depth"])) * 1e3,
                         "wear_volume_mm3": w["volume"] * 1e9, "cycles": w["cycles"],
                         "model": w["model"], "status": status_name(w["status"]),
@@ -490,7 +498,7 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
             warnings.append(f"clearance joint {name!r}: on the worn profile the pin may lift "
                             f"off the wall (contact margin {w['contact_margin_worn']:.2g})")
         if "film" in w:
-            joints[name] |= _write_film(mfile, out, name, w["film"])
+            joints[name] |= _film_outputs(mfile, files, name, w["film"])
             if w["film"].get("out_of_range"):
                 warnings.append(f"clearance joint {name!r}: {w['film']['out_of_range']}")
             soft = _soft_bore(w["film"]["unworn"])
@@ -503,16 +511,16 @@ def write_wear(mfile: MechanismFile, out: OutputDir, wear: dict, *, cycles: floa
                                 "converge at every sample of the cycle: its film numbers are "
                                 "not reliable")
     models = "/".join(sorted({w["model"] for w in wear.values()}))
-    figure = out.file("wear.png")
-    plots.wear_panels(figure, {n: (w["theta"], w["depth"]) for n, w in wear.items()},
-                      {n: (w["history_cycles"], w["history_peak"]) for n, w in wear.items()},
-                      title=plots.wear_title(mfile.title or str(mfile.file),
-                                             {n: w["cycles"] for n, w in wear.items()},
-                                             {n: w["status"] for n, w in wear.items()},
-                                             model=models),
-                      walls={n: w["wall"] for n, w in wear.items()}, limit=limit,
-                      lives={n: w["cycles_to_limit"] for n, w in wear.items()})
-    return {"joints": joints, "warnings": warnings, "figure": figure.name, "stopped": pierced}
+    title = plots.wear_title(mfile.title or str(mfile.file),
+                             {n: w["cycles"] for n, w in wear.items()},
+                             {n: w["status"] for n, w in wear.items()}, model=models)
+    figure = files.figure("wear.png", lambda path: plots.wear_panels(
+        path, {n: (w["theta"], w["depth"]) for n, w in wear.items()},
+        {n: (w["history_cycles"], w["history_peak"]) for n, w in wear.items()}, title=title,
+        walls={n: w["wall"] for n, w in wear.items()}, limit=limit,
+        lives={n: w["cycles_to_limit"] for n, w in wear.items()}))
+    return {"joints": joints, "warnings": warnings, "figure": figure, "stopped": pierced,
+            "outputs": files}
 
 
 # The rigid-bore film holds where the bore's deflection under the film's peak
@@ -536,9 +544,10 @@ def _soft_bore(f: dict) -> str | None:
             "self-consistent there, its numbers are those of a rigid bore")
 
 
-def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> dict:
+def _film_outputs(mfile: MechanismFile, files: Outputs, name: str, film: dict) -> dict:
     """``film_<joint>.csv`` and ``.png`` of a lubricated joint (its film over
-    the cycle, unworn and worn bushing); returns its summary.json keys."""
+    the cycle, unworn and worn bushing), added to ``files``; returns its
+    summary.json keys."""
     cols = {"crank_angle_deg": film["crank_angle_deg"]}
     for case, suffix in (("unworn", ""), ("worn", "_worn")):
         f = film[case]
@@ -548,15 +557,16 @@ def _write_film(mfile: MechanismFile, out: OutputDir, name: str, film: dict) -> 
                  f"asperity_share{suffix}": f["asperity_share"],
                  f"film_load_N{suffix}": f["film_load"],
                  f"asperity_load_N{suffix}": f["asperity_load"]}
-    out.csv(f"film_{name}.csv", cols)
-    plots.film_panels(
-        out.file(f"film_{name}.png"), film["crank_angle_deg"],
+    files.csv(f"film_{name}.csv", cols)
+    title = (f"{mfile.title or mfile.file}: lubricated joint {name} "
+             f"(η = {film['viscosity']:g} Pa s, σ = {film['roughness'] * 1e6:.3g} µm), "
+             "quasi-static orbit over the cycle, unworn and worn bushing")
+    files.figure(f"film_{name}.png", lambda path: plots.film_panels(
+        path, film["crank_angle_deg"],
         {case: (film[case]["min_film_thickness"], film[case]["asperity_share"],
                 film[case]["interference"]) for case in ("unworn", "worn")},
         onset=film["onset_gap"], onset_ratio=film["onset_ratio"], roughness=film["roughness"],
-        title=f"{mfile.title or mfile.file}: lubricated joint {name} "
-              f"(η = {film['viscosity']:g} Pa s, σ = {film['roughness'] * 1e6:.3g} µm), "
-              "quasi-static orbit over the cycle, unworn and worn bushing")
+        title=title))
     keys: dict[str, Any] = {}
     for case, suffix in (("unworn", ""), ("worn", "_worn")):
         f = film[case]
@@ -582,4 +592,4 @@ def check_wear_options(model: str, method: str, resume: bool) -> None:
                              (resume, "--resume")))
 
 
-__all__ = ["check_wear_options", "run", "write", "write_wear"]
+__all__ = ["check_wear_options", "run", "wear_outputs", "write"]

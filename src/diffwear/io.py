@@ -328,18 +328,15 @@ class OutputDir:
         self.file(name)
         return self._atomic(name, lambda tmp: tmp.write_text(body))
 
-    def write(self, outputs: Outputs) -> list[Path]:
+    def write(self, outputs: Outputs) -> None:
         """Write every file of ``outputs``, in the order they were gathered."""
-        written = []
         for name, kind, payload in outputs.items:
             if kind == "csv":
-                written.append(self.csv(name, payload))
+                self.csv(name, payload)
             elif kind == "text":
-                written.append(self.text(name, payload() if callable(payload) else payload))
+                self.text(name, payload() if callable(payload) else payload)
             else:  # a figure draws itself to the path it is given
                 payload(self.file(name))
-                written.append(self.path / name)
-        return written
 
 
 class Outputs:

@@ -242,7 +242,8 @@ def test_a_run_names_a_short_film_out_of_its_range(tmp_path):
     film, or no ``bearing`` (the finite film by default) it does not."""
     from diffwear.choices import SHIPPED_MECHANISMS
     from diffwear.config import load
-    from diffwear.mechanism_file.wear import film_out_of_range
+    from diffwear.contact.finite_bearing import film_out_of_range
+    from diffwear.mechanism_file.wear import bearing_name
 
     text = (SHIPPED_MECHANISMS / "rig_lubricated.toml").read_text()
     assert 'roughness = "0.65 um" }' in text
@@ -252,7 +253,8 @@ def test_a_run_names_a_short_film_out_of_its_range(tmp_path):
         path = tmp_path / f"rig{k}.toml"
         path.write_text(text.replace('roughness = "0.65 um" }',
                                      'roughness = "0.65 um"' + extra + " }"))
-        notes.append(film_out_of_range(load(path).mechanism.element("crank_rod")))
+        joint = load(path).mechanism.element("crank_rod")
+        notes.append(film_out_of_range(bearing_name(joint.law), joint.law, joint.pin_radius))
     assert "L/D = 0.689" in notes[0] and "0.98" in notes[0] and 'bearing = "finite"' in notes[0]
     assert notes[1] is None and notes[2] is None and notes[3] is None
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from diffwear import progress
 from diffwear.cli import main
 from diffwear.config import load
 from diffwear.errors import InputError
@@ -158,7 +159,7 @@ def test_a_long_compile_says_its_progress(files, tmp_path, capsys, monkeypatch):
         raise Stop
 
     monkeypatch.setattr(size, "WARN_SECONDS", 0.0)
-    monkeypatch.setattr(size, "PROGRESS_EVERY_SECONDS", 0.05)
+    monkeypatch.setattr(progress, "PROGRESS_EVERY_SECONDS", 0.05)
     monkeypatch.setattr(run_cli, "integrate_timed", compile_then_stop)
     monkeypatch.setattr(run_cli, "initial_state", lambda mfile: None)
     monkeypatch.setattr(run_cli, "check_motion", lambda mfile, y0: None)

@@ -49,6 +49,7 @@ from ..mechanism_file import (
 )
 from ..mechanism_file import wear as mechanism_wear
 from ..models.execution import Checkpoints
+from ..progress import progress_line
 from ..report import Block, Bullets, Figure, Report, Section, Table, render
 from ..wear.status import RESULTS, message
 from ..wear.status import name as status_name
@@ -414,6 +415,7 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
     slow = check_size(mfile, yes=yes)
     if slow is not None:  # said now, before the wait
         print(f"diffwear: warning: {slow}", file=sys.stderr)
+    wait = size.estimate(mfile).seconds
     if cycles is None and (resume or model != "quasi-static" or method != "constant"):
         raise InputError("--model, --method and --resume belong to a wear mfile: give "
                          "--cycles N")
@@ -431,7 +433,7 @@ def run(mfile: MechanismFile, out_dir: str, *, overwrite: bool = False,
     log(f"[{mfile.file}] integrating {mfile.simulation.duration:g} s (first run compiles) ...")
     # a motion the integrator cannot finish is written up to where it stopped
     if slow is not None and progress:  # a long compile: a line now and then, never silence
-        with size.progress_line("compiling and integrating", size.estimate(mfile).seconds):
+        with progress_line("compiling and integrating", wait):
             timed = integrate_timed(mfile, y0, partial=True)
     else:
         timed = integrate_timed(mfile, y0, partial=True)

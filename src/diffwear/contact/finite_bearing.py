@@ -114,6 +114,7 @@ from .reynolds_grid import (
 )
 
 __all__ = ["CAVITATION", "FiniteBearingFilm", "SteadyFiniteFilm", "film_law_for",
+           "film_out_of_range",
            "film_pressure", "nodes_for", "reynolds_forces"]
 
 # Cavitation conditions (`FiniteBearingFilm`'s ``cavitation``): Reynolds
@@ -363,6 +364,21 @@ def film_law_for(length_over_diameter: float, max_eccentricity_ratio: float) -> 
     52 % high)."""
     ld, eps = float(length_over_diameter), float(max_eccentricity_ratio)
     return "short" if ld**2 <= SHORT_BEARING_LIMIT * (1.0 - eps) else "finite"
+
+
+def film_out_of_range(bearing: str, law, pin_radius) -> str | None:
+    """A sentence where the ``bearing`` film (``"short"``, ``"long"`` or
+    ``"finite"``) of the lubricated ``law`` (a `MixedLubrication`) on a pin of
+    ``pin_radius`` [m] is outside its range (`film_law_for`: the short film
+    beyond (L/D)^2 = 0.05 (1 - eps_max), the long film anywhere), else None."""
+    ld = float(law.film.length) / (2.0 * float(pin_radius))
+    eps_max = float(law.saturated_film().max_eccentricity_ratio)
+    if bearing == "finite" or film_law_for(ld, eps_max) == bearing:
+        return None
+    return (f"the {bearing} film is outside its range here (L/D = {ld:.3g}, eccentricity ratio "
+            f"up to {eps_max:.3g}: the short film holds to 4.5 % only where (L/D)^2 <= 0.05 "
+            f"(1 - eps); at L/D = 0.7 and eps = 0.9 it carries 3.5 x the finite film's "
+            f"load); bearing = \"finite\" gives the finite-length film's numbers")
 
 
 # Nodes of the steady film's table: uniform in w = sqrt(-ln(1 - eps)) from

@@ -13,7 +13,7 @@ free bodies and of pendulum chains (``benchmarks/compile_size.py``, record
 
 which the coefficients below copy.  The time is that of a 2-core machine;
 faster machines take less, so a long estimate is a warning with a progress
-line while it compiles (nothing looks hung), and beyond the compile budget a
+line while it compiles (`diffwear.progress`) (nothing looks hung), and beyond the compile budget a
 question: the command runs it with ``--yes`` only.  The memory estimate is a
 refusal where the machine has less.
 """
@@ -21,15 +21,11 @@ refusal where the machine has less.
 from __future__ import annotations
 
 import os
-import sys
-import threading
-import time
-from collections.abc import Iterator
-from contextlib import contextmanager
-from typing import NamedTuple, TextIO
+from typing import NamedTuple
 
 from ..config import MechanismFile
 from ..errors import InputError
+from ..progress import minutes
 
 # Fit of benchmarks/records/compile_size.json: `diffwear run FILE` in a fresh
 # process (start-up, compilation, a 0.01 s run), 2-core x86-64 machine.
@@ -46,8 +42,6 @@ WARN_SECONDS = 60.0
 # Ten minutes: the 10,000 free bodies a hostile-input trial ran (about 3 min,
 # 3.2 GB) stay within it; a 1,500-link chain (about 10 min) does not.
 COMPILE_BUDGET_SECONDS = 600.0
-# Seconds between the lines of `progress_line`.
-PROGRESS_EVERY_SECONDS = 10.0
 
 
 class SizeEstimate(NamedTuple):
@@ -83,10 +77,6 @@ def physical_memory() -> int | None:
         return None
 
 
-def _minutes(seconds: float) -> str:
-    return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.0f} min"
-
-
 def check_size(mfile: MechanismFile, memory: int | None = None, *, yes: bool = True
                ) -> str | None:
     """Refuse (`InputError`) a file whose estimated memory exceeds ``memory``
@@ -104,8 +94,8 @@ def check_size(mfile: MechanismFile, memory: int | None = None, *, yes: bool = T
     if est.seconds > COMPILE_BUDGET_SECONDS and not yes:
         raise InputError(
             f"{mfile.file}: {est.describe()}: compiling it is estimated to take about "
-            f"{_minutes(est.seconds)} and {est.bytes / 1e9:.1f} GB of memory on a 2-core "
-            f"machine, beyond the compile budget of {_minutes(COMPILE_BUDGET_SECONDS)}; "
+            f"{minutes(est.seconds)} and {est.bytes / 1e9:.1f} GB of memory on a 2-core "
+            f"machine, beyond the compile budget of {minutes(COMPILE_BUDGET_SECONDS)}; "
             "allowed: --yes to run it anyway (a progress line shows the compile; Ctrl-C "
             "stops it cleanly), or a mechanism with fewer joints, force elements or bodies")
     if est.seconds > WARN_SECONDS:
@@ -116,48 +106,5 @@ def check_size(mfile: MechanismFile, memory: int | None = None, *, yes: bool = T
     return None
 
 
-@contextmanager
-def progress_line(what: str, seconds: float, stream: TextIO | None = None,
-                  every: float | None = None) -> Iterator[None]:
-    """While the block runs, say every ``every`` seconds (default
-    `PROGRESS_EVERY_SECONDS`) on ``stream`` (default stderr) how long ``what``
-    has run against its estimate of ``seconds``: one line rewritten in place
-    on a terminal, a line each time otherwise (a log file)."""
-    out = sys.stderr if stream is None else stream
-    every = PROGRESS_EVERY_SECONDS if every is None else every
-    start = time.perf_counter()
-    stop = threading.Event()
-    try:
-        tty = out.isatty()
-    except (AttributeError, ValueError):
-        tty = False
-    said = []
-
-    def tick() -> None:
-        while not stop.wait(every):
-            text = (f"diffwear: {what}: {time.perf_counter() - start:.0f} s so far, of an "
-                    f"estimated {_minutes(seconds)}")
-            try:
-                out.write(f"\r{text}" if tty else f"{text}\n")
-                out.flush()
-            except (OSError, ValueError):  # a closed stream: stop saying it
-                return
-            said.append(text)
-
-    thread = threading.Thread(target=tick, name="diffwear-progress", daemon=True)
-    thread.start()
-    try:
-        yield
-    finally:
-        stop.set()
-        thread.join()
-        if tty and said:
-            try:
-                out.write("\n")
-                out.flush()
-            except (OSError, ValueError):
-                pass
-
-
 __all__ = ["COMPILE_BUDGET_SECONDS", "SizeEstimate", "check_size", "estimate",
-           "physical_memory", "progress_line"]
+           "physical_memory"]

@@ -8,7 +8,7 @@ count), and, with a depth ``limit``, the revolutions until each joint's peak
 wear reaches it.  The joints must use the elastic-foundation law (a pressure
 distribution to wear), lubricated or not.  Per joint: the worn profile, the
 peak-depth history and the worn volume, and for a lubricated joint its film
-over the cycle (`film_cycle`) on the unworn and the worn bushing
+over the cycle (`QuasiStatic.film_cycle`) on the unworn and the worn bushing
 (`diffwear.cli.run` writes them).
 """
 
@@ -22,20 +22,18 @@ from pathlib import Path
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax import lax
 
 from .._checks import require_float64
 from ..config import MechanismFile
 from ..contact.clearance_joint import ClearanceJoint
+from ..contact.finite_bearing import film_out_of_range
 from ..contact.mixed import MixedLubrication
 from ..errors import InputError
 from ..mechanism.constraints import Driver
-from ..mechanism.geometry import safe_norm
 from ..models import MAX_CYCLES, AbstractWearModel, QuasiStatic, WearSolution
 from ..models.execution import Checkpoints, RunTimes, run_model
 from ..studies.model_words import describe
 from ..wear import worn_volume
-from ..wear.cycle import film_tolerance
 from ..wear.status import at
 from .motion import first_driver
 
@@ -153,7 +151,9 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     (``causes``), and (with ``limit`` [m]) the cycles to reach it, on
     ``model`` (default `QuasiStatic`; the dynamic model evolves one joint and
     keeps ``checkpoints``, whose meta this adds the file's name and checksum
-    to: the checkpoint of another file, or an edited one, is not resumed)."""
+    to: the checkpoint of another file, or an edited one, is not resumed);
+    a lubricated joint's ``film`` over the cycle on the unworn and the worn
+    bushing (`film_settings`, `QuasiStatic.film_cycle`)."""
     require_float64("wear of a mechanism file")
     # one mechanism, not a vmapped sweep: slots to spare for a groove whose
     # peak grows slower than the step rule expects (slots after the end cost
@@ -161,18 +161,21 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
     model = QuasiStatic(max_steps=FILE_WEAR_SLOTS) if model is None else model
     joints, period, walls = check_wear(mfile, model, limit=limit)
     mech = mfile.mechanism
-    if checkpoints is not None:
-        # a lubricated joint anywhere runs the cycles on a Rosenbrock method
-        lubricated = film_tolerance(mech) is not None
-        meta = {**file_meta(mfile), **describe(model, cycles, lubricated),
-                "limit_mm": None if limit is None else round(limit * 1e3, 12),
-                "cycles": float(cycles),
-                "n_theta": int(mech.element(joints[0]).profile.n)}
-        checkpoints = checkpoints._replace(meta={**checkpoints.meta, **meta})
+    # what the file says before anything runs: what to change should a
+    # joint's cycle model fail, and its film's settings
+    causes = {name: likely_causes(mfile, name) for name in joints}
+    films = film_settings(mfile, joints)
     life = None
     if limit is not None and isinstance(model, QuasiStatic):
         res, life, times = _run_and_life(model, mech, joints, y0, period, cycles, limit, walls)
     else:
+        if checkpoints is not None:
+            # a lubricated joint anywhere runs the cycles on a Rosenbrock method
+            lubricated = bool(lubricated_joints(mfile))
+            checkpoints = checkpoints._replace(meta={
+                **checkpoints.meta, **file_meta(mfile), **describe(model, cycles, lubricated),
+                "limit_mm": None if limit is None else round(limit * 1e3, 12),
+                "cycles": float(cycles), "n_theta": int(mech.element(joints[0]).profile.n)})
         res, times = run_model(model, lambda _: mech, jnp.zeros(()), joints, y0, period=period,
                                cycles=cycles, wall_thickness=walls, checkpoints=checkpoints)
         if limit is not None:
@@ -194,12 +197,20 @@ def evolve_file(mfile: MechanismFile, y0, *, cycles: float, limit: float | None 
             "cycles_to_limit": (float(life.life[k]) if life is not None else None),
             "model": model.name, "wall_time_s": times.wall_time,
             "compile_time_s": times.compile_time, **times.info,
-            **model_numbers(model, res, k, cycles),
-            # what to change where the joint's cycle model failed (words)
-            "causes": likely_causes(mfile, name),
+            **model_numbers(model, res, k, cycles), "causes": causes[name],
         }
-    for name, film in film_cycle(mfile, y0, {n: out[n]["depth"] for n in joints}).items():
-        out[name]["film"] = film
+    if films:
+        # the loads of the ideal mechanism, as the quasi-static wear model takes them
+        names, worn = tuple(films), tuple(jnp.asarray(out[n]["depth"]) for n in films)
+        per_joint, loads_ok = jax.jit(lambda y, worn: QuasiStatic().film_cycle(
+            mech, names, y, period, worn))(y0, worn)
+        for name, (unworn, worn_parts) in zip(names, per_joint):
+            el = mech.element(name)
+            out[name]["film"] = {
+                **films[name], "loads_ok": bool(loads_ok),
+                "out_of_range": film_out_of_range(films[name]["bearing"], el.law, el.pin_radius),
+                "unworn": {k: np.asarray(v) for k, v in unworn.items()},
+                "worn": {k: np.asarray(v) for k, v in worn_parts.items()}}
     return out
 
 
@@ -252,28 +263,13 @@ def check_joints(mfile: MechanismFile, model: AbstractWearModel, joints) -> None
         raise InputError(f"{mfile.file}: {err}") from None
 
 
-def lubricated_joints(mfile: MechanismFile, joints) -> tuple[str, ...]:
-    """Those of ``joints`` whose law is a `MixedLubrication` (a ``lubricant`` key)."""
-    return tuple(n for n in joints
-                 if isinstance(mfile.mechanism.element(n).law, MixedLubrication))
-
-
-def film_out_of_range(element) -> str | None:
-    """A sentence where a lubricated joint's film law is outside its range
-    (`film_law_for`: the short film beyond (L/D)^2 = 0.05 (1 - eps_max), the
-    long film anywhere), else None."""
-    from ..contact.finite_bearing import film_law_for
-
-    law = element.law
-    name = bearing_name(law)
-    ld = float(law.film.length) / (2.0 * float(element.pin_radius))
-    eps_max = float(law.saturated_film().max_eccentricity_ratio)
-    if name == "finite" or film_law_for(ld, eps_max) == name:
-        return None
-    return (f"the {name} film is outside its range here (L/D = {ld:.3g}, eccentricity ratio "
-            f"up to {eps_max:.3g}: the short film holds to 4.5 % only where (L/D)^2 <= 0.05 "
-            f"(1 - eps); at L/D = 0.7 and eps = 0.9 it carries 3.5 x the finite film's "
-            f"load); bearing = \"finite\" gives the finite-length film's numbers")
+def lubricated_joints(mfile: MechanismFile, joints=None) -> tuple[str, ...]:
+    """Those of ``joints`` (default: every force element) whose law is a
+    `MixedLubrication` (a ``lubricant`` key)."""
+    mech = mfile.mechanism
+    elements = mech.forces if joints is None else [mech.element(n) for n in joints]
+    return tuple(e.name for e in elements
+                 if isinstance(getattr(e, "law", None), MixedLubrication))
 
 
 def bearing_name(law: MixedLubrication) -> str:
@@ -287,65 +283,23 @@ def bearing_name(law: MixedLubrication) -> str:
                 type(law.film).__name__)
 
 
-def film_cycle(mfile: MechanismFile, y0, depths: dict, model: QuasiStatic | None = None) -> dict:
-    """Per lubricated joint named in ``depths`` ({name: wear depth [m] on the
-    bushing grid}): the film and the asperities over one cycle at the pin's
-    quasi-static equilibrium (`LubricatedQuasiStaticJoint.equilibrium`), on
-    the unworn bushing and on the worn one, with the loads of the ideal
-    mechanism as the quasi-static wear model takes them (``model``'s samples,
-    default `QuasiStatic`'s)."""
-    names = lubricated_joints(mfile, tuple(depths))
-    if not names:
-        return {}
-    model = QuasiStatic() if model is None else model
-    mech, period = mfile.mechanism, drive_period(mfile)
-    worn = tuple(jnp.asarray(depths[n], dtype=float) for n in names)
-
-    def parts(j, lo, eq):
-        # soft bore: the film's peak pressure deflects the bore by p / k_f
-        film = j.law.saturated_film()
-        eps = safe_norm(eq.offset) / film.clearance
-        peak = jax.vmap(lambda e, om: film.steady_peak_pressure(e, om, j.dry.pin_radius))(
-            eps, lo.omega)
-        return {"min_film_thickness": eq.min_film_thickness, "film_ratio": eq.film_ratio,
-                "interference": eq.interference, "film_peak_pressure": peak,
-                "bore_deflection": peak / j.law.asperity.stiffness,
-                "asperity_share": eq.asperity_share, "film_load": eq.film_load,
-                "asperity_load": eq.normal_load, "ok": eq.ok}
-
-    @jax.jit
-    def evaluate(y, worn):
-        loads = model.loads(mech, names, y, period)
-        out = []
-        for j, lo, h in zip(model.joints(mech, names), loads.joints, worn):
-            # the unworn bushing, then the worn one from the unworn offsets:
-            # one scan, so that the equilibrium (the orbit's solves) is
-            # compiled once
-            def one(guess, depth, j=j, lo=lo):
-                eq = j.equilibrium(depth, lo, guess)
-                return eq.offset, parts(j, lo, eq)
-
-            _, both = lax.scan(one, jnp.full_like(lo.force, jnp.nan),
-                               jnp.stack([jnp.zeros(j.n), h]))
-            out.append(tuple(jax.tree.map(lambda a, k=k: a[k], both) for k in (0, 1)))
-        return out, loads.ok
-
-    per_joint, ok = evaluate(y0, worn)
+def film_settings(mfile: MechanismFile, joints) -> dict:
+    """Per lubricated joint of ``joints``, what the file sets of its film:
+    the crank angle [deg] of each of the quasi-static wear model's samples
+    of the cycle (where `QuasiStatic.film_cycle` gives the film), the
+    lubricant and the film model (``bearing``)."""
+    mech = mfile.mechanism
     driver = drive(mfile)
-    samples = int(per_joint[0][0]["film_ratio"].shape[0])
-    t = period * np.arange(samples) / samples
+    samples = QuasiStatic().samples
+    t = driver.period * np.arange(samples) / samples
     crank = np.degrees(float(driver.angle0) + float(driver.omega) * t)
     out = {}
-    for name, (unworn, worn_parts) in zip(names, per_joint):
+    for name in lubricated_joints(mfile, joints):
         law = mech.element(name).law
         out[name] = {
             "crank_angle_deg": crank,
-            "unworn": {k: np.asarray(v) for k, v in unworn.items()},
-            "worn": {k: np.asarray(v) for k, v in worn_parts.items()},
-            "loads_ok": bool(ok),
             "viscosity": float(law.film.viscosity), "roughness": float(law.roughness),
             "bearing": bearing_name(law), "onset_gap": float(law.onset_gap),
-            "out_of_range": film_out_of_range(mech.element(name)),
             "onset_ratio": float(law.onset_ratio),
         }
     return out

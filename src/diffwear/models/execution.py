@@ -253,25 +253,21 @@ def run_model(model: AbstractWearModel, mech_of: Callable, p, joints: tuple[str,
     resumable.  Every other model runs whole (seconds; a resume is an
     `InputError`), and a joint that stopped early has the profile it reached
     (`WearSolution.reached`)."""
-    if isinstance(model, Dynamic):
-        (joint,) = one_joint(joints)
+    if not isinstance(model, Dynamic):
+        if checkpoints is not None and checkpoints.resume:
+            raise InputError(f"--resume: the {model.name} model runs whole, without "
+                             "checkpoints (seconds); run it again instead")
 
-        def make(p):
-            return model.evolver(mech_of(p), joint, cycles, period=period,
-                                 wall_thickness=wall_thickness)
+        def evolution(p, y0):
+            return model.evolve(mech_of(p), joints, y0, period=period, cycles=cycles,
+                                wall_thickness=wall_thickness)
 
-        return run_evolution(make, p, y0, checkpoints)
-
-    if checkpoints is not None and checkpoints.resume:
-        raise InputError(f"--resume: the {model.name} model runs whole, without "
-                         "checkpoints (seconds); run it again instead")
-
-    def evolution(p, y0):
-        return model.evolve(mech_of(p), joints, y0, period=period, cycles=cycles,
-                            wall_thickness=wall_thickness)
-
-    res, times = timed(evolution, p, y0)
-    return res.reached(), times  # a run that stopped early: its results so far
+        res, times = timed(evolution, p, y0)
+        return res.reached(), times  # a run that stopped early: its results so far
+    (joint,) = one_joint(joints)
+    return run_evolution(lambda p: model.evolver(mech_of(p), joint, cycles, period=period,
+                                                 wall_thickness=wall_thickness),
+                         p, y0, checkpoints)
 
 
 __all__ = ["Checkpoint", "ChunkedEvolution", "save_checkpoint", "load_checkpoint",

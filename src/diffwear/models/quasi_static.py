@@ -275,6 +275,43 @@ class QuasiStatic(AbstractWearModel):
         return (history(mech, joint, y0, period, jnp.zeros_like(depth)),
                 history(mech, joint, y0, period, depth), crank)
 
+    def film_cycle(self, mech, joints, y0, period, depths) -> tuple[list, Any]:
+        """The lubricated ``joints``' film and asperities over one cycle at the
+        pin's quasi-static equilibrium (`LubricatedQuasiStaticJoint.equilibrium`),
+        on the unworn bushing and on the worn one (``depths``: per joint, the
+        wear depth [m] on the bushing grid), under this model's loads.  Per
+        joint, (unworn, worn) dicts of arrays over the cycle's samples; and
+        whether the loads converged."""
+        loads = self.loads(mech, joints, y0, period)
+        out = []
+        for j, lo, h in zip(self.joints(mech, joints), loads.joints, depths):
+            # the unworn bushing, then the worn one from the unworn offsets:
+            # one scan, so that the equilibrium (the orbit's solves) is
+            # compiled once
+            def one(guess, depth, j=j, lo=lo):
+                eq = j.equilibrium(depth, lo, guess)
+                return eq.offset, _film_numbers(j, lo, eq)
+
+            _, both = jax.lax.scan(one, jnp.full_like(lo.force, jnp.nan),
+                                   jnp.stack([jnp.zeros(j.n), h]))
+            out.append(tuple(jax.tree.map(lambda a, k=k: a[k], both) for k in (0, 1)))
+        return out, loads.ok
+
+
+def _film_numbers(joint, loads: JointLoads, eq) -> dict:
+    """A lubricated joint's film numbers at its equilibrium ``eq`` over the
+    cycle; the bore's deflection under the film's peak pressure is p / k_f
+    (the foundation's stiffness: a soft bore's test)."""
+    film = joint.law.saturated_film()
+    eps = safe_norm(eq.offset) / film.clearance
+    peak = jax.vmap(lambda e, om: film.steady_peak_pressure(e, om, joint.dry.pin_radius))(
+        eps, loads.omega)
+    return {"min_film_thickness": eq.min_film_thickness, "film_ratio": eq.film_ratio,
+            "interference": eq.interference, "film_peak_pressure": peak,
+            "bore_deflection": peak / joint.law.asperity.stiffness,
+            "asperity_share": eq.asperity_share, "film_load": eq.film_load,
+            "asperity_load": eq.normal_load, "ok": eq.ok}
+
 
 class _JointWear(AbstractWearTerm):
     """One quasi-static joint's wear per cycle at the clearance profile

@@ -376,8 +376,8 @@ class Fitter:
         sd = self._disc
 
         def outputs(v):
-            return problem.outputs(v[sx], EffectValues(v[ss], v[sg], v[sd], library=library),
-                                   v[su])
+            effects = EffectValues(v[ss], v[sg], v[sd], library=library)
+            return problem.outputs(v[sx], effects, v[su])
 
         def columns(v, tangents):
             """(outputs, d outputs / dv . t for each row t of ``tangents``)."""

@@ -61,10 +61,19 @@ UNIT = {"profile": (1e6, "um", "bushing angle [deg]", 180 / math.pi),
 
 def _figures(c: Calibration) -> Outputs:
     """The calibration's figures (`plots.calibration`) from its numbers, each
-    drawn when the files are written."""
+    drawn when the files are written: every number first, then the figures."""
     p = c.problem
     which = p.series_of_point
     final = c.final or c.base
+    stage1 = c.selection.stages[0] if c.selection is not None and c.selection.stages else None
+    ranked = sorted(stage1.assessed.values(), key=lambda a: a.criterion) if stage1 else []
+    deepest = _deepest(c.dataset)
+    chosen_label = _final_label(final)
+    title_p = ("posterior of the final model (" + _posterior_words(c.posterior) + ")"
+               if c.posterior is not None else "")
+    members = _members_of(final)
+    covered = _covered(final.discrepancy, c) if final.discrepancy is not None else None
+    # the fits' series, the residuals and the force residual's spectrum
     band = None if c.posterior is None else c.posterior.predictive_band(p.sigma, p.y)
     fits = []
     for k, s in enumerate(c.dataset.series):
@@ -74,25 +83,15 @@ def _figures(c: Calibration) -> Outputs:
             name=s.name, kind=s.kind, unit=unit, xlabel=xlabel, scale=scale, x=s.x * xscale,
             y=s.y, sigma=s.sigma, holdout=s.holdout, base=c.base.prediction[m],
             chosen=None if final is c.base else final.prediction[m],
-            chosen_label=_final_label(final), cycles=s.cycles,
+            chosen_label=chosen_label, cycles=s.cycles,
             band=None if band is None else (band[0][m], band[1][m])))
-    files = Outputs()
-    for fit in fits:
-        files.figure(f"fit_{fit.name}.png", partial(plots_calibration.series_fit, f=fit))
     cycles = [s.cycle_counts for s in c.dataset.series]
     residuals = [c.base.residual[which == k] for k in range(len(c.dataset.series))]
     harmonics = residual_structure(c).get("force_residual_harmonics")
-    files.figure("residual_structure.png", lambda path: plots_calibration.residual_structure(
-        path, fits, residuals, cycles, harmonics))
-    stage1 = c.selection.stages[0] if c.selection is not None and c.selection.stages else None
-    if stage1 is not None and stage1.assessed:
-        ranked = sorted(stage1.assessed.values(), key=lambda a: a.criterion)
-        adopted = [learned.label(m) for m in _members_of(final)]
-        labels = [learned.label(a.effect) for a in ranked]
-        files.figure("candidates.png", lambda path: plots_calibration.candidates(
-            path, labels, [a.criterion for a in ranked], [a.qualifies for a in ranked],
-            adopted, AMBIGUITY))
-    if final.discrepancy is not None:
+    # the first stage's candidates, by criterion
+    adopted = [learned.label(m) for m in members] if ranked else []
+    labels = [learned.label(a.effect) for a in ranked]
+    if final.discrepancy is not None:  # the learned discrepancy with its band
         d = final.discrepancy
         lib = c.problem.library
         span = learned.span(d, c.dataset, lib)
@@ -100,32 +99,41 @@ def _figures(c: Calibration) -> Outputs:
         x, delta, band_d = learned.curve(d, final.discrepancy_coefficients,
                                          final.discrepancy_cov, span, c.dataset.fit_cycles, b,
                                          lib)
-        axis, words, covered = lib.variable(d).axis, disc_words(d, lib), _covered(d, c)
-        files.figure("discrepancy.png", lambda path: plots_calibration.discrepancy(
-            path, x, delta, band_d, axis, f"learned discrepancy of k over {words}", covered))
-    if c.posterior is not None:
+        axis, title_d = lib.variable(d).axis, f"learned discrepancy of k over {disc_words(d, lib)}"
+    if c.posterior is not None:  # the posterior's numbers in the dataset's units
         post = c.posterior
+        numbers = post.layout.natural(post.z)
         columns = {_number_label(n, c.dataset): _in_dataset_unit(n, v, c.dataset)
-                   for n, v in post.layout.natural(post.z).items()
-                   if not n.startswith("delta_")}
-        title = "posterior of the final model (" + _posterior_words(post) + ")"
+                   for n, v in numbers.items() if not n.startswith("delta_")}
+    f = c.forecast
+    nxt = (f.next_measurement if f is not None else None) or {}
+    chosen = None
+    if f is not None and nxt.get("kind") in f.scores:  # the inspection to take next
+        cyc, val = f.scores[nxt["kind"]]
+        chosen = (nxt["cycles"], float(val[int(np.argmin(np.abs(cyc - nxt["cycles"])))]))
+    ylabel = ("separation of the two explanations [sigma]" if "expected_separation_sigma" in nxt
+              else "life band narrowed by [share]" if "life_band_reduction" in nxt
+              else "depth band narrowed by [share]")
+
+    files = Outputs()
+    for fit in fits:
+        files.figure(f"fit_{fit.name}.png", partial(plots_calibration.series_fit, f=fit))
+    files.figure("residual_structure.png", lambda path: plots_calibration.residual_structure(
+        path, fits, residuals, cycles, harmonics))
+    if ranked:
+        files.figure("candidates.png", lambda path: plots_calibration.candidates(
+            path, labels, [a.criterion for a in ranked], [a.qualifies for a in ranked],
+            adopted, AMBIGUITY))
+    if final.discrepancy is not None:
+        files.figure("discrepancy.png", lambda path: plots_calibration.discrepancy(
+            path, x, delta, band_d, axis, title_d, covered))
+    if c.posterior is not None:
         files.figure("posterior.png", lambda path: plots_calibration.posterior(
-            path, columns, post.weights, title))
-    if c.forecast is not None and c.forecast.trajectory:
-        f = c.forecast
-        deepest = _deepest(c.dataset)
+            path, columns, post.weights, title_p))
+    if f is not None and f.trajectory:
         files.figure("life.png", lambda path: plots_calibration.life(
             path, f.trajectory, f.limit, deepest, f.horizon, (f.life["q05"], f.life["q95"])))
-        nxt = f.next_measurement or {}
         if f.scores:
-            chosen = None
-            if nxt.get("kind") in f.scores:
-                cyc, val = f.scores[nxt["kind"]]
-                chosen = (nxt["cycles"], float(val[int(np.argmin(np.abs(cyc - nxt["cycles"])))]))
-            ylabel = ("separation of the two explanations [sigma]"
-                      if "expected_separation_sigma" in nxt else
-                      "life band narrowed by [share]" if "life_band_reduction" in nxt else
-                      "depth band narrowed by [share]")
             files.figure("next_measurement.png", lambda path: plots_calibration.next_measurement(
                 path, f.scores, ylabel, chosen))
     return files

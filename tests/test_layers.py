@@ -87,7 +87,7 @@ def test_no_module_getattr_import_tricks():
 LAYERS = (
     ("errors",),                          # the error classes
     ("choices", "_checks", "io", "report", "gradient_check", "interrupt",  # options, outputs,
-     "worker"),                           # worker processes
+     "worker", "progress"),               # worker processes, a long wait's progress line
     ("mechanism",),                       # bodies, joints, forces: the DAE's terms
     ("dynamics", "contact", "fem"),       # integration; contact laws; FEM contact
     ("wear",),                            # Archard wear, the profile, the evolution

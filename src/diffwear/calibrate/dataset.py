@@ -60,6 +60,10 @@ FOLDER_RULE = f"a dataset folder holding {MANIFEST} and its CSV files"
 
 # parameter name -> dimension (None: a plain number); the table: `parameters`
 PARAMETERS: dict[str, str | None] = {n: p.dimension for n, p in RIG_PARAMETERS.items()}
+# SI units of the rig's numbers in a report (a dataset's own units are
+# converted on loading: k in mm^3/(N m) is 1e-9 1/Pa)
+REPORT_UNITS = {"wear coefficient": "1/Pa = m^3/(N m)", "length": "m", None: "-",
+                "mass": "kg", "inertia": "kg m^2", "stiffness": "N/m"}
 PARAMETER_RULE = ("k (wear coefficient); clearance, depth, diameter, wall, free_length, "
                   "crank_length, rod_length (lengths); spring_stiffness (N/m); crank_mass, "
                   "rod_mass, slider_mass (masses); crank_inertia, rod_inertia (kg m^2); "
@@ -164,6 +168,27 @@ class Dataset:
     def fit_names(self) -> tuple[str, ...]:
         """Names of the parameters with ``fit = true``, in `PARAMETERS` order."""
         return tuple(n for n, p in self.parameters.items() if p.fit)
+
+    def unit_of(self, name: str) -> str | None:
+        """The unit a fitted number ``name`` is reported in: the dataset's own
+        for its parameters, SI (`REPORT_UNITS`) for the rest of the rig's."""
+        p = self.parameters.get(name)
+        if p is not None and p.unit:
+            return p.unit
+        return REPORT_UNITS.get(PARAMETERS[name]) if name in PARAMETERS else None
+
+    def in_own_unit(self, name: str, values) -> np.ndarray:
+        """``values`` of ``name`` (SI) in the unit `unit_of` gives."""
+        p = self.parameters.get(name)
+        dim = PARAMETERS.get(name)
+        if p is not None and p.unit and dim:
+            return units.in_unit(1.0, p.unit, dim) * np.asarray(values)
+        return np.asarray(values)
+
+    def label(self, name: str) -> str:
+        """``name`` with its unit, for a table's column or a figure's axis."""
+        unit = self.unit_of(name)
+        return f"{name.replace('_', ' ')}" + (f" [{unit}]" if unit else "")
 
     def file_of(self, series: Series) -> Path:
         """The CSV path of ``series``."""

@@ -17,7 +17,7 @@ from functools import partial
 import numpy as np  # noqa: E402
 
 from ..calibrate import learned
-from ..calibrate.dataset import PARAMETERS, Dataset  # noqa: E402
+from ..calibrate.dataset import Dataset  # noqa: E402
 from ..calibrate.effects import LIBRARY, Library  # noqa: E402
 from ..calibrate.fit import ModelSettings  # noqa: E402
 from ..calibrate.forecast import DEFAULT_OUTLOOK
@@ -32,7 +32,6 @@ from ..calibrate.identify import (  # noqa: E402
 )
 from ..calibrate.residual_structure import residual_structure, series_rms
 from ..calibrate.residual_words import describe_residuals  # noqa: E402
-from ..config import units
 from ..io import OutputDir, Outputs  # noqa: E402
 from ..plots import calibration as plots_calibration
 from ..report import (
@@ -46,11 +45,6 @@ from ..report import (
     render,
     significant,
 )
-
-# SI units of the fitted parameters in the report (the dataset's own units are
-# converted on loading: k in mm^3/(N m) is 1e-9 1/Pa)
-REPORT_UNITS = {"wear coefficient": "1/Pa = m^3/(N m)", "length": "m", None: "-",
-                "mass": "kg", "inertia": "kg m^2", "stiffness": "N/m"}
 
 DESCRIPTION = "calibrate the rig model on measured wear data and identify a missing effect"
 # the figures' axes: y scale and unit, x label and scale (angles, SI rad, drawn in deg)
@@ -103,7 +97,7 @@ def _figures(c: Calibration) -> Outputs:
     if c.posterior is not None:  # the posterior's numbers in the dataset's units
         post = c.posterior
         numbers = post.layout.natural(post.z)
-        columns = {_number_label(n, c.dataset): _in_dataset_unit(n, v, c.dataset)
+        columns = {c.dataset.label(n): c.dataset.in_own_unit(n, v)
                    for n, v in numbers.items() if not n.startswith("delta_")}
     f = c.forecast
     nxt = (f.next_measurement if f is not None else None) or {}
@@ -167,28 +161,6 @@ def _deepest(data) -> list[tuple]:
             for s in data.series if s.kind == "profile"]
 
 
-def _number_label(name: str, data) -> str:
-    unit = _unit_of(name, data)
-    return f"{name.replace('_', ' ')}" + (f" [{unit}]" if unit else "")
-
-
-def _unit_of(name: str, data) -> str | None:
-    """The unit a number is reported in: the dataset's own for its parameters."""
-    p = data.parameters.get(name)
-    if p is not None and p.unit:
-        return p.unit
-    dim = PARAMETERS.get(name)
-    return REPORT_UNITS.get(dim) if name in PARAMETERS else None
-
-
-def _in_dataset_unit(name: str, values, data):
-    p = data.parameters.get(name)
-    dim = PARAMETERS.get(name)
-    if p is not None and p.unit and dim:
-        return units.in_unit(1.0, p.unit, dim) * np.asarray(values)
-    return np.asarray(values)
-
-
 def _stage_line(k: int, st: dict) -> str:
     """One forward-selection stage in words."""
     qualified = [learned.label(e) for e, c in st["candidates"].items() if c["qualifies"]]
@@ -213,8 +185,8 @@ def _final_label(f) -> str:
 
 def _param_text(name: str, value: float, std: float, data) -> str:
     """A fitted number with its 1-sigma in the dataset's unit."""
-    scale = _in_dataset_unit(name, 1.0, data)
-    unit = _unit_of(name, data)
+    scale = data.in_own_unit(name, 1.0)
+    unit = data.unit_of(name)
     return plus_minus(value * float(scale), std * float(scale)) + (f" {unit}" if unit else "")
 
 
@@ -401,8 +373,8 @@ def _parameter_section(c: Calibration, summary: dict, final) -> Section:
     rows = []
     for n in d.fit_names:
         q = numbers.get(n)
-        scale = float(_in_dataset_unit(n, 1.0, d))
-        rows.append((f"{n} [{_unit_of(n, d) or '-'}]",
+        scale = float(d.in_own_unit(n, 1.0))
+        rows.append((f"{n} [{d.unit_of(n) or '-'}]",
                      plus_minus(c.base.params[n] * scale, c.base.params_std[n] * scale),
                      plus_minus(final.params[n] * scale, final.params_std[n] * scale),
                      "" if q is None else f"{significant(q['q05'] * scale, 4)} .. "

@@ -489,15 +489,29 @@ def _improving(stage: Stage, current: FitResult) -> list:
 
 
 def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
-          reference=None, foresee=None, variables=()) -> Path:
+          reference=None, foresee=None, variables=(), base: FitResult | None = None) -> Path:
     """Greedy forward selection from the one-candidate model ``first``: the
     best qualifying addition (effect or discrepancy over one of
     ``variables``) by the criterion at each stage, then the members already
     in the model re-judged beside it; a member dropped is not offered again
     on this path.  ``reference(fit) -> chi2`` (the dynamic model's fit-point
     chi-square, evaluated, not refitted): an addition must lower it too,
-    else it stands for the fitted model's own error.  ``foresee(fit)``: told
+    else it stands for the fitted model's own error; so must ``first`` from
+    ``base`` (the model without it), where the base's is finite: a path
+    whose first member raises it ends on ``base``.  ``foresee(fit)``: told
     the fits that check would evaluate (unchecked)."""
+    if base is not None and foresee is not None:
+        foresee(base)
+        foresee(first.fit)
+    if base is not None and reference is not None:
+        before, after = reference(base), reference(first.fit)
+        if math.isfinite(before) and not after < before:
+            first.qualifies = False
+            first.reasons.append(f"the dynamic model's chi2 rises ({before:.5g} -> "
+                                 f"{after:.5g}): the fitted model's own error")
+            log(f"+ {learned.label(first.effect)}: the dynamic model's chi2 rises "
+                f"{before:.5g} -> {after:.5g}; not adopted")
+            return Path(base, {}, [])
     current = first.fit
     adopted = {first.effect: first}
     stages: list = []
@@ -586,7 +600,7 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
             log(line)
 
         grown.append(_Grown(_grow(fitter, a, kinds, inspections, first_pass,
-                                  foresee=foresee, variables=variables),
+                                  foresee=foresee, variables=variables, base=base),
                             seen, reference is None))
     while True:
         unchecked = [g for g in grown if not g.checked]
@@ -598,7 +612,7 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
         log(f"path {g.path.name}: checked on the dynamic model")
         g.path = _grow(fitter, starts[grown.index(g)], kinds, inspections,
                        lambda line, seen=g.seen: None if line in seen else log(line), reference,
-                       variables=variables)
+                       variables=variables, base=base)
         g.checked = True
     paths: dict[tuple, Path] = {}
     trailing = []

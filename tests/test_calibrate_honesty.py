@@ -85,6 +85,51 @@ def test_a_cached_fit_in_a_poorer_minimum_is_fitted_again_from_a_larger_model():
     assert _fit_cached(f, ("creep",), None, fit(10.0)) is better     # a subset start: cached
 
 
+def test_a_first_member_that_raises_the_dynamic_models_chi2_is_not_adopted(monkeypatch):
+    """The dynamic model's check holds back a path's first member where it is
+    a learned discrepancy, as it holds back each later member: one that
+    lowers the fitted model's chi2 but raises the dynamic model's (at the
+    fitted numbers) stands for the fitted model's own error, and the path
+    ends on the model without it; one that lowers both, a base the dynamic
+    model cannot evaluate, or a first library effect leaves the path to
+    grow."""
+    import math
+    from types import SimpleNamespace
+
+    from diffwear.calibrate import identify
+
+    def fit(chi2, discrepancy=None):
+        return SimpleNamespace(chi2_fit=chi2, effects=(), discrepancy=discrepancy, notes={})
+
+    base, angle = fit(1292.3), fit(1230.3, "angle")
+    dynamic = {id(base): 1239.5, id(angle): 1264.3}   # the dynamic model's fit-point chi2
+
+    def first():
+        return SimpleNamespace(fit=angle, effect="discrepancy:angle", qualifies=True, reasons=[])
+
+    # a later stage offers nothing: the path is its first member
+    monkeypatch.setattr(identify, "_stage", lambda *a, **k: SimpleNamespace(
+        assessed={}, added=None, dropped=()))
+    lines = []
+    a = first()
+    path = identify._grow(None, a, (), (), lines.append, lambda f: dynamic[id(f)], base=base)
+    assert path.model is base and path.name == "none" and not a.qualifies
+    assert "rises (1239.5 -> 1264.3)" in a.reasons[0] and "not adopted" in lines[0]
+    dynamic[id(angle)] = 1200.0                                       # lowers both
+    a = first()
+    path = identify._grow(None, a, (), (), lines.append, lambda f: dynamic[id(f)], base=base)
+    assert path.model is angle and a.qualifies
+    dynamic[id(base)], dynamic[id(angle)] = math.inf, 1264.3          # base not evaluable
+    path = identify._grow(None, first(), (), (), lines.append, lambda f: dynamic[id(f)],
+                          base=base)
+    assert path.model is angle
+    dynamic[id(base)] = 1239.5                                        # a library effect
+    effect = SimpleNamespace(fit=angle, effect="pressure_exponent", qualifies=True, reasons=[])
+    path = identify._grow(None, effect, (), (), lines.append, lambda f: dynamic[id(f)],
+                          base=base)
+    assert path.model is angle and effect.qualifies
+
+
 def test_grid_in_the_fit_window_does_not_depend_on_later_measurements():
     """The nodes up to the fit window's end are the same whether the run ends
     there or goes on to held-out inspections (or a life); beyond, the steps

@@ -496,14 +496,20 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
     in the model re-judged beside it; a member dropped is not offered again
     on this path.  ``reference(fit) -> chi2`` (the dynamic model's fit-point
     chi-square, evaluated, not refitted): an addition must lower it too,
-    else it stands for the fitted model's own error; so must ``first`` from
-    ``base`` (the model without it), where the base's is finite: a path
-    whose first member raises it ends on ``base``.  ``foresee(fit)``: told
-    the fits that check would evaluate (unchecked)."""
-    if base is not None and foresee is not None:
+    else it stands for the fitted model's own error.  So must ``first`` from
+    ``base`` (the model without it) where ``first`` is a learned discrepancy
+    and the base's is finite: a path whose first member is a discrepancy
+    that raises it ends on ``base``.  (A first library effect is not held
+    back: its form is physics both models share, and where their pressure
+    distributions differ its dynamic chi-square can rise although it is the
+    cause; a discrepancy can take any shape, the fitted model's error's
+    too.)  ``foresee(fit)``: told the fits that check would evaluate
+    (unchecked)."""
+    judged = base is not None and learned.variable_of(first.effect) is not None
+    if judged and foresee is not None:
         foresee(base)
         foresee(first.fit)
-    if base is not None and reference is not None:
+    if judged and reference is not None:
         before, after = reference(base), reference(first.fit)
         if math.isfinite(before) and not after < before:
             first.qualifies = False

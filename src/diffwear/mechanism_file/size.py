@@ -13,8 +13,8 @@ free bodies and of pendulum chains (``benchmarks/compile_size.py``, record
 
 which the coefficients below copy.  The time is that of a 2-core machine;
 faster machines take less, so a long estimate is a warning with a progress
-line while it compiles (`diffwear.progress`) (nothing looks hung), and beyond the compile budget a
-question: the command runs it with ``--yes`` only.  The memory estimate is a
+line while it compiles (nothing looks hung: `diffwear.progress`), and beyond
+the compile budget a question: the command runs it with ``--yes`` only.  The memory estimate is a
 refusal where the machine has less.
 """
 

@@ -505,19 +505,19 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
     cause; a discrepancy can take any shape, the fitted model's error's
     too.)  ``foresee(fit)``: told the fits that check would evaluate
     (unchecked)."""
-    judged = base is not None and learned.variable_of(first.effect) is not None
-    if judged and foresee is not None:
-        foresee(base)
-        foresee(first.fit)
-    if judged and reference is not None:
-        before, after = reference(base), reference(first.fit)
-        if math.isfinite(before) and not after < before:
-            first.qualifies = False
-            first.reasons.append(f"the dynamic model's chi2 rises ({before:.5g} -> "
-                                 f"{after:.5g}): the fitted model's own error")
-            log(f"+ {learned.label(first.effect)}: the dynamic model's chi2 rises "
-                f"{before:.5g} -> {after:.5g}; not adopted")
-            return Path(base, {}, [])
+    if base is not None and learned.variable_of(first.effect) is not None:
+        if foresee is not None:
+            foresee(base)
+            foresee(first.fit)
+        if reference is not None:
+            before, after = reference(base), reference(first.fit)
+            if math.isfinite(before) and not after < before:
+                first.qualifies = False
+                first.reasons.append(f"the dynamic model's chi2 rises ({before:.5g} -> "
+                                     f"{after:.5g}): the fitted model's own error")
+                log(f"+ {learned.label(first.effect)}: the dynamic model's chi2 rises "
+                    f"{before:.5g} -> {after:.5g}; not adopted")
+                return Path(base, {}, [])
     current = first.fit
     adopted = {first.effect: first}
     stages: list = []

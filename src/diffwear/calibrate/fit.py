@@ -44,6 +44,10 @@ from .model import BASE_NAMES, Observation, RigHistory, rig_defaults
 from .quasi_static import DEFAULT_STEPS, QuasiStaticRigHistory
 
 DEFAULT_LOG_SCALE = 0.1  # tau of a fitted parameter without a stated std
+# Levenberg-Marquardt steps a fit may take per unknown where that exceeds the
+# fitter's ``max_steps`` (MINPACK's lmder allows 100 (n + 1) evaluations;
+# here each step is one exact Jacobian)
+STEPS_PER_UNKNOWN = 5
 # A shape is kept within this many prior spreads of its default (a factor
 # 1e4 either way for a decade prior): beyond, an effect has no shape left to
 # give (a film formed at once is a change of k)
@@ -351,7 +355,10 @@ class Fitter:
     structure.  Unknowns z are in units of each parameter's stated spread
     (tau), of an effect's scale, of a shape's prior spread and of a
     discrepancy coefficient's prior spread, so the step tolerance ``xtol``
-    reads "1 % of a spread".
+    reads "1 % of a spread".  A fit may take ``max_steps`` Levenberg-
+    Marquardt steps, or `STEPS_PER_UNKNOWN` per unknown where that is more
+    (a nine-layer depth discrepancy descends a long valley: the coating
+    campaign's took 34 steps, and was dropped as failed at 30).
     """
 
     def __init__(self, problem: Problem, *, xtol=1e-2, ftol=1e-4, max_steps=30):
@@ -480,11 +487,13 @@ class Fitter:
         t[np.arange(len(index)), start + np.asarray(index, dtype=int)] = 1.0
         return t
 
-    def _levenberg_marquardt(self, z, evaluate, rows, free, what, bounds=None):
+    def _levenberg_marquardt(self, z, evaluate, rows, free, what, bounds=None,
+                             max_steps: int | None = None):
         """(z, steps, fit-row Jacobian, all residuals) at the accepted minimum.
         ``evaluate(z) -> (all residuals, fit-row Jacobian)``; ``rows(r_all, z)``:
         the objective's rows; ``bounds``: (lower, upper) arrays of z (a step
-        is cut back to the box)."""
+        is cut back to the box); ``max_steps``: default the fitter's."""
+        max_steps = self.max_steps if max_steps is None else max_steps
         lower, upper = ((np.full(z.shape, -np.inf), np.full(z.shape, np.inf))
                         if bounds is None else bounds)
         r_all, jac = evaluate(z)
@@ -493,7 +502,7 @@ class Fitter:
             raise SolverError(f"calibration of the {what}: the model failed at the start "
                               "(non-finite predictions)")
         chi2, lam, steps = float(r @ r), 1e-3, 0
-        for steps in range(1, self.max_steps + 1):
+        for steps in range(1, max_steps + 1):
             j = jac[:, free]
             a, g = j.T @ j, j.T @ r
             d = np.maximum(np.diag(a), 1e-12 * max(np.max(np.diag(a)), 1e-300))
@@ -517,7 +526,7 @@ class Fitter:
             if np.max(np.abs(dz)) < self.xtol or drop < self.ftol * chi2:
                 return z, steps, jac, r_all
         raise SolverError(f"calibration of the {what}: Levenberg-Marquardt did not converge in "
-                          f"{self.max_steps} steps (chi2 {chi2:.6g})")
+                          f"{max_steps} steps (chi2 {chi2:.6g})")
 
     def effect_jacobian(self, x, log_shape, v=None) -> np.ndarray:
         """dr/ds of every effect (columns, the library's order) at the log-shapes
@@ -647,7 +656,8 @@ class Fitter:
         t0 = time.perf_counter()
         z0 = np.clip(z0, lay.lower, lay.upper)
         z, steps, jz, r = self._levenberg_marquardt(
-            z0, evaluate, objective_rows, np.ones(lay.size, bool), what, (lay.lower, lay.upper))
+            z0, evaluate, objective_rows, np.ones(lay.size, bool), what, (lay.lower, lay.upper),
+            max(self.max_steps, STEPS_PER_UNKNOWN * lay.size))
         wall = time.perf_counter() - t0
         if not np.all(np.isfinite(r)):  # a held-out point the model could not reach
             raise SolverError(f"calibration of the {what}: the model failed at the solution "

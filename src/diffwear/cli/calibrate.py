@@ -53,7 +53,7 @@ UNIT = {"profile": (1e6, "um", "bushing angle [deg]", 180 / math.pi),
         "force": (1.0, "N", "crank angle [deg]", 180 / math.pi)}
 
 
-def _figures(c: Calibration) -> Outputs:
+def _figures(c: Calibration, structure: dict) -> Outputs:
     """The calibration's figures (`plots.calibration`) from its numbers, each
     drawn when the files are written: every number first, then the figures."""
     p = c.problem
@@ -81,7 +81,7 @@ def _figures(c: Calibration) -> Outputs:
             band=None if band is None else (band[0][m], band[1][m])))
     cycles = [s.cycle_counts for s in c.dataset.series]
     residuals = [c.base.residual[which == k] for k in range(len(c.dataset.series))]
-    harmonics = residual_structure(c).get("force_residual_harmonics")
+    harmonics = structure.get("force_residual_harmonics")
     # the first stage's candidates, by criterion
     adopted = [learned.label(m) for m in members] if ranked else []
     labels = [learned.label(a.effect) for a in ranked]
@@ -190,7 +190,7 @@ def _param_text(name: str, value: float, std: float, data) -> str:
     return plus_minus(value * float(scale), std * float(scale)) + (f" {unit}" if unit else "")
 
 
-def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
+def _report(c: Calibration, summary: dict, files: list[str], structure: dict) -> Report:
     d = c.dataset
     lib = c.problem.library
     blocks: list[Block] = [
@@ -299,18 +299,18 @@ def _report(c: Calibration, summary: dict, files: list[str]) -> Report:
                 f"{significant(mc['chi2_fit_model'], 5)}): the quasi-static model's own error "
                 "may have chosen the effects; refit with `--model dynamic` before trusting "
                 "them."])]))
-    structure = []
-    for key, value in residual_structure(c).items():
+    lines = []
+    for key, value in structure.items():
         if isinstance(value, dict):
             value = ", ".join(f"{k}: {significant(v, 3)}" for k, v in value.items())
         elif isinstance(value, list):
             value = ", ".join(significant(v, 3) for v in value)
         elif isinstance(value, float):
             value = significant(value, 3)
-        structure.append(f"{key.replace('_', ' ')}: {value}")
+        lines.append(f"{key.replace('_', ' ')}: {value}")
     blocks += [
         Section("Residual structure (base fit)", [Bullets(summary["residual_words"]),
-                                                  Bullets(structure)]),
+                                                  Bullets(lines)]),
         Section("Error per series", [Table(
             ("series", "RMS before [sigma]", "RMS after [sigma]"),
             [(name, significant(before, 3), significant(after, 3))
@@ -534,12 +534,13 @@ def run(data: Dataset, out: OutputDir, *, settings: ModelSettings | None = None,
     summary = c.summary()
     final = c.final or c.base
     summary["series_rms"] = series_rms(c, final)
-    summary["residual_words"] = describe_residuals(c, residual_structure(c))
+    structure = residual_structure(c)
+    summary["residual_words"] = describe_residuals(c, structure)
     summary["frame_warnings"] = frame_warnings(c)
     for w in summary["frame_warnings"]:
         log(f"warning: {w['message']}")
     # every number first, then every file (`Outputs`)
-    files = _figures(c)
+    files = _figures(c, structure)
     figures = files.names
     p = c.problem
     files.csv("residuals.csv", {
@@ -549,7 +550,7 @@ def run(data: Dataset, out: OutputDir, *, settings: ModelSettings | None = None,
         "held_out": p.holdout.astype(int)})
     summary["series"] = [s.name for s in data.series]
     summary["plots"] = figures
-    report = _report(c, summary, figures)
+    report = _report(c, summary, figures, structure)
     files.text("report.md", lambda: render(report))
     out.write(files)
     out.json("summary.json", summary)

@@ -111,7 +111,8 @@ def candidates(path: Path, names: Sequence[str], criteria: Sequence[float],
     """Each candidate refitted on the base model: its penalised criterion
     (BIC, on the fit points) above the best candidate's, qualifying ones
     filled, the adopted ones named; the comparable window shaded (within it
-    the simplest wins).  Bars beyond the axis are cut at its end."""
+    the simplest wins).  Each bar's end is a dot (the best candidate's bar
+    has no length); bars beyond the axis are cut at its end."""
     from matplotlib.patches import Patch
 
     fig, ax = plt.subplots(figsize=(8.4, 0.9 + 0.32 * max(len(names), 1)))
@@ -121,10 +122,15 @@ def candidates(path: Path, names: Sequence[str], criteria: Sequence[float],
     y = np.arange(len(names))[::-1]
     colors = ["C0" if q else "0.75" for q in qualifies]
     ax.barh(y, np.clip(gap, 0.0, top), color=colors, left=0.0)
+    # each bar's end marked, so that the best candidate's (length zero) shows
+    ax.scatter(np.clip(gap, 0.0, top), y, s=18, c=colors, edgecolors="k", linewidths=0.6,
+               zorder=3, clip_on=False)
     ax.axvspan(0, window, color="C2", alpha=0.12, lw=0)
     for yi, g in zip(y, gap):
         if g > top:
             ax.text(top, yi, f" {g:,.0f} ", ha="right", va="center", fontsize=7, color="w")
+        elif g == 0.0:
+            ax.text(0.02 * top, yi, "best", ha="left", va="center", fontsize=7)
     ax.set_yticks(y, [n + ("  (adopted)" if n in adopted else "") for n in names])
     handles = [Patch(color="C0", label="qualifies (p < 0.001)"),
                Patch(color="0.75", label="does not qualify"),

@@ -521,3 +521,21 @@ def test_the_rig_studys_locus_shows_the_pin_in_its_worn_pocket(tmp_path):
         _assert_legends_clear(fig)
         _assert_angles_in_degrees(fig)
         _assert_no_zero_axes(fig)
+
+
+def test_the_best_candidate_shows_in_the_candidates_figure(tmp_path):
+    """Bars are drawn above the best candidate's criterion, so the best one's
+    has no length: every bar's end is a dot, at its criterion above the
+    best, and the best is labelled."""
+    from diffwear.plots.files import captured
+
+    criteria = [1200.0, 1203.0, 1250.0, 5000.0]
+    with captured() as figures:
+        plots_calibration.candidates(tmp_path / "candidates.png",
+                                     ["angle", "run_in", "pressure_exponent", "third_body"],
+                                     criteria, [True, True, False, True], ["run_in"], 6.0)
+    ax = figures["candidates.png"].axes[0]
+    top = 60.0   # the axis ends at ten windows
+    ends = ax.collections[0].get_offsets()
+    np.testing.assert_allclose(ends[:, 0], np.minimum(np.subtract(criteria, 1200.0), top))
+    assert [t.get_text() for t in ax.texts] == ["best", " 3,800 "]

@@ -19,7 +19,7 @@ variable           basis phi_j(x) (delta = sum c_j phi_j)              prior std
 ``cycles``         Legendre P_1..P_3 of 2 N / N_end - 1 (N_end: the     1 / j
                    end of the fit window; held beyond it)
 ``depth``          steps s((h - d_j) / w_j) - s(-d_j / w_j),           1
-                   d_j = 25 um x 2^(j/2) up to 0.4 mm, w_j = d_j / 16,
+                   d_j = 25, 50, 100, 200, 400 um, w_j = d_j / 16,
                    s(u) = (1 + tanh u) / 2: layers of the bore
 =================  ==================================================  ==========
 
@@ -53,14 +53,13 @@ HARMONICS = 4       # angle: cos / sin of orders 1..HARMONICS
 DEGREE = 3          # the other variables: orders 1..DEGREE
 # Depth: the bore as layers whose wear coefficients differ (a coating, a
 # moulded skin, a transfer layer): a step of k at each of these depths,
-# spaced by sqrt 2 from 25 um (the scale of a transfer film or a moulded
-# skin) to 0.4 mm (the rig wears 0.45 mm in 21,400 cycles, Ch. 7), so that
-# an interface anywhere lies within 19 % of one.  A layer's interface is
-# sharp (a coating's is microns wide): each step is a sixteenth of its
-# depth wide, so k is near constant between two steps and a layer's step
-# deeper than the fit data reach stays at its prior mean, zero: below the
-# deepest data the last layer seen is held
-LAYERS = tuple(25e-6 * 2.0 ** (i / 2) for i in range(9))  # m, 25 um .. 0.4 mm
+# doubling from 25 um (the scale of a transfer film or a moulded skin) to
+# 0.4 mm (the rig wears 0.45 mm in 21,400 cycles, Ch. 7).  A layer's
+# interface is sharp (a coating's is microns wide): each step is a
+# sixteenth of its depth wide, so k is near constant between two steps and
+# a step deeper than the fit data reach stays at its prior mean, zero:
+# below the deepest data the last layer seen is held
+LAYERS = (25e-6, 50e-6, 100e-6, 200e-6, 400e-6)  # m
 LAYER_WIDTH = 1.0 / 16.0  # of the layer's depth
 # Pressure scale: 1 MPa, the reference of the pressure exponent (`effects.P_REF`).
 P_REF = 1.0e6  # Pa

@@ -47,7 +47,7 @@ DEFAULT_LOG_SCALE = 0.1  # tau of a fitted parameter without a stated std
 # Levenberg-Marquardt steps a fit may take per unknown where that exceeds the
 # fitter's ``max_steps`` (MINPACK's lmder allows 100 (n + 1) evaluations;
 # here each step is one exact Jacobian)
-STEPS_PER_UNKNOWN = 5
+STEPS_PER_UNKNOWN = 10
 # A shape is kept within this many prior spreads of its default (a factor
 # 1e4 either way for a decade prior): beyond, an effect has no shape left to
 # give (a film formed at once is a change of k)
@@ -357,8 +357,9 @@ class Fitter:
     discrepancy coefficient's prior spread, so the step tolerance ``xtol``
     reads "1 % of a spread".  A fit may take ``max_steps`` Levenberg-
     Marquardt steps, or `STEPS_PER_UNKNOWN` per unknown where that is more
-    (a nine-layer depth discrepancy descends a long valley: the coating
-    campaign's took 34 steps, and was dropped as failed at 30).
+    (a discrepancy of many coefficients can descend a long valley: on the
+    coating campaign the depth's, 7 unknowns, took 66 steps and was dropped
+    as failed at 30).
     """
 
     def __init__(self, problem: Problem, *, xtol=1e-2, ftol=1e-4, max_steps=30):

@@ -45,8 +45,9 @@ from .quasi_static import DEFAULT_STEPS, QuasiStaticRigHistory
 
 DEFAULT_LOG_SCALE = 0.1  # tau of a fitted parameter without a stated std
 # Levenberg-Marquardt steps a fit may take per unknown where that exceeds the
-# fitter's ``max_steps`` (MINPACK's lmder allows 100 (n + 1) evaluations;
-# here each step is one exact Jacobian)
+# fitter's ``max_steps`` (a budget that grows with the unknowns, as MINPACK's
+# lmder allows 100 (n + 1) evaluations): ten covers the slowest shipped fit,
+# the coating campaign's depth discrepancy (66 steps for 7 unknowns)
 STEPS_PER_UNKNOWN = 10
 # A shape is kept within this many prior spreads of its default (a factor
 # 1e4 either way for a decade prior): beyond, an effect has no shape left to

@@ -511,12 +511,7 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
             foresee(first.fit)
         if reference is not None:
             before, after = reference(base), reference(first.fit)
-            if math.isfinite(before) and not after < before:
-                first.qualifies = False
-                first.reasons.append(f"the dynamic model's chi2 rises ({before:.5g} -> "
-                                     f"{after:.5g}): the fitted model's own error")
-                log(f"+ {learned.label(first.effect)}: the dynamic model's chi2 rises "
-                    f"{before:.5g} -> {after:.5g}; not adopted")
+            if math.isfinite(before) and _held_back(first, before, after, log):
                 return Path(base, {}, [])
     current = first.fit
     adopted = {first.effect: first}
@@ -531,16 +526,10 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
             foresee(ranked[0].fit)
         if ranked and reference is not None:
             before = reference(current)
+            beside = " + ".join(learned.label(m) for m in _members(current))
             for a in ranked:
                 after = reference(a.fit)
-                beside = " + ".join(learned.label(m) for m in _members(current))
-                if not after < before:
-                    a.qualifies = False
-                    a.reasons.append(f"the dynamic model's chi2 rises ({before:.5g} -> "
-                                     f"{after:.5g}): the fitted model's own error")
-                    log(f"+ {learned.label(a.effect)} beside {beside}: the dynamic "
-                        f"model's chi2 rises {before:.5g} -> {after:.5g}; not adopted")
-                else:
+                if not _held_back(a, before, after, log, beside):
                     log(f"+ {learned.label(a.effect)} beside {beside}: the dynamic "
                         f"model's chi2 falls {before:.5g} -> {after:.5g}")
                     break
@@ -560,6 +549,21 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
         if best.effect in stage.dropped:
             break
     return Path(current, {e: adopted[e] for e in _members(current) if e in adopted}, stages)
+
+
+def _held_back(a: Assessment, before: float, after: float, log, beside: str = "") -> bool:
+    """Whether the dynamic model's fit-point chi-square fails to fall from
+    ``before`` to ``after`` with ``a``'s candidate added (``beside`` the
+    members already in the model); if so, ``a`` no longer qualifies, with
+    the reason, and the log says so."""
+    if after < before:
+        return False
+    a.qualifies = False
+    a.reasons.append(f"the dynamic model's chi2 rises ({before:.5g} -> {after:.5g}): the "
+                     "fitted model's own error")
+    log(f"+ {learned.label(a.effect)}{f' beside {beside}' if beside else ''}: the dynamic "
+        f"model's chi2 rises {before:.5g} -> {after:.5g}; not adopted")
+    return True
 
 
 @dataclass

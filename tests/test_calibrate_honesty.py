@@ -110,24 +110,108 @@ def test_a_first_member_that_raises_the_dynamic_models_chi2_is_not_adopted(monke
     # a later stage offers nothing: the path is its first member
     monkeypatch.setattr(identify, "_stage", lambda *a, **k: SimpleNamespace(
         assessed={}, added=None, dropped=()))
+    monkeypatch.setattr(identify, "criterion", lambda f: f.chi2_fit)
     lines = []
     a = first()
-    path = identify._grow(None, a, (), (), lines.append, lambda f: dynamic[id(f)], base=base)
+    path, = identify._grow(None, a, (), (), lines.append, lambda f: dynamic[id(f)], base=base)
     assert path.model is base and path.name == "none" and not a.qualifies
     assert "rises (1239.5 -> 1264.3)" in a.reasons[0] and "not adopted" in lines[0]
     dynamic[id(angle)] = 1200.0                                       # lowers both
     a = first()
-    path = identify._grow(None, a, (), (), lines.append, lambda f: dynamic[id(f)], base=base)
+    path, = identify._grow(None, a, (), (), lines.append, lambda f: dynamic[id(f)], base=base)
     assert path.model is angle and a.qualifies
     dynamic[id(base)], dynamic[id(angle)] = math.inf, 1264.3          # base not evaluable
-    path = identify._grow(None, first(), (), (), lines.append, lambda f: dynamic[id(f)],
+    path, = identify._grow(None, first(), (), (), lines.append, lambda f: dynamic[id(f)],
                           base=base)
     assert path.model is angle
     dynamic[id(base)] = 1239.5                                        # a library effect
     effect = SimpleNamespace(fit=angle, effect="pressure_exponent", qualifies=True, reasons=[])
-    path = identify._grow(None, effect, (), (), lines.append, lambda f: dynamic[id(f)],
+    path, = identify._grow(None, effect, (), (), lines.append, lambda f: dynamic[id(f)],
                           base=base)
     assert path.model is angle and effect.qualifies
+
+
+def test_two_additions_that_tie_are_each_grown_to_an_end(monkeypatch):
+    """Beside a discrepancy over the angle, a run-in and a transfer film
+    lower the criterion to within `AMBIGUITY` of each other: each opens a
+    branch, both ends come back (best first), and a third addition further
+    off does not; where the best addition stands alone, one path ends on
+    it, as greedy selection would."""
+    from types import SimpleNamespace
+
+    from diffwear.calibrate import identify
+
+    def fit(chi2, effects=(), discrepancy=None):
+        return SimpleNamespace(chi2_fit=chi2, effects=effects, discrepancy=discrepancy, notes={})
+
+    def grow(offers):
+        def stage(fitter, current, *a, **k):   # beside an effect, nothing more helps
+            assessed = {e: SimpleNamespace(effect=e, fit=f, criterion=f.chi2_fit,
+                                           qualifies=True, reasons=[])
+                        for e, f in offers.items() if not current.effects}
+            return identify.Stage([], assessed, {})
+
+        monkeypatch.setattr(identify, "_stage", stage)
+        monkeypatch.setattr(identify, "prune", lambda fitter, model, *a, **k: (model, {}, []))
+        monkeypatch.setattr(identify, "criterion", lambda f: f.chi2_fit)
+        lines: list = []
+        first = SimpleNamespace(effect="discrepancy:angle", fit=angle, qualifies=True, reasons=[])
+        return identify._grow(None, first, (), (), lines.append), lines
+
+    angle = fit(1980.6, discrepancy="angle")
+    offers = {"run_in": fit(1124.1, ("run_in",), "angle"),
+              "transfer_film": fit(1124.8, ("transfer_film",), "angle"),
+              "pressure_exponent": fit(1932.2, ("pressure_exponent",), "angle")}
+    ends, lines = grow(offers)
+    assert [p.name for p in ends] == ["run_in + discrepancy in the bushing angle",
+                                      "transfer_film + discrepancy in the bushing angle"]
+    assert [p.stages[0].added for p in ends] == ["run_in", "transfer_film"]
+    assert [p.stages[0].branches for p in ends] == [["transfer_film"], ["run_in"]]
+    assert {p.start for p in ends} == {"discrepancy:angle"}
+    assert any("run_in or transfer_film" in line and "each grown" in line for line in lines)
+    offers["transfer_film"] = fit(1124.1 + identify.AMBIGUITY, ("transfer_film",), "angle")
+    ends, lines = grow(offers)
+    assert [p.name for p in ends] == ["run_in + discrepancy in the bushing angle"]
+    assert not any("each grown" in line for line in lines)
+
+
+def test_a_tie_beside_a_shared_member_leaves_the_shared_member_adopted(monkeypatch):
+    """Two ends that tie (run-in or transfer film, each beside the angle's
+    discrepancy) make the answer "run_in or transfer_film": the member both
+    hold is adopted, and the answer is open only on the rest."""
+    from types import SimpleNamespace
+
+    from diffwear.calibrate import identify
+
+    def fit(chi2, effects=(), discrepancy=None):
+        return SimpleNamespace(chi2_fit=chi2, effects=effects, discrepancy=discrepancy, notes={})
+
+    base, angle = fit(68212.0), fit(1980.6, discrepancy="angle")
+    offers = {"run_in": fit(1124.1, ("run_in",), "angle"),
+              "transfer_film": fit(1124.8, ("transfer_film",), "angle")}
+
+    def stage(fitter, current, *a, **k):
+        if current is base:
+            found = {"discrepancy:angle": angle}
+        else:
+            found = {} if current.effects else offers
+        return identify.Stage([], {e: SimpleNamespace(effect=e, fit=f, criterion=f.chi2_fit,
+                                                      qualifies=True, reasons=[])
+                                   for e, f in found.items()}, {})
+
+    monkeypatch.setattr(identify, "_stage", stage)
+    monkeypatch.setattr(identify, "prune", lambda fitter, model, *a, **k: (model, {}, []))
+    monkeypatch.setattr(identify, "criterion", lambda f: f.chi2_fit)
+    monkeypatch.setattr(identify, "determined_numbers", lambda f: 2.0 * len(f.effects))
+    monkeypatch.setattr(identify, "forward_check", lambda *a, **k: None)
+    lines: list = []
+    sel = identify.select(None, base, (), (), None, lines.append)
+    a, b = sel.ambiguous
+    assert (a.model, b.model) == (offers["run_in"], offers["transfer_film"])
+    assert [m.effect for m in sel.adopted] == ["discrepancy:angle"]
+    assert sel.stages[0].added == "discrepancy:angle"      # the path's first member
+    assert identify._apart(a, {"discrepancy:angle"}) == "run_in"
+    assert any("cannot tell them apart" in line for line in lines)
 
 
 def test_grid_in_the_fit_window_does_not_depend_on_later_measurements():

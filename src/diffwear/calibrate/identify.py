@@ -38,6 +38,7 @@ the life and the next measurement.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -99,6 +100,9 @@ OCCAM_TOLERANCE = 0.5
 # criterion drop the best single effect gives
 PATHS = 3
 PATH_SHARE = 0.9
+# Additions within AMBIGUITY of a stage's best grown as branches of their own,
+# the best included: a tie is carried to the ends, where the models compete
+BRANCHES = 2
 # A refit's first start: the score test's Gauss-Newton step, at most this
 # many of the effect's scales (the step is linear; the model is not)
 FIRST_STEP_SCALES = 5.0
@@ -238,6 +242,7 @@ class Stage:
     added: str | None = None
     dropped: list = field(default_factory=list)
     ambiguous: tuple | None = None     # (Path, Path): two equally good models
+    branches: list = field(default_factory=list)   # as close as `added`: grown apart
 
 
 @dataclass
@@ -465,6 +470,7 @@ class Path:
     model: FitResult
     adopted: dict
     stages: list
+    start: str | None = None                 # its first member (None: held back)
     check: "PredictiveCheck | None" = None   # its prediction of the last fit inspection
 
     @property
@@ -489,18 +495,23 @@ def _improving(stage: Stage, current: FitResult) -> list:
 
 
 def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
-          reference=None, foresee=None, variables=(), base: FitResult | None = None) -> Path:
-    """Greedy forward selection from the one-candidate model ``first``: the
-    best qualifying addition (effect or discrepancy over one of
-    ``variables``) by the criterion at each stage, then the members already
-    in the model re-judged beside it; a member dropped is not offered again
-    on this path.  ``reference(fit) -> chi2`` (the dynamic model's fit-point
-    chi-square, evaluated, not refitted): an addition must lower it too,
-    else it stands for the fitted model's own error.  So must ``first`` from
-    ``base`` (the model without it) where ``first`` is a learned discrepancy
-    and the base's is finite: a path whose first member is a discrepancy
-    that raises it ends on ``base``.  (A first library effect is not held
-    back: its form is physics both models share, and where their pressure
+          reference=None, foresee=None, variables=(), base: FitResult | None = None) -> list:
+    """Forward selection from the one-candidate model ``first``: the best
+    qualifying addition (effect or discrepancy over one of ``variables``)
+    by the criterion at each stage, then the members already in the model
+    re-judged beside it; a member dropped is not offered again on this
+    path.  An addition within `AMBIGUITY` of the best opens a branch of its
+    own (at most `BRANCHES` at a stage): where two additions tie, the data
+    may still tell their models apart one stage on, and only comparing the
+    ends can say.  Returns every branch's `Path`, best criterion first.
+
+    ``reference(fit) -> chi2`` (the dynamic model's fit-point chi-square,
+    evaluated, not refitted): an addition must lower it too, else it stands
+    for the fitted model's own error.  So must ``first`` from ``base`` (the
+    model without it) where ``first`` is a learned discrepancy and the
+    base's is finite: a path whose first member is a discrepancy that raises
+    it ends on ``base``.  (A first library effect is not held back: its
+    form is physics both models share, and where their pressure
     distributions differ its dynamic chi-square can rise although it is the
     cause; a discrepancy can take any shape, the fitted model's error's
     too.)  ``foresee(fit)``: told the fits that check would evaluate
@@ -512,43 +523,79 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
         if reference is not None:
             before, after = reference(base), reference(first.fit)
             if math.isfinite(before) and _held_back(first, before, after, log):
-                return Path(base, {}, [])
-    current = first.fit
-    adopted = {first.effect: first}
-    stages: list = []
-    excluded: set = set()
-    while len(_members(current)) < MAX_EFFECTS:
-        stage = _stage(fitter, current, kinds, inspections, log, tuple(excluded), variables)
-        stages.append(stage)
-        ranked = _improving(stage, current)
-        if ranked and foresee is not None:
-            foresee(current)
-            foresee(ranked[0].fit)
-        if ranked and reference is not None:
-            before = reference(current)
-            beside = " + ".join(learned.label(m) for m in _members(current))
-            for a in ranked:
-                after = reference(a.fit)
-                if not _held_back(a, before, after, log, beside):
-                    log(f"+ {learned.label(a.effect)} beside {beside}: the dynamic "
-                        f"model's chi2 falls {before:.5g} -> {after:.5g}")
-                    break
-            ranked = [a for a in ranked if a.qualifies]
-        if not ranked:
-            break
-        best = ranked[0]
-        stage.added = best.effect
-        log(f"adopted beside {' + '.join(learned.label(m) for m in _members(current))}: "
-            f"{learned.label(best.effect)}")
-        current, judged, stage.dropped = prune(fitter, best.fit, inspections, log)
-        adopted[best.effect] = best
-        for e in stage.dropped:
-            adopted.pop(e, None)
-            excluded.add(e)
-        adopted.update(judged)
-        if best.effect in stage.dropped:
-            break
-    return Path(current, {e: adopted[e] for e in _members(current) if e in adopted}, stages)
+                return [Path(base, {}, [])]
+    # branches still to grow: (model, its members' assessments, stages, excluded)
+    def end(model, adopted, stages) -> Path:
+        return Path(model, {e: adopted[e] for e in _members(model) if e in adopted}, stages,
+                    first.effect)
+
+    todo: list[tuple] = [(first.fit, {first.effect: first}, [], frozenset())]
+    grown = {frozenset(_members(first.fit))}
+    ends = []
+    while todo:
+        current, adopted, stages, excluded = todo.pop(0)
+        if len(_members(current)) >= MAX_EFFECTS:
+            ends.append(end(current, adopted, stages))
+            continue
+        stage, ties = _additions(fitter, current, kinds, inspections, log, excluded, variables,
+                                 reference, foresee)
+        if not ties:
+            ends.append(end(current, adopted, [*stages, stage]))
+            continue
+        beside = " + ".join(learned.label(m) for m in _members(current))
+        if len(ties) > 1:
+            log(f"beside {beside}: " + " or ".join(learned.label(a.effect) for a in ties)
+                + f" (within {AMBIGUITY:g} in the criterion): each grown on a branch of its own")
+        for a in ties:
+            members = frozenset((*_members(current), a.effect))
+            if members in grown:
+                continue
+            grown.add(members)
+            branch = dataclasses.replace(stage, added=a.effect, dropped=[], branches=[
+                t.effect for t in ties if t is not a])
+            log(f"adopted beside {beside}: {learned.label(a.effect)}"
+                + (" (on a branch of its own)" if a is not ties[0] else ""))
+            model, judged, branch.dropped = prune(fitter, a.fit, inspections, log)
+            kept = {**adopted, a.effect: a}
+            for e in branch.dropped:
+                kept.pop(e, None)
+            kept.update(judged)
+            if a.effect in branch.dropped:   # the addition itself fell: the path ends
+                ends.append(end(model, kept, [*stages, branch]))
+                continue
+            todo.append((model, kept, [*stages, branch], excluded | set(branch.dropped)))
+    return sorted(ends, key=lambda p: p.criterion)
+
+
+def _additions(fitter: Fitter, current: FitResult, kinds, inspections, log, excluded,
+               variables, reference, foresee) -> tuple:
+    """One stage on top of ``current``: the stage, and the qualifying
+    additions that improve on it by the criterion, the best and those within
+    `AMBIGUITY` of it (at most `BRANCHES`), each passed by ``reference``
+    (`_grow`) where given."""
+    stage = _stage(fitter, current, kinds, inspections, log, tuple(excluded), variables)
+    ranked = _improving(stage, current)
+    if ranked and foresee is not None:
+        foresee(current)
+        for a in ranked[:BRANCHES]:
+            foresee(a.fit)
+    if ranked and reference is not None:
+        before = reference(current)
+        beside = " + ".join(learned.label(m) for m in _members(current))
+        passed: list = []
+        for a in ranked:
+            if passed and a.criterion - passed[0].criterion >= AMBIGUITY:
+                break
+            after = reference(a.fit)
+            if not _held_back(a, before, after, log, beside):
+                log(f"+ {learned.label(a.effect)} beside {beside}: the dynamic "
+                    f"model's chi2 falls {before:.5g} -> {after:.5g}")
+                passed.append(a)
+            if len(passed) == BRANCHES:
+                break
+        ranked = [a for a in ranked if a.qualifies]
+    ties = [a for a in ranked if a.criterion - ranked[0].criterion < AMBIGUITY][:BRANCHES]
+    return stage, ties
 
 
 def _held_back(a: Assessment, before: float, after: float, log, beside: str = "") -> bool:
@@ -568,9 +615,13 @@ def _held_back(a: Assessment, before: float, after: float, log, beside: str = ""
 
 @dataclass
 class _Grown:
-    path: Path
-    seen: set          # its log lines
+    paths: list        # the ends of one start's branches, best first
+    seen: set          # their log lines
     checked: bool      # grown with the dynamic model's check
+
+    @property
+    def criterion(self) -> float:
+        return self.paths[0].criterion
 
 
 def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
@@ -614,25 +665,26 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
                             seen, reference is None))
     while True:
         unchecked = [g for g in grown if not g.checked]
-        checked = [g.path.criterion for g in grown if g.checked]
-        if not unchecked or (checked and min(g.path.criterion for g in unchecked)
+        checked = [g.criterion for g in grown if g.checked]
+        if not unchecked or (checked and min(g.criterion for g in unchecked)
                              >= min(checked) + AMBIGUITY):
             break
-        g = min(unchecked, key=lambda g: g.path.criterion)
-        log(f"path {g.path.name}: checked on the dynamic model")
-        g.path = _grow(fitter, starts[grown.index(g)], kinds, inspections,
+        g = min(unchecked, key=lambda g: g.criterion)
+        log(f"path {g.paths[0].name}: checked on the dynamic model")
+        g.paths = _grow(fitter, starts[grown.index(g)], kinds, inspections,
                        lambda line, seen=g.seen: None if line in seen else log(line), reference,
                        variables=variables, base=base)
         g.checked = True
     paths: dict[tuple, Path] = {}
     trailing = []
     for g in grown:
-        if g.checked:
-            paths.setdefault(tuple(sorted(_members(g.path.model))), g.path)
-        else:
-            trailing.append(g.path)
-            log(f"path {g.path.name}: not checked on the dynamic model (criterion "
-                f"{g.path.criterion:.1f}, {AMBIGUITY:g} or more above the best checked path)")
+        for path in g.paths:
+            if g.checked:
+                paths.setdefault(tuple(sorted(_members(path.model))), path)
+            else:
+                trailing.append(path)
+                log(f"path {path.name}: not checked on the dynamic model (criterion "
+                    f"{path.criterion:.1f}, {AMBIGUITY:g} or more above the best checked path)")
     order = sorted(paths.values(), key=lambda p: p.criterion)
     # a model is an explanation only when it also predicts the last fit
     # inspection from the earlier ones (`validation`)
@@ -654,14 +706,17 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
     simplest = min(p.numbers for p in window)
     window = [p for p in window if p.numbers <= simplest + OCCAM_TOLERANCE]
     best = window[0]
-    stage1.added = _members(best.model)[0] if _members(best.model) else None
+    stage1.added = best.start
     stages = [stage1, *best.stages]
     if len(window) > 1:
         other = window[1]
         log(f"{best.name} or {other.name}: these data cannot tell them apart (criteria "
             f"{best.criterion:.1f} and {other.criterion:.1f})")
         stage1.ambiguous = (best, other)
-        return Selection(base, [], stages, (best, other), order)
+        # what both alternatives hold is adopted; the answer is open on the rest
+        shared = [best.adopted[e] for e in _members(best.model)
+                  if e in _members(other.model) and e in best.adopted]
+        return Selection(base, shared, stages, (best, other), order)
     others = sorted((p for p in (*order, *trailing) if p is not best), key=lambda p: p.criterion)
     log(f"selected: {best.name} (criterion {best.criterion:.1f}; other paths: "
         + (", ".join(f"{p.name} {p.criterion:.1f}" for p in others) or "none") + ")")
@@ -718,15 +773,21 @@ class Calibration:
         effects = [a.entry() for a in self.adopted]
         if sel is not None and sel.ambiguous is not None:
             a, b = sel.ambiguous
-            sentence = f"{a.name} or {b.name}: these data cannot tell them apart"
+            shared = set(_members(a.model)) & set(_members(b.model))
+            beside = " + ".join(learned.label(m) for m in _members(a.model) if m in shared)
+            sentence = (f"{_apart(a, shared)} or {_apart(b, shared)}"
+                        + (f" beside {beside}" if shared else "")
+                        + ": these data cannot tell them apart")
             separation = None if self.forecast is None else self.forecast.next_measurement
             if separation and "expected_separation_sigma" in separation:
                 sentence += "; " + separation["sentence"]
             effects.append({
-                "name": f"{a.name} or {b.name}", "ambiguous": True,
+                "name": f"{_apart(a, shared)} or {_apart(b, shared)}", "ambiguous": True,
+                "beside": [learned.label(m) for m in _members(a.model) if m in shared],
                 "alternatives": [{"name": p.name, "criterion": p.criterion,
                                   "effects": [x.entry() for e, x in p.adopted.items()
-                                              if learned.variable_of(e) is None],
+                                              if learned.variable_of(e) is None
+                                              and e not in shared],
                                   "discrepancy": p.model.discrepancy}
                                  for p in (a, b)],
                 "separating_measurement": separation, "sentence": sentence})
@@ -793,8 +854,13 @@ class Calibration:
         return _discrepancy(self) or {}
 
 
+def _apart(p: Path, shared) -> str:
+    """``p``'s name less the members it shares with its alternative."""
+    return " + ".join(learned.label(m) for m in _members(p.model) if m not in shared) or "none"
+
+
 def _stage_summary(st: Stage) -> dict:
-    return {"added": st.added, "dropped": st.dropped,
+    return {"added": st.added, "dropped": st.dropped, "branches": st.branches,
             "ambiguous": [p.name for p in st.ambiguous] if st.ambiguous else None,
             "candidates": {e: {"criterion": a.criterion, "qualifies": a.qualifies,
                                "reasons": a.reasons, "z": a.z,
@@ -1041,8 +1107,9 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
         forward_check(fitter, final) if _members(final) else None)
     explained = gof["consistent_with_noise"] and (prediction is None or prediction.predicts)
     unexplained = not explained
-    log(f"selected: {' + '.join(learned.label(m) for m in _members(chosen)) or 'no effect'}"
-        + (" (the residual stays unexplained)" if unexplained else ""))
+    answer = (" or ".join(p.name for p in sel.ambiguous) if sel.ambiguous is not None else
+              " + ".join(learned.label(m) for m in _members(chosen)) or "no effect")
+    log(f"selected: {answer}" + (" (the residual stays unexplained)" if unexplained else ""))
     suspects = []
     if ((not _members(chosen) or unexplained) and sel.ambiguous is None and problem.suspects
             and not too_few):

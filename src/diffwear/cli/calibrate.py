@@ -168,6 +168,9 @@ def _stage_line(k: int, st: dict) -> str:
             f"{', '.join(qualified) or 'none'}")
     if st.get("added"):
         text += f"; added **{learned.label(st['added'])}**"
+    if st.get("branches"):
+        text += (f" ({', '.join(learned.label(e) for e in st['branches'])} as close by the "
+                 "criterion: grown on a branch of its own)")
     if st.get("dropped"):
         text += (f"; dropped {', '.join(learned.label(e) for e in st['dropped'])} (no longer "
                  "qualifying beside the rest)")
@@ -481,7 +484,8 @@ def _effect_lines(summary: dict, library: Library = LIBRARY) -> list[str]:
     lines = [f"effect identified: **{summary['effect_identified']}**"]
     for e in effects:
         if e.get("ambiguous"):
-            lines.append(f"**{e['name']}**: these data cannot tell them apart; "
+            beside = f" beside {' + '.join(e['beside'])}" if e.get("beside") else ""
+            lines.append(f"**{e['name']}**{beside}: these data cannot tell them apart; "
                          + "; ".join(f"{a['name']}: "
                                      + ", ".join(_effect_text(x, library)
                                                  for x in a["effects"])

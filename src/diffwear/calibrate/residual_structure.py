@@ -1,6 +1,6 @@
 """Where a calibration's residual sits, in numbers.
 
-`residual_structure` measures the base fit's residual (in units of each
+`locate_residual` measures the base fit's residual (in units of each
 series' stated noise) by bushing angle, by cycle count and by harmonic order:
 the structure a missing effect leaves.  `residual_words` puts these numbers
 in words; `series_rms` gives each series' RMS residual before and after the
@@ -31,7 +31,7 @@ def _harmonics(angle, residual, orders) -> dict[int, float]:
     return {int(o): float(a) for o, a in zip(orders, amp)}
 
 
-def residual_structure(c: Calibration) -> dict:
+def locate_residual(c: Calibration) -> dict:
     """Where the base fit's residual sits: the numbers behind the report's
     "Residual structure" section and `describe_residuals`.
 

@@ -30,7 +30,7 @@ from ..calibrate.identify import (  # noqa: E402
     Calibration,
     calibrate,
 )
-from ..calibrate.residual_structure import residual_structure, series_rms
+from ..calibrate.residual_structure import locate_residual, series_rms
 from ..calibrate.residual_words import describe_residuals  # noqa: E402
 from ..io import OutputDir, Outputs  # noqa: E402
 from ..plots import calibration as plots_calibration
@@ -538,7 +538,7 @@ def run(data: Dataset, out: OutputDir, *, settings: ModelSettings | None = None,
     summary = c.summary()
     final = c.final or c.base
     summary["series_rms"] = series_rms(c, final)
-    structure = residual_structure(c)
+    structure = locate_residual(c)
     summary["residual_words"] = describe_residuals(c, structure)
     summary["frame_warnings"] = frame_warnings(c)
     for w in summary["frame_warnings"]:

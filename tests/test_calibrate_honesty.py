@@ -214,6 +214,32 @@ def test_a_tie_beside_a_shared_member_leaves_the_shared_member_adopted(monkeypat
     assert any("cannot tell them apart" in line for line in lines)
 
 
+def test_the_report_says_what_an_open_answer_stands_beside():
+    """The report's lines for an answer open on two effects beside a member
+    both alternatives hold, and for a stage whose runner-up grew a branch."""
+    from diffwear.cli.calibrate import _effect_lines, _stage_line
+
+    entry = {"name": "transfer_film", "strength": 0.5555, "strength_std": 0.007}
+    summary = {"effect_identified": "ambiguous", "effects_identified": [{
+        "name": "transfer_film or run_in", "ambiguous": True,
+        "beside": ["discrepancy in the bushing angle"],
+        "alternatives": [{"name": "transfer_film + discrepancy in the bushing angle",
+                          "effects": [entry]},
+                         {"name": "run_in + discrepancy in the bushing angle",
+                          "effects": [{**entry, "name": "run_in", "strength": 1.01,
+                                       "strength_std": 0.028}]}]}]}
+    line = _effect_lines(summary)[1]
+    assert line.startswith("**transfer_film or run_in** beside discrepancy in the bushing "
+                           "angle: these data cannot tell them apart; ")
+    assert "**run_in**, strength 1.01 +- 0.028" in line
+    stage = {"candidates": {"run_in": {"qualifies": True},
+                            "transfer_film": {"qualifies": True}},
+             "added": "transfer_film", "branches": ["run_in"]}
+    assert _stage_line(1, stage).endswith(
+        "added **transfer_film** (run_in as close by the criterion: grown on a branch of its "
+        "own)")
+
+
 def test_grid_in_the_fit_window_does_not_depend_on_later_measurements():
     """The nodes up to the fit window's end are the same whether the run ends
     there or goes on to held-out inspections (or a life); beyond, the steps

@@ -16,13 +16,15 @@ the life and the next measurement.
    (`selection.criterion`: no held-out term).  Members already in the model
    are re-judged in the joint fit and dropped if they no longer qualify.
    Paths grow from the best few single candidates (`PATHS`), the best
-   discrepancy among them.
+   discrepancy among them; an addition within `AMBIGUITY` of a stage's best
+   grows a branch of its own (`BRANCHES`), and every branch's end competes.
 3. Prediction inside the fit window (`validation.forward_check`): each
    path's model, refitted on the points before the window's last
    inspection, must predict that inspection; only predicting models
    compete, the fewest members first (Occam's window, `OCCAM_TOLERANCE`),
-   and a runner-up within `AMBIGUITY` makes the answer "A or B".  The held-
-   out points are read once, after the choice, for the before/after report.
+   and a runner-up within `AMBIGUITY` makes the answer "A or B" (what both
+   hold adopted, the answer open on the rest).  The held-out points are
+   read once, after the choice, for the before/after report.
 4. Goodness of fit: the chosen model must leave fit-point residuals
    consistent with the stated noise, chi2 <= dof + `GOF_SIGMAS` sqrt(2 dof);
    otherwise ``residual_unexplained`` is true.
@@ -524,11 +526,11 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
             before, after = reference(base), reference(first.fit)
             if math.isfinite(before) and _held_back(first, before, after, log):
                 return [Path(base, {}, [])]
-    # branches still to grow: (model, its members' assessments, stages, excluded)
     def end(model, adopted, stages) -> Path:
         return Path(model, {e: adopted[e] for e in _members(model) if e in adopted}, stages,
                     first.effect)
 
+    # branches still to grow: (model, its members' assessments, stages, excluded)
     todo: list[tuple] = [(first.fit, {first.effect: first}, [], frozenset())]
     grown = {frozenset(_members(first.fit))}
     ends = []
@@ -672,8 +674,8 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
         g = min(unchecked, key=lambda g: g.criterion)
         log(f"path {g.paths[0].name}: checked on the dynamic model")
         g.paths = _grow(fitter, starts[grown.index(g)], kinds, inspections,
-                       lambda line, seen=g.seen: None if line in seen else log(line), reference,
-                       variables=variables, base=base)
+                        lambda line, seen=g.seen: None if line in seen else log(line), reference,
+                        variables=variables, base=base)
         g.checked = True
     paths: dict[tuple, Path] = {}
     trailing = []
@@ -774,16 +776,16 @@ class Calibration:
         if sel is not None and sel.ambiguous is not None:
             a, b = sel.ambiguous
             shared = set(_members(a.model)) & set(_members(b.model))
-            beside = " + ".join(learned.label(m) for m in _members(a.model) if m in shared)
+            beside = [learned.label(m) for m in _members(a.model) if m in shared]
             sentence = (f"{_apart(a, shared)} or {_apart(b, shared)}"
-                        + (f" beside {beside}" if shared else "")
+                        + (f" beside {' + '.join(beside)}" if beside else "")
                         + ": these data cannot tell them apart")
             separation = None if self.forecast is None else self.forecast.next_measurement
             if separation and "expected_separation_sigma" in separation:
                 sentence += "; " + separation["sentence"]
             effects.append({
                 "name": f"{_apart(a, shared)} or {_apart(b, shared)}", "ambiguous": True,
-                "beside": [learned.label(m) for m in _members(a.model) if m in shared],
+                "beside": beside,
                 "alternatives": [{"name": p.name, "criterion": p.criterion,
                                   "effects": [x.entry() for e, x in p.adopted.items()
                                               if learned.variable_of(e) is None

@@ -217,7 +217,7 @@ def test_a_tie_beside_a_shared_member_leaves_the_shared_member_adopted(monkeypat
 def test_the_report_says_what_an_open_answer_stands_beside():
     """The report's lines for an answer open on two effects beside a member
     both alternatives hold, and for a stage whose runner-up grew a branch."""
-    from diffwear.cli.calibrate import _effect_lines, _stage_line
+    from diffwear.cli.calibrate import _effect_lines, _life_blocks, _stage_line
 
     entry = {"name": "transfer_film", "strength": 0.5555, "strength_std": 0.007}
     summary = {"effect_identified": "ambiguous", "effects_identified": [{
@@ -238,6 +238,59 @@ def test_the_report_says_what_an_open_answer_stands_beside():
     assert _stage_line(1, stage).endswith(
         "added **transfer_film** (run_in as close by the criterion: grown on a branch of its "
         "own)")
+    life = {"beyond_run": 0.0, "q05": 3.26e5, "median": 3.3e5, "q95": 4.1e5, "limit_mm": 6.342,
+            "run_to_cycles": 7.6e5, "horizon_cycles": 42800.0,
+            "depth_at_horizon": {"median": 0.93, "q05": 0.92, "q95": 0.95},
+            "models": [{"name": "transfer_film + discrepancy in the bushing angle",
+                        "weight": 0.77},
+                       {"name": "run_in + discrepancy in the bushing angle", "weight": 0.23}]}
+    text = _life_blocks({"life": life, "next_measurement": None})[0].blocks[0]
+    assert text.startswith("Over both explanations the data leave open")
+    assert text.endswith("transfer_film + discrepancy in the bushing angle 77 %, "
+                         "run_in + discrepancy in the bushing angle 23 %.")
+
+
+def test_an_open_answer_gives_the_life_over_both_models(monkeypatch):
+    """Two models the data leave open wear at 1 and at 0.5 um per 1,000
+    cycles: to a 0.1 mm limit, lives of 100,000 and 200,000 cycles.  The
+    life's band pools both posteriors by the models' weights: with the
+    second at 30 %, the median stays the first's life and the 95 % point is
+    the second's; with it at 70 %, the median moves to it; alone, the first
+    model's band is its own life only."""
+    from types import SimpleNamespace
+
+    from diffwear.calibrate import forecast as fc
+
+    n = np.linspace(0.0, 400e3, 4001)
+
+    class Extended:
+        depth_cycles = n
+        parts = {"depth": slice(0, n.size)}
+
+        def __init__(self, *a):
+            pass
+
+        def predictions(self, v):
+            return v[0] * n                      # depth [m] at a constant rate [m/cycle]
+
+    monkeypatch.setattr(fc, "_Extended", Extended)
+    monkeypatch.setattr(fc, "_first_estimate", lambda *a: 1e5)
+    monkeypatch.setattr(fc, "_next_measurement", lambda *a, **k: None)
+    data = SimpleNamespace(series=[])
+
+    def post(rate):
+        layout = SimpleNamespace(pack=lambda z: z)
+        return SimpleNamespace(fit=SimpleNamespace(notes={"layout": layout}),
+                               z=np.full((4, 1), rate), weights=np.full(4, 0.25))
+
+    fast, slow = post(1e-9), post(0.5e-9)
+    alone = fc.forecast(None, fast, data, 1e-4, 3e5).life
+    assert alone["q05"] == pytest.approx(1e5) and alone["q95"] == pytest.approx(1e5)
+    mixed = fc.forecast(None, fast, data, 1e-4, 3e5, other=(slow, 0.3)).life
+    assert mixed["q05"] == pytest.approx(1e5) and mixed["median"] == pytest.approx(1e5)
+    assert mixed["q95"] == pytest.approx(2e5)
+    assert fc.forecast(None, fast, data, 1e-4, 3e5, other=(slow, 0.7)).life[
+        "median"] == pytest.approx(2e5)
 
 
 def test_grid_in_the_fit_window_does_not_depend_on_later_measurements():

@@ -7,7 +7,11 @@ the fit window (`quasi_static.cycle_grid`), at every posterior draw
 (`posterior`): the cycle count at which the maximum wear depth reaches the
 limit, and the depth at the horizon, each with the draws' 90 % band.  A draw
 that does not reach the limit by the run's end is censored there (the band
-then reads "beyond").
+then reads "beyond").  When the answer is "A or B", the data have not chosen
+between two models, so neither's band alone is the life's: both are run,
+each on its own posterior's draws, and the draws are pooled with the models'
+weights exp(-criterion / 2), normalised (Bayesian model averaging with BIC
+weights: Hoeting, Madigan, Raftery and Volinsky, Stat. Sci. 14 (1999) 382).
 
 **The next measurement.**  Over the cycle counts up to the horizon, each
 kind of inspection the dataset holds (a worn profile at the dataset's
@@ -219,32 +223,37 @@ def _first_estimate(fitter: Fitter, fit: FitResult, limit: float) -> float:
 
 
 def forecast(fitter: Fitter, post: Posterior, data, limit: float, horizon: float,
-             alternatives: tuple | None = None) -> Forecast:
+             alternatives: tuple | None = None, other: tuple | None = None) -> Forecast:
     """The life to ``limit`` and the depth at ``horizon`` with their bands over
     the posterior ``post``, and the next measurement (module notes);
-    ``alternatives``: the two fits of an "A or B" answer."""
+    ``alternatives``: the two fits of an "A or B" answer; ``other``: the
+    second model's (posterior, weight), its draws pooled with ``post``'s
+    (weight 1 - weight)."""
     fit = post.fit
-    lay = fit.notes["layout"]
     estimate = _first_estimate(fitter, fit, limit)
     end = max(horizon, min(LIFE_MARGIN * estimate, 1e3 * horizon))
     candidates = np.linspace(horizon / CANDIDATES, horizon, CANDIDATES)
     profiles = [s for s in data.series if s.kind == "profile"]
     angles = np.asarray(profiles[-1].x, float) if profiles else None
     ext = _Extended(fitter, end, candidates, angles, data)
-    lives, depths, runs = [], [], []
+    lives, depths, runs, shares = [], [], [], []
     n = ext.depth_cycles
-    draws = _resampled(post, FORECAST_DRAWS)
-    for zi in draws:
-        d = ext.predictions(lay.pack(zi))[ext.parts["depth"]]
-        runs.append(d)
-        lives.append(_crossing(n, d, limit))
-        depths.append(float(np.interp(horizon, n, d)))
+    pooled = [(post, 1.0)] if other is None else [(post, 1.0 - other[1]), other]
+    for p, weight in pooled:
+        lay = p.fit.notes["layout"]
+        draws = _resampled(p, max(2, round(weight * FORECAST_DRAWS)))
+        for zi in draws:
+            d = ext.predictions(lay.pack(zi))[ext.parts["depth"]]
+            runs.append(d)
+            lives.append(_crossing(n, d, limit))
+            depths.append(float(np.interp(horizon, n, d)))
+            shares.append(weight / len(draws))
     runs_ = np.asarray(runs)
     ok = np.all(np.isfinite(runs_), axis=1)   # a draw whose run failed stands for nothing
     if not ok.any():
         raise SolverError("forecast: the model fails on every posterior draw past the campaign")
     runs_ = runs_[ok]
-    w = np.full(int(ok.sum()), 1.0 / int(ok.sum()))
+    w = np.asarray(shares)[ok] / np.sum(np.asarray(shares)[ok])
     trajectory = (n, *(np.array([_weighted_quantile(runs_[:, j], w, q)
                                  for j in range(n.size)])
                        for q in (0.5 * (1 - BAND), 0.5, 0.5 * (1 + BAND))))

@@ -1037,8 +1037,8 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
     final = c.final or c.base
     t0 = time.perf_counter()
     exact = getattr(fitter.problem.model, "name", "") == "quasi-static"
-    c.posterior = refined(fitter, posterior_of(fitter, final,
-                                               outlook.method if exact else "linear"), log)
+    method = outlook.method if exact else "linear"
+    c.posterior = refined(fitter, posterior_of(fitter, final, method), log)
     if c.posterior.fit is not final:   # the same model at a better minimum
         c.final = final = c.posterior.fit
         for a in (*c.adopted, *c.partial, *([c.discrepancy] if c.discrepancy else [])):
@@ -1055,12 +1055,19 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
     if limit is None:
         return
     sel = c.selection
-    alternatives = None
-    if sel is not None and sel.ambiguous is not None:
-        alternatives = (sel.ambiguous[0].model, sel.ambiguous[1].model)
+    alternatives = other = None
     t0 = time.perf_counter()
-    c.forecast = forecast(fitter, c.posterior, c.dataset, limit, horizon, alternatives)
+    if sel is not None and sel.ambiguous is not None:
+        first, second = sel.ambiguous
+        alternatives = (first.model, second.model)
+        # the data have not chosen: the life is over both, by their weights
+        weight = 1.0 / (1.0 + math.exp(0.5 * (second.criterion - first.criterion)))
+        other = (refined(fitter, posterior_of(fitter, second.model, method), log), weight)
+    c.forecast = forecast(fitter, c.posterior, c.dataset, limit, horizon, alternatives, other)
     life = c.forecast.life
+    if alternatives is not None and other is not None:
+        life["models"] = [{"name": first.name, "weight": 1.0 - other[1]},
+                          {"name": second.name, "weight": other[1]}]
     log(f"life to {limit * 1e3:g} mm: {life['median']:,.0f} cycles (90 %: {life['q05']:,.0f}"
         f"-{life['q95']:,.0f}); next measurement: "
         f"{(c.forecast.next_measurement or {}).get('sentence', 'none')} "

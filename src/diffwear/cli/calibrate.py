@@ -455,9 +455,13 @@ def _life_blocks(summary: dict) -> list[Block]:
     nxt = summary.get("next_measurement")
     if nxt:
         lines.append(f"the next measurement: {nxt['sentence']}")
-    return [Section("Life and the next measurement", [
-        "Under the chosen model (its effects and discrepancy included), over the "
-        "posterior's draws.", Bullets(lines)])]
+    models = life.get("models")
+    where = ("Under the chosen model (its effects and discrepancy included), over the "
+             "posterior's draws." if not models else
+             "Over both explanations the data leave open, each on its own posterior's draws, "
+             "pooled by the models' weights exp(-criterion / 2): "
+             + ", ".join(f"{m['name']} {100 * m['weight']:.0f} %" for m in models) + ".")
+    return [Section("Life and the next measurement", [where, Bullets(lines)])]
 
 
 def _shape_text(entry: dict, library: Library = LIBRARY) -> str:

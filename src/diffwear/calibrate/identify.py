@@ -356,6 +356,11 @@ def _members(model: FitResult) -> tuple:
             *((learned.candidate(model.discrepancy),) if model.discrepancy else ()))
 
 
+def _name(model: FitResult, leave=()) -> str:
+    """The members of ``model`` (less ``leave``) in words, joined by " + "."""
+    return " + ".join(learned.label(m) for m in _members(model) if m not in leave)
+
+
 def _without(model: FitResult, member: str) -> tuple:
     """(effects, discrepancy) of ``model`` less ``member``."""
     if learned.variable_of(member) is not None:
@@ -423,7 +428,7 @@ def _stage(fitter: Fitter, current: FitResult, kinds, inspections, log,
                               + _discrepancy_scores(fitter, current, variables, exclude))
     scores = current.notes[key]
     log(("scores" if not _members(current) else
-         f"scores beside {' + '.join(learned.label(m) for m in _members(current))}")
+         f"scores beside {_name(current)}")
         + ": " + ", ".join(f"{learned.label(s.effect)} {s.statistic:.3g}" for s in scores))
     stage = Stage(scores, {}, {})
     # at the first stage every effect with a positive score is refitted (a
@@ -485,7 +490,7 @@ class Path:
 
     @property
     def name(self) -> str:
-        return " + ".join(learned.label(m) for m in _members(self.model)) or "none"
+        return _name(self.model) or "none"
 
 
 def _improving(stage: Stage, current: FitResult) -> list:
@@ -544,7 +549,7 @@ def _grow(fitter: Fitter, first: Assessment, kinds, inspections, log,
         if not ties:
             ends.append(end(current, adopted, [*stages, stage]))
             continue
-        beside = " + ".join(learned.label(m) for m in _members(current))
+        beside = _name(current)
         if len(ties) > 1:
             log(f"beside {beside}: " + " or ".join(learned.label(a.effect) for a in ties)
                 + f" (within {AMBIGUITY:g} in the criterion): each grown on a branch of its own")
@@ -583,7 +588,7 @@ def _additions(fitter: Fitter, current: FitResult, kinds, inspections, log, excl
             foresee(a.fit)
     if ranked and reference is not None:
         before = reference(current)
-        beside = " + ".join(learned.label(m) for m in _members(current))
+        beside = _name(current)
         passed: list = []
         for a in ranked:
             if passed and a.criterion - passed[0].criterion >= AMBIGUITY:
@@ -858,7 +863,7 @@ class Calibration:
 
 def _apart(p: Path, shared) -> str:
     """``p``'s name less the members it shares with its alternative."""
-    return " + ".join(learned.label(m) for m in _members(p.model) if m not in shared) or "none"
+    return _name(p.model, shared) or "none"
 
 
 def _stage_summary(st: Stage) -> dict:
@@ -1117,7 +1122,7 @@ def _loop(data: Dataset, problem: Problem, fitter: Fitter, discrepancy: tuple,
     explained = gof["consistent_with_noise"] and (prediction is None or prediction.predicts)
     unexplained = not explained
     answer = (" or ".join(p.name for p in sel.ambiguous) if sel.ambiguous is not None else
-              " + ".join(learned.label(m) for m in _members(chosen)) or "no effect")
+              _name(chosen) or "no effect")
     log(f"selected: {answer}" + (" (the residual stays unexplained)" if unexplained else ""))
     suspects = []
     if ((not _members(chosen) or unexplained) and sel.ambiguous is None and problem.suspects

@@ -23,7 +23,12 @@ from diffwear.calibrate.fit import Fitter, ModelSettings, Problem  # noqa: E402
 from diffwear.calibrate.forecast import _crossing, check_request  # noqa: E402
 from diffwear.calibrate.learned import _turns, describe  # noqa: E402
 from diffwear.calibrate.model import rig_defaults  # noqa: E402
-from diffwear.calibrate.posterior import _mixture_quantile, _weighted_quantile  # noqa: E402
+from diffwear.calibrate.posterior import (  # noqa: E402
+    _mixture_quantile,
+    _weighted_quantile,
+    coverage,
+    predictive_band,
+)
 from diffwear.calibrate.quasi_static import cycle_grid  # noqa: E402
 from diffwear.calibrate.synthetic import Plan, synthesize  # noqa: E402
 from diffwear.calibrate.validation import forward_check  # noqa: E402
@@ -217,7 +222,7 @@ def test_a_tie_beside_a_shared_member_leaves_the_shared_member_adopted(monkeypat
 def test_the_report_says_what_an_open_answer_stands_beside():
     """The report's lines for an answer open on two effects beside a member
     both alternatives hold, and for a stage whose runner-up grew a branch."""
-    from diffwear.cli.calibrate import _effect_lines, _life_blocks, _stage_line
+    from diffwear.cli.calibrate import _effect_lines, _error_section, _life_blocks, _stage_line
 
     entry = {"name": "transfer_film", "strength": 0.5555, "strength_std": 0.007}
     summary = {"effect_identified": "ambiguous", "effects_identified": [{
@@ -248,6 +253,15 @@ def test_the_report_says_what_an_open_answer_stands_beside():
     assert text.startswith("Over both explanations the data leave open")
     assert text.endswith("transfer_film + discrepancy in the bushing angle 77 %, "
                          "run_in + discrepancy in the bushing angle 23 %.")
+    scores = {"heldout_rmse_before": 17.1, "heldout_rmse_after": 0.97, "fit_rmse_before": 9.0,
+              "fit_rmse_after": 1.0, "heldout_coverage": 0.9, "fit_coverage": 0.91,
+              "coverage_models": life["models"]}
+    said = _error_section(scores).blocks[0]
+    assert ("The two explanations' (pooled by their weights: transfer_film + discrepancy in "
+            "the bushing angle 77 %, run_in + discrepancy in the bushing angle 23 %) 90 % "
+            "predictive band (model and noise) holds 90 % of the held-out points") in said
+    said = _error_section({**scores, "coverage_models": None}).blocks[0]
+    assert "The final model's 90 % predictive band" in said
 
 
 def test_an_open_answer_gives_the_life_over_both_models(monkeypatch):
@@ -291,6 +305,32 @@ def test_an_open_answer_gives_the_life_over_both_models(monkeypatch):
     assert mixed["q95"] == pytest.approx(2e5)
     assert fc.forecast(None, fast, data, 1e-4, 3e5, other=(slow, 0.7)).life[
         "median"] == pytest.approx(2e5)
+
+
+def test_an_open_answers_band_pools_both_models_by_their_weights():
+    """Two models predict a point at 0 and at 10 (each one draw, noise sigma
+    1).  Pooled half and half, the components barely overlap, so the 90 %
+    band runs from the first's 10 % point to the second's 90 % point,
+    -1.2816 and 11.2816 (normal quantile of 0.1: 1.2815516); a measurement at
+    10 lies inside the pooled band and outside the first model's own."""
+    from types import SimpleNamespace
+
+    def post(mean):
+        return SimpleNamespace(residuals=np.array([[mean]]), weights=np.array([1.0]))
+
+    sigma, y = np.array([1.0]), np.array([0.0])
+    lo, hi = predictive_band(((post(0.0), 0.5), (post(10.0), 0.5)), sigma, y)
+    assert lo[0] == pytest.approx(-1.2815516, abs=1e-5)
+    assert hi[0] == pytest.approx(11.2815516, abs=1e-5)
+    # the data at 10: residuals are (model - data) / sigma
+    y10 = np.array([10.0])
+    first, second = post(-10.0), post(0.0)
+    rows = np.array([True])
+    assert coverage(((first, 1.0),), sigma, y10, rows) == 0.0
+    assert coverage(((first, 0.5), (second, 0.5)), sigma, y10, rows) == 1.0
+    # weight 0.9 on the first: the 95 % point is still in the second's body
+    lo, hi = predictive_band(((post(0.0), 0.9), (post(10.0), 0.1)), sigma, y)
+    assert hi[0] == pytest.approx(10.0, abs=1e-5)
 
 
 def test_grid_in_the_fit_window_does_not_depend_on_later_measurements():

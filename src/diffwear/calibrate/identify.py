@@ -55,7 +55,7 @@ from .fit import FitResult, Fitter, ModelSettings, Problem
 from .forecast import DEFAULT_OUTLOOK, Forecast, Outlook, forecast
 from .parameters import RIG_PARAMETERS, plausible_range
 from .plausibility import check_depths, unit_slips
-from .posterior import Posterior, refined
+from .posterior import Posterior, coverage, predictive_band, refined
 from .posterior import posterior as posterior_of
 from .reference import DynamicCheck
 from .scores import (
@@ -770,8 +770,32 @@ class Calibration:
     prediction: PredictiveCheck | None = None     # the final model's forward check
     without_discrepancy: FitResult | None = None  # the final model less its discrepancy
     posterior: Posterior | None = None
+    # an "A or B" answer: the second model's posterior and its weight
+    open_posterior: tuple[Posterior, float] | None = None
     coverage: dict = field(default_factory=dict)  # share of points inside the 90 % band
     forecast: Forecast | None = None
+
+    @property
+    def pool(self) -> tuple[tuple[Posterior, float], ...]:
+        """(posterior, weight) of each model the answer holds: the chosen
+        model's alone, or both of an "A or B" answer by their weights."""
+        if self.posterior is None:
+            return ()
+        if self.open_posterior is None:
+            return ((self.posterior, 1.0),)
+        return ((self.posterior, 1.0 - self.open_posterior[1]), self.open_posterior)
+
+    def pool_models(self) -> list[dict] | None:
+        """{name, weight} of each model `pool` holds when it holds two."""
+        if len(self.pool) < 2 or self.selection is None or self.selection.ambiguous is None:
+            return None
+        return [{"name": m.name, "weight": w}
+                for m, (_, w) in zip(self.selection.ambiguous, self.pool)]
+
+    def predictive_band(self):
+        """(lower, upper) 90 % predictive band of every point over `pool`."""
+        p = self.problem
+        return predictive_band(self.pool, p.sigma, p.y)
 
     def summary(self) -> dict:
         final = self.final or self.chosen
@@ -846,6 +870,7 @@ class Calibration:
             "posterior": None if self.posterior is None else self.posterior.entry(),
             "heldout_coverage": self.coverage.get("heldout"),
             "fit_coverage": self.coverage.get("fit"),
+            "coverage_models": self.pool_models(),
             "life": None if self.forecast is None else {
                 "limit_mm": self.forecast.limit * 1e3, **self.forecast.life,
                 "depth_at_horizon": self.forecast.depth,
@@ -1037,8 +1062,9 @@ def calibrate(data: Dataset, settings: ModelSettings | None = None, *,
 
 
 def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None:
-    """The chosen model's posterior, its predictive bands' coverage of the
-    held-out points, the life with its band and the next measurement."""
+    """The chosen model's posterior (and, for an "A or B" answer, the second
+    model's), the predictive bands' coverage of the held-out points, the life
+    with its band and the next measurement."""
     final = c.final or c.base
     t0 = time.perf_counter()
     exact = getattr(fitter.problem.model, "name", "") == "quasi-static"
@@ -1048,9 +1074,18 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
         c.final = final = c.posterior.fit
         for a in (*c.adopted, *c.partial, *([c.discrepancy] if c.discrepancy else [])):
             a.fit = final
+    sel = c.selection
+    alternatives = None
+    if sel is not None and sel.ambiguous is not None:
+        first, second = sel.ambiguous
+        alternatives = (first.model, second.model)
+        # the data have not chosen: the bands and the life are over both, by their weights
+        weight = 1.0 / (1.0 + math.exp(0.5 * (second.criterion - first.criterion)))
+        c.open_posterior = (refined(fitter, posterior_of(fitter, second.model, method), log),
+                            weight)
     p = c.problem
-    c.coverage = {"fit": c.posterior.coverage(p.sigma, p.y, ~p.holdout),
-                  "heldout": c.posterior.coverage(p.sigma, p.y, p.holdout)}
+    c.coverage = {"fit": coverage(c.pool, p.sigma, p.y, ~p.holdout),
+                  "heldout": coverage(c.pool, p.sigma, p.y, p.holdout)}
     d = c.posterior.diagnostics
     log(f"posterior ({c.posterior.method}): " + (
         f"Pareto k {d['pareto_k']:.2f}, ESS {d['ess']:.0f}" if "pareto_k" in d else
@@ -1059,20 +1094,12 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
     limit, horizon = outlook.resolved(c.dataset, p)
     if limit is None:
         return
-    sel = c.selection
-    alternatives = other = None
     t0 = time.perf_counter()
-    if sel is not None and sel.ambiguous is not None:
-        first, second = sel.ambiguous
-        alternatives = (first.model, second.model)
-        # the data have not chosen: the life is over both, by their weights
-        weight = 1.0 / (1.0 + math.exp(0.5 * (second.criterion - first.criterion)))
-        other = (refined(fitter, posterior_of(fitter, second.model, method), log), weight)
-    c.forecast = forecast(fitter, c.posterior, c.dataset, limit, horizon, alternatives, other)
+    c.forecast = forecast(fitter, c.posterior, c.dataset, limit, horizon, alternatives,
+                          c.open_posterior)
     life = c.forecast.life
-    if alternatives is not None and other is not None:
-        life["models"] = [{"name": first.name, "weight": 1.0 - other[1]},
-                          {"name": second.name, "weight": other[1]}]
+    if c.pool_models():
+        life["models"] = c.pool_models()
     log(f"life to {limit * 1e3:g} mm: {life['median']:,.0f} cycles (90 %: {life['q05']:,.0f}"
         f"-{life['q95']:,.0f}); next measurement: "
         f"{(c.forecast.next_measurement or {}).get('sentence', 'none')} "

@@ -39,6 +39,7 @@ measurement (model and noise) and any derived number (the life,
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import jax
@@ -98,26 +99,43 @@ class Posterior:
 
     def predictive_band(self, sigma: np.ndarray, y: np.ndarray, level: float = BAND):
         """(lower, upper) of the ``level`` predictive band of every point in
-        data units: the mixture over the draws of the model's prediction plus
-        the point's Gaussian noise."""
-        pred = self.residuals * sigma + y                   # (S, n)
-        lo = _mixture_quantile(pred, sigma, self.weights, 0.5 * (1.0 - level))
-        hi = _mixture_quantile(pred, sigma, self.weights, 0.5 * (1.0 + level))
-        return lo, hi
+        data units (`predictive_band` of this posterior alone)."""
+        return predictive_band(((self, 1.0),), sigma, y, level)
 
     def coverage(self, sigma, y, rows, level: float = BAND) -> float:
         """Share of the points ``rows`` inside their ``level`` predictive band."""
-        if not np.any(rows):
-            return math.nan
-        lo, hi = self.predictive_band(sigma, y, level)
-        inside = (y >= lo) & (y <= hi)
-        return float(np.mean(inside[rows]))
+        return coverage(((self, 1.0),), sigma, y, rows, level)
 
     def entry(self) -> dict:
         return {"method": self.method, "draws": int(self.z.shape[0]), "chains": self.chains,
                 "diagnostics": {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
                                 for k, v in self.diagnostics.items()},
                 "numbers": self.numbers()}
+
+
+def predictive_band(pool: Sequence[tuple[Posterior, float]], sigma: np.ndarray,
+                    y: np.ndarray, level: float = BAND):
+    """(lower, upper) of the ``level`` predictive band of every point in data
+    units: the mixture over the draws of the model's prediction plus the
+    point's Gaussian noise.  ``pool``: (posterior, weight) of each model the
+    answer holds open, their draws pooled by those weights (one model: weight 1)."""
+    pred = np.concatenate([p.residuals * sigma + y for p, _ in pool])   # (S, n)
+    w = np.concatenate([p.weights * weight for p, weight in pool])
+    w = w / np.sum(w)
+    lo = _mixture_quantile(pred, sigma, w, 0.5 * (1.0 - level))
+    hi = _mixture_quantile(pred, sigma, w, 0.5 * (1.0 + level))
+    return lo, hi
+
+
+def coverage(pool: Sequence[tuple[Posterior, float]], sigma: np.ndarray, y: np.ndarray,
+             rows: np.ndarray, level: float = BAND) -> float:
+    """Share of the points ``rows`` inside their ``level`` predictive band
+    over ``pool`` (`predictive_band`); NaN when ``rows`` holds none."""
+    if not np.any(rows):
+        return math.nan
+    lo, hi = predictive_band(pool, sigma, y, level)
+    inside = (y >= lo) & (y <= hi)
+    return float(np.mean(inside[rows]))
 
 
 def _weighted_summary(x: np.ndarray, w: np.ndarray) -> dict:

@@ -68,7 +68,7 @@ def _figures(c: Calibration, structure: dict) -> Outputs:
     members = _members_of(final)
     covered = _covered(final.discrepancy, c) if final.discrepancy is not None else None
     # the fits' series, the residuals and the force residual's spectrum
-    band = None if c.posterior is None else c.posterior.predictive_band(p.sigma, p.y)
+    band = None if c.posterior is None else c.predictive_band()
     fits = []
     for k, s in enumerate(c.dataset.series):
         m = which == k
@@ -126,7 +126,8 @@ def _figures(c: Calibration, structure: dict) -> Outputs:
             path, columns, post.weights, title_p))
     if f is not None and f.trajectory:
         files.figure("life.png", lambda path: plots_calibration.life(
-            path, f.trajectory, f.limit, deepest, f.horizon, (f.life["q05"], f.life["q95"])))
+            path, f.trajectory, f.limit, deepest, f.horizon, (f.life["q05"], f.life["q95"]),
+            [(m["name"], m["weight"]) for m in f.life.get("models", [])]))
         if f.scores:
             files.figure("next_measurement.png", lambda path: plots_calibration.next_measurement(
                 path, f.scores, ylabel, chosen))
@@ -230,7 +231,7 @@ def _report(c: Calibration, summary: dict, files: list[str], structure: dict) ->
         Bullets(_suspect_lines(summary)),
         f"How it was chosen: {summary['selection']['rule']}.",
     ]))
-    blocks.append(_error_section(c, summary))
+    blocks.append(_error_section(summary))
     blocks.append(_parameter_section(c, summary, final))
     blocks += _life_blocks(summary)
     candidates = []
@@ -351,7 +352,7 @@ def _limit_shape(effect: str, value: float, library: Library = LIBRARY) -> str:
     return f"{significant(value, 3)} {shape.unit}" if shape else significant(value, 3)
 
 
-def _error_section(c: Calibration, summary: dict) -> Section:
+def _error_section(summary: dict) -> Section:
     """The error before and after on the held-out points, which the choice did
     not see, and the predictive bands' coverage."""
     rows = [("held-out RMSE [sigma]", significant(summary["heldout_rmse_before"], 3),
@@ -362,7 +363,11 @@ def _error_section(c: Calibration, summary: dict) -> Section:
             "them is the error on data the answer did not see.")
     cov = summary.get("heldout_coverage")
     if cov is not None and cov == cov:
-        text += (f"  The final model's 90 % predictive band (model and noise) holds "
+        whose = ("final model's" if not summary.get("coverage_models") else
+                 "two explanations' (pooled by their weights: "
+                 + ", ".join(f"{m['name']} {100 * m['weight']:.0f} %"
+                             for m in summary["coverage_models"]) + ")")
+        text += (f"  The {whose} 90 % predictive band (model and noise) holds "
                  f"{100 * cov:.0f} % of the held-out points"
                  f" ({100 * summary['fit_coverage']:.0f} % of the fit points).")
     return Section("Before and after, on data the choice did not see",

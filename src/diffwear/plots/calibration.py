@@ -193,10 +193,11 @@ def posterior(path: Path, columns: dict, weights, title: str) -> Path:
 
 
 def life(path: Path, trajectory: tuple, limit: float, measured: Sequence[tuple],
-         horizon: float, life_band: tuple) -> Path:
+         horizon: float, life_band: tuple, models: Sequence[tuple[str, float]] = ()) -> Path:
     """The maximum wear depth with its 90 % band: over the campaign and its
     horizon beside the measured maxima (held-out ones open), and over the
-    whole life to the limit, with the life's band."""
+    whole life to the limit, with the life's band.  ``models``: (name,
+    weight) of each explanation whose draws were pooled, when more than one."""
     n, lo, mid, hi = (np.asarray(a, dtype=float) for a in trajectory)
     fig, (near, far) = plt.subplots(1, 2, figsize=(11.0, 3.8),
                                     gridspec_kw={"width_ratios": [1, 1.3]})
@@ -230,7 +231,10 @@ def life(path: Path, trajectory: tuple, limit: float, measured: Sequence[tuple],
                 labels.append(lab)
     far.legend(handles, labels, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0),
                borderaxespad=0.0)
-    fig.suptitle("Wear life: maximum depth over the posterior's draws", fontsize=11)
+    over = ("the posterior's draws" if len(models) < 2 else
+            "both explanations' draws, pooled: "
+            + ", ".join(f"{name} {100 * w:.0f} %" for name, w in models))
+    fig.suptitle(f"Wear life: maximum depth over {over}", fontsize=11)
     return _save(fig, path)
 
 

@@ -422,16 +422,12 @@ def test_shipped_campaigns(name, tmp_path):
     assert check["ok"] and check["chi2_fit"] > 0
 
 
-@pytest.mark.extended
-def test_mechanism_file_dataset_calibrates(tmp_path):
-    """A dataset pointing to the rig's mechanism file (the shipped rig.toml)
-    and fitting two of its numbers by path calibrates to the campaign's truth
-    (the file's 180-node grid and the law's default contact band against the
-    preset's 90 nodes and 1 um)."""
+def _file_dataset(folder):
+    """The guide-friction campaign on the shipped rig's mechanism file, two of
+    its numbers fitted by path (one written in mm^3/(N m), one in mm)."""
     import shutil
 
     src = SHIPPED / "synthetic_guide_friction"
-    folder = tmp_path / "file"
     folder.mkdir()
     for f in src.glob("*.csv"):
         shutil.copy(f, folder)
@@ -450,7 +446,28 @@ bushing_density = "2250 kg/m^3"
 "bodies.slider.mass" = {{}}
 
 {rest}""")
-    data = load_dataset(folder)
+    return load_dataset(folder)
+
+
+def test_a_mechanism_files_numbers_are_reported_in_the_units_the_dataset_wrote(tmp_path):
+    """1 m^3/(N m) is 1e9 mm^3/(N m), 1 m is 1e3 mm; a number written
+    without a unit is reported in SI."""
+    data = _file_dataset(tmp_path / "file")
+    k = "joints.crank_rod.wear.coefficient"
+    assert data.unit_of(k) == "mm^3/(N m)"
+    assert float(data.in_own_unit(k, 6.06e-13)) == pytest.approx(6.06e-4, rel=1e-12)
+    assert float(data.in_own_unit("forces.slider_spring.free_length", 0.5579)) == \
+        pytest.approx(557.9, rel=1e-12)
+    assert float(data.in_own_unit("bodies.slider.mass", 1.25)) == 1.25
+
+
+@pytest.mark.extended
+def test_mechanism_file_dataset_calibrates(tmp_path):
+    """A dataset pointing to the rig's mechanism file (the shipped rig.toml)
+    and fitting two of its numbers by path calibrates to the campaign's truth
+    (the file's 180-node grid and the law's default contact band against the
+    preset's 90 nodes and 1 um)."""
+    data = _file_dataset(tmp_path / "file")
     assert data.mechanism is not None and data.preset is None
     p = Problem.from_dataset(data, ModelSettings(steps=20))
     res = Fitter(p).fit(None)

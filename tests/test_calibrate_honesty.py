@@ -222,7 +222,13 @@ def test_a_tie_beside_a_shared_member_leaves_the_shared_member_adopted(monkeypat
 def test_the_report_says_what_an_open_answer_stands_beside():
     """The report's lines for an answer open on two effects beside a member
     both alternatives hold, and for a stage whose runner-up grew a branch."""
-    from diffwear.cli.calibrate import _effect_lines, _error_section, _life_blocks, _stage_line
+    from diffwear.calibrate.reporting import (
+        _effect_lines,
+        _error_section,
+        _life_blocks,
+        _stage_line,
+    )
+    from diffwear.report import markdown
 
     entry = {"name": "transfer_film", "strength": 0.5555, "strength_std": 0.007}
     summary = {"effect_identified": "ambiguous", "effects_identified": [{
@@ -233,7 +239,7 @@ def test_the_report_says_what_an_open_answer_stands_beside():
                          {"name": "run_in + discrepancy in the bushing angle",
                           "effects": [{**entry, "name": "run_in", "strength": 1.01,
                                        "strength_std": 0.028}]}]}]}
-    line = _effect_lines(summary)[1]
+    line = markdown(_effect_lines(summary)[1])
     assert line.startswith("**transfer_film or run_in** beside discrepancy in the bushing "
                            "angle: these data cannot tell them apart; ")
     assert "**run_in**, strength 1.01 +- 0.028" in line

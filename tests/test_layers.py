@@ -86,7 +86,8 @@ def test_no_module_getattr_import_tricks():
 # package or from a lower layer (peers in one layer do not import each other).
 LAYERS = (
     ("errors",),                          # the error classes
-    ("choices", "_checks", "io", "report", "gradient_check", "interrupt",  # options, outputs,
+    ("report",),                          # reports as data and their renderer
+    ("choices", "_checks", "io", "gradient_check", "interrupt",  # options, outputs,
      "worker", "progress"),               # worker processes, a long wait's progress line
     ("mechanism",),                       # bodies, joints, forces: the DAE's terms
     ("dynamics", "contact", "fem"),       # integration; contact laws; FEM contact

@@ -394,7 +394,7 @@ def test_calibration_fits_plot_angles_in_degrees(tmp_path):
     """The measured profile and force trace go to the plots in degrees (the
     command's unit table converts the datasets' radians): a full turn spans
     0..358 deg on axes labelled deg, the legends off the data."""
-    from diffwear.cli.calibrate import UNIT
+    from diffwear.calibrate.outputs import UNIT
 
     theta = 2 * np.pi * np.arange(180) / 180
     fits = []

@@ -2,7 +2,17 @@
 
 import pytest
 
-from diffwear.report import Bullets, Figure, Report, Section, Table, render
+from diffwear.report import (
+    Bullets,
+    Figure,
+    PlusMinus,
+    Report,
+    Section,
+    Significant,
+    Table,
+    Text,
+    render,
+)
 
 
 def test_render_writes_every_block_kind_once_in_order():
@@ -19,6 +29,25 @@ def test_render_writes_every_block_kind_once_in_order():
         "| joint | F [N] |\n|:---|---:|\n| crank\\|rod | 1.5 |\n| rod_slider | 2 |\n\n"
         "## Wear\n\n- a\n- b\n\n### Detail\n\n- **stop**\n\n"
         "![wear.png](wear.png)\n")
+
+
+def test_numbers_stay_numbers_until_the_report_is_rendered():
+    """A `Text` of strings and numbers, in a paragraph, a bullet and a cell,
+    reads as `significant` and `plus_minus` write them (hand-written here)."""
+    chi2 = Text(("chi2 ", Significant(1463.04, 5), " on 1443 dof"))
+    k = PlusMinus(6.0743e-13, 1.42e-15)
+    report = Report("Fit", [
+        chi2,
+        Text(()),                                     # an empty text is dropped
+        Bullets([Text(("k = ", k, " 1/Pa")), Text(("shape ", Significant(None, 3)))]),
+        Table(("number", "value"), [("k", k), ("ratio", Text((Significant(0.000123456, 3),
+                                                              "x")))]),
+    ])
+    # +- to the std's two digits, the value to the same decimal place (4 digits)
+    assert render(report) == (
+        "# Fit\n\nchi2 1463 on 1443 dof\n\n"
+        "- k = 6.074e-13 +- 1.4e-15 1/Pa\n- shape n/a\n\n"
+        "| number | value |\n|---|---|\n| k | 6.074e-13 +- 1.4e-15 |\n| ratio | 1.23e-04x |\n")
 
 
 def test_tables_refuse_ragged_rows_and_bad_alignment():

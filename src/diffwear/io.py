@@ -54,6 +54,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .errors import InputError, OutputError
+from .report import Report, render
 
 
 def _jsonable(value):
@@ -335,6 +336,10 @@ class OutputDir:
                 self.csv(name, payload)
             elif kind == "text":
                 self.text(name, payload() if callable(payload) else payload)
+            elif kind == "json":
+                self.json(name, payload)
+            elif kind == "report":
+                self.text(name, render(payload))
             else:  # a figure draws itself to the path it is given
                 payload(self.file(name))
 
@@ -356,6 +361,15 @@ class Outputs:
 
     def figure(self, name: str, draw: Callable[[Path], object]) -> str:
         return self._add(name, "figure", draw)
+
+    def report(self, name: str, report: Report) -> str:
+        """A `Report`, rendered to markdown when written."""
+        return self._add(name, "report", report)
+
+    def json(self, name: str, payload: Mapping) -> str:
+        """A JSON file; ``summary.json`` gathered last marks the run finished
+        once every file before it is written."""
+        return self._add(name, "json", payload)
 
     def extend(self, other: Outputs) -> None:
         self.items += other.items

@@ -1,7 +1,9 @@
 """Reports as data: a `Report` is a title and a list of blocks (paragraphs,
 `Table`, `Bullets`, `Figure`, nested `Section`); `render` writes the markdown
 of every ``report.md``.  A driver states what to report; how it looks is
-decided here, once.
+decided here, once.  A number may stay a number until then: `Significant`
+and `PlusMinus` in a `Text` (a paragraph, a bullet or a cell made of parts)
+or in a table's cell are written when the report is rendered.
 """
 
 from __future__ import annotations
@@ -9,6 +11,30 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Union
+
+
+@dataclass(frozen=True)
+class Significant:
+    """A number to ``digits`` significant digits (`significant`)."""
+
+    value: float | None
+    digits: int = 4
+
+
+@dataclass(frozen=True)
+class PlusMinus:
+    """A number with its uncertainty, ``value +- std`` (`plus_minus`)."""
+
+    value: float
+    std: float | None
+
+
+@dataclass(frozen=True)
+class Text:
+    """A paragraph, a bullet or a cell made of strings, numbers
+    (`Significant`, `PlusMinus`) and other `Text`, joined when rendered."""
+
+    parts: Sequence[Any]
 
 
 @dataclass(frozen=True)
@@ -33,7 +59,7 @@ class Table:
 class Bullets:
     """A bullet list; ``strong``: each item in bold (warnings, failures)."""
 
-    items: Sequence[str]
+    items: Sequence[str | Text]
     strong: bool = False
 
 
@@ -50,7 +76,7 @@ class Section:
     blocks: Sequence[Block] = field(default_factory=tuple)
 
 
-Block = Union[str, Table, Bullets, Figure, Section]
+Block = Union[str, Text, Table, Bullets, Figure, Section]
 
 
 @dataclass(frozen=True)
@@ -59,13 +85,24 @@ class Report:
     blocks: Sequence[Block] = field(default_factory=tuple)
 
 
+def _text(part: Any) -> str:
+    """A part of a report as it reads: numbers written, `Text` joined."""
+    if isinstance(part, Significant):
+        return significant(part.value, part.digits)
+    if isinstance(part, PlusMinus):
+        return plus_minus(part.value, part.std)
+    if isinstance(part, Text):
+        return "".join(_text(p) for p in part.parts)
+    return str(part)
+
+
 def _cell(value: Any) -> str:
-    return str(value).replace("|", "\\|").replace("\n", " ")
+    return _text(value).replace("|", "\\|").replace("\n", " ")
 
 
 def _block(block: Block, level: int) -> list[str]:
-    if isinstance(block, str):
-        return [block]
+    if isinstance(block, (str, Text)):
+        return [_text(block)]
     if isinstance(block, Table):
         rule = ([":---" if a == "l" else "---:" for a in block.align] if block.align
                 else ["---"] * len(block.header))
@@ -73,7 +110,8 @@ def _block(block: Block, level: int) -> list[str]:
                 "|" + "|".join(rule) + "|",
                 *("| " + " | ".join(_cell(c) for c in row) + " |" for row in block.rows)]
     if isinstance(block, Bullets):
-        return [f"- **{item}**" if block.strong else f"- {item}" for item in block.items]
+        return [f"- **{_text(item)}**" if block.strong else f"- {_text(item)}"
+                for item in block.items]
     if isinstance(block, Figure):
         return [f"![{block.file}]({block.file})"]
     if isinstance(block, Section):
@@ -84,7 +122,8 @@ def _block(block: Block, level: int) -> list[str]:
 def _blocks(blocks: Sequence[Block], level: int, heading: str) -> list[str]:
     lines = [heading]
     for b in blocks:
-        if (isinstance(b, str) and not b) or (isinstance(b, Bullets) and not b.items):
+        if (isinstance(b, (str, Text)) and not _text(b)) or (isinstance(b, Bullets)
+                                                              and not b.items):
             continue
         lines += ["", *_block(b, level)]
     return lines
@@ -100,10 +139,11 @@ def render(report: Report) -> str:
     return "\n".join(_blocks(report.blocks, 1, heading=f"# {report.title}")) + "\n"
 
 
-__all__ = ["Block", "Bullets", "Figure", "Report", "Section", "Table", "markdown", "render"]
+__all__ = ["Block", "Bullets", "Figure", "PlusMinus", "Report", "Section", "Significant",
+           "Table", "Text", "markdown", "render"]
 
 
-def significant(value: float, digits: int = 4) -> str:
+def significant(value: float | None, digits: int = 4) -> str:
     """``value`` to ``digits`` significant digits, in plain notation between
     1e-3 and 1e5 and scientific outside ("0.8647", "6.074e-04", "n/a")."""
     if value is None or not isinstance(value, (int, float)) or value != value:
@@ -115,7 +155,7 @@ def significant(value: float, digits: int = 4) -> str:
     return f"{value:.{digits - 1}e}"
 
 
-def plus_minus(value: float, std: float) -> str:
+def plus_minus(value: float, std: float | None) -> str:
     """``value +- std`` with the uncertainty to two significant digits and the
     value to the same decimal place ("6.074e-04 +- 1.4e-06", "0.55 +- 0.12")."""
     if std is None or not std > 0 or std != std or value != value:

@@ -90,6 +90,8 @@ class Parameter:
     suspect: bool = True
     # the unit the dataset wrote it in (reports use it; not part of its value)
     unit: str | None = field(default=None, compare=False)
+    # one SI unit of it in ``unit`` (found when the dataset loads)
+    per_si: float = field(default=1.0, compare=False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,10 +182,7 @@ class Dataset:
     def in_own_unit(self, name: str, values) -> np.ndarray:
         """``values`` of ``name`` (SI) in the unit `unit_of` gives."""
         p = self.parameters.get(name)
-        dim = PARAMETERS.get(name)
-        if p is not None and p.unit and dim:
-            return units.in_unit(1.0, p.unit, dim) * np.asarray(values)
-        return np.asarray(values)
+        return np.asarray(values) * (p.per_si if p is not None and p.unit else 1.0)
 
     def label(self, name: str) -> str:
         """``name`` with its unit, for a table's column or a figure's axis."""
@@ -502,9 +501,10 @@ def _parameters(ctx: Context, raw, mechanism=None) -> dict[str, Parameter]:
             raise ctx.error(f"{path}.value", "missing: a fitted parameter needs its starting "
                             "value", f"{name} = {{ value = ..., std = ..., fit = true }}")
         written = entry.get("value", entry.get("std"))
-        out[name] = Parameter(name, v["value"], v["std"], v["fit"], v["suspect"],
-                              units.unit_of(written, dimension)
-                              if isinstance(written, str) and dimension else None)
+        unit = (units.unit_of(written, dimension)
+                if isinstance(written, str) and dimension else None)
+        out[name] = Parameter(name, v["value"], v["std"], v["fit"], v["suspect"], unit,
+                              units.in_unit(1.0, unit, dimension) if unit and dimension else 1.0)
     if not any(p.fit for p in out.values()):
         given = ", ".join(out) or "(none)"
         rule = PARAMETER_RULE if mechanism is None else "numbers of the mechanism file by path"

@@ -102,10 +102,6 @@ class Posterior:
         data units (`predictive_band` of this posterior alone)."""
         return predictive_band(((self, 1.0),), sigma, y, level)
 
-    def coverage(self, sigma, y, rows, level: float = BAND) -> float:
-        """Share of the points ``rows`` inside their ``level`` predictive band."""
-        return coverage(((self, 1.0),), sigma, y, rows, level)
-
     def entry(self) -> dict:
         return {"method": self.method, "draws": int(self.z.shape[0]), "chains": self.chains,
                 "diagnostics": {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)

@@ -263,9 +263,9 @@ def test_the_report_says_what_an_open_answer_stands_beside():
               "fit_rmse_after": 1.0, "heldout_coverage": 0.9, "fit_coverage": 0.91,
               "coverage_models": life["models"]}
     said = _error_section(scores).blocks[0]
-    assert ("The two explanations' (pooled by their weights: transfer_film + discrepancy in "
-            "the bushing angle 77 %, run_in + discrepancy in the bushing angle 23 %) 90 % "
-            "predictive band (model and noise) holds 90 % of the held-out points") in said
+    assert ("The 90 % predictive band (model and noise) over both explanations, pooled by "
+            "their weights (transfer_film + discrepancy in the bushing angle 77 %, run_in + "
+            "discrepancy in the bushing angle 23 %), holds 90 % of the held-out points") in said
     said = _error_section({**scores, "coverage_models": None}).blocks[0]
     assert "The final model's 90 % predictive band" in said
 

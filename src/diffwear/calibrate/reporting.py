@@ -235,12 +235,12 @@ def _error_section(summary: dict) -> Section:
             "them is the error on data the answer did not see.")
     cov = summary.get("heldout_coverage")
     if cov is not None and cov == cov:
-        whose = ("final model's" if not summary.get("coverage_models") else
-                 "two explanations' (pooled by their weights: "
-                 + ", ".join(f"{m['name']} {100 * m['weight']:.0f} %"
-                             for m in summary["coverage_models"]) + ")")
-        text += (f"  The {whose} 90 % predictive band (model and noise) holds "
-                 f"{100 * cov:.0f} % of the held-out points"
+        models = summary.get("coverage_models")
+        whose = ("The final model's 90 % predictive band (model and noise)" if not models else
+                 "The 90 % predictive band (model and noise) over both explanations, pooled "
+                 "by their weights (" + ", ".join(f"{m['name']} {100 * m['weight']:.0f} %"
+                                                  for m in models) + "),")
+        text += (f"  {whose} holds {100 * cov:.0f} % of the held-out points"
                  f" ({100 * summary['fit_coverage']:.0f} % of the fit points).")
     return Section("Before and after, on data the choice did not see",
                    [text, Table(("", "base model", "final model"), rows)])

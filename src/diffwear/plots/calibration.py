@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -234,7 +235,9 @@ def life(path: Path, trajectory: tuple, limit: float, measured: Sequence[tuple],
     over = ("the posterior's draws" if len(models) < 2 else
             "both explanations' draws, pooled: "
             + ", ".join(f"{name} {100 * w:.0f} %" for name, w in models))
-    fig.suptitle(f"Wear life: maximum depth over {over}", fontsize=11)
+    # a long pair of model names goes on a second line rather than off the figure
+    fig.suptitle("\n".join(textwrap.wrap(f"Wear life: maximum depth over {over}", 100)),
+                 fontsize=11)
     return _save(fig, path)
 
 

@@ -50,7 +50,7 @@ from ..mechanism_file import (
 from ..mechanism_file import wear as mechanism_wear
 from ..models.execution import Checkpoints
 from ..progress import progress_line
-from ..report import Block, Bullets, Figure, Report, Section, Table, render
+from ..report import Block, Bullets, Figure, Report, Section, Table
 from ..wear.status import RESULTS, message
 from ..wear.status import name as status_name
 from . import objects
@@ -186,7 +186,7 @@ def write(mfile: MechanismFile, r: Results, out: OutputDir, *, steps: int, simul
     summary["compile_time_s"] = compile_time
     summary["run_time_s"] = wall - compile_time
     report = _report(mfile, summary, figures)
-    files.text("report.md", lambda: render(report))
+    files.report("report.md", report)
     out.write(files)
     out.json("summary.json", summary)
     fatal = [w for w, is_fatal in warnings if is_fatal]

@@ -213,10 +213,11 @@ def _calibration_table() -> str:
                     f"{chi2} | {s['wall_time_s']:.0f} s |")
     return "\n".join(rows) + (
         "\n\nLife: the median and the 90 % band of the cycles until the maximum depth "
-        "reaches the bushing wall, under the chosen model.  Wall times: the whole loop incl. "
-        "compilation, the posterior, the life and the dynamic check, measured with other "
-        "jobs sharing the 2 CPUs; the benchmark cases `calibration loop` time a campaign "
-        "alone.")
+        "reaches the bushing wall, under the chosen model (under both, their draws pooled "
+        "by their weights, where the answer is open; so is the band's coverage).  Wall "
+        "times: the whole loop incl. compilation, the posterior, the life and the dynamic "
+        "check, measured with other jobs sharing the 2 CPUs; the benchmark cases "
+        "`calibration loop` time a campaign alone.")
 
 
 # Stored calibration runs whose figures the calibration guide shows (served

@@ -12,6 +12,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from calibration_answers import answer_entry
 
 from diffwear.calibrate import load_dataset
 from diffwear.calibrate.effects import (
@@ -380,22 +381,6 @@ def _make_datasets():
     return make
 
 
-def _answer_entry(summary: dict, effect: str) -> dict:
-    """``effect``'s entry in a calibration's answer: the effect named, or one
-    side of an "A or B" answer that names the inspection separating them."""
-    for e in summary["effects_identified"]:
-        if e.get("ambiguous"):
-            assert summary["next_measurement"]["expected_separation_sigma"] > 0
-            for a in e["alternatives"]:
-                for x in a["effects"]:
-                    if x["name"] == effect:
-                        return x
-        elif e["name"] == effect:
-            assert summary["effect_identified"] == effect
-            return e
-    raise AssertionError(f"{effect} is not in the answer: {summary['effects_identified']}")
-
-
 @pytest.mark.long  # the shipped campaigns take one to two minutes each
 @pytest.mark.parametrize("name", ["synthetic_run_in", "synthetic_pressure_exponent",
                                   "synthetic_creep", "synthetic_guide_friction",
@@ -426,7 +411,7 @@ def test_shipped_campaigns(name, tmp_path):
         # named, or one side of an "A or B" answer with the inspection that
         # would separate them (the fit data alone may leave it open)
         k = int(np.argmax(np.abs(np.asarray(effects.strength))))
-        entry = _answer_entry(s, NAMES[k])
+        entry = answer_entry(s, NAMES[k])
         assert abs(entry["strength"] - float(effects.strength[k])) <= 2 * entry["strength_std"]
         if EFFECTS[k].shape is not None:
             true_shape = float(effects.shape(NAMES[k]))

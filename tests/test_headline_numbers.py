@@ -9,6 +9,7 @@ import re
 from pathlib import Path
 
 import pytest
+from calibration_answers import answer_entry
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
@@ -78,25 +79,11 @@ def test_design_row_is_the_stored_run():
     assert seconds == pytest.approx(DESIGN["total_wall_time_s"], abs=5.0)
 
 
-def _named(summary: dict, effect: str) -> dict:
-    """The entry of ``effect`` in a calibration's answer: named, or one side
-    of an "A or B" answer that names the inspection separating them."""
-    for e in summary["effects_identified"]:
-        if e.get("ambiguous"):
-            assert summary["next_measurement"]["expected_separation_sigma"] > 0
-            found = [x for a in e["alternatives"] for x in a["effects"] if x["name"] == effect]
-            if found:
-                return found[0]
-        elif e["name"] == effect:
-            return e
-    raise AssertionError(f"{effect} is not in the answer: {summary['effects_identified']}")
-
-
 def test_calibration_row_is_the_stored_runs():
     strength, spread, scale, truth, truth_scale, seconds = _numbers(
         _cell("Calibration of a 21,400-cycle campaign"))[:6]
     run = json.loads((CALIBRATION_RESULTS / "campaign_slow_run_in" / "summary.json").read_text())
-    run_in = _named(run, "run_in")
+    run_in = answer_entry(run, "run_in")
     assert strength == round(run_in["strength"], 2)
     assert spread == round(run_in["strength_std"], 2)
     assert scale == round(run_in["shape"], -1)

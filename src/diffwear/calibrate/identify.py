@@ -1098,8 +1098,9 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
     c.forecast = forecast(fitter, c.posterior, c.dataset, limit, horizon, alternatives,
                           c.open_posterior)
     life = c.forecast.life
-    if c.pool_models():
-        life["models"] = c.pool_models()
+    models = c.pool_models()
+    if models:
+        life["models"] = models
     log(f"life to {limit * 1e3:g} mm: {life['median']:,.0f} cycles (90 %: {life['q05']:,.0f}"
         f"-{life['q95']:,.0f}); next measurement: "
         f"{(c.forecast.next_measurement or {}).get('sentence', 'none')} "

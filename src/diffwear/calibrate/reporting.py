@@ -238,12 +238,16 @@ def _error_section(summary: dict) -> Section:
         models = summary.get("coverage_models")
         whose = ("The final model's 90 % predictive band (model and noise)" if not models else
                  "The 90 % predictive band (model and noise) over both explanations, pooled "
-                 "by their weights (" + ", ".join(f"{m['name']} {100 * m['weight']:.0f} %"
-                                                  for m in models) + "),")
+                 f"by their weights ({_weights_words(models)}),")
         text += (f"  {whose} holds {100 * cov:.0f} % of the held-out points"
                  f" ({100 * summary['fit_coverage']:.0f} % of the fit points).")
     return Section("Before and after, on data the choice did not see",
                    [text, Table(("", "base model", "final model"), rows)])
+
+
+def _weights_words(models: list[dict]) -> str:
+    """The models an open answer pools, with their weights ("A 77 %, B 23 %")."""
+    return ", ".join(f"{m['name']} {100 * m['weight']:.0f} %" for m in models)
 
 
 def _parameter_section(c: Calibration, summary: dict) -> Section:
@@ -335,7 +339,7 @@ def _life_blocks(summary: dict) -> list[Block]:
              "posterior's draws." if not models else
              "Over both explanations the data leave open, each on its own posterior's draws, "
              "pooled by the models' weights exp(-criterion / 2): "
-             + ", ".join(f"{m['name']} {100 * m['weight']:.0f} %" for m in models) + ".")
+             + _weights_words(models) + ".")
     return [Section("Life and the next measurement", [where, Bullets(lines)])]
 
 

@@ -304,12 +304,12 @@ def test_an_open_answer_gives_the_life_over_both_models(monkeypatch):
                                z=np.full((4, 1), rate), weights=np.full(4, 0.25))
 
     fast, slow = post(1e-9), post(0.5e-9)
-    alone = fc.forecast(None, fast, data, 1e-4, 3e5).life
+    alone = fc.forecast(None, ((fast, 1.0),), data, 1e-4, 3e5).life
     assert alone["q05"] == pytest.approx(1e5) and alone["q95"] == pytest.approx(1e5)
-    mixed = fc.forecast(None, fast, data, 1e-4, 3e5, other=(slow, 0.3)).life
+    mixed = fc.forecast(None, ((fast, 0.7), (slow, 0.3)), data, 1e-4, 3e5).life
     assert mixed["q05"] == pytest.approx(1e5) and mixed["median"] == pytest.approx(1e5)
     assert mixed["q95"] == pytest.approx(2e5)
-    assert fc.forecast(None, fast, data, 1e-4, 3e5, other=(slow, 0.7)).life[
+    assert fc.forecast(None, ((fast, 0.3), (slow, 0.7)), data, 1e-4, 3e5).life[
         "median"] == pytest.approx(2e5)
 
 

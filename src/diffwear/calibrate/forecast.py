@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -222,14 +223,14 @@ def _first_estimate(fitter: Fitter, fit: FitResult, limit: float) -> float:
     return float(seen[-1] + max(limit - deepest[-1], 0.0) / rate)
 
 
-def forecast(fitter: Fitter, post: Posterior, data, limit: float, horizon: float,
-             alternatives: tuple | None = None, other: tuple | None = None) -> Forecast:
-    """The life to ``limit`` and the depth at ``horizon`` with their bands over
-    the posterior ``post``, and the next measurement (module notes);
-    ``alternatives``: the two fits of an "A or B" answer; ``other``: the
-    second model's (posterior, weight), its draws pooled with ``post``'s
-    (weight 1 - weight)."""
-    fit = post.fit
+def forecast(fitter: Fitter, pool: Sequence[tuple[Posterior, float]], data, limit: float,
+             horizon: float, alternatives: tuple | None = None) -> Forecast:
+    """The life to ``limit`` and the depth at ``horizon`` with their bands, and
+    the next measurement (module notes).  ``pool``: (posterior, weight) of
+    each model the answer holds (`Calibration.pool`: the chosen model's
+    alone, or both of an "A or B" answer), their draws pooled by the weights;
+    ``alternatives``: the two fits of an "A or B" answer."""
+    fit = pool[0][0].fit
     estimate = _first_estimate(fitter, fit, limit)
     end = max(horizon, min(LIFE_MARGIN * estimate, 1e3 * horizon))
     candidates = np.linspace(horizon / CANDIDATES, horizon, CANDIDATES)
@@ -238,8 +239,7 @@ def forecast(fitter: Fitter, post: Posterior, data, limit: float, horizon: float
     ext = _Extended(fitter, end, candidates, angles, data)
     lives, depths, runs, shares = [], [], [], []
     n = ext.depth_cycles
-    pooled = [(post, 1.0)] if other is None else [(post, 1.0 - other[1]), other]
-    for p, weight in pooled:
+    for p, weight in pool:
         lay = p.fit.notes["layout"]
         draws = _resampled(p, max(2, round(weight * FORECAST_DRAWS)))
         for zi in draws:

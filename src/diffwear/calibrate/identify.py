@@ -1095,8 +1095,7 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
     if limit is None:
         return
     t0 = time.perf_counter()
-    c.forecast = forecast(fitter, c.posterior, c.dataset, limit, horizon, alternatives,
-                          c.open_posterior)
+    c.forecast = forecast(fitter, c.pool, c.dataset, limit, horizon, alternatives)
     life = c.forecast.life
     models = c.pool_models()
     if models:

@@ -419,6 +419,26 @@ def test_deleting_the_held_out_series_leaves_every_fit_unchanged(small, tmp_path
 
 
 @pytest.mark.extended  # compiles the small campaign's model (a minute)
+def test_only_a_discrepancy_that_trades_with_k_along_a_valley_loses_that_direction(small):
+    """Over the worn arc the angle's Fourier terms hold a near-constant, which
+    trades with k along a curved valley: that direction is taken out of the
+    fit, and it is the one along which delta acts like k (its effect over
+    the fit points within 1e-3 of k's in angle).  A trend in the cycle count
+    acts unlike k: the data see it apart from k, and nothing is taken out."""
+    from diffwear.calibrate.fit import Layout
+
+    data, fitter, base = small
+    u = fitter.k_direction("angle")
+    assert u is not None and np.linalg.norm(u) == pytest.approx(1.0, rel=1e-12)
+    lay = Layout.of(fitter, (), "angle", constrained=False)
+    rows = ~fitter.problem.holdout
+    jac = fitter.linearise(lay.pack(lay.start(None, 0.0, 0.0, base)), lay.tangents).jac[rows]
+    along, jk = jac[:, fitter.problem.n_base:] @ u, jac[:, fitter.k_index]
+    assert abs(along @ jk) / (np.linalg.norm(along) * np.linalg.norm(jk)) > 1 - 1e-3
+    assert fitter.k_direction("cycles") is None
+
+
+@pytest.mark.extended  # compiles the small campaign's model (a minute)
 def test_identified_k_is_orthogonal_to_the_discrepancy_and_keeps_its_uncertainty(small, lobes):
     """Beside the learned discrepancy the reported k is the identified one:
     in its coordinates every discrepancy direction is orthogonal to k's over

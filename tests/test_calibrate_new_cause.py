@@ -134,15 +134,16 @@ def test_a_new_discrepancy_variable_is_fitted_and_described(grease_campaign):
     before = f.fit(None)
     res = f.fit(None, discrepancy="volume")
     assert res.discrepancy == "volume"
-    # noise-free data: the base model misses them by 0.7 sigma RMS; the
-    # discrepancy, held orthogonal to k's direction (`Fitter.k_direction`),
-    # takes most of that away
-    assert res.chi2_fit < 0.15 * before.chi2_fit
-    # and predicts the held-out inspections better than the base model
-    assert res.chi2_holdout < 0.25 * before.chi2_holdout
+    # noise-free data: the base model misses them by 0.7 sigma RMS.  A trend
+    # in the worn volume acts unlike k over the data, so no direction of its
+    # coefficients is taken out to keep k identified (`Fitter.k_direction`):
+    # the discrepancy reaches the truth and takes the misfit away
+    assert f.k_direction("volume") is None
+    assert res.chi2_fit < 1e-3 * before.chi2_fit
+    # and predicts the held-out inspections as well
+    assert res.chi2_holdout < 1e-3 * before.chi2_holdout
     # k (1 + delta) rises with the worn volume as the truth's does, within
-    # 15 % of it over the volumes the fit window reaches (the constraint
-    # against k leaves the truth just out of reach)
+    # 1 % of it over the volumes the fit window reaches
     (weighed,) = [s for s in grease_campaign.series if s.kind == "volume"]
     v = np.linspace(0.1, 1.0, 10) * float(np.max(weighed.y[~weighed.holdout]))
     phi = np.asarray(WornVolume().basis(jnp.asarray(v)))
@@ -151,7 +152,7 @@ def test_a_new_discrepancy_variable_is_fitted_and_described(grease_campaign):
     c = np.asarray(res.discrepancy_coefficients)
     rate = k * (1 + phi @ c)
     assert rate[-1] > 1.3 * rate[0]
-    np.testing.assert_allclose(rate, k0 * (1 + phi @ coef), rtol=0.15)
+    np.testing.assert_allclose(rate, k0 * (1 + phi @ coef), rtol=0.01)
     b = np.asarray(res.notes["log_k_per_coefficient"])
     words = learned.describe("volume", c, res.discrepancy_cov, grease_campaign, b,
                              LIBRARY_PLUS)

@@ -423,6 +423,27 @@ def test_calibration_fits_plot_angles_in_degrees(tmp_path):
     assert max(ax.get_lines()[0].get_xdata()) == pytest.approx(358.0)
 
 
+def test_a_pooled_band_says_so_in_the_legend(tmp_path):
+    """An open answer's band pools both models while the line is the first
+    model's: the legend says both, and the band spans the given bounds."""
+    x = np.linspace(0.0, 10.0, 11)
+    y = np.ones(11)
+    f = plots_calibration.SeriesFit(
+        name="worn_volume", kind="volume", unit="mm^3", xlabel="cycles", scale=1.0, x=x, y=y,
+        sigma=0.1, holdout=np.zeros(11, bool), base=y, chosen=1.1 * y,
+        chosen_label="with run_in (the first of two explanations)", cycles=None,
+        band=(y - 0.5, y + 2.0), band_label="90 % predictive band, pooled over both")
+    with plots.captured() as figures:
+        plots_calibration.series_fit(tmp_path / "fit.png", f)
+    ax = figures["fit.png"].axes[0]
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "90 % predictive band, pooled over both" in texts
+    assert "with run_in (the first of two explanations)" in texts
+    (band,) = ax.collections[:1]
+    ys = band.get_paths()[0].vertices[:, 1]
+    assert ys.min() == pytest.approx(0.5) and ys.max() == pytest.approx(3.0)
+
+
 # ----------------------------------------------------------------------------- a user's file
 
 # A new user's slider-crank: the shipped Ch. 7 rig file (Tables 7-1, 7-2)

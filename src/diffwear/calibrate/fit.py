@@ -53,6 +53,13 @@ STEPS_PER_UNKNOWN = 10
 # 1e4 either way for a decade prior): beyond, an effect has no shape left to
 # give (a film formed at once is a change of k)
 SHAPE_PRIOR_SIGMAS = 4.0
+# The discrepancy's direction along k (`Fitter.k_direction`) is taken out of
+# the fit where a Gauss-Newton 1-sigma step along it departs from the
+# linearised residuals by more than this in chi2 (the quadratic's own value
+# there is 1).  Measured at the shipped campaigns' base fits: 9-55 for the
+# bushing angle, 0.2-0.3 for the pressure, under 0.01 for the sliding speed
+# and under 1e-3 for the cycle count and the wear depth
+VALLEY = 1.0
 # Cycle counts at which the model's worn volume is reported beside the
 # residuals (`Problem.probe_cycles`): fractions of the campaign, geometric
 # from 1/50 (where a run-in shows) to the end
@@ -600,27 +607,59 @@ class Fitter:
         return self.fits[key]
 
     def k_direction(self, variable: str) -> np.ndarray | None:
-        """The direction, in the discrepancy's coefficients (prior units), along
-        which k (1 + delta) changes like k itself over the data: g = J_d^T J_k
-        over the fit points at the base fit, normalised; None when k is not
-        fitted.  The discrepancy is held orthogonal to it (`Layout.of`), so that
-        a part of delta constant over the data cannot trade against k: k stays
-        identified, and the posterior has no valley along which k and delta's
-        near-constant part exchange (a valley that is straight only to first
-        order: along it the exact posterior falls off orders of magnitude
-        faster than its Gauss-Newton quadratic).  Computed once per variable,
-        at the base fit, from the fit points alone."""
+        """The direction u, in the discrepancy's coefficients (prior units),
+        along which k (1 + delta) changes like k itself over the data (g = J_d^T
+        J_k over the fit points at the base fit, normalised), when it must be
+        taken out of the fit; None when it need not, or when k is not fitted.
+
+        Along u, delta and k trade against each other: moving delta by u and
+        ln k by the matching amount (`identified_k`) leaves the predictions
+        unchanged to first order.  Where u's effect is k's almost exactly (a
+        Fourier series over a worn arc: a near-constant over the data), the
+        trade is a valley that is straight only to first order: a step of the
+        Gauss-Newton 1-sigma along it departs from the linearised residuals by
+        tens to thousands in chi2, and the Laplace posterior has no meaning
+        there.  Then the discrepancy is held orthogonal to u (`Layout.of`),
+        which costs it nothing the data show apart from k.  Where the step
+        departs by less than `VALLEY` (a trend in the cycle count or the wear
+        depth, whose effect differs from k's: the data see that direction
+        apart from k, 1e4-1e5 times better than the prior), u stays free, as
+        taking it out would cost a three-term basis a third of its freedom (on
+        a wear coefficient swinging with the cycle count, chi2 5,795 instead
+        of 1,172).  Computed once per variable, at the base fit, from the fit
+        points alone."""
         if self.k_index is None:
             return None
         if variable not in self._k_free:
-            base = self.base_fit()
-            lay = Layout.of(self, (), variable, constrained=False)
-            rows = ~self.problem.holdout
-            jac = self.linearise(lay.pack(lay.start(None, 0.0, 0.0, base)), lay.tangents).jac
-            g = jac[rows][:, self.problem.n_base:].T @ jac[rows][:, self.k_index]
-            norm = float(np.linalg.norm(g))
-            self._k_free[variable] = g / norm if norm > 0 else None
+            self._k_free[variable] = self._valley(variable)
         return self._k_free[variable]
+
+    def _valley(self, variable: str) -> np.ndarray | None:
+        """u of `k_direction` where a Gauss-Newton 1-sigma step along it (delta
+        by u, ln k by the matching amount) departs from the linearised fit
+        residuals by more than `VALLEY` in chi2; None otherwise."""
+        k = self.k_index
+        assert k is not None  # `k_direction` asks only where k is fitted
+        base = self.base_fit()
+        lay = Layout.of(self, (), variable, constrained=False)
+        rows = ~self.problem.holdout
+        nb = self.problem.n_base
+        z0 = lay.start(None, 0.0, 0.0, base)
+        lin = self.linearise(lay.pack(z0), lay.tangents)
+        jac = lin.jac[rows]
+        g = jac[:, nb:].T @ jac[:, k]
+        norm = float(np.linalg.norm(g))
+        if norm == 0.0:
+            return None
+        u = g / norm
+        a = identified_k(jac, k, slice(nb, lay.size))
+        moved = (jac[:, nb:] + np.outer(jac[:, k], a)) @ u   # the step's linear effect
+        dz = np.zeros(lay.size)
+        dz[nb:], dz[k] = u, a @ u
+        dz /= math.sqrt(1.0 + float(moved @ moved))         # 1 sigma (data and prior)
+        exact = self.residuals(lay.pack(z0 + dz))[rows]
+        departure = float(np.sum((exact - lin.r[rows] - jac @ dz) ** 2))
+        return u if departure > VALLEY else None
 
     def refine(self, fit: "FitResult", z) -> "FitResult":
         """``fit``'s model fitted again from the unknowns ``z`` (a point of its

@@ -82,6 +82,11 @@ def _figures(c: Calibration, structure: dict) -> Outputs:
     covered = _covered(final.discrepancy, c) if final.discrepancy is not None else None
     # the fits' series, the residuals and the force residual's spectrum
     band = None if c.posterior is None else c.predictive_band()
+    pooled = c.pool_models()
+    if pooled:   # an open answer: the line is the first model's, the band both models'
+        chosen_label += " (the first of two explanations)"
+    band_label = ("90 % predictive band, pooled over both" if pooled
+                  else "90 % predictive band")
     fits = []
     for k, s in enumerate(c.dataset.series):
         m = which == k
@@ -91,7 +96,7 @@ def _figures(c: Calibration, structure: dict) -> Outputs:
             y=s.y, sigma=s.sigma, holdout=s.holdout, base=c.base.prediction[m],
             chosen=None if final is c.base else final.prediction[m],
             chosen_label=chosen_label, cycles=s.cycles,
-            band=None if band is None else (band[0][m], band[1][m])))
+            band=None if band is None else (band[0][m], band[1][m]), band_label=band_label))
     cycles = [s.cycle_counts for s in c.dataset.series]
     residuals = [c.base.residual[which == k] for k in range(len(c.dataset.series))]
     harmonics = structure.get("force_residual_harmonics")

@@ -35,6 +35,7 @@ class SeriesFit:
     chosen_label: str
     cycles: float | None
     band: tuple | None = None  # (lower, upper) of the final model's 90 % predictive band
+    band_label: str = "90 % predictive band"  # says when the band pools two models
 
 
 def series_fit(path: Path, f: SeriesFit) -> Path:
@@ -47,10 +48,10 @@ def series_fit(path: Path, f: SeriesFit) -> Path:
         lo, hi = (np.asarray(b)[order] * f.scale for b in f.band)
         if few:
             ax.errorbar(f.x[order], 0.5 * (lo + hi), yerr=0.5 * (hi - lo), fmt="none",
-                        ecolor="C1", alpha=0.35, lw=6, label="90 % predictive band")
+                        ecolor="C1", alpha=0.35, lw=6, label=f.band_label)
         else:
             ax.fill_between(f.x[order], lo, hi, color="C1", alpha=0.25, lw=0,
-                            label="90 % predictive band")
+                            label=f.band_label)
     ax.errorbar(f.x, f.y * f.scale, yerr=f.sigma * f.scale, fmt=".", ms=3, color="k",
                 label="data (1 sigma)", alpha=0.7)
     ax.plot(f.x[order], f.base[order] * f.scale, "s" if few else "-", mfc="none",

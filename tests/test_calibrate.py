@@ -764,8 +764,15 @@ def test_calibration_names_what_the_data_show(name, tmp_path):
             assert d["lobes"] == lobes
             for want, got in zip(peaks, d["peaks_deg"]):
                 assert abs((got - want + 180) % 360 - 180) < 10.0
-        # the held-out error, read after the choice, falls to near the noise
-        assert s["heldout_rmse_after"] < 1.5 < s["heldout_rmse_before"]
+        if variable == "cycles":
+            # a trend in time says nothing of the time after the fit window
+            # (a k that follows the lab's humidity): the held-out inspection
+            # is forecast with the trend held, and what can be asked is that
+            # the 90 % band says so, not that the error falls
+            assert s["heldout_coverage"] >= 0.85, s["heldout_coverage"]
+        else:
+            # the held-out error, read after the choice, falls to near the noise
+            assert s["heldout_rmse_after"] < 1.5 < s["heldout_rmse_before"]
         # k stays identified beside the discrepancy (its 1-sigma within 3x)
         if "k_without" in d:
             assert d["k_with"]["std"] <= 3.0 * d["k_without"]["std"]

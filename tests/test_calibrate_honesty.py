@@ -296,7 +296,7 @@ def test_an_open_answer_gives_the_life_over_both_models(monkeypatch):
     monkeypatch.setattr(fc, "_Extended", Extended)
     monkeypatch.setattr(fc, "_first_estimate", lambda *a: 1e5)
     monkeypatch.setattr(fc, "_next_measurement", lambda *a, **k: None)
-    data = SimpleNamespace(series=[])
+    data = SimpleNamespace(series=[], max_cycles=0.0)
 
     def post(rate):
         layout = SimpleNamespace(pack=lambda z: z)
@@ -520,6 +520,18 @@ def test_forward_check_against_a_direct_predictive_covariance(small):
     assert not check.predicts
     lobes = fitter.fit((), start=base, discrepancy="angle")
     assert forward_check(fitter, lobes).predicts
+
+
+def test_the_next_inspection_is_scored_after_the_last_one():
+    """Candidates evenly over (last inspection, horizon]: with 24 of them from
+    21,400 to 42,800 cycles, every 891.67 cycles, the first one step after
+    the last inspection and the horizon itself the last."""
+    from diffwear.calibrate.forecast import CANDIDATES, inspection_candidates
+
+    c = inspection_candidates(21400.0, 42800.0)
+    assert c.size == CANDIDATES == 24
+    assert c[0] == pytest.approx(21400.0 + 21400.0 / 24) and c[-1] == pytest.approx(42800.0)
+    np.testing.assert_allclose(np.diff(c), 21400.0 / 24)
 
 
 def test_forecast_requests_are_checked():

@@ -13,9 +13,10 @@ each on its own posterior's draws, and the draws are pooled with the models'
 weights exp(-criterion / 2), normalised (Bayesian model averaging with BIC
 weights: Hoeting, Madigan, Raftery and Volinsky, Stat. Sci. 14 (1999) 382).
 
-**The next measurement.**  Over the cycle counts up to the horizon, each
-kind of inspection the dataset holds (a worn profile at the dataset's
-angles and precision, a weighing at its precision) is scored by what it
+**The next measurement.**  Over the cycle counts after the dataset's last
+inspection, up to the horizon, each kind of inspection the dataset holds (a
+worn profile at the dataset's angles and precision, a weighing at its
+precision) is scored by what it
 would teach, on the model linearised at the fit (Gauss-Newton: the
 inspection's rows J_m / sigma added to the information):
 
@@ -44,7 +45,7 @@ from .posterior import BAND, Posterior, _weighted_quantile
 from .quasi_static import QuasiStaticRigHistory
 
 # Candidate cycle counts of the next inspection: this many, evenly over
-# (0, horizon] (with the horizon itself)
+# (last inspection, horizon] (with the horizon itself)
 CANDIDATES = 24
 # The life run goes this far past the first estimate of the life (the wear
 # rate may fall as the bore conforms; a linear estimate comes early)
@@ -223,6 +224,14 @@ def _first_estimate(fitter: Fitter, fit: FitResult, limit: float) -> float:
     return float(seen[-1] + max(limit - deepest[-1], 0.0) / rate)
 
 
+def inspection_candidates(last: float, horizon: float) -> np.ndarray:
+    """The cycle counts at which the next inspection is scored: `CANDIDATES`
+    of them, evenly over (``last``, ``horizon``]: the next inspection of this
+    bushing comes after its last one."""
+    step = (horizon - last) / CANDIDATES
+    return last + step * np.arange(1, CANDIDATES + 1)
+
+
 def forecast(fitter: Fitter, pool: Sequence[tuple[Posterior, float]], data, limit: float,
              horizon: float, alternatives: tuple | None = None) -> Forecast:
     """The life to ``limit`` and the depth at ``horizon`` with their bands, and
@@ -233,7 +242,7 @@ def forecast(fitter: Fitter, pool: Sequence[tuple[Posterior, float]], data, limi
     fit = pool[0][0].fit
     estimate = _first_estimate(fitter, fit, limit)
     end = max(horizon, min(LIFE_MARGIN * estimate, 1e3 * horizon))
-    candidates = np.linspace(horizon / CANDIDATES, horizon, CANDIDATES)
+    candidates = inspection_candidates(float(data.max_cycles), horizon)
     profiles = [s for s in data.series if s.kind == "profile"]
     angles = np.asarray(profiles[-1].x, float) if profiles else None
     ext = _Extended(fitter, end, candidates, angles, data)

@@ -16,9 +16,9 @@ weights: Hoeting, Madigan, Raftery and Volinsky, Stat. Sci. 14 (1999) 382).
 **The next measurement.**  Over the cycle counts after the dataset's last
 inspection, up to the horizon, each kind of inspection the dataset holds (a
 worn profile at the dataset's angles and precision, a weighing at its
-precision) is scored by what it
-would teach, on the model linearised at the fit (Gauss-Newton: the
-inspection's rows J_m / sigma added to the information):
+precision) is scored by what it would teach, on the model linearised at
+the fit (Gauss-Newton: the inspection's rows J_m / sigma added to the
+information):
 
 * when the answer is "A or B", the separation it would give them: its
   predictions under the two models apart, in units of the noise and both

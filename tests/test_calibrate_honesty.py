@@ -219,6 +219,60 @@ def test_a_tie_beside_a_shared_member_leaves_the_shared_member_adopted(monkeypat
     assert any("cannot tell them apart" in line for line in lines)
 
 
+def test_two_discrepancies_that_fit_alike_are_both_an_answer(monkeypatch):
+    """A discrepancy over the cycle count and one over the wear depth fit the
+    fit points alike (chi2 1148.8 and 1148.5, the low-wear skin's numbers):
+    the criterion prefers the cycle count by 10.3, beyond `AMBIGUITY`, for
+    its fewer coefficients alone, and the answer is "cycle count or wear
+    depth"; with the depth's fit worse by more than `AMBIGUITY` the cycle
+    count stands alone, and so it does beside a depth path that holds an
+    effect the cycle count's does not."""
+    from types import SimpleNamespace
+
+    from diffwear.calibrate import identify
+
+    def fit(chi2, penalty, discrepancy=None, effects=()):
+        return SimpleNamespace(chi2_fit=chi2, prior_chi2=0.5, penalty=penalty, effects=effects,
+                               discrepancy=discrepancy, notes={})
+
+    base = fit(31480.1, 0.0)
+
+    def select(depth):
+        offers = {"discrepancy:cycles": fit(1148.8, 16.5, "cycles"), depth[0]: depth[1]}
+
+        def stage(fitter, current, *a, **k):
+            found = offers if current is base else {}
+            return identify.Stage([], {e: SimpleNamespace(effect=e, fit=f, qualifies=True,
+                                                          criterion=identify.criterion(f),
+                                                          reasons=[])
+                                       for e, f in found.items()}, {})
+
+        monkeypatch.setattr(identify, "_stage", stage)
+        monkeypatch.setattr(identify, "criterion", lambda f: f.chi2_fit + f.penalty)
+        monkeypatch.setattr(identify, "determined_numbers", lambda f: f.penalty / 7.05)
+        monkeypatch.setattr(identify, "forward_check", lambda *a, **k: None)
+        lines: list = []
+        return identify.select(None, base, (), (), None, lines.append), lines, offers
+
+    sel, lines, offers = select(("discrepancy:depth", fit(1148.5, 27.1, "depth")))
+    assert sel.ambiguous is not None
+    a, b = sel.ambiguous
+    assert (a.model, b.model) == (offers["discrepancy:cycles"], offers["discrepancy:depth"])
+    assert sel.adopted == [] and sel.model is base      # nothing both hold
+    assert any("fits the fit points as well" in line and "(10.3)" in line for line in lines)
+    assert any("cannot tell them apart" in line for line in lines)
+    # pooled by their fits, chi2 + prior 1149.3 and 1149.0: the depth's weight
+    # 1 / (1 + exp(-0.15)), where its criterion's would be 1 / (1 + exp(5.15))
+    weight, rule = identify.second_weight(a, b)
+    assert weight == pytest.approx(1.0 / (1.0 + math.exp(-0.15)), rel=1e-12)
+    assert rule == "exp(-(chi2 + prior) / 2)"
+    for depth in (("discrepancy:depth", fit(1148.8 + 6.1, 27.1, "depth")),
+                  ("third_body", fit(1148.5, 27.1, "depth", ("third_body",)))):
+        sel, lines, offers = select(depth)
+        assert sel.ambiguous is None and sel.model is offers["discrepancy:cycles"]
+        assert not any("as well" in line for line in lines)
+
+
 def test_the_report_says_what_an_open_answer_stands_beside():
     """The report's lines for an answer open on two effects beside a member
     both alternatives hold, and for a stage whose runner-up grew a branch."""
@@ -259,6 +313,11 @@ def test_the_report_says_what_an_open_answer_stands_beside():
     assert text.startswith("Over both explanations the data leave open")
     assert text.endswith("transfer_film + discrepancy in the bushing angle 77 %, "
                          "run_in + discrepancy in the bushing angle 23 %.")
+    assert "pooled by the models' weights exp(-criterion / 2): " in text
+    fits = [{**m, "weighted_by": "exp(-(chi2 + prior) / 2)"} for m in life["models"]]
+    text = _life_blocks({"life": {**life, "models": fits},
+                         "next_measurement": None})[0].blocks[0]
+    assert "pooled by the models' weights exp(-(chi2 + prior) / 2): " in text
     scores = {"heldout_rmse_before": 17.1, "heldout_rmse_after": 0.97, "fit_rmse_before": 9.0,
               "fit_rmse_after": 1.0, "heldout_coverage": 0.9, "fit_coverage": 0.91,
               "coverage_models": life["models"]}

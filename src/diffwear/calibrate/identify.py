@@ -23,8 +23,13 @@ the life and the next measurement.
    inspection, must predict that inspection; only predicting models
    compete, the fewest members first (Occam's window, `OCCAM_TOLERANCE`),
    and a runner-up within `AMBIGUITY` makes the answer "A or B" (what both
-   hold adopted, the answer open on the rest).  The held-out points are
-   read once, after the choice, for the before/after report.
+   hold adopted, the answer open on the rest).  So does a model that differs
+   from the chosen one only in its discrepancy's variable and fits the fit
+   points as well (chi-square and prior within `AMBIGUITY`, `_rival`): two
+   bases over different variables are not nested, and the criterion's gap
+   between two that fit alike is only the penalty of their coefficients.
+   The held-out points are read once, after the choice, for the before/after
+   report.
 4. Goodness of fit: the chosen model must leave fit-point residuals
    consistent with the stated noise, chi2 <= dof + `GOF_SIGMAS` sqrt(2 dof);
    otherwise ``residual_unexplained`` is true.
@@ -84,7 +89,9 @@ SELECTION_RULE = (
     "compete in one forward selection (each adopted on its chi-square drop at p = 0.001 and "
     "ranked by BIC, chi2 + prior + ln n per determined number); a model counts as an "
     "explanation only if, refitted on the points before the fit window's last inspection, "
-    "it predicts that inspection; the held-out points are read once, after the choice")
+    "it predicts that inspection; two discrepancies over different variables that fit the fit "
+    "points alike (chi2 + prior within 6) are both an answer; the held-out points are read "
+    "once, after the choice")
 # An effect is refitted only if the fit points leave degrees of freedom after
 # it: with none, any candidate fits exactly and nothing can be told apart.
 MIN_DOF_FOR_EFFECT = 2
@@ -672,9 +679,12 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
                             seen, reference is None))
     while True:
         unchecked = [g for g in grown if not g.checked]
-        checked = [g.criterion for g in grown if g.checked]
-        if not unchecked or (checked and min(g.criterion for g in unchecked)
-                             >= min(checked) + AMBIGUITY):
+        lead = min((g.paths[0] for g in grown if g.checked), key=lambda p: p.criterion,
+                   default=None)
+        if lead is not None:   # only a path that could enter the best checked one's window
+            unchecked = [g for g in unchecked if g.criterion < lead.criterion + AMBIGUITY
+                         or any(_rival(lead, p) for p in g.paths)]
+        if not unchecked:
             break
         g = min(unchecked, key=lambda g: g.criterion)
         log(f"path {g.paths[0].name}: checked on the dynamic model")
@@ -715,6 +725,13 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
     best = window[0]
     stage1.added = best.start
     stages = [stage1, *best.stages]
+    rival = min((p for p in pool if _rival(best, p)), key=_misfit, default=None)
+    if len(window) == 1 and rival is not None:
+        log(f"{rival.name} fits the fit points as well as {best.name} (chi2 + prior "
+            f"{_misfit(rival):.1f} and {_misfit(best):.1f}): the criterion's gap "
+            f"({rival.criterion - best.criterion:.1f}) is only the penalty of their "
+            "coefficients")
+        window.append(rival)
     if len(window) > 1:
         other = window[1]
         log(f"{best.name} or {other.name}: these data cannot tell them apart (criteria "
@@ -728,6 +745,40 @@ def select(fitter: Fitter, base: FitResult, kinds, inspections, data, log,
     log(f"selected: {best.name} (criterion {best.criterion:.1f}; other paths: "
         + (", ".join(f"{p.name} {p.criterion:.1f}" for p in others) or "none") + ")")
     return Selection(best.model, list(best.adopted.values()), stages, None, order)
+
+
+def _misfit(p: Path) -> float:
+    """The fit points' chi-square of a path's model with its prior rows: the
+    criterion without the penalty of its determined numbers."""
+    return p.model.chi2_fit + p.model.prior_chi2
+
+
+def _rival(best: Path, p: Path) -> bool:
+    """Whether ``p``'s model differs from ``best``'s only in the variable of
+    its learned discrepancy and fits the fit points as well, its `_misfit`
+    less than `AMBIGUITY` above (module notes).  Two bases over different
+    variables are not nested: when their fits tie, the criterion's gap is
+    only the penalty of their coefficients, which follows the bases' sizes
+    and priors (five depth layers against three cycle-count terms), not
+    the data."""
+    a, b = best.model, p.model
+    return (p is not best and a.discrepancy is not None
+            and b.discrepancy not in (None, a.discrepancy)
+            and sorted(a.effects) == sorted(b.effects)
+            and _misfit(p) - _misfit(best) < AMBIGUITY)
+
+
+def second_weight(first: Path, second: Path) -> tuple[float, str]:
+    """The second explanation's weight in an open answer, and the rule:
+    exp(-criterion / 2), normalised (Bayesian model averaging with BIC
+    weights); for two discrepancies over different variables that fit alike
+    (`_rival`), exp(-(chi2 + prior) / 2), as the criterion's gap between them
+    is only their coefficients' penalty."""
+    if _rival(first, second):
+        return (1.0 / (1.0 + math.exp(0.5 * (_misfit(second) - _misfit(first)))),
+                "exp(-(chi2 + prior) / 2)")
+    return (1.0 / (1.0 + math.exp(0.5 * (second.criterion - first.criterion))),
+            "exp(-criterion / 2)")
 
 
 def _words(a: Assessment) -> str:
@@ -789,7 +840,8 @@ class Calibration:
         """{name, weight} of each model `pool` holds when it holds two."""
         if len(self.pool) < 2 or self.selection is None or self.selection.ambiguous is None:
             return None
-        return [{"name": m.name, "weight": w}
+        rule = second_weight(*self.selection.ambiguous)[1]
+        return [{"name": m.name, "weight": w, "weighted_by": rule}
                 for m, (_, w) in zip(self.selection.ambiguous, self.pool)]
 
     def predictive_band(self):
@@ -920,6 +972,12 @@ def _discrepancy(c: Calibration) -> dict | None:
         if s.effect in stage1.failed:
             tried[v]["failed"] = stage1.failed[s.effect]
     d = c.discrepancy
+    open_ = [] if sel is None or sel.ambiguous is None else list(sel.ambiguous)
+    if d is None and any(p.model.discrepancy for p in open_):
+        # one explanation of an open answer holds a discrepancy: not adopted, not refused
+        return {"variable": None, "alternatives": [p.model.discrepancy for p in open_],
+                "tried": tried, "shape": "open: " + " or ".join(p.name for p in open_)
+                + " (the fit data cannot tell them apart)"}
     if d is None:
         if not tried:
             return None
@@ -1080,7 +1138,7 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
         first, second = sel.ambiguous
         alternatives = (first.model, second.model)
         # the data have not chosen: the bands and the life are over both, by their weights
-        weight = 1.0 / (1.0 + math.exp(0.5 * (second.criterion - first.criterion)))
+        weight, _ = second_weight(first, second)
         c.open_posterior = (refined(fitter, posterior_of(fitter, second.model, method), log),
                             weight)
     p = c.problem

@@ -83,8 +83,9 @@ def _figures(c: Calibration, structure: dict) -> Outputs:
     # the fits' series, the residuals and the force residual's spectrum
     band = None if c.posterior is None else c.predictive_band()
     pooled = c.pool_models()
+    first = " (the first of two explanations)" if pooled else ""
     if pooled:   # an open answer: the line is the first model's, the band both models'
-        chosen_label += " (the first of two explanations)"
+        chosen_label += first
     band_label = ("90 % predictive band, pooled over both" if pooled
                   else "90 % predictive band")
     fits = []
@@ -111,7 +112,8 @@ def _figures(c: Calibration, structure: dict) -> Outputs:
         x, delta, band_d = learned.curve(d, final.discrepancy_coefficients,
                                          final.discrepancy_cov, span, c.dataset.fit_cycles, b,
                                          lib)
-        axis, title_d = lib.variable(d).axis, f"learned discrepancy of k over {disc_words(d, lib)}"
+        axis = lib.variable(d).axis
+        title_d = f"learned discrepancy of k over {disc_words(d, lib)}{first}"
     if c.posterior is not None:  # the posterior's numbers in the dataset's units
         post = c.posterior
         numbers = post.layout.natural(post.z)

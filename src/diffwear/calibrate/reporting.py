@@ -335,11 +335,11 @@ def _life_blocks(summary: dict) -> list[Block]:
     if nxt:
         lines.append(f"the next measurement: {nxt['sentence']}")
     models = life.get("models")
+    rule = (models or [{}])[0].get("weighted_by", "exp(-criterion / 2)")
     where = ("Under the chosen model (its effects and discrepancy included), over the "
              "posterior's draws." if not models else
              "Over both explanations the data leave open, each on its own posterior's draws, "
-             "pooled by the models' weights exp(-criterion / 2): "
-             + _weights_words(models) + ".")
+             f"pooled by the models' weights {rule}: " + _weights_words(models) + ".")
     return [Section("Life and the next measurement", [where, Bullets(lines)])]
 
 

@@ -297,6 +297,21 @@ def test_the_report_says_what_an_open_answer_stands_beside():
     assert line.startswith("**transfer_film or run_in** beside discrepancy in the bushing "
                            "angle: these data cannot tell them apart; ")
     assert "**run_in**, strength 1.01 +- 0.028" in line
+    # two discrepancies: each described by its own shape
+    summary = {"effect_identified": "ambiguous", "effects_identified": [{
+        "name": "discrepancy in the cycle count or discrepancy in the wear depth",
+        "ambiguous": True, "beside": [],
+        "alternatives": [{"name": "discrepancy in the cycle count", "effects": [],
+                          "discrepancy": "cycles", "discrepancy_shape": "rises from -38 % at "
+                          "0 cycles to +31 % at 1.6e+04 cycles"},
+                         {"name": "discrepancy in the wear depth", "effects": [],
+                          "discrepancy": "depth", "discrepancy_shape": "rises from -25 % at "
+                          "0 mm to +45 % at 0.37 mm"}]}]}
+    line = markdown(_effect_lines(summary)[1])
+    assert line.endswith("these data cannot tell them apart; discrepancy in the cycle count: "
+                         "k over the cycle count rises from -38 % at 0 cycles to +31 % at "
+                         "1.6e+04 cycles; discrepancy in the wear depth: k over the wear depth "
+                         "rises from -25 % at 0 mm to +45 % at 0.37 mm"), line
     stage = {"candidates": {"run_in": {"qualifies": True},
                             "transfer_film": {"qualifies": True}},
              "added": "transfer_film", "branches": ["run_in"]}

@@ -836,6 +836,17 @@ class Calibration:
             return ((self.posterior, 1.0),)
         return ((self.posterior, 1.0 - self.open_posterior[1]), self.open_posterior)
 
+    def _own_discrepancy(self, model: FitResult, shared: set) -> dict:
+        """{"discrepancy_shape": words} of an open answer's explanation whose
+        discrepancy the other does not hold; else {}."""
+        v = model.discrepancy
+        if v is None or learned.candidate(v) in shared:
+            return {}
+        d = learned.describe(v, model.discrepancy_coefficients, model.discrepancy_cov,
+                             self.dataset, model.notes.get("log_k_per_coefficient"),
+                             self.problem.library)
+        return {"discrepancy_shape": d["shape"]}
+
     def pool_models(self) -> list[dict] | None:
         """{name, weight} of each model `pool` holds when it holds two."""
         if len(self.pool) < 2 or self.selection is None or self.selection.ambiguous is None:
@@ -871,7 +882,8 @@ class Calibration:
                                   "effects": [x.entry() for e, x in p.adopted.items()
                                               if learned.variable_of(e) is None
                                               and e not in shared],
-                                  "discrepancy": p.model.discrepancy}
+                                  "discrepancy": p.model.discrepancy,
+                                  **self._own_discrepancy(p.model, shared)}
                                  for p in (a, b)],
                 "separating_measurement": separation, "sentence": sentence})
         first = effects[0] if effects else None

@@ -10,7 +10,7 @@ import math
 from ..report import Block, Bullets, PlusMinus, Section, Significant, Table, Text
 from . import learned
 from .effects import LIBRARY, Library
-from .identify import GOF_SIGMAS, LR_CRITICAL, STRENGTH_SIGMAS, Calibration
+from .identify import AMBIGUITY, GOF_SIGMAS, LR_CRITICAL, STRENGTH_SIGMAS, Calibration
 
 
 def report_blocks(c: Calibration, summary: dict, structure: dict) -> list[Block]:
@@ -128,7 +128,9 @@ def _candidate_section(summary: dict, lib: Library) -> Section:
         "with a drop above the critical value for its effective number of coefficients.  BIC "
         "(ln n per determined number) ranks them; forward selection adds one at a time; the "
         f"result must leave noise-sized residuals (chi2 <= dof + {GOF_SIGMAS:g} sqrt(2 dof)) "
-        "and predict the fit window's last inspection.",
+        "and predict the fit window's last inspection.  Models within "
+        f"{AMBIGUITY:g} of the best criterion, and two discrepancies over different variables "
+        f"whose chi2 + prior lie within {AMBIGUITY:g}, are an open answer.",
         Bullets([_stage_line(k, st) for k, st in enumerate(summary.get("stages", []))]),
         Table(("candidate", "score", "p", "refit strength", "refit shape", "refit chi2",
                "qualifies"), candidates),
@@ -369,9 +371,11 @@ def _effect_lines(summary: dict, library: Library = LIBRARY) -> list:
     for e in effects:
         if e.get("ambiguous"):
             beside = f" beside {' + '.join(e['beside'])}" if e.get("beside") else ""
-            each = [Text((f"{a['name']}: ",
-                          *_joined([_effect_text(x, library) for x in a["effects"]], ", ")))
-                    for a in e["alternatives"]]
+            each = [Text((f"{a['name']}: ", *_joined([
+                *(_effect_text(x, library) for x in a["effects"]),
+                *([f"k over {disc_words(a['discrepancy'], library)} {a['discrepancy_shape']}"]
+                  if a.get("discrepancy_shape") else [])], ", ")))
+                for a in e["alternatives"]]
             lines.append(Text((f"**{e['name']}**{beside}: these data cannot tell them apart; ",
                                *_joined(each, "; "))))
         else:

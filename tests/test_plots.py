@@ -544,6 +544,27 @@ def test_the_rig_studys_locus_shows_the_pin_in_its_worn_pocket(tmp_path):
         _assert_no_zero_axes(fig)
 
 
+def test_long_calibration_titles_stay_inside_their_figures(tmp_path):
+    """The discrepancy's title of an open answer's first explanation and the
+    posterior's over one number (a figure 3.2 inches wide) are wrapped, not
+    cut off at the figure's edge."""
+    from diffwear.plots.files import captured
+
+    x = np.linspace(0.0, 16050.0, 50)
+    with captured() as figures:
+        plots_calibration.discrepancy(
+            tmp_path / "discrepancy.png", x, 0.3 * np.sin(x / 3000.0), np.full(x.size, 0.1),
+            "cycles", "learned discrepancy of k over the cycle count (the first of two "
+            "explanations)", (0.0, 16050.0))
+        plots_calibration.posterior(
+            tmp_path / "posterior.png", {"k [mm^3/(N m)]": np.linspace(6.39, 6.44, 200)},
+            np.full(200, 1 / 200), "posterior of the first of two explanations (Laplace, "
+            "importance-weighted)")
+    for fig in figures.values():
+        _assert_inside_the_figure(fig)
+    assert "\n" in figures["discrepancy.png"].axes[0].get_title()
+
+
 def test_the_best_candidate_shows_in_the_candidates_figure(tmp_path):
     """Bars are drawn above the best candidate's criterion, so the best one's
     has no length: every bar's end is a dot, at its criterion above the

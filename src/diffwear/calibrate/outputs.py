@@ -76,14 +76,14 @@ def _figures(c: Calibration, structure: dict) -> Outputs:
     ranked = sorted(stage1.assessed.values(), key=lambda a: a.criterion) if stage1 else []
     deepest = _deepest(c.dataset)
     chosen_label = _final_label(final)
-    title_p = ("posterior of the final model (" + _posterior_words(c.posterior) + ")"
-               if c.posterior is not None else "")
     members = _members_of(final)
     covered = _covered(final.discrepancy, c) if final.discrepancy is not None else None
     # the fits' series, the residuals and the force residual's spectrum
     band = None if c.posterior is None else c.predictive_band()
     pooled = c.pool_models()
     first = " (the first of two explanations)" if pooled else ""
+    title_p = ("posterior of " + ("the first of two explanations" if pooled else "the final model")
+               + " (" + _posterior_words(c.posterior) + ")" if c.posterior is not None else "")
     if pooled:   # an open answer: the line is the first model's, the band both models'
         chosen_label += first
     band_label = ("90 % predictive band, pooled over both" if pooled

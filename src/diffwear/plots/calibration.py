@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib.ticker import FuncFormatter
 
 from .files import save
-from .layout import legend_outside
+from .layout import legend_outside, wrapped
 
 
 @dataclass(frozen=True)
@@ -160,7 +160,7 @@ def discrepancy(path: Path, x, delta, band, xlabel: str, title: str,
     ax.fill_between(x, d - b, d + b, alpha=0.3, label="1 sigma")
     ax.plot(x, d, label="delta")
     ax.axhline(0.0, color="k", lw=0.6)
-    ax.set(xlabel=xlabel, ylabel="k (1 + delta): delta [%]", title=title)
+    ax.set(xlabel=xlabel, ylabel="k (1 + delta): delta [%]", title=wrapped(title, 55))
     if xlabel.endswith("[MPa]") or xlabel.endswith("[mm/s]"):
         ax.set_xscale("log")
     if xlabel.startswith("bushing angle"):
@@ -190,7 +190,8 @@ def posterior(path: Path, columns: dict, weights, title: str) -> Path:
         ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
     for ax in list(axes.flat)[n:]:
         ax.set_axis_off()
-    fig.suptitle(title + " (dotted: 5 % and 95 %)", fontsize=10)
+    # about 13 characters of a 10-point title to the inch
+    fig.suptitle(wrapped(title + " (dotted: 5 % and 95 %)", int(13 * 3.2 * cols)), fontsize=10)
     return _save(fig, path)
 
 

@@ -11,7 +11,8 @@ then reads "beyond").  When the answer is "A or B", the data have not chosen
 between two models, so neither's band alone is the life's: both are run,
 each on its own posterior's draws, and the draws are pooled with the models'
 weights exp(-criterion / 2), normalised (Bayesian model averaging with BIC
-weights: Hoeting, Madigan, Raftery and Volinsky, Stat. Sci. 14 (1999) 382).
+weights: Hoeting, Madigan, Raftery and Volinsky, Stat. Sci. 14 (1999) 382;
+for two discrepancies that fit alike, by their fits: `identify.second_weight`).
 
 **The next measurement.**  Over the cycle counts after the dataset's last
 inspection, up to the horizon, each kind of inspection the dataset holds (a

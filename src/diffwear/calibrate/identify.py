@@ -848,7 +848,8 @@ class Calibration:
         return {"discrepancy_shape": d["shape"]}
 
     def pool_models(self) -> list[dict] | None:
-        """{name, weight} of each model `pool` holds when it holds two."""
+        """{name, weight, weighted_by} of each model `pool` holds when it holds
+        two (`second_weight`: the rule)."""
         if len(self.pool) < 2 or self.selection is None or self.selection.ambiguous is None:
             return None
         rule = second_weight(*self.selection.ambiguous)[1]

@@ -775,10 +775,10 @@ def second_weight(first: Path, second: Path) -> tuple[float, str]:
     (`_rival`), exp(-(chi2 + prior) / 2), as the criterion's gap between them
     is only their coefficients' penalty."""
     if _rival(first, second):
-        return (1.0 / (1.0 + math.exp(0.5 * (_misfit(second) - _misfit(first)))),
-                "exp(-(chi2 + prior) / 2)")
-    return (1.0 / (1.0 + math.exp(0.5 * (second.criterion - first.criterion))),
-            "exp(-criterion / 2)")
+        a, b, rule = _misfit(first), _misfit(second), "exp(-(chi2 + prior) / 2)"
+    else:
+        a, b, rule = first.criterion, second.criterion, "exp(-criterion / 2)"
+    return 1.0 / (1.0 + math.exp(0.5 * (b - a))), rule
 
 
 def _words(a: Assessment) -> str:

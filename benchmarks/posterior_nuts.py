@@ -4,28 +4,39 @@ model, no dynamic check, no look ahead) chooses its model; NUTS
 (`diffwear.calibrate.posterior.nuts`: four chains, the Gauss-Newton
 covariance as the mass matrix) then samples that model's numbers.  Recorded
 per campaign: the largest rank-normalised split R-hat over the numbers (goal
-<= 1.01), the smallest bulk ESS, the divergences and the times.
+<= 1.01), the smallest bulk ESS, the divergences, the time of one gradient
+of the log posterior, the times and the device.
 
     python benchmarks/posterior_nuts.py [CAMPAIGN ...] [--json PATH]
+    python benchmarks/posterior_nuts.py [CAMPAIGN ...] --choose MODELS.json
+    python benchmarks/posterior_nuts.py [CAMPAIGN ...] --chosen MODELS.json [--json PATH]
 
 Each campaign takes the loop's minutes plus the sampler's; a campaign
-already in the record is kept unless named again.
+already in the record is kept unless named again.  The loop and the sampler
+can run on different machines: ``--choose`` runs the loops and writes each
+chosen model (its effects, discrepancy variable and fitted unknowns) without
+sampling; ``--chosen`` refits each such model from its unknowns (a few
+steps) and samples it, on whatever device JAX finds (the chains vectorised
+on an accelerator).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
 
 import jax
+import jax.numpy as jnp
+import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
 from diffwear.calibrate import load_dataset  # noqa: E402
-from diffwear.calibrate.fit import Fitter  # noqa: E402
+from diffwear.calibrate.fit import Fitter, Problem  # noqa: E402
 from diffwear.calibrate.identify import calibrate  # noqa: E402
 from diffwear.calibrate.posterior import CHAINS, SAMPLES, WARMUP, nuts  # noqa: E402
 
@@ -37,39 +48,114 @@ DEFAULT = ("campaign_two_lobe_k", "campaign_pressure_exponent", "campaign_run_in
 GOAL_R_HAT = 1.01
 
 
-def one(name: str) -> dict:
+def model_of(fit) -> dict:
+    """The chosen model of a fit, enough to refit it (`refit`)."""
+    lay = fit.notes["layout"]
+    return {"effects": list(lay.effects), "discrepancy": lay.discrepancy,
+            "z": np.asarray(fit.notes["z"], float).tolist(),
+            "rows": np.asarray(fit.notes["rows"], bool).tolist(),
+            "chi2_fit": fit.chi2_fit, "prior_chi2": fit.prior_chi2}
+
+
+def choose(name: str) -> dict:
     data = load_dataset(CAMPAIGNS / name)
     t0 = time.perf_counter()
     c = calibrate(data, check=False, outlook=None, log=lambda *_: None)
-    loop_s = time.perf_counter() - t0
-    final = c.final or c.base
+    model = model_of(c.final or c.base)
+    if model["rows"] == (~c.problem.holdout).tolist():
+        del model["rows"]   # the dataset's own fit points
+    return {**model, "loop_s": time.perf_counter() - t0}
+
+
+def refit(name: str, model: dict):
+    """(fitter, fit) of ``model`` (`model_of`) on campaign ``name``, refitted
+    from its unknowns: the same fit, on this machine's arithmetic."""
+    fitter = Fitter(Problem.from_dataset(load_dataset(CAMPAIGNS / name)))
+    rows = model.get("rows")
+    fit = fitter.fit(tuple(model["effects"]), discrepancy=model["discrepancy"],
+                     rows=None if rows is None else np.asarray(rows, bool),
+                     z0=np.asarray(model["z"], float))
+    return fitter, fit
+
+
+def gradient_seconds(fitter, fit, repeats: int = 5) -> float:
+    """Median time of one gradient of the log posterior at the fit (compiled)."""
+    grad = jax.jit(jax.grad(fitter.log_posterior(fit)))
+    z = jnp.asarray(fit.notes["z"], float)
+    grad(z).block_until_ready()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        grad(z).block_until_ready()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def one(name: str, model: dict | None = None, sample: bool = True) -> dict:
+    if model is None:
+        data = load_dataset(CAMPAIGNS / name)
+        t0 = time.perf_counter()
+        c = calibrate(data, check=False, outlook=None, log=lambda *_: None)
+        loop_s = time.perf_counter() - t0
+        fitter, final = Fitter(c.problem), c.final or c.base
+    else:
+        loop_s = model.get("loop_s", math.nan)
+        fitter, final = refit(name, model)
+    grad_s = gradient_seconds(fitter, final)
+    device = {"device": jax.devices()[0].device_kind, "backend": jax.default_backend()}
+    chosen = f" (chosen {model['chi2_fit']:.2f})" if model else ""
+    print(f"{name}: fit chi2 {final.chi2_fit:.2f}{chosen}; one gradient {grad_s:.4f} s "
+          f"on {device['device']}", flush=True)
+    if not sample:
+        return {"campaign": name, "numbers": final.notes["layout"].size,
+                "gradient_s": grad_s, **device}
     t1 = time.perf_counter()
-    post = nuts(Fitter(c.problem), final)
+    post = nuts(fitter, final)
     d = post.diagnostics
     names = list(post.layout.natural(post.z[:1]))
     return {"campaign": name, "model": [*final.effects,
                                         *([f"discrepancy:{final.discrepancy}"]
                                           if final.discrepancy else [])],
+            "chi2_fit": final.chi2_fit,
+            **({"chi2_fit_chosen": model["chi2_fit"]} if model else {}),
             "numbers": len(names), "max_r_hat": d["max_r_hat"], "min_ess": d["min_ess"],
             "r_hat": dict(zip(names, map(float, d["r_hat"]))),
             "divergences": d["divergences"], "draws": d["draws_sampled"],
             "meets_goal": d["max_r_hat"] <= GOAL_R_HAT,
-            "loop_s": loop_s, "nuts_s": time.perf_counter() - t1}
+            "loop_s": loop_s, "gradient_s": grad_s, "nuts_s": time.perf_counter() - t1,
+            **device}
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("campaigns", nargs="*", default=list(DEFAULT))
     ap.add_argument("--json", type=Path, default=RECORD)
+    ap.add_argument("--choose", type=Path, help="write the chosen models here; no sampling")
+    ap.add_argument("--chosen", type=Path, help="sample the models written by --choose")
+    ap.add_argument("--gradient-only", action="store_true",
+                    help="time one gradient of the log posterior; no sampling")
     args = ap.parse_args(argv)
+    if args.choose:
+        chosen = json.loads(args.choose.read_text()) if args.choose.is_file() else {}
+        for name in args.campaigns:
+            chosen[name] = choose(name)
+            print(f"{name}: {chosen[name]['effects']} + {chosen[name]['discrepancy']}, "
+                  f"loop {chosen[name]['loop_s']:.0f} s", flush=True)
+            args.choose.write_text(json.dumps(chosen, indent=1) + "\n")
+        return 0
+    models = json.loads(args.chosen.read_text()) if args.chosen else {}
     record = json.loads(args.json.read_text()) if args.json.is_file() else {}
     rows = {r["campaign"]: r for r in record.get("rows", [])}
     for name in args.campaigns:
-        row = one(name)
+        row = one(name, models[name] if args.chosen else None, not args.gradient_only)
         rows[name] = row
+        if args.gradient_only:
+            args.json.write_text(json.dumps({"rows": list(rows.values())}, indent=2) + "\n")
+            continue
         print(f"{name}: max R-hat {row['max_r_hat']:.4f} (goal <= {GOAL_R_HAT}), "
               f"min ESS {row['min_ess']:.0f}, {row['divergences']} divergences; "
-              f"loop {row['loop_s']:.0f} s, NUTS {row['nuts_s']:.0f} s", flush=True)
+              f"gradient {row['gradient_s']:.3f} s, NUTS {row['nuts_s']:.0f} s "
+              f"on {row['device']}", flush=True)
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps({
             "chains": CHAINS, "warmup": WARMUP, "samples": SAMPLES, "goal_r_hat": GOAL_R_HAT,

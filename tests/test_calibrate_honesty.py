@@ -637,6 +637,20 @@ def test_nuts_agrees_with_the_checked_laplace_posterior_where_it_is_gaussian(sma
     assert a["k"]["std"] == pytest.approx(base.params_std["k"], rel=0.25)
 
 
+@pytest.mark.extended  # compiles NUTS on the small campaign's model twice (a minute)
+def test_vectorised_chains_are_the_chains_run_one_after_another(small):
+    """The chains as one vectorised program (an accelerator's default) draw
+    what the same chains draw one after another: the same keys, the same
+    arithmetic per chain."""
+    from diffwear.calibrate.posterior import nuts
+
+    data, fitter, base = small
+    one_by_one = nuts(fitter, base, chains=2, warmup=8, samples=12, parallel=False)
+    together = nuts(fitter, base, chains=2, warmup=8, samples=12, parallel=True)
+    np.testing.assert_allclose(together.z, one_by_one.z, rtol=1e-7, atol=1e-9)
+    assert together.diagnostics["divergences"] == one_by_one.diagnostics["divergences"]
+
+
 @pytest.mark.extended  # one synthetic campaign fitted and its posterior drawn (a minute)
 def test_one_coverage_campaign_reproduces_its_recorded_count(tmp_path):
     """The coverage study's first campaign counts the held-out points inside

@@ -340,8 +340,13 @@ def test_the_report_says_what_an_open_answer_stands_beside():
     assert ("The 90 % predictive band (model and noise) over both explanations, pooled by "
             "their weights (transfer_film + discrepancy in the bushing angle 77 %, run_in + "
             "discrepancy in the bushing angle 23 %), holds 90 % of the held-out points") in said
-    said = _error_section({**scores, "coverage_models": None}).blocks[0]
+    # the errors are the first explanation's, and the table says whose
+    table = _error_section(scores).blocks[1]
+    assert table.header == ("", "base model",
+                            "first explanation: transfer_film + discrepancy in the bushing angle")
+    said, table = _error_section({**scores, "coverage_models": None}).blocks
     assert "The final model's 90 % predictive band" in said
+    assert table.header == ("", "base model", "final model")
 
 
 def test_an_open_answer_gives_the_life_over_both_models(monkeypatch):

@@ -235,16 +235,18 @@ def _error_section(summary: dict) -> Section:
              Significant(summary["fit_rmse_after"], 3))]
     text = ("The held-out measurements were read once, after the choice: the error on "
             "them is the error on data the answer did not see.")
+    models = summary.get("coverage_models")
     cov = summary.get("heldout_coverage")
     if cov is not None and cov == cov:
-        models = summary.get("coverage_models")
         whose = ("The final model's 90 % predictive band (model and noise)" if not models else
                  "The 90 % predictive band (model and noise) over both explanations, pooled "
                  f"by their weights ({_weights_words(models)}),")
         text += (f"  {whose} holds {100 * cov:.0f} % of the held-out points"
                  f" ({100 * summary['fit_coverage']:.0f} % of the fit points).")
+    # an open answer's errors are its first explanation's; its band is pooled
+    after = f"first explanation: {models[0]['name']}" if models else "final model"
     return Section("Before and after, on data the choice did not see",
-                   [text, Table(("", "base model", "final model"), rows)])
+                   [text, Table(("", "base model", after), rows)])
 
 
 def _weights_words(models: list[dict]) -> str:

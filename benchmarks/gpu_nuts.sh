@@ -10,7 +10,7 @@
 # Writes $OUT/posterior_nuts_gpu.json (rows as `posterior_nuts.py` records
 # them; a campaign unfinished at SECONDS has none) and $OUT/log.txt.
 set -u
-PROCS=${1:-5}
+PROCS=${1:-4}
 LIMIT=${2:-500}
 OUT=${OUT:-/tmp/gpu_nuts}
 mkdir -p "$OUT"

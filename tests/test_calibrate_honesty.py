@@ -642,6 +642,30 @@ def test_nuts_agrees_with_the_checked_laplace_posterior_where_it_is_gaussian(sma
     assert a["k"]["std"] == pytest.approx(base.params_std["k"], rel=0.25)
 
 
+@pytest.mark.extended  # compiles the small campaign's log posterior (a minute)
+def test_the_log_posterior_is_minus_infinity_where_the_model_fails(small):
+    """A sampler's trajectory can reach where the model fails (a wear
+    coefficient e^30 times the fit's, a rod too long to assemble); there the
+    log posterior is -inf with a zero gradient, and the program goes on.
+    Elsewhere its gradient is the central difference of its value."""
+    data, fitter, base = small
+    log_p = fitter.log_posterior(base)
+    value_and_grad = jax.jit(jax.value_and_grad(log_p))
+    z = np.asarray(base.notes["z"], float)
+    for far in (z + [100.0, 0.0], z + [0.0, 1e4]):   # tau 0.3: e^30, e^3000
+        value, grad = value_and_grad(jnp.asarray(far))
+        assert float(value) == -math.inf
+        np.testing.assert_array_equal(np.asarray(grad), 0.0)
+    probe = z + [0.3, -0.2]     # away from the fit, where the gradient is not ~0
+    _, grad = value_and_grad(jnp.asarray(probe))
+    h = 1e-5
+    for i in range(z.size):
+        e = np.zeros(z.size)
+        e[i] = h
+        fd = (float(log_p(jnp.asarray(probe + e))) - float(log_p(jnp.asarray(probe - e)))) / (2 * h)
+        assert float(grad[i]) == pytest.approx(fd, rel=1e-5, abs=1e-6)
+
+
 @pytest.mark.extended  # compiles NUTS on the small campaign's model twice (a minute)
 def test_vectorised_chains_are_the_chains_run_one_after_another(small):
     """The chains as one vectorised program (an accelerator's default) draw

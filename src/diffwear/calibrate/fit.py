@@ -426,39 +426,41 @@ class Fitter:
 
     def log_posterior(self, fit: "FitResult"):
         """z -> log p(z | data) up to a constant, a JAX function of ``fit``'s
-        unknowns (`posterior` module notes; -inf outside the layout's bounds).
-        Its gradient is one reverse pass of the model (a sampler asks for a
-        scalar's gradient: one pass, where the fit's forward-mode program
-        would push one tangent per unknown), zeroed where the model fails."""
+        unknowns (`posterior` module notes; -inf outside the layout's bounds
+        and where the model fails).  Its gradient is one reverse pass of the
+        model (a sampler asks for a scalar's gradient: one pass, where the
+        fit's forward-mode program would push one tangent per unknown),
+        zeroed where the model fails.  Outside the bounds (a strength past
+        its physical limit, where the model need not be defined) the model
+        is evaluated at the fit instead: a sampler's trajectory can go there."""
         lay: Layout = fit.notes["layout"]
         rows = jnp.asarray(np.asarray(fit.notes["rows"], bool))
         tangents = jnp.asarray(lay.tangents)
         prior = jnp.asarray(lay.prior_index)
         lower, upper = jnp.asarray(lay.lower), jnp.asarray(lay.upper)
+        z_fit = jnp.asarray(fit.notes["z"], dtype=float)
         outputs = self._raw_outputs
 
-        def fit_residuals(z):
-            return jnp.where(rows, outputs(tangents.T @ z)[0], 0.0)
-
         def misfit(z):
-            r = fit_residuals(z)
-            # double where: a point the model cannot reach adds nothing, and
-            # no NaN flows back through it
+            inside = jnp.all((z >= lower) & (z <= upper))
+            # double where: outside the bounds the model runs at the fit
+            r = jnp.where(rows, outputs(tangents.T @ jnp.where(inside, z, z_fit))[0], 0.0)
+            # a point the model cannot reach adds nothing, and no NaN flows
+            # back through it; the value says the model failed
             finite = jnp.isfinite(r)
             safe = jnp.where(finite, r, 0.0)
-            return -0.5 * (safe @ safe + z[prior] @ z[prior]), jnp.all(finite)
+            value = -0.5 * (safe @ safe + z[prior] @ z[prior])
+            return value, inside & jnp.all(finite)
 
         @jax.custom_vjp
         def log_p(z):
-            return _bounded(z, *misfit(z))
-
-        def _bounded(z, value, finite):
-            inside = jnp.all((z >= lower) & (z <= upper)) & finite
-            return jnp.where(inside, value, -jnp.inf)
+            value, ok = misfit(z)
+            return jnp.where(ok, value, -jnp.inf)
 
         def forward(z):
-            (value, finite), grad = jax.value_and_grad(misfit, has_aux=True)(z)
-            return _bounded(z, value, finite), jnp.where(jnp.all(jnp.isfinite(grad)), grad, 0.0)
+            (value, ok), grad = jax.value_and_grad(misfit, has_aux=True)(z)
+            return (jnp.where(ok, value, -jnp.inf),
+                    jnp.where(ok & jnp.all(jnp.isfinite(grad)), grad, 0.0))
 
         def backward(grad, g):
             return (g * grad,)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# NUTS on the shipped campaigns on a GPU machine: the models the calibration
-# loop chose (`posterior_nuts.py --choose`, on any machine, written to
-# benchmarks/records/posterior_nuts_models.json) sampled by `--chosen`, the
+# NUTS on the shipped campaigns on a GPU machine: the models the shipped
+# calibrations chose (refitted by `posterior_nuts.py --choose` on any machine,
+# written to benchmarks/records/posterior_nuts_models.json) sampled by `--chosen`, the
 # four chains of a campaign vectorised on the GPU, PROCS campaigns at a time;
 # the same host's CPU times one gradient of the first for comparison.
 #

@@ -43,7 +43,8 @@ def test_assembly_derivative_is_the_implicit_one_in_both_modes():
 
 
 def test_assembly_value_is_the_root_itself():
-    """The derivative's Newton step adds exactly zero to the root."""
+    """The derivative rule leaves the value alone: the same root jitted or
+    not, Phi = 0 there."""
     guess = _guess()
     mech, _ = four_bar(d=D)
     q, ok = jax.jit(assemble)(mech, guess)

@@ -39,45 +39,61 @@ def _projection(mech: Mechanism, q, t, v, target):
     return v - jm.T @ mu
 
 
+def _kkt(z, inputs):
+    """The first-order conditions [M (q - q_guess) + Phi_q^T mu ; Phi] of
+    `assemble` at z = [q, mu], ``inputs`` = (mech, q_guess, t)."""
+    mech, q_guess, t = inputs
+    mdiag = mech.mass_diagonal()
+    q, mu = z[: mech.n_coords], z[mech.n_coords :]
+    jac = mech.phi_q(q, t)
+    return jnp.concatenate([(mdiag / jnp.mean(mdiag)) * (q - q_guess) + jac.T @ mu, mech.phi(q, t)])
+
+
+@eqx.filter_custom_jvp
+def _at_root(root, inputs):
+    """``root``, a zero of `_kkt` at ``inputs``, differentiated implicitly
+    (`assemble`)."""
+    return root
+
+
+@_at_root.def_jvp
+def _at_root_jvp(primals, tangents):
+    root, inputs = primals
+    _, t_inputs = tangents
+    dynamic, static = eqx.partition(inputs, eqx.is_inexact_array)
+    t_dynamic = jax.tree_util.tree_map(
+        lambda x, t: None if x is None else (jnp.zeros_like(x) if t is None else t),
+        dynamic, t_inputs, is_leaf=lambda x: x is None)
+    _, d_kkt = jax.jvp(lambda d: _kkt(root, eqx.combine(d, static)), (dynamic,), (t_dynamic,))
+    # dz = -J^-1 dF: NaN, not an error, where J is singular or dF is NaN
+    return root, -jnp.linalg.solve(jax.jacfwd(_kkt)(root, inputs), d_kkt)
+
+
 def assemble(mech: Mechanism, q_guess, t=0.0, *, tol=1e-12, max_steps=64):
     """Configuration q with Phi(q, t) = 0 closest (M-norm) to ``q_guess``.
 
     Returns ``(q, converged)``; `check_assembly` raises a clear error for an
     unusable result.  Jit- and grad-safe: the root is found on the inputs with
-    their derivatives stopped, and its derivative is that of one Newton step
-    taken at the root (dz = -J^-1 dF, the implicit function theorem), whose
-    value is zero.  A failed evaluation (a NaN flowing back from a model that
-    could not be evaluated, a singular Jacobian) then gives a NaN derivative
-    that the caller can see, where the root finder's own implicit derivative
-    would stop the whole program in its linear solve.
+    their derivatives stopped, and differentiated by the implicit function
+    theorem (dz = -J^-1 dF, `_at_root`) with a plain linear solve.  A failed
+    evaluation (a NaN flowing back from a model that could not be evaluated,
+    a singular Jacobian) then gives a NaN derivative that the caller can see,
+    where the root finder's own implicit derivative would stop the whole
+    program in its linear solve.
     """
     q_guess = jnp.asarray(q_guess, dtype=float)
     t = jnp.asarray(t, dtype=q_guess.dtype)
     m = mech.n_constraints
     if m == 0:
         return q_guess, jnp.array(True)
-
-    def kkt(z, inputs):
-        mech, q_guess, t = inputs
-        mdiag = mech.mass_diagonal()
-        q, mu = z[: mech.n_coords], z[mech.n_coords :]
-        jac = mech.phi_q(q, t)
-        return jnp.concatenate(
-            [(mdiag / jnp.mean(mdiag)) * (q - q_guess) + jac.T @ mu, mech.phi(q, t)]
-        )
-
     inputs = (mech, q_guess, t)
     dynamic, static = eqx.partition(inputs, eqx.is_inexact_array)
     frozen = eqx.combine(jax.lax.stop_gradient(dynamic), static)
-    z0 = jnp.concatenate([frozen[1], jnp.zeros(m, dtype=q_guess.dtype)])
+    z0 = jnp.concatenate([jax.lax.stop_gradient(q_guess), jnp.zeros(m, dtype=q_guess.dtype)])
     sol: optx.Solution = optx.root_find(
-        kkt, optx.Newton(rtol=tol, atol=tol), z0, args=frozen, max_steps=max_steps, throw=False
+        _kkt, optx.Newton(rtol=tol, atol=tol), z0, args=frozen, max_steps=max_steps, throw=False
     )
-    root = sol.value
-    step = jnp.linalg.solve(jax.jacfwd(kkt)(root, frozen), kkt(root, inputs))
-    # double where: the step's value is exactly zero, its derivative the root's
-    z = root - jnp.where(jnp.all(jnp.isfinite(step)), step - jax.lax.stop_gradient(step), 0.0)
-    q = z[: mech.n_coords]
+    q = _at_root(sol.value, inputs)[: mech.n_coords]
     ok = (sol.result == optx.RESULTS.successful) & jnp.all(jnp.isfinite(q))
     return q, ok
 

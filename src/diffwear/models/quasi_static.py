@@ -36,6 +36,7 @@ from ..contact import ContactHistory
 from ..errors import InputError
 from ..mechanism import GROUND, Mechanism
 from ..mechanism.geometry import safe_angle, safe_norm
+from ..quasistatic.joint import EQUILIBRIUM
 from ..quasistatic.loads import CycleLoads, JointLoads, clearance_joints, cycle_loads
 from ..quasistatic.lubricated import joint_model
 from ..wear._engine import AbstractWearTerm, CycleWear, Stop
@@ -313,6 +314,9 @@ def _film_numbers(joint, loads: JointLoads, eq) -> dict:
             "asperity_load": eq.normal_load, "ok": eq.ok}
 
 
+_KEEP_EQUILIBRIUM = jax.checkpoint_policies.save_only_these_names(EQUILIBRIUM)
+
+
 class _JointWear(AbstractWearTerm):
     """One quasi-static joint's wear per cycle at the clearance profile
     c0 + g h (g the modifier's growth), its rate and response modulated by
@@ -327,6 +331,12 @@ class _JointWear(AbstractWearTerm):
         return 1.0 if self.modifier is None else self.modifier.growth()
 
     def cycle(self, h, memory) -> CycleWear:
+        # a reverse pass keeps of each cycle only its pin offsets and
+        # recomputes the rest: stored, the (samples x nodes) arrays of every
+        # step cost 2.5x the recomputation (benchmarks/records/reverse_pass.json)
+        return jax.checkpoint(_JointWear._cycle, policy=_KEEP_EQUILIBRIUM)(self, h, memory)
+
+    def _cycle(self, h, memory) -> CycleWear:
         seen = self._growth() * h[0]
         dw, _, eq = self.joint.cycle_wear(seen, self.loads, memory)
         a = self.joint.wear_response(seen, self.loads, eq)

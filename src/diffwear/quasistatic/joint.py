@@ -46,6 +46,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jax import lax
+from jax.ad_checkpoint import checkpoint_name
 from jaxtyping import Array, Bool, Float
 
 from ..contact import smoothing
@@ -61,6 +62,11 @@ from .loads import JointLoads
 # penetration): 1e-10 relative, i.e. ~1e-15 m on the rig's 33 um clearance.
 EQUILIBRIUM_TOL = 1e-10
 _NEWTON_STEPS = 60
+# The name of an equilibrium's pin offsets inside the derivative rules of its
+# solves: a reverse pass through the wear integration keeps these and
+# recomputes the rest of each cycle, never the solves' iterations
+# (`diffwear.models.quasi_static`, `_JointWear.cycle`).
+EQUILIBRIUM = "pin_equilibrium"
 # Below this load [N] the equilibrium is not defined (no spring compressed);
 # such a sample is flagged by `contact_margin` and solved with this floor.
 _LOAD_FLOOR = 1e-9
@@ -186,6 +192,7 @@ def _pin_offset_jvp(primals, tangents):
     the 2 x 2 solve in closed form."""
     c, load, kc, width, guess = primals
     e, ok = _pin_offset(*primals)
+    e = checkpoint_name(e, EQUILIBRIUM)
     primals, tangents = primals[:4], tangents[:4]  # the guess does not move the root
     n = c.shape[0]
     u = _directions(n)

@@ -90,6 +90,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import lax
+from jax.ad_checkpoint import checkpoint_name
 from jaxtyping import Array, Bool, Float
 
 from ..contact.clearance_joint import ClearanceJoint
@@ -100,7 +101,7 @@ from ..contact.mixed import MixedLubrication, asperity_share
 from ..contact.profile import BushingProfile
 from ..errors import InputError
 from ..mechanism.geometry import safe_norm
-from .joint import QuasiStaticJoint, _solve_2x2, pin_offset
+from .joint import EQUILIBRIUM, QuasiStaticJoint, _solve_2x2, pin_offset
 from .loads import JointLoads
 
 # Newton tolerance on the force balance, relative to the load: 1e-10.
@@ -492,6 +493,7 @@ def _offset_jvp(primals, tangents):
     offset, e.g. of the wear response in a life's tangent) are exact too."""
     joint, load, omega, clearance, _ = primals
     e, ok = _offset(*primals)
+    e = checkpoint_name(e, EQUILIBRIUM)
 
     def balance(j, w, om, c):
         return j._balance(e, w, om, c)
@@ -527,6 +529,7 @@ def _orbit_jvp(primals, tangents):
     primal output of `_orbit` itself, so the rule differentiates again."""
     joint, force, omega, dt, clearance, _ = primals
     e, ok = _orbit(*primals)
+    e = checkpoint_name(e, EQUILIBRIUM)
     previous = jnp.roll(e, 1, axis=0)
 
     def residuals(j, w, om, step, c):

@@ -332,8 +332,9 @@ class _JointWear(AbstractWearTerm):
 
     def cycle(self, h, memory) -> CycleWear:
         # a reverse pass keeps of each cycle only its pin offsets and
-        # recomputes the rest: stored, the (samples x nodes) arrays of every
-        # step cost 2.5x the recomputation (benchmarks/records/reverse_pass.json)
+        # recomputes the rest: a gradient that stored the cycle's (samples x
+        # nodes) arrays for every step cost 2.4-2.6x as much
+        # (benchmarks/experiments/reverse_pass.py)
         return jax.checkpoint(_JointWear._cycle, policy=_KEEP_EQUILIBRIUM)(self, h, memory)
 
     def _cycle(self, h, memory) -> CycleWear:

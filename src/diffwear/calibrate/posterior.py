@@ -24,11 +24,17 @@ coefficients, and flat priors on the rest.  Two ways to it:
   the sampler.
 * **NUTS** (`method="nuts"`): the No-U-Turn sampler (Hoffman and Gelman, J.
   Mach. Learn. Res. 15 (2014) 1593; blackjax) on the same compiled model,
-  its gradient one reverse pass of the model (`Fitter.log_posterior`), the
-  Gauss-Newton covariance as its inverse mass matrix (so that only
-  the step size is adapted), `CHAINS` chains, the rank-normalised split
-  R-hat and the bulk effective sample size of each number reported (Vehtari,
-  Gelman, Simpson, Carpenter and Buerkner, Bayesian Anal. 16 (2021) 667).
+  its gradient one reverse pass of the model (`Fitter.log_posterior`),
+  `CHAINS` chains, the rank-normalised split R-hat and the bulk effective
+  sample size of each number reported (Vehtari, Gelman, Simpson, Carpenter
+  and Buerkner, Bayesian Anal. 16 (2021) 667).  It samples u, the numbers
+  in the coordinates that whiten the Gauss-Newton covariance C (z = z_fit +
+  R u, R R^T = C), where the posterior is near a unit Gaussian: the
+  warm-up adapts the step size and a mass matrix from the identity, and
+  its estimate is shrunk towards 1e-3 I (Stan's regularisation), which
+  presumes numbers of unit scale (in z a number whose spread is 1e-3 is
+  given a 100 times too wide mass-matrix entry, and every trajectory
+  diverges).
 
 Either way the posterior is a set of weighted draws with the model's
 predictions at every measured point, so the predictive band of a
@@ -284,13 +290,54 @@ def laplace(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED
     return Posterior("laplace", fit, z, w, residuals, diagnostics)
 
 
+def nuts_chains(logdensity, mean, cov, chains: int = CHAINS, warmup: int = WARMUP,
+                samples: int = SAMPLES, seed: int = SEED, parallel: bool | None = None):
+    """NUTS chains on ``logdensity`` (z -> log p, a JAX function) sampled in
+    the coordinates u that whiten ``cov`` about ``mean`` (z = mean + R u;
+    module notes): the draws of z (chains, samples, d) and whether each
+    transition diverged (chains, samples).  ``parallel``: see `nuts`."""
+    import blackjax
+
+    z_hat = jnp.asarray(mean, dtype=float)
+    root = jnp.asarray(_whitening(np.asarray(cov, float)))
+    key = jax.random.PRNGKey(seed)
+
+    def whitened(u):   # the log density at z = z_hat + R u
+        return logdensity(z_hat + root @ u)
+
+    @jax.jit
+    def one_chain(key):
+        k_init, k_warm, k_run = jax.random.split(key, 3)
+        start = 0.5 * jax.random.normal(k_init, z_hat.shape)
+        adapt = blackjax.window_adaptation(
+            blackjax.nuts, whitened, is_mass_matrix_diagonal=False,
+            initial_inverse_mass_matrix=jnp.eye(z_hat.shape[0]), initial_step_size=0.5,
+            imm_shrinkage_to_previous=0.9)
+        (state, params), _ = adapt.run(k_warm, start, num_steps=warmup)
+        kernel = blackjax.nuts(whitened, **params).step
+
+        def step(state, k):
+            state, info = kernel(k, state)
+            return state, (state.position, info.is_divergent)
+
+        _, (positions, divergent) = jax.lax.scan(step, state, jax.random.split(k_run, samples))
+        return z_hat + positions @ root.T, divergent
+
+    keys = jax.random.split(key, chains)
+    if jax.default_backend() != "cpu" if parallel is None else parallel:
+        p, d = jax.vmap(one_chain)(keys)
+        return np.asarray(p), np.asarray(d)
+    runs = [one_chain(k) for k in keys]
+    return (np.stack([np.asarray(p) for p, _ in runs]),    # (chains, samples, d)
+            np.stack([np.asarray(d) for _, d in runs]))
+
+
 def nuts(fitter: Fitter, fit: FitResult, chains: int = CHAINS, warmup: int = WARMUP,
          samples: int = SAMPLES, seed: int = SEED, parallel: bool | None = None) -> Posterior:
     """NUTS on the exact model (module notes).  ``parallel``: the chains as
     one vectorised program (default: on an accelerator, where the chains'
     arithmetic runs side by side; on a CPU it runs no faster than the chains
     one after another, and each chain's tree depth then sets its own cost)."""
-    import blackjax
     from blackjax.diagnostics import ess_bulk, rhat
 
     lay = fit.notes["layout"]
@@ -298,38 +345,9 @@ def nuts(fitter: Fitter, fit: FitResult, chains: int = CHAINS, warmup: int = WAR
         raise InputError(f"posterior sampling: {fit.n_fit} fit points for {lay.size} numbers "
                          "leave no degree of freedom; allowed: more fit points than numbers "
                          "(or --posterior laplace)")
-    logdensity = fitter.log_posterior(fit)
-    cov = _symmetric(np.asarray(fit.notes["cov"], float))
-    z_hat = jnp.asarray(fit.notes["z"], dtype=float)
-    root = jnp.asarray(_root(cov))
-    key = jax.random.PRNGKey(seed)
-
-    @jax.jit
-    def one_chain(key):
-        k_init, k_warm, k_run = jax.random.split(key, 3)
-        start = z_hat + 0.5 * root @ jax.random.normal(k_init, z_hat.shape)
-        adapt = blackjax.window_adaptation(
-            blackjax.nuts, logdensity, is_mass_matrix_diagonal=False,
-            initial_inverse_mass_matrix=jnp.asarray(cov), initial_step_size=0.5,
-            imm_shrinkage_to_previous=0.9)
-        (state, params), _ = adapt.run(k_warm, start, num_steps=warmup)
-        kernel = blackjax.nuts(logdensity, **params).step
-
-        def step(state, k):
-            state, info = kernel(k, state)
-            return state, (state.position, info.is_divergent)
-
-        _, (positions, divergent) = jax.lax.scan(step, state, jax.random.split(k_run, samples))
-        return positions, divergent
-
-    keys = jax.random.split(key, chains)
-    if jax.default_backend() != "cpu" if parallel is None else parallel:
-        p, d = jax.vmap(one_chain)(keys)
-        chain_z, divergent = np.asarray(p), np.asarray(d)
-    else:
-        runs = [one_chain(k) for k in keys]
-        chain_z = np.stack([np.asarray(p) for p, _ in runs])   # (chains, samples, d)
-        divergent = np.stack([np.asarray(d) for _, d in runs])
+    chain_z, divergent = nuts_chains(fitter.log_posterior(fit), np.asarray(fit.notes["z"], float),
+                                     _symmetric(np.asarray(fit.notes["cov"], float)),
+                                     chains, warmup, samples, seed, parallel)
     values = lay.natural(chain_z.reshape(-1, lay.size))
     stacked = np.stack([v.reshape(chains, samples) for v in values.values()], axis=-1)
     r_hat = np.array([float(rhat(jnp.asarray(stacked[..., i]))) for i in range(lay.size)])
@@ -411,6 +429,13 @@ def require_sampling(data, problem) -> None:
 
 def _symmetric(a: np.ndarray) -> np.ndarray:
     return 0.5 * (a + a.T)
+
+
+def _whitening(cov: np.ndarray) -> np.ndarray:
+    """R with R R^T = ``cov``, invertible: the eigenvalues floored at 1e-12 of
+    the largest (u then moves z along every direction)."""
+    lam, vec = np.linalg.eigh(cov)
+    return vec * np.sqrt(np.maximum(lam, 1e-12 * max(float(np.max(lam)), 1e-300)))
 
 
 def _root(cov: np.ndarray) -> np.ndarray:

@@ -138,7 +138,7 @@ def one(name: str, model: dict | None = None, sample: bool = True,
         return {"campaign": name, "numbers": final.notes["layout"].size,
                 "gradient_s": grad_s, **device}
     t1 = time.perf_counter()
-    post = nuts(fitter, final)
+    post = nuts(fitter, final, log=lambda line: print(f"{name}: {line}", flush=True))
     d = post.diagnostics
     names = list(post.layout.natural(post.z[:1]))
     return {"campaign": name, "model": [*final.effects,

@@ -44,8 +44,10 @@ def test_nuts_draws_numbers_whose_spreads_differ_by_four_orders(given):
     spreads = np.array([1e-3, 0.4, 30.0])
     mean, cov, log_p = _gaussian(spreads, 0.8)
     given_cov = cov if given == "exact" else np.diag((2.0 * spreads) ** 2)
-    z, divergent = nuts_chains(jax.jit(log_p), mean, given_cov, parallel=False)
-    assert z.shape == (CHAINS, SAMPLES, 3) and WARMUP > 0
+    lines: list[str] = []
+    z, divergent = nuts_chains(jax.jit(log_p), mean, given_cov, parallel=False, log=lines.append)
+    assert z.shape == (CHAINS, SAMPLES, 3)
+    assert len(lines) == CHAINS and f"chain {CHAINS} of {CHAINS} ({WARMUP} warm-up" in lines[-1]
     assert int(divergent.sum()) == 0
     r_hat = np.array([float(rhat(jnp.asarray(z[..., i]))) for i in range(3)])
     assert np.all(r_hat <= 1.01), r_hat

@@ -1140,7 +1140,7 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
     t0 = time.perf_counter()
     exact = getattr(fitter.problem.model, "name", "") == "quasi-static"
     method = outlook.method if exact else "linear"
-    c.posterior = refined(fitter, posterior_of(fitter, final, method), log)
+    c.posterior = refined(fitter, posterior_of(fitter, final, method, log), log)
     if c.posterior.fit is not final:   # the same model at a better minimum
         c.final = final = c.posterior.fit
         for a in (*c.adopted, *c.partial, *([c.discrepancy] if c.discrepancy else [])):
@@ -1152,7 +1152,7 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
         alternatives = (first.model, second.model)
         # the data have not chosen: the bands and the life are over both, by their weights
         weight, _ = second_weight(first, second)
-        c.open_posterior = (refined(fitter, posterior_of(fitter, second.model, method), log),
+        c.open_posterior = (refined(fitter, posterior_of(fitter, second.model, method, log), log),
                             weight)
     p = c.problem
     c.coverage = {"fit": coverage(c.pool, p.sigma, p.y, ~p.holdout),

@@ -291,11 +291,15 @@ def laplace(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED
 
 
 def nuts_chains(logdensity, mean, cov, chains: int = CHAINS, warmup: int = WARMUP,
-                samples: int = SAMPLES, seed: int = SEED, parallel: bool | None = None):
+                samples: int = SAMPLES, seed: int = SEED, parallel: bool | None = None,
+                log=None):
     """NUTS chains on ``logdensity`` (z -> log p, a JAX function) sampled in
     the coordinates u that whiten ``cov`` about ``mean`` (z = mean + R u;
     module notes): the draws of z (chains, samples, d) and whether each
-    transition diverged (chains, samples).  ``parallel``: see `nuts`."""
+    transition diverged (chains, samples).  ``parallel``: see `nuts`;
+    ``log``: a line as each chain ends, one after another."""
+    import time
+
     import blackjax
 
     z_hat = jnp.asarray(mean, dtype=float)
@@ -327,17 +331,25 @@ def nuts_chains(logdensity, mean, cov, chains: int = CHAINS, warmup: int = WARMU
     if jax.default_backend() != "cpu" if parallel is None else parallel:
         p, d = jax.vmap(one_chain)(keys)
         return np.asarray(p), np.asarray(d)
-    runs = [one_chain(k) for k in keys]
+    runs = []
+    for i, k in enumerate(keys):
+        t0 = time.perf_counter()
+        runs.append(jax.block_until_ready(one_chain(k)))
+        if log is not None:
+            log(f"posterior: NUTS chain {i + 1} of {chains} ({warmup} warm-up steps, "
+                f"{samples} draws) in {time.perf_counter() - t0:.0f} s")
     return (np.stack([np.asarray(p) for p, _ in runs]),    # (chains, samples, d)
             np.stack([np.asarray(d) for _, d in runs]))
 
 
 def nuts(fitter: Fitter, fit: FitResult, chains: int = CHAINS, warmup: int = WARMUP,
-         samples: int = SAMPLES, seed: int = SEED, parallel: bool | None = None) -> Posterior:
+         samples: int = SAMPLES, seed: int = SEED, parallel: bool | None = None,
+         log=None) -> Posterior:
     """NUTS on the exact model (module notes).  ``parallel``: the chains as
     one vectorised program (default: on an accelerator, where the chains'
     arithmetic runs side by side; on a CPU it runs no faster than the chains
-    one after another, and each chain's tree depth then sets its own cost)."""
+    one after another, and each chain's tree depth then sets its own cost);
+    ``log``: a line as each chain ends (chains one after another)."""
     from blackjax.diagnostics import ess_bulk, rhat
 
     lay = fit.notes["layout"]
@@ -347,7 +359,7 @@ def nuts(fitter: Fitter, fit: FitResult, chains: int = CHAINS, warmup: int = WAR
                          "(or --posterior laplace)")
     chain_z, divergent = nuts_chains(fitter.log_posterior(fit), np.asarray(fit.notes["z"], float),
                                      _symmetric(np.asarray(fit.notes["cov"], float)),
-                                     chains, warmup, samples, seed, parallel)
+                                     chains, warmup, samples, seed, parallel, log)
     values = lay.natural(chain_z.reshape(-1, lay.size))
     stacked = np.stack([v.reshape(chains, samples) for v in values.values()], axis=-1)
     r_hat = np.array([float(rhat(jnp.asarray(stacked[..., i]))) for i in range(lay.size)])
@@ -398,16 +410,16 @@ def refined(fitter: Fitter, post: Posterior, log=print) -> Posterior:
         return post
     log(f"posterior: a draw lay {gain:.1f} above the fit in log posterior; the fit refined "
         f"from it (chi2 {post.fit.chi2_fit:.1f} -> {fit.chi2_fit:.1f})")
-    again = posterior(fitter, fit, post.method)
+    again = posterior(fitter, fit, post.method, log)
     again.diagnostics["refined_from_chi2"] = post.fit.chi2_fit
     return again
 
 
-def posterior(fitter: Fitter, fit: FitResult, method: str = "laplace") -> Posterior:
+def posterior(fitter: Fitter, fit: FitResult, method: str = "laplace", log=None) -> Posterior:
     if method not in (*METHODS, "linear"):
         raise InputError(f"--posterior {method!r}: allowed {', '.join(METHODS)}")
     if method == "nuts":
-        return nuts(fitter, fit)
+        return nuts(fitter, fit, log=log)
     return laplace(fitter, fit) if method == "laplace" else linear(fitter, fit)
 
 

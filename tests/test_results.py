@@ -31,9 +31,10 @@ STORED = {"ok": 0, "wall_reached": 1, "cycle_model_failed": 2, "run_ended_early"
 
 def test_each_member_keeps_its_stored_code_and_reads_back():
     assert [name(m) for m in members()] == list(STORED)
+    assert len(RESULTS) == len(STORED)  # type: ignore[arg-type]  # (the metaclass's len)
     for key, value in STORED.items():
         member = getattr(RESULTS, key)
-        assert int(code(member)) == value
+        assert int(code(member)) == value and name(member) == key
         assert bool(from_code(value) == member) and bool(from_code(float(value)) == member)
         assert message(from_code(value)) == RESULTS[member]
     assert message(RESULTS.ok) == "ok" and words(RESULTS.wall_reached) == "wall reached"

@@ -65,15 +65,20 @@ def from_code(codes) -> RESULTS:
     return _with_code(values.astype(np.int32))
 
 
+# the members' names in the order of their codes (equinox keeps its own
+# table private; the names are read through the public attribute lookup, and
+# a test checks that they are all of its members)
+_NAMES = ("ok", "wall_reached", "cycle_model_failed", "run_ended_early", "contact_lost")
+
+
 def members() -> tuple[RESULTS, ...]:
     """Every member, in the order of their codes."""
-    return tuple(cast(RESULTS, v) for v in RESULTS._name_to_item.values())  # its own table
+    return tuple(cast(RESULTS, getattr(RESULTS, n)) for n in _NAMES)
 
 
 def name(status) -> str:
     """The member's name of a concrete scalar ``status`` ("ok", "wall_reached", ...)."""
-    index = int(code(status))
-    return next(k for k, v in RESULTS._name_to_item.items() if int(code(v)) == index)
+    return _NAMES[int(code(status))]
 
 
 def message(status) -> str:

@@ -2,11 +2,12 @@
 the one its calibration loop chose (`diffwear.calibrate.identify.calibrate`,
 the quasi-static model, no dynamic check, no look ahead), or, with
 ``--choose`` / ``--chosen``, the one its shipped calibration chose (dynamic
-check included); NUTS (`diffwear.calibrate.posterior.nuts`: four chains, the
-Gauss-Newton covariance as the mass matrix) then samples that model's
+check included); NUTS (`diffwear.calibrate.posterior.nuts`: four chains, in the
+coordinates that whiten the Gauss-Newton covariance) then samples that model's
 numbers.  Recorded per campaign: the largest rank-normalised split R-hat
 over the numbers (goal <= 1.01), the smallest bulk ESS, the divergences, the
-time of one gradient of the log posterior, the times and the device.
+time of one gradient of the log posterior, each chain's mean and spread
+of each number, the times and the device.
 
     python benchmarks/posterior_nuts.py [CAMPAIGN ...] [--json PATH]
     python benchmarks/posterior_nuts.py [CAMPAIGN ...] --choose MODELS.json
@@ -148,6 +149,8 @@ def one(name: str, model: dict | None = None, sample: bool = True,
             **({"chi2_fit_chosen": model["chi2_fit"]} if model else {}),
             "numbers": len(names), "max_r_hat": d["max_r_hat"], "min_ess": d["min_ess"],
             "r_hat": dict(zip(names, map(float, d["r_hat"]))),
+            "chain_mean": dict(zip(names, np.asarray(d["chain_mean"]).T.tolist())),
+            "chain_std": dict(zip(names, np.asarray(d["chain_std"]).T.tolist())),
             "divergences": d["divergences"], "draws": d["draws_sampled"],
             "meets_goal": d["max_r_hat"] <= GOAL_R_HAT,
             "loop_s": loop_s, "gradient_s": grad_s, "nuts_s": time.perf_counter() - t1,

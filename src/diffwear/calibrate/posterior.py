@@ -371,7 +371,10 @@ def nuts(fitter: Fitter, fit: FitResult, chains: int = CHAINS, warmup: int = WAR
     w = np.full(z_kept.shape[0], 1.0 / z_kept.shape[0])
     diagnostics = {"r_hat": r_hat, "ess": ess, "max_r_hat": float(np.max(r_hat)),
                    "min_ess": float(np.min(ess)),
-                   "divergences": int(np.sum(divergent)), "draws_sampled": int(z.shape[0])}
+                   "divergences": int(np.sum(divergent)), "draws_sampled": int(z.shape[0]),
+                   # each chain's mean and spread of each number (chains, d): where
+                   # an R-hat above 1 comes from
+                   "chain_mean": stacked.mean(axis=1), "chain_std": stacked.std(axis=1)}
     return Posterior("nuts", fit, z_kept, w, residuals, diagnostics, chains)
 
 

@@ -293,7 +293,11 @@ def test_life_jacobian_matches_central_differences_at_the_2mm_limit():
     err = np.abs(jac - fd) / scale
     assert np.all(np.isfinite(jac))
     assert err.max() < 1e-4, err.max(axis=2)
-    grads = np.asarray(jax.jit(jax.vmap(jax.jacrev(model)))(xs))
+    # reverse mode one design at a time: on XLA's CPU runtime (jaxlib 0.10.2)
+    # the vmapped reverse-mode program of this life can stall with every
+    # worker thread idle (docs/notes/cpu-sweeps.md)
+    rev = jax.jit(jax.jacrev(model))
+    grads = np.stack([np.asarray(rev(x)) for x in xs])
     np.testing.assert_allclose(grads, jac, rtol=0, atol=1e-8 * np.abs(jac).max())
     # life rises with the joint's own depth everywhere in the box
     assert np.all(jac[:, 0, 2] > 0) and np.all(jac[:, 1, 3] > 0)

@@ -6,8 +6,13 @@ code.  Each run below is the script's own (`run`, then its thinning of the
 curves, `thin_csv`), compared with the stored files: every column of every
 stored CSV, and every number of the stored summary except times and file
 lists.  Stored values carry 6 significant digits (`SIGNIFICANT`), so a
-column matches within a last-digit flip (2e-5 of the value) or 1e-6 of its
-largest value (a zero crossing).
+column matches within a last-digit flip (2e-5 of the value) or a floor of its
+largest value: 1e-4 for the wear's histories and profiles (integrals over
+the run), 3e-2 for the forces and pin loci of one cycle (`ONE_CYCLE`).  A
+clearance joint's impacts amplify rounding: the same code and jaxlib on two
+machines gave the rig's one-cycle curves 1.2e-2 of a column's largest value
+apart (its joint force fy_N; the pin's offset 9e-3), its wear histories
+1.4e-5 and its summary numbers 1.5e-6 of the value apart.
 
 The rig's study (the site's main figures, ~1 min) runs under ``--extended``
 (CI); the others (up to ~5 min each) under ``--long``."""
@@ -27,7 +32,11 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "design_studies" / "docs_figure_data.py"
 RTOL = 2e-5    # a last-digit flip of a 6-digit value: <= 1e-5 of it
-FLOOR = 1e-6   # of a column's largest |value|: a value near a zero crossing
+FLOOR = 1e-4   # of a column's largest |value|: an integral over the run (7x the measured 1.4e-5)
+# files of one cycle's curves (forces, pin locus): 2.5x the measured 1.2e-2
+ONE_CYCLE = ("_first_cycle", "_last_cycle")
+ONE_CYCLE_FLOOR = 3e-2
+SUMMARY_RTOL = 1e-5  # a summary number (7x the measured 1.5e-6)
 # summary.json keys that change from run to run or name files, not results
 UNSTABLE = ("wall_time", "compile_time", "time_s", "_s", "files", "checkpoint", "file",
             "resumed_from_cycles", "wall_time_ratio")
@@ -78,7 +87,8 @@ def _assert_same_figure_data(name: str, fresh_dir: Path, thinned: Path) -> int:
             for col, x in a.items():
                 y = b[col]
                 assert x.shape == y.shape, (stored.name, col, x.shape, y.shape)
-                floor = FLOOR * float(np.max(np.abs(x), initial=0.0))
+                share = ONE_CYCLE_FLOOR if stored.stem.endswith(ONE_CYCLE) else FLOOR
+                floor = share * float(np.max(np.abs(x), initial=0.0))
                 np.testing.assert_allclose(y, x, rtol=RTOL, atol=floor,
                                            err_msg=f"{name}/{stored.name}: {col}")
                 compared += x.size
@@ -87,7 +97,8 @@ def _assert_same_figure_data(name: str, fresh_dir: Path, thinned: Path) -> int:
             b = _numbers(json.loads((fresh_dir / "summary.json").read_text()))
             assert set(a) == set(b), sorted(set(a) ^ set(b))
             for key, x in a.items():
-                assert math.isclose(b[key], x, rel_tol=1e-6, abs_tol=1e-12), (name, key, x, b[key])
+                assert math.isclose(b[key], x, rel_tol=SUMMARY_RTOL, abs_tol=1e-12), \
+                    (name, key, x, b[key])
             compared += len(a)
     return compared
 
@@ -121,7 +132,9 @@ def test_every_stored_run_is_checked_against_a_fresh_one():
 
 def test_the_comparison_tells_a_changed_curve_from_rounding(tmp_path):
     """The comparison itself: the stored rig profile written again at 6
-    digits passes; the same with one value moved by 1e-4 fails."""
+    digits passes; the same with its deepest value moved by 1e-3 (10x the
+    histories' floor) fails, and so does one cycle's largest force moved by
+    6 % (2x the one-cycle floor)."""
     script = _script()
     stored = script.STORE / "rig-21400" / "wear_profile.csv"
     fresh_dir = tmp_path / "fresh"
@@ -134,8 +147,19 @@ def test_the_comparison_tells_a_changed_curve_from_rounding(tmp_path):
     rows = stored.read_text().splitlines()
     head, values = rows[0], [r.split(",") for r in rows[1:]]
     k = int(np.argmax([float(v[1]) for v in values]))
-    values[k][1] = f"{float(values[k][1]) * (1 + 1e-4):.6g}"
+    values[k][1] = f"{float(values[k][1]) * (1 + 1e-3):.6g}"
     (fresh_dir / stored.name).write_text("\n".join([head, *map(",".join, values)]) + "\n")
     (tmp_path / "b").mkdir()
     with pytest.raises(AssertionError, match="wear_profile.csv: depth_mm"):
         _assert_same_figure_data("rig-21400", fresh_dir, tmp_path / "b")
+    (fresh_dir / stored.name).write_text(stored.read_text())
+    force = stored.parent / "joint_force_first_cycle.csv"
+    rows = force.read_text().splitlines()
+    head, values = rows[0], [r.split(",") for r in rows[1:]]
+    col = head.split(",").index("force_N")
+    k = int(np.argmax([float(v[col]) for v in values]))
+    values[k][col] = f"{float(values[k][col]) * 1.06:.6g}"
+    (fresh_dir / force.name).write_text("\n".join([head, *map(",".join, values)]) + "\n")
+    (tmp_path / "c").mkdir()
+    with pytest.raises(AssertionError, match="joint_force_first_cycle.csv: force_N"):
+        _assert_same_figure_data("rig-21400", fresh_dir, tmp_path / "c")

@@ -144,22 +144,24 @@ def test_the_comparison_tells_a_changed_curve_from_rounding(tmp_path):
         (fresh_dir / f.name).write_text(f.read_text())
     (tmp_path / "a").mkdir()
     assert _assert_same_figure_data("rig-21400", fresh_dir, tmp_path / "a") > 1000
-    rows = stored.read_text().splitlines()
-    head, values = rows[0], [r.split(",") for r in rows[1:]]
-    k = int(np.argmax([float(v[1]) for v in values]))
-    values[k][1] = f"{float(values[k][1]) * (1 + 1e-3):.6g}"
-    (fresh_dir / stored.name).write_text("\n".join([head, *map(",".join, values)]) + "\n")
+    _move_largest(stored, "depth_mm", 1 + 1e-3, fresh_dir / stored.name)
     (tmp_path / "b").mkdir()
     with pytest.raises(AssertionError, match="wear_profile.csv: depth_mm"):
         _assert_same_figure_data("rig-21400", fresh_dir, tmp_path / "b")
     (fresh_dir / stored.name).write_text(stored.read_text())
     force = stored.parent / "joint_force_first_cycle.csv"
-    rows = force.read_text().splitlines()
-    head, values = rows[0], [r.split(",") for r in rows[1:]]
-    col = head.split(",").index("force_N")
-    k = int(np.argmax([float(v[col]) for v in values]))
-    values[k][col] = f"{float(values[k][col]) * 1.06:.6g}"
-    (fresh_dir / force.name).write_text("\n".join([head, *map(",".join, values)]) + "\n")
+    _move_largest(force, "force_N", 1.06, fresh_dir / force.name)
     (tmp_path / "c").mkdir()
     with pytest.raises(AssertionError, match="joint_force_first_cycle.csv: force_N"):
         _assert_same_figure_data("rig-21400", fresh_dir, tmp_path / "c")
+
+
+def _move_largest(stored: Path, column: str, factor: float, out: Path) -> None:
+    """``stored`` written to ``out`` with ``column``'s largest value times
+    ``factor`` (at the stored 6 digits)."""
+    rows = stored.read_text().splitlines()
+    head, values = rows[0], [r.split(",") for r in rows[1:]]
+    col = head.split(",").index(column)
+    k = int(np.argmax([float(v[col]) for v in values]))
+    values[k][col] = f"{float(values[k][col]) * factor:.6g}"
+    out.write_text("\n".join([head, *map(",".join, values)]) + "\n")

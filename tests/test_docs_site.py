@@ -11,7 +11,11 @@ sources:
   (the links themselves are checked without a site);
 * every example page shows as many outputs and output images as its stored
   notebook holds, and no code cell unexecuted ("In [ ]");
-* every ``<img src>`` that is not inline data resolves to a file in the site.
+* every ``<img src>`` that is not inline data resolves to a file in the site;
+* no paragraph holds a line that begins as a list item or a table row does
+  (Markdown that Python-Markdown did not read as a list or a table: a list
+  straight after a paragraph, or a table or second paragraph indented less
+  than four spaces inside a list item).
 
 Without a site, the figure list of ``docs/figures.py`` is checked against
 the pages that link its figures (fast, no build).
@@ -153,6 +157,23 @@ def test_every_image_resolves_to_a_file(site):
             if not target.is_file() or target.stat().st_size == 0:
                 broken.append(f"{page.relative_to(site)}: {src}")
     assert not broken, "\n".join(broken)
+
+
+# a line of a paragraph that Markdown should have read as a list item or a
+# table row; code is blanked first, as it may hold either legitimately
+UNREAD_BLOCK = re.compile(r"^\s*(?:(?:[-*+]|\d+\.)\s.*|\|.*\|\s*)$", re.MULTILINE)
+PARAGRAPH = re.compile(r"<p>(.*?)</p>", re.DOTALL)
+CODE = re.compile(r"<pre.*?</pre>|<code.*?</code>", re.DOTALL)
+
+
+def test_no_list_or_table_shown_as_text(site):
+    unread = []
+    for page in sorted(site.rglob("*.html")):
+        html = CODE.sub("code", page.read_text())
+        for paragraph in PARAGRAPH.findall(html):
+            unread += [f"{page.relative_to(site)}: {line.strip()[:80]!r}"
+                       for line in UNREAD_BLOCK.findall(paragraph)]
+    assert not unread, "\n".join(unread)
 
 
 def test_drawn_figures_fit_the_page(site):

@@ -44,8 +44,8 @@ JOINT = "crank_rod"
 
 
 class RigWear(eqx.Module):
-    """Wear of the Ch. 7 rig's crank-rod PTFE bushing (`presets.rig_slider_crank`
-    + `with_wear_joint` + `Dynamic().evolve` with `Constant(A)`).
+    """Wear of the Ch. 7 rig's crank-rod PTFE bushing: `presets.rig_slider_crank`
+    with `with_wear_joint`, evolved by `Dynamic().evolve` with `Constant(A)`.
 
     Parameters (SI): ``k`` wear coefficient [1/Pa], ``clearance`` [m], ``depth``
     bushing depth [m], ``diameter`` pin diameter [m], ``mu`` friction,

@@ -4,8 +4,10 @@ the quasi-static model, no dynamic check, no look ahead), or, with
 ``--choose`` / ``--chosen``, the one its shipped calibration chose (dynamic
 check included); NUTS (`diffwear.calibrate.posterior.nuts`: four chains, in the
 coordinates that whiten the Gauss-Newton covariance) then samples that model's
-numbers.  Recorded per campaign: the largest rank-normalised split R-hat
-over the numbers (goal <= 1.01), the smallest bulk ESS, the divergences, the
+numbers, its chains running on until every R-hat is at most 1.01 (up to
+1,000 draws a chain).  Recorded per campaign: the largest rank-normalised
+split R-hat over the numbers (goal <= 1.01), the draws a chain it took, the
+smallest bulk ESS, the divergences, the
 time of one gradient of the log posterior, each chain's mean and spread
 of each number, the times and the device.
 
@@ -42,7 +44,14 @@ from diffwear.calibrate import load_dataset  # noqa: E402
 from diffwear.calibrate.effects import log_shape  # noqa: E402
 from diffwear.calibrate.fit import Fitter, Problem  # noqa: E402
 from diffwear.calibrate.identify import calibrate  # noqa: E402
-from diffwear.calibrate.posterior import CHAINS, SAMPLES, WARMUP, nuts  # noqa: E402
+from diffwear.calibrate.posterior import (  # noqa: E402
+    CHAINS,
+    MAX_SAMPLES,
+    R_HAT_TARGET,
+    SAMPLES,
+    WARMUP,
+    nuts,
+)
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -50,7 +59,7 @@ RECORD = HERE / "records" / "posterior_nuts.json"
 CAMPAIGNS = ROOT / "design_studies" / "calibration"
 RESULTS = CAMPAIGNS / "results"   # the shipped calibrations (`run_all.py`)
 DEFAULT = ("campaign_two_lobe_k", "campaign_pressure_exponent", "campaign_run_in_and_creep")
-GOAL_R_HAT = 1.01
+GOAL_R_HAT = R_HAT_TARGET
 
 
 def model_of(fit) -> dict:
@@ -152,6 +161,7 @@ def one(name: str, model: dict | None = None, sample: bool = True,
             "chain_mean": dict(zip(names, np.asarray(d["chain_mean"]).T.tolist())),
             "chain_std": dict(zip(names, np.asarray(d["chain_std"]).T.tolist())),
             "divergences": d["divergences"], "draws": d["draws_sampled"],
+            "draws_per_chain": d["draws_per_chain"],
             "meets_goal": d["max_r_hat"] <= GOAL_R_HAT,
             "loop_s": loop_s, "gradient_s": grad_s, "nuts_s": time.perf_counter() - t1,
             **device}
@@ -185,13 +195,16 @@ def main(argv=None) -> int:
         if args.gradient_only:
             args.json.write_text(json.dumps({"rows": list(rows.values())}, indent=2) + "\n")
             continue
-        print(f"{name}: max R-hat {row['max_r_hat']:.4f} (goal <= {GOAL_R_HAT}), "
+        print(f"{name}: max R-hat {row['max_r_hat']:.4f} (goal <= {GOAL_R_HAT}) after "
+              f"{row['draws_per_chain']} draws a chain, "
               f"min ESS {row['min_ess']:.0f}, {row['divergences']} divergences; "
               f"NUTS {row['nuts_s']:.0f} s "
               f"on {row['device']}", flush=True)
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps({
-            "chains": CHAINS, "warmup": WARMUP, "samples": SAMPLES, "goal_r_hat": GOAL_R_HAT,
+            **{k: v for k, v in record.items() if k not in ("rows", "max_samples")},
+            "chains": CHAINS, "warmup": WARMUP, "samples": SAMPLES,
+            "max_samples": MAX_SAMPLES, "goal_r_hat": GOAL_R_HAT,
             "rows": sorted(rows.values(), key=lambda r: r["campaign"])}, indent=2) + "\n")
     return 0
 

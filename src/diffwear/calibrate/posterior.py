@@ -27,7 +27,8 @@ coefficients, and flat priors on the rest.  Two ways to it:
   its gradient one reverse pass of the model (`Fitter.log_posterior`),
   `CHAINS` chains, the rank-normalised split R-hat and the bulk effective
   sample size of each number reported (Vehtari, Gelman, Simpson, Carpenter
-  and Buerkner, Bayesian Anal. 16 (2021) 667).  It samples u, the numbers
+  and Buerkner, Bayesian Anal. 16 (2021) 667); the chains run on until
+  every R-hat is at most `R_HAT_TARGET` or `MAX_SAMPLES` draws a chain.  It samples u, the numbers
   in the coordinates that whiten the Gauss-Newton covariance C (z = z_fit +
   R u, R R^T = C), where the posterior is near a unit Gaussian: the
   warm-up adapts the step size and a mass matrix from the identity, and
@@ -68,6 +69,14 @@ PROPOSAL_DOF = 5.0
 CHAINS = 4
 WARMUP = 150
 SAMPLES = 250
+# The chains go on, `SAMPLES` more draws each, until every number's R-hat is
+# at most R_HAT_TARGET (Vehtari et al. 2021, Sec. 4: 1.01), up to
+# MAX_SAMPLES draws a chain.  On an exact unit Gaussian the sampler's largest
+# R-hat over two numbers exceeds 1.01 in 7 of 40 seeds at 250 draws a chain
+# and in 0 of 40 at 1,000 (benchmarks/records/r_hat_scatter.json): below
+# 1,000 a chain, R-hat's own scatter reaches the target
+R_HAT_TARGET = 1.01
+MAX_SAMPLES = 1000
 BAND = 0.90           # the predictive band's probability
 SEED = 20091         # draws are repeatable
 
@@ -292,12 +301,21 @@ def laplace(fitter: Fitter, fit: FitResult, draws: int = DRAWS, seed: int = SEED
 
 def nuts_chains(logdensity, mean, cov, chains: int = CHAINS, warmup: int = WARMUP,
                 samples: int = SAMPLES, seed: int = SEED, parallel: bool | None = None,
-                log=None):
+                log=None, *, numbers=None, r_hat_target: float | None = R_HAT_TARGET,
+                max_samples: int = MAX_SAMPLES):
     """NUTS chains on ``logdensity`` (z -> log p, a JAX function) sampled in
     the coordinates u that whiten ``cov`` about ``mean`` (z = mean + R u;
-    module notes): the draws of z (chains, samples, d) and whether each
-    transition diverged (chains, samples).  ``parallel``: see `nuts`;
-    ``log``: a line as each chain ends, one after another."""
+    module notes): the draws of z (chains, draws, d) and whether each
+    transition diverged (chains, draws).
+
+    Each chain warms up and takes ``samples`` draws; while the largest
+    R-hat (rank-normalised, split) of ``numbers(z)`` exceeds ``r_hat_target``,
+    every chain goes on from where it stopped, with its adapted step size and
+    mass matrix, by ``samples`` more draws, up to ``max_samples`` a chain
+    (``r_hat_target`` None: no more than ``samples``).  ``numbers``: (S, d)
+    draws -> (S, m) the numbers R-hat is judged on (default: z itself).
+    ``parallel``: see `nuts`; ``log``: a line as each chain ends, one after
+    another, and as the chains are extended."""
     import time
 
     import blackjax
@@ -309,6 +327,16 @@ def nuts_chains(logdensity, mean, cov, chains: int = CHAINS, warmup: int = WARMU
     def whitened(u):   # the log density at z = z_hat + R u
         return logdensity(z_hat + root @ u)
 
+    def draws(state, params, key):
+        kernel = blackjax.nuts(whitened, **params).step
+
+        def step(state, k):
+            state, info = kernel(k, state)
+            return state, (state.position, info.is_divergent)
+
+        state, (positions, divergent) = jax.lax.scan(step, state, jax.random.split(key, samples))
+        return (state, params), z_hat + positions @ root.T, divergent
+
     @jax.jit
     def one_chain(key):
         k_init, k_warm, k_run = jax.random.split(key, 3)
@@ -318,52 +346,99 @@ def nuts_chains(logdensity, mean, cov, chains: int = CHAINS, warmup: int = WARMU
             initial_inverse_mass_matrix=jnp.eye(z_hat.shape[0]), initial_step_size=0.5,
             imm_shrinkage_to_previous=0.9)
         (state, params), _ = adapt.run(k_warm, start, num_steps=warmup)
-        kernel = blackjax.nuts(whitened, **params).step
+        return draws(state, params, k_run)
 
-        def step(state, k):
-            state, info = kernel(k, state)
-            return state, (state.position, info.is_divergent)
-
-        _, (positions, divergent) = jax.lax.scan(step, state, jax.random.split(k_run, samples))
-        return z_hat + positions @ root.T, divergent
-
+    more = jax.jit(draws)
     keys = jax.random.split(key, chains)
     if jax.default_backend() != "cpu" if parallel is None else parallel:
-        p, d = jax.vmap(one_chain)(keys)
-        return np.asarray(p), np.asarray(d)
-    runs = []
-    for i, k in enumerate(keys):
-        t0 = time.perf_counter()
-        runs.append(jax.block_until_ready(one_chain(k)))
+        def run_all(block, carry):
+            if block == 0:
+                return jax.vmap(one_chain)(keys)
+            return jax.vmap(more)(*carry, jax.vmap(lambda k: jax.random.fold_in(k, block))(keys))
+    else:
+        def run_all(block, carry):
+            runs = []
+            for i, k in enumerate(keys):
+                t0 = time.perf_counter()
+                if block == 0:
+                    runs.append(jax.block_until_ready(one_chain(k)))
+                else:
+                    chain_carry = jax.tree_util.tree_map(lambda x: x[i], carry)
+                    runs.append(jax.block_until_ready(
+                        more(*chain_carry, jax.random.fold_in(k, block))))
+                if log is not None:
+                    what = f"{warmup} warm-up steps, {samples} draws" if block == 0 else \
+                        f"{samples} more draws"
+                    log(f"posterior: NUTS chain {i + 1} of {chains} ({what}) in "
+                        f"{time.perf_counter() - t0:.0f} s")
+            return jax.tree_util.tree_map(lambda *x: jnp.stack(x), *runs)
+
+    positions, divergent = [], []
+    block, carry = 0, None
+    while True:
+        carry, p, d = run_all(block, carry)
+        positions.append(np.asarray(p))        # (chains, samples, d)
+        divergent.append(np.asarray(d))
+        z = np.concatenate(positions, axis=1)
+        block += 1
+        if r_hat_target is None or z.shape[1] + samples > max_samples:
+            break
+        r_hat = max_r_hat(z, numbers)
+        if not r_hat > r_hat_target:
+            break
         if log is not None:
-            log(f"posterior: NUTS chain {i + 1} of {chains} ({warmup} warm-up steps, "
-                f"{samples} draws) in {time.perf_counter() - t0:.0f} s")
-    return (np.stack([np.asarray(p) for p, _ in runs]),    # (chains, samples, d)
-            np.stack([np.asarray(d) for _, d in runs]))
+            log(f"posterior: largest R-hat {r_hat:.4f} above {r_hat_target} after "
+                f"{z.shape[1]} draws a chain; each chain goes on for {samples} more")
+    return z, np.concatenate(divergent, axis=1)
+
+
+def r_hats(z: np.ndarray, numbers=None) -> np.ndarray:
+    """The rank-normalised split R-hat (Vehtari et al. 2021) of each number
+    of chains ``z`` (chains, draws, d); ``numbers``: see `nuts_chains`."""
+    from blackjax.diagnostics import rhat
+
+    chains, n, d = z.shape
+    values = z if numbers is None else np.asarray(numbers(z.reshape(-1, d))).reshape(chains, n, -1)
+    return np.array([float(rhat(jnp.asarray(values[..., i]))) for i in range(values.shape[-1])])
+
+
+def max_r_hat(z: np.ndarray, numbers=None) -> float:
+    return float(np.max(r_hats(z, numbers)))
 
 
 def nuts(fitter: Fitter, fit: FitResult, chains: int = CHAINS, warmup: int = WARMUP,
          samples: int = SAMPLES, seed: int = SEED, parallel: bool | None = None,
-         log=None) -> Posterior:
-    """NUTS on the exact model (module notes).  ``parallel``: the chains as
+         log=None, r_hat_target: float | None = R_HAT_TARGET,
+         max_samples: int = MAX_SAMPLES) -> Posterior:
+    """NUTS on the exact model (module notes), the chains extended until every
+    reported number's R-hat is at most ``r_hat_target`` (`nuts_chains`;
+    ``diagnostics["converged"]`` says whether it was met within
+    ``max_samples`` draws a chain).  ``parallel``: the chains as
     one vectorised program (default: on an accelerator, where the chains'
     arithmetic runs side by side; on a CPU it runs no faster than the chains
     one after another, and each chain's tree depth then sets its own cost);
     ``log``: a line as each chain ends (chains one after another)."""
-    from blackjax.diagnostics import ess_bulk, rhat
+    from blackjax.diagnostics import ess_bulk
 
     lay = fit.notes["layout"]
     if fit.dof < 1:
         raise InputError(f"posterior sampling: {fit.n_fit} fit points for {lay.size} numbers "
                          "leave no degree of freedom; allowed: more fit points than numbers "
                          "(or --posterior laplace)")
+
+    def numbers(z):   # the reported numbers (S, m) of draws z (S, d)
+        return np.stack(list(lay.natural(z).values()), axis=-1)
+
     chain_z, divergent = nuts_chains(fitter.log_posterior(fit), np.asarray(fit.notes["z"], float),
                                      _symmetric(np.asarray(fit.notes["cov"], float)),
-                                     chains, warmup, samples, seed, parallel, log)
-    values = lay.natural(chain_z.reshape(-1, lay.size))
-    stacked = np.stack([v.reshape(chains, samples) for v in values.values()], axis=-1)
-    r_hat = np.array([float(rhat(jnp.asarray(stacked[..., i]))) for i in range(lay.size)])
-    ess = np.array([float(ess_bulk(jnp.asarray(stacked[..., i]))) for i in range(lay.size)])
+                                     chains, warmup, samples, seed, parallel, log,
+                                     numbers=numbers, r_hat_target=r_hat_target,
+                                     max_samples=max_samples)
+    per_chain = chain_z.shape[1]
+    stacked = numbers(chain_z.reshape(-1, lay.size)).reshape(chains, per_chain, -1)
+    r_hat = r_hats(stacked)
+    ess = np.array([float(ess_bulk(jnp.asarray(stacked[..., i])))
+                    for i in range(stacked.shape[-1])])
     z = chain_z.reshape(-1, lay.size)
     thin = max(1, z.shape[0] // DRAWS)   # the predictions at a spread of the draws
     z_kept = z[::thin]
@@ -372,6 +447,10 @@ def nuts(fitter: Fitter, fit: FitResult, chains: int = CHAINS, warmup: int = WAR
     diagnostics = {"r_hat": r_hat, "ess": ess, "max_r_hat": float(np.max(r_hat)),
                    "min_ess": float(np.min(ess)),
                    "divergences": int(np.sum(divergent)), "draws_sampled": int(z.shape[0]),
+                   "draws_per_chain": per_chain,
+                   # the chains ran on until R-hat met this (or MAX_SAMPLES)
+                   "r_hat_target": r_hat_target,
+                   "converged": bool(r_hat_target is None or np.max(r_hat) <= r_hat_target),
                    # each chain's mean and spread of each number (chains, d): where
                    # an R-hat above 1 comes from
                    "chain_mean": stacked.mean(axis=1), "chain_std": stacked.std(axis=1)}

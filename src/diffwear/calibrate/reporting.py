@@ -299,9 +299,18 @@ def _posterior_how(post: dict) -> Text | str:
     """How the posterior was sampled, and the check it passed or failed."""
     diag = post["diagnostics"]
     if post["method"] == "nuts":
-        return Text((f"NUTS, {post['chains']} chains, {diag['draws_sampled']} draws; largest "
-                     "R-hat ", Significant(diag["max_r_hat"], 4), ", smallest bulk ESS "
-                     f"{diag['min_ess']:.0f}, {diag['divergences']} divergent transitions"))
+        how = Text((f"NUTS, {post['chains']} chains, {diag['draws_sampled']} draws; largest "
+                    "R-hat ", Significant(diag["max_r_hat"], 4), ", smallest bulk ESS "
+                    f"{diag['min_ess']:.0f}, {diag['divergences']} divergent transitions"))
+        target = diag.get("r_hat_target")
+        if target is None:
+            return how
+        if diag.get("converged", True):
+            return Text((how, f" (the chains ran until every R-hat was at most {target}: "
+                              f"{diag['draws_per_chain']} draws a chain)"))
+        return Text((how, f"; **R-hat stayed above {target}** after "
+                          f"{diag['draws_per_chain']} draws a chain: the chains disagree, "
+                          "and the bands below rest on an unconverged sample"))
     if "pareto_k" in diag:
         k_text = ("n/a" if diag["pareto_k"] is None or not math.isfinite(diag["pareto_k"])
                   else Significant(diag["pareto_k"], 2))

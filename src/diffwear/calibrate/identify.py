@@ -1160,7 +1160,8 @@ def _look_ahead(c: "Calibration", fitter: Fitter, outlook: Outlook, log) -> None
     d = c.posterior.diagnostics
     log(f"posterior ({c.posterior.method}): " + (
         f"Pareto k {d['pareto_k']:.2f}, ESS {d['ess']:.0f}" if "pareto_k" in d else
-        f"max R-hat {d.get('max_r_hat', math.nan):.3f}, min ESS {d.get('min_ess', math.nan):.0f}")
+        f"max R-hat {d.get('max_r_hat', math.nan):.3f}, min ESS {d.get('min_ess', math.nan):.0f}"
+        f", {d.get('draws_per_chain', 0)} draws a chain")
         + f" ({time.perf_counter() - t0:.0f} s)")
     limit, horizon = outlook.resolved(c.dataset, p)
     if limit is None:
